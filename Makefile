@@ -1,0 +1,30 @@
+# Two commands do everything on a fresh machine:
+#   make test   create .venv if missing, install granstokes, run pytest
+#   make demo   create .venv if missing, install granstokes, run the demo and write its report
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed-stamp
+DEMO   ?= demo-out
+
+.PHONY: test demo bench clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+
+$(STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q -e '.[test]'
+	touch $@
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+demo: $(STAMP)
+	$(BIN)/granstokes demo --out $(DEMO)
+
+bench: $(STAMP)
+	$(BIN)/python bench/work_precision.py
+
+clean:
+	rm -rf $(VENV) $(DEMO) *.egg-info
