@@ -1,0 +1,44 @@
+"""Baseline: the same spatial discretisation integrated by scipy's solve_ivp (method of lines).
+
+Imposed stress only (the imposed-speed problem is a DAE, which solve_ivp does not take).  The
+Jacobian is the exact tridiagonal one, passed as a sparse matrix so BDF/Radau factorise it as banded.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+import scipy.sparse as sp
+from scipy.integrate import solve_ivp
+
+from .problems import ImposedStress
+from .rheology import Friction
+from .solver import Numerics, Solution, check_times
+from .stepper import StepStats
+
+
+def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics = Numerics(),
+                     method: str = "BDF") -> Solution:
+    """Imposed wall stress by solve_ivp(method) on the interior nodes, tau~(0) = 1 for t~ > 0."""
+    t = check_times(times)
+    problem = ImposedStress(friction, mu_w, numerics.mesh())
+    x0 = problem.initial()
+    x0[0] = 1.0
+
+    def rhs(_, z):
+        return problem.rate(np.concatenate(([1.0], z)))
+
+    def jac(_, z):
+        _, sub, diag, sup = problem.rate_and_jacobian(np.concatenate(([1.0], z)))
+        return sp.diags([sub[1:], diag, sup], [-1, 0, 1], format="csc")
+
+    start = time.process_time()
+    sol = solve_ivp(rhs, (0.0, t[-1]), x0[1:], method=method, t_eval=t, jac=jac,
+                    rtol=numerics.rtol, atol=numerics.atol)
+    if not sol.success:
+        raise RuntimeError(f"solve_ivp({method}) failed: {sol.message}")
+    stats = StepStats(steps=int(sol.t.size), newton_iterations=int(sol.nfev), cpu_seconds=time.process_time() - start)
+    tau = np.column_stack([np.ones(len(t)), sol.y.T, np.ones(len(t))])
+    series = pd.DataFrame(columns=["t", "u_w", "mu_w", "delta"])
+    return Solution("stress", friction, problem.mu_w, None, problem.mesh, t, tau, series, stats, numerics)

@@ -1,0 +1,116 @@
+"""The paper's shear-stress diffusion problem (the evolution rate), apart from the numerics.
+
+Unknowns are tau~ at nodes 0..N-1 of a Mesh; tau~(y~=1) = 1 is fixed.  The interior rate is
+eq. GranularStokesEqn,
+
+    d tau~/d t~ = D(y~, tau~) d2 tau~/dy~2,   D = (mu_d p~ - mu_w tau~)^2 / p~^(3/2),  p~ = 1 + beta_w y~,
+
+and the wall row closes the system: tau~(0) = 1 for an imposed stress, or the integral
+condition eq. GranularStokesEqn_muBIS_BCs for an imposed speed.  With an imposed speed, mu_w is the
+steady mu_w^inf and tau~ = mu p~/mu_w^inf; the interior equation is then exactly
+eq. GranularStokesEqn_muBIS written for tau~ instead of mu~ (same scaling, same steady state).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .mesh import Mesh
+from .rheology import Friction, finite, require
+from .steady import mu_w_for_speed
+
+
+class ShearStressDiffusion:
+    """Interior rate of eq. GranularStokesEqn and its tridiagonal Jacobian."""
+
+    imposed: str
+
+    def __init__(self, friction: Friction, mu_w: float, mesh: Mesh):
+        self.friction = friction
+        self.mu_w = friction.check_mu_w(mu_w)
+        self.beta = friction.beta(self.mu_w)
+        self.mesh = mesh
+        self.p = 1.0 + self.beta * mesh.y
+        self._p32 = self.p[1:-1] ** 1.5
+
+    def initial(self) -> np.ndarray:
+        """tau~(y~, 0) = mu_s p~/mu_w at nodes 0..N-1 (eq. InitStokesEqn)."""
+        return self.friction.mu_s * self.p[:-1] / self.mu_w
+
+    def full(self, x: np.ndarray) -> np.ndarray:
+        return np.append(x, 1.0)
+
+    def rate(self, x: np.ndarray) -> np.ndarray:
+        """d tau~/d t~ at the interior nodes 1..N-1."""
+        return self.rate_and_jacobian(x)[0]
+
+    def rate_and_jacobian(self, x: np.ndarray):
+        """Rate at nodes 1..N-1 and its Jacobian: (rate, sub, diag, sup) with sub[i] = dF_i/dtau_{i-1}
+        for rows 1..N-1, diag for rows 1..N-1, sup[i] = dF_i/dtau_{i+1} for rows 1..N-2."""
+        tau = self.full(x)
+        cl, cd, cu = self.mesh.d2
+        lap = cl * tau[:-2] + cd * tau[1:-1] + cu * tau[2:]
+        s = self.friction.mu_d * self.p[1:-1] - self.mu_w * tau[1:-1]
+        diff = s * s / self._p32
+        rate = diff * lap
+        diag = diff * cd - 2 * self.mu_w * s / self._p32 * lap
+        return rate, diff * cl, diag, (diff * cu)[:-1]
+
+    def mu(self, x: np.ndarray) -> np.ndarray:
+        """Local friction mu = mu_w tau~/p~ at all nodes."""
+        return self.mu_w * self.full(x) / self.p
+
+    def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
+        """Largest fraction of a Newton update to take (1: no limit)."""
+        return 1.0
+
+
+class ImposedStress(ShearStressDiffusion):
+    """Imposed wall shear stress tau_w = mu_w p_w: tau~(0, t~) = 1."""
+
+    imposed = "stress"
+
+    def wall(self, x: np.ndarray):
+        """Wall residual g(x) and its gradient (dense row over nodes 0..N-1)."""
+        grad = np.zeros_like(x)
+        grad[0] = 1.0
+        return x[0] - 1.0, grad
+
+
+class ImposedSpeed(ShearStressDiffusion):
+    """Imposed wall speed u~_w: the wall stress is the extra unknown fixed by
+    eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~ (trapezoidal rule,
+    the same quadrature that gives the velocity profile, so the constraint holds to round-off).
+
+    Singular start: the initial state mu~ = 1 carries no velocity, so at t~ = 0+ the whole jump
+    u~_w sits in a wall sub-layer where mu~ -> 0 (mu -> mu_d).  In the continuum that sub-layer is
+    exponentially thin for t~ << t_mud ~ u~_w^2 (the velocity form dU/dt ~ d/dy(-1/u_y) is a heat
+    equation for y(u) in the hodograph plane); on the mesh it is absorbed by the first cell, where
+    the constraint gives mu~_w ~ h_0/(2 Dmu u~_w): mu_w = mu_d - O(h_0 Dmu), no smaller than the
+    mesh can show.  Newton updates are limited so that mu~ stays positive at every node.
+    """
+
+    imposed = "speed"
+
+    def __init__(self, friction: Friction, u_w: float, mesh: Mesh):
+        require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
+        self.u_w = float(u_w)
+        super().__init__(friction, mu_w_for_speed(friction, u_w), mesh)
+        dmu = friction.dmu
+        self._wq = mesh.weights[:-1] * np.sqrt(self.p[:-1]) / dmu
+        self._dmu_tilde = -self.mu_w / (self.p[:-1] * dmu)  # d mu~/d tau~
+
+    def mu_tilde(self, x: np.ndarray) -> np.ndarray:
+        return (self.friction.mu_d - self.mu_w * x / self.p[:-1]) / self.friction.dmu
+
+    def wall(self, x: np.ndarray):
+        mt = self.mu_tilde(x)
+        g = self._wq @ (1.0 / mt - 1.0) - self.u_w
+        return g, -self._wq / mt**2 * self._dmu_tilde
+
+    def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
+        """Keep mu~ > 0: at most halve mu~ at any node in one Newton update."""
+        mt, dmt = self.mu_tilde(x), self._dmu_tilde * dx
+        falling = dmt < 0
+        if not falling.any():
+            return 1.0
+        return float(min(1.0, np.min(-0.5 * mt[falling] / dmt[falling])))
