@@ -78,15 +78,18 @@ class ImposedStress(ShearStressDiffusion):
 
 class ImposedSpeed(ShearStressDiffusion):
     """Imposed wall speed u~_w: the wall stress is the extra unknown fixed by
-    eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~ (trapezoidal rule,
-    the same quadrature that gives the velocity profile, so the constraint holds to round-off).
+    eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~ (with the mesh's
+    quadrature, the one that gives the velocity profile, so the constraint holds to round-off).
+
+    The wall unknown is v = 1/mu~(0) (the wall shear rate, up to a factor), in which the
+    constraint is linear: Newton fixes it exactly in one iteration.
 
     Singular start: the initial state mu~ = 1 carries no velocity, so at t~ = 0+ the whole jump
     u~_w sits in a wall sub-layer where mu~ -> 0 (mu -> mu_d).  In the continuum that sub-layer is
-    exponentially thin for t~ << t_mud ~ u~_w^2 (the velocity form dU/dt ~ d/dy(-1/u_y) is a heat
-    equation for y(u) in the hodograph plane); on the mesh it is absorbed by the first cell, where
-    the constraint gives mu~_w ~ h_0/(2 Dmu u~_w): mu_w = mu_d - O(h_0 Dmu), no smaller than the
-    mesh can show.  Newton updates are limited so that mu~ stays positive at every node.
+    exponentially thin for t~ << t_mud ~ u~_w^2 (the velocity form du/dt ~ d/dy(-1/u_y) is a heat
+    equation for y(u) in the hodograph plane); on the mesh it is carried by the first cell, where
+    the constraint gives mu~_w ~ h_0/(2 Dmu u~_w), i.e. mu_w = mu_d - O(h_0): the wall friction is
+    as close to mu_d as the mesh can show.  Newton updates are limited to keep mu~ > 0.
     """
 
     imposed = "speed"
@@ -95,22 +98,44 @@ class ImposedSpeed(ShearStressDiffusion):
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
         self.u_w = float(u_w)
         super().__init__(friction, mu_w_for_speed(friction, u_w), mesh)
-        dmu = friction.dmu
-        self._wq = mesh.weights[:-1] * np.sqrt(self.p[:-1]) / dmu
-        self._dmu_tilde = -self.mu_w / (self.p[:-1] * dmu)  # d mu~/d tau~
+        self._wq = mesh.weights[:-1] * np.sqrt(self.p[:-1]) / friction.dmu
+
+    def initial(self) -> np.ndarray:
+        x = super().initial()
+        x[0] = 1.0  # v = 1/mu~ = 1: mu = mu_s at the wall
+        return x
+
+    def full(self, x: np.ndarray) -> np.ndarray:
+        fr = self.friction
+        tau0 = (fr.mu_d - fr.dmu / x[0]) * self.p[0] / self.mu_w
+        return np.concatenate(([tau0], x[1:], [1.0]))
+
+    def rate_and_jacobian(self, x: np.ndarray):
+        rate, sub, diag, sup = super().rate_and_jacobian(x)
+        sub[0] *= self.friction.dmu * self.p[0] / (self.mu_w * x[0] ** 2)  # d tau~_0 / d v
+        return rate, sub, diag, sup
 
     def mu_tilde(self, x: np.ndarray) -> np.ndarray:
-        return (self.friction.mu_d - self.mu_w * x / self.p[:-1]) / self.friction.dmu
+        """mu~ at nodes 0..N-1."""
+        mt = (self.friction.mu_d - self.mu_w * x / self.p[:-1]) / self.friction.dmu
+        mt[0] = 1.0 / x[0]
+        return mt
 
     def wall(self, x: np.ndarray):
         mt = self.mu_tilde(x)
-        g = self._wq @ (1.0 / mt - 1.0) - self.u_w
-        return g, -self._wq / mt**2 * self._dmu_tilde
+        g = self._wq[0] * (x[0] - 1.0) + self._wq[1:] @ (1.0 / mt[1:] - 1.0) - self.u_w
+        grad = self._wq / mt**2 * self.mu_w / (self.p[:-1] * self.friction.dmu)
+        grad[0] = self._wq[0]
+        return g, grad
 
     def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
-        """Keep mu~ > 0: at most halve mu~ at any node in one Newton update."""
-        mt, dmt = self.mu_tilde(x), self._dmu_tilde * dx
+        """At most halve mu~ at an interior node, or v at the wall, in one Newton update."""
+        mt = self.mu_tilde(x)[1:]
+        dmt = -self.mu_w / (self.p[1:-1] * self.friction.dmu) * dx[1:]
+        limits = [1.0]
+        if dx[0] < 0:
+            limits.append(-0.5 * x[0] / dx[0])
         falling = dmt < 0
-        if not falling.any():
-            return 1.0
-        return float(min(1.0, np.min(-0.5 * mt[falling] / dmt[falling])))
+        if falling.any():
+            limits.append(np.min(-0.5 * mt[falling] / dmt[falling]))
+        return float(min(limits))

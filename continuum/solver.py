@@ -15,7 +15,7 @@ from .problems import ImposedSpeed, ImposedStress
 from .rheology import Friction, finite, require
 from .scales import UNITS
 from .steady import steady_delta, steady_wall_speed
-from .stepper import StepStats, integrate
+from .stepper import TABLEAUX, StepStats, integrate
 
 
 @dataclass(frozen=True)
@@ -26,9 +26,11 @@ class Numerics:
     stretch: float = 6.0
     rtol: float = 1e-6
     atol: float = 1e-8
+    method: str = "sdirk4"
 
     def __post_init__(self):
         Mesh.graded(self.n_cells, self.stretch)  # validates both
+        require(self.method in TABLEAUX, "method", f"one of {sorted(TABLEAUX)}", self.method)
         require(finite(self.rtol) and 0 < self.rtol < 1, "rtol", "in (0, 1)", self.rtol)
         require(finite(self.atol) and 0 < self.atol < 1, "atol", "in (0, 1)", self.atol)
 
@@ -124,9 +126,9 @@ class Solution:
 def _run(problem, times, numerics: Numerics, fixed_times=None) -> Solution:
     t = check_times(times)
     recorder = obs.SeriesRecorder(problem)
-    states, stats = integrate(problem, t, rtol=numerics.rtol, atol=numerics.atol,
+    states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
                               fixed_times=fixed_times, observer=recorder)
-    tau = np.column_stack([states, np.ones(len(t))])
+    tau = np.array([problem.full(x) for x in states])
     series = pd.DataFrame(recorder.rows, columns=["t", "u_w", "mu_w", "delta"])
     return Solution(problem.imposed, problem.friction, problem.mu_w,
                     getattr(problem, "u_w", None), problem.mesh, t, tau, series, stats, numerics)

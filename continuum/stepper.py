@@ -1,16 +1,17 @@
-"""TR-BDF2 time integration (Bank et al. 1985; Hosea & Shampine 1996) with Newton on the
-bordered tridiagonal system.
+"""Singly diagonally implicit Runge-Kutta (DIRK) time stepping with Newton on the bordered
+tridiagonal system, adaptive steps from an embedded error estimate.
 
-Why TR-BDF2 and not plain Crank-Nicolson: the wall condition switches on impulsively at t~ = 0
-(tau~ jumps from mu_s/mu_w to 1, or u~ from 0 to u~_w), and CN does not damp the stiff
-high-wavenumber modes this excites (amplification -> -1), so it rings on the graded mesh once
-D dt/h^2 >> 1.  TR-BDF2 is a trapezoidal stage to t_n + gamma h followed by a BDF2 stage: second
-order, L-stable, one-step (so variable steps are free), both stages with the same matrix
-I - d h J (d = gamma/2, gamma = 2 - sqrt 2), and an embedded local error estimate.
+Every implicit stage solves  X - h a_ii F(X) = rhs  on the interior rows plus the wall row
+g(X) = 0, by simplified Newton with one tridiagonal factorisation per step (NewtonMatrix).  All tableaux are stiffly accurate (x_{n+1} is the last stage),
+so the wall condition holds exactly at every step (the DAE is index 1).
 
-Each stage solves x - d h F(x) = rhs on interior rows plus the wall row g(x) = 0 by full Newton.
-The Newton matrix is tridiagonal except for the (dense) wall row; it is solved by bordering:
-one LAPACK gttrf factorisation and one gttrs with two right-hand sides per iteration.
+Methods (``TABLEAUX``):
+* ``sdirk4``: Hairer & Wanner (1996, Table IV.6.5) 5-stage SDIRK, order 4, L-stable, embedded
+  order 3.  The default: the work-precision benchmark (bench/) shows it is the cheapest to 1e-6.
+* ``tr-bdf2``: trapezoidal stage then BDF2 (Bank et al. 1985) as a 3-stage ESDIRK, order 2,
+  L-stable, embedded order 3 (Hosea & Shampine 1996).
+* ``crank-nicolson``: the paper's scheme, order 2, A-stable but not L-stable (stiff modes excited
+  by the impulsive start ring with amplification -> -1); no error estimate, fixed steps only.
 """
 from __future__ import annotations
 
@@ -20,11 +21,43 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg.lapack import dgttrf, dgttrs
 
-GAMMA = 2.0 - np.sqrt(2.0)
-D = GAMMA / 2.0
-C_ERR = (-3 * GAMMA**2 + 4 * GAMMA - 2) / (12 * (2 - GAMMA))
-W_XG = 1.0 / (GAMMA * (2.0 - GAMMA))
-W_XN = (1.0 - GAMMA) ** 2 / (GAMMA * (2.0 - GAMMA))
+
+@dataclass(frozen=True)
+class Tableau:
+    """Butcher tableau of a stiffly accurate DIRK method; ``err`` = b - b_hat (None: no estimate)."""
+
+    name: str
+    A: tuple[tuple[float, ...], ...]
+    order: int
+    err: tuple[float, ...] | None = None
+    err_order: int = 0  # order of the local error estimate, h^(err_order) -> step exponent
+
+    @property
+    def explicit_first(self) -> bool:
+        return self.A[0][0] == 0.0
+
+
+_G = 2.0 - np.sqrt(2.0)
+_D, _W = _G / 2.0, np.sqrt(2.0) / 4.0
+TABLEAUX = {
+    "sdirk4": Tableau(
+        "sdirk4",
+        ((1 / 4, 0, 0, 0, 0),
+         (1 / 2, 1 / 4, 0, 0, 0),
+         (17 / 50, -1 / 25, 1 / 4, 0, 0),
+         (371 / 1360, -137 / 2720, 15 / 544, 1 / 4, 0),
+         (25 / 24, -49 / 48, 125 / 16, -85 / 12, 1 / 4)),
+        order=4,
+        err=(25 / 24 - 59 / 48, -49 / 48 + 17 / 96, 125 / 16 - 225 / 32, 0.0, 1 / 4),
+        err_order=4),
+    "tr-bdf2": Tableau(
+        "tr-bdf2",
+        ((0, 0, 0), (_D, _D, 0), (_W, _W, _D)),
+        order=2,
+        err=(_W - (1 - _W) / 3, _W - (3 * _W + 1) / 3, _D - _D / 3),
+        err_order=3),
+    "crank-nicolson": Tableau("crank-nicolson", ((0, 0), (0.5, 0.5)), order=2),
+}
 
 
 @dataclass
@@ -40,75 +73,100 @@ class NewtonFailure(RuntimeError):
     pass
 
 
-def bordered_solve(a, c, b1, dl, d, du, r0, r):
-    """Solve [[a, c], [b1 e_1, T]] [x0; z] = [r0; r], T = tridiag(dl, d, du)."""
-    dl_, d_, du_, du2, ipiv, info = dgttrf(dl, d, du)
-    if info != 0:
-        raise NewtonFailure("singular Newton matrix")
-    rhs = np.zeros((len(d), 2))
-    rhs[:, 0] = r
-    rhs[0, 1] = b1
-    sol, info = dgttrs(dl_, d_, du_, du2, ipiv, rhs)
-    zr, zb = sol[:, 0], sol[:, 1]
-    x0 = (r0 - c @ zr) / (a - c @ zb)
-    return np.concatenate(([x0], zr - x0 * zb))
+class NewtonMatrix:
+    """LU factors of I - dh J(x) on the interior rows (tridiagonal, LAPACK gttrf), reused for
+    every Newton iteration and every stage of a step (simplified Newton: SDIRK stages share dh).
+
+    The wall row (Dirichlet, or the dense imposed-speed constraint) is eliminated by bordering:
+    [[a, c], [b1 e_1, T]] [x0; z] = [r0; r]  =>  x0 = (r0 - c.T^-1 r)/(a - c.T^-1 b1 e_1).
+    """
+
+    def __init__(self, problem, x, dh):
+        _, sub, diag, sup = problem.rate_and_jacobian(x)
+        self.dh = dh
+        self.factors = dgttrf(-dh * sub[1:], 1.0 - dh * diag, -dh * sup)
+        if self.factors[-1] != 0:
+            raise NewtonFailure("singular Newton matrix")
+        e1 = np.zeros(len(diag))
+        e1[0] = -dh * sub[0]
+        self.zb = self._solve(e1)
+
+    def _solve(self, r):
+        return dgttrs(*self.factors[:-1], r)[0]
+
+    def solve(self, grad, r0, r):
+        zr = self._solve(r)
+        c = grad[1:]
+        x0 = (r0 - c @ zr) / (grad[0] - c @ self.zb)
+        return np.concatenate(([x0], zr - x0 * self.zb))
 
 
-def _newton_matrix(problem, x, dh):
-    rate, sub, diag, sup = problem.rate_and_jacobian(x)
-    return rate, -dh * sub, 1.0 - dh * diag, -dh * sup
+def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8):
+    """Solve x - dh F(x) = rhs (interior rows), g(x) = 0 (wall row) by simplified Newton.
 
-
-def solve_stage(problem, x, dh, rhs, weights, tol, stats, max_iter=10):
-    """Solve x - dh F(x) = rhs (interior rows), g(x) = 0 (wall row) by Newton from guess x.
-
-    Converged when the weighted RMS norm of the update is below ``tol``; returns (x, F(x))."""
+    Stops when the contraction-corrected update theta/(1-theta) |dx| (weighted RMS) is below
+    ``tol`` (Hairer & Wanner 1996, IV.8); returns (x, F(x))."""
     x = x.copy()
+    rate = problem.rate(x)
+    previous = None
     for _ in range(max_iter):
         stats.newton_iterations += 1
-        rate, sub, diag, sup = _newton_matrix(problem, x, dh)
         g, grad = problem.wall(x)
-        res = x[1:] - dh * rate - rhs
-        dx = bordered_solve(grad[0], grad[1:], sub[0], sub[1:], diag, sup, -g, -res)
+        dx = matrix.solve(grad, -g, rhs - x[1:] + matrix.dh * rate)
         if not np.all(np.isfinite(dx)):
             break
         x += problem.step_fraction(x, dx) * dx
-        if np.sqrt(np.mean((dx / weights) ** 2)) < tol:
-            return x, problem.rate(x)
+        rate = problem.rate(x)
+        size = np.sqrt(np.mean((dx / weights) ** 2))
+        theta = 0.5 if previous is None else size / previous
+        if theta >= 1.0:
+            break
+        if size * theta / (1.0 - theta) < tol or size < 1e-3 * tol:
+            return x, rate
+        previous = size
     stats.newton_failures += 1
     raise NewtonFailure("Newton did not converge")
 
 
-def tr_bdf2_step(problem, x, f, h, xg_guess, weights, newton_tol, stats):
-    """One TR-BDF2 step of size h from (x, f = F(x)); returns x_{n+1}, F_{n+1} and the
-    filtered local error estimate (Hosea & Shampine 1996, eq. for the TR-BDF2 pair)."""
-    dh = D * h
-    xg, fg = solve_stage(problem, xg_guess, dh, x[1:] + dh * f, weights, newton_tol, stats)
-    guess = x + (xg - x) / GAMMA
-    x1, f1 = solve_stage(problem, guess, dh, W_XG * xg[1:] - W_XN * x[1:], weights, newton_tol, stats)
-    est = 2 * C_ERR * h * (f / GAMMA - fg / (GAMMA * (1 - GAMMA)) + f1 / (1 - GAMMA))
-    _, sub, diag, sup = _newton_matrix(problem, x1, dh)
-    _, grad = problem.wall(x1)
-    err = bordered_solve(grad[0], grad[1:], sub[0], sub[1:], diag, sup, 0.0, est)
-    return x1, f1, err, xg
+def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats):
+    """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}) and the local error
+    estimate filtered through (I - h a_ss J)^-1 (Hosea & Shampine 1996), or None."""
+    matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
+    rates = [f] if tab.explicit_first else []
+    X = x
+    for i in range(len(rates), len(tab.A)):
+        explicit = x[1:] + h * sum(a * r for a, r in zip(tab.A[i][:i], rates) if a != 0.0)
+        # predictor: the explicit part plus the last stage rate for the implicit part
+        guess = X.copy()
+        if rates:
+            guess[1:] = explicit + matrix.dh * rates[-1]
+        X, r = solve_stage(problem, matrix, guess, explicit, weights, newton_tol, stats)
+        rates.append(r)
+    if tab.err is None:
+        return X, rates[-1], None
+    est = h * sum(e * r for e, r in zip(tab.err, rates) if e != 0.0)
+    _, grad = problem.wall(X)
+    return X, rates[-1], matrix.solve(grad, 0.0, est)
 
 
-def integrate(problem, t_out, *, rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=1e-3, fixed_times=None,
-              observer=None, max_steps=200_000):
+def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=0.03,
+              fixed_times=None, observer=None, max_steps=200_000):
     """Integrate ``problem`` from t~ = 0, returning the state at each time of the sorted ``t_out``.
 
-    Adaptive steps keep the RMS local error (atol + rtol |x|)-weighted below 1; with
-    ``fixed_times`` (an increasing array that contains every t_out) the steps are those, with no
-    error control (for refinement studies).  ``observer(t, x)`` is called after every accepted step.
-    Returns (states, stats) with states of shape (len(t_out), N).
+    Adaptive steps keep the RMS local error, weighted by atol + rtol |x|, below 1; with
+    ``fixed_times`` (an increasing array containing every t_out) the steps are those, with no
+    error control (refinement studies).  ``observer(t, x)`` is called after every accepted step.
+    Returns (states, stats), states of shape (len(t_out), N).
     """
+    tab = TABLEAUX[method]
+    if fixed_times is None and tab.err is None:
+        raise ValueError(f"method {method!r} has no error estimate: give fixed_times")
     t_out = np.asarray(t_out, dtype=float)
     stats = StepStats()
     start = time.process_time()
     x = problem.initial()
     f = problem.rate(x)
     t, h = 0.0, h0
-    x_prev, h_prev = None, None
     states = np.empty((len(t_out), len(x)))
     k = 0
     schedule = None if fixed_times is None else iter(np.asarray(fixed_times, dtype=float))
@@ -123,30 +181,27 @@ def integrate(problem, t_out, *, rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=1e-3,
             h_try = min(h, t_out[k] - t)
             if t_out[k] - (t + h_try) < 0.05 * h_try:
                 h_try = t_out[k] - t
-        weights = atol + rtol * np.abs(x[1:])
-        weights = np.concatenate(([weights[0]], weights))
-        # predictor for the TR stage: linear extrapolation of the last step
-        xg_guess = x if x_prev is None else x + (x - x_prev) * (GAMMA * h_try / h_prev)
+        weights = atol + rtol * np.abs(x)
         try:
-            x1, f1, err_vec, _ = tr_bdf2_step(problem, x, f, h_try, xg_guess, weights, newton_tol, stats)
+            x1, f1, err_vec = dirk_step(problem, tab, x, f, h_try, weights, newton_tol, stats)
         except NewtonFailure:
             if schedule is not None:
                 raise
             stats.rejected += 1
             h = 0.25 * h_try
             continue
-        err = np.sqrt(np.mean((err_vec[1:] / weights[1:]) ** 2))
-        if schedule is None and err > 1.0:
-            stats.rejected += 1
-            h = h_try * max(0.2, 0.9 * err ** (-1 / 3))
-            continue
+        if schedule is None:
+            err = max(np.sqrt(np.mean((err_vec[1:] / weights[1:]) ** 2)), 1e-10)
+            factor = 0.9 * err ** (-1.0 / tab.err_order)
+            if err > 1.0:
+                stats.rejected += 1
+                h = h_try * max(0.2, factor)
+                continue
+            h = h_try * min(4.0, max(0.2, factor))
         stats.steps += 1
-        x_prev, h_prev = x, h_try
         x, f, t = x1, f1, t + h_try
         if observer is not None:
             observer(t, x)
-        if schedule is None:
-            h = h_try * min(4.0, max(0.2, 0.9 * max(err, 1e-10) ** (-1 / 3)))
         while k < len(t_out) and np.isclose(t, t_out[k], rtol=1e-13, atol=0.0):
             states[k] = x
             k += 1

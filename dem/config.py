@@ -1,0 +1,360 @@
+"""DEM scene configuration: TOML schema, validation (before anything runs) and the presets.
+
+A config is a TOML document (DEM units: d = rho_p = g = 1)::
+
+    name = "demo"
+    seeds = [1]                 # one prepared bed per seed (ensembles)
+    dt = 2e-4                   # optional; default t_c/20, never above it
+    [material]                  # the bed's expected mu(I) parameters (continuum.scales.Material)
+    mu_s = 0.28; mu_d = 0.58; I0 = 0.3; I_convention = "dem"; phi = 0.8
+    [grains]                    # dimension 2 (disks) or 3 (spheres); diameters uniform by number in [1-w, 1+w]
+    dimension = 2; polydispersity = 0.15; mu_p = 0.5; restitution = 0.5; contact = "hooke"; kappa = 1e4
+    [box]                       # widths and depth in d; depth omitted -> max delta_s + margin
+    width = 20.0; margin = 10.0
+    [load]
+    p_w = 20.0
+    [[drive]]                   # kind "stress" (mu_w or mu_w_tilde) or "speed" (u_w, or mu_w_tilde: matching speed)
+    name = "stress"; kind = "stress"; mu_w_tilde = 0.5; duration_ts = 10.0
+    [output]                    # intervals in time units sqrt(d/g)
+    plate = 0.02; atoms = 1.0; contacts = 5.0; profiles = 0.5; restart = 2.0; thermo = 0.1
+    [prepare]
+    ke_per_grain = 1e-5
+
+Every key is optional except the drives; unknown keys are errors.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from continuum.rheology import finite, require
+from continuum.scales import Material
+
+from .contact import Contact
+
+MIN_WIDTH = 8.0  # d: narrower periodic boxes order the packing and correlate the plate with its image
+MIN_WIDTH_Z = 4.0
+MIN_DEPTH = 4.0
+KAPPA_MIN = 1e4  # rigid limit: overlap under p_w d at most 1e-4 d
+
+
+def _positive(name, value, minimum=0.0, strict=True):
+    ok = finite(value) and (value > minimum if strict else value >= minimum)
+    require(ok, name, f"a finite number {'>' if strict else '>='} {minimum:g}", value)
+
+
+@dataclass(frozen=True)
+class Grains:
+    """Grains: disks (2D) or spheres (3D) with diameters uniform by number in [1-w, 1+w] d."""
+
+    dimension: int = 2
+    polydispersity: float = 0.15
+    mu_p: float = 0.5
+    restitution: float = 0.5
+    contact: str = "hooke"
+    kappa: float = 1e4
+    kt_over_kn: float = 2 / 7
+
+    def __post_init__(self):
+        require(self.dimension in (2, 3), "grains.dimension", "2 or 3", self.dimension)
+        require(finite(self.polydispersity) and 0 <= self.polydispersity <= 0.3,
+                "grains.polydispersity", "in [0, 0.3] (half-width of the diameter range in d)", self.polydispersity)
+        _positive("grains.mu_p", self.mu_p, strict=False)
+        require(finite(self.restitution) and 0 < self.restitution < 1, "grains.restitution",
+                "in the open interval (0, 1)", self.restitution)
+        require(self.contact in ("hooke", "hertz"), "grains.contact", "'hooke' or 'hertz'", self.contact)
+        require(finite(self.kappa) and self.kappa >= KAPPA_MIN, "grains.kappa",
+                f"a finite number >= {KAPPA_MIN:g} (rigid limit)", self.kappa)
+        require(finite(self.kt_over_kn) and 0 < self.kt_over_kn <= 1, "grains.kt_over_kn", "in (0, 1]",
+                self.kt_over_kn)
+
+
+@dataclass(frozen=True)
+class Box:
+    """Periodic widths (x; z in 3D) and bed depth in d; ``depth=None`` sizes it from delta_s + margin."""
+
+    width: float = 20.0
+    width_z: float | None = None
+    depth: float | None = None
+    margin: float = 10.0
+    base_thickness: float = 1.5
+
+    def __post_init__(self):
+        _positive("box.width", self.width, MIN_WIDTH, strict=False)
+        if self.width_z is not None:
+            _positive("box.width_z", self.width_z, MIN_WIDTH_Z, strict=False)
+        if self.depth is not None:
+            _positive("box.depth", self.depth, MIN_DEPTH, strict=False)
+        _positive("box.margin", self.margin, strict=False)
+        require(finite(self.base_thickness) and 0.5 <= self.base_thickness <= 5, "box.base_thickness",
+                "in [0.5, 5] (d)", self.base_thickness)
+
+
+@dataclass(frozen=True)
+class Drive:
+    """One drive of the prepared bed: imposed stress (tau_w = mu_w p_w) or imposed plate speed u_w."""
+
+    name: str
+    kind: str
+    mu_w_tilde: float | None = None
+    mu_w: float | None = None
+    u_w: float | None = None
+    duration: float | None = None
+    duration_ts: float = 10.0
+    min_duration: float = 0.0
+
+    def __post_init__(self):
+        require(isinstance(self.name, str) and re.fullmatch(r"[A-Za-z0-9_.-]+", self.name) is not None,
+                "drive.name", "a non-empty name of letters, digits, '_', '-', '.'", self.name)
+        p = f"drive[{self.name}]"
+        require(self.kind in ("stress", "speed"), f"{p}.kind", "'stress' or 'speed'", self.kind)
+        given = [k for k in ("mu_w_tilde", "mu_w", "u_w") if getattr(self, k) is not None]
+        valid = {"stress": ("mu_w_tilde", "mu_w"), "speed": ("u_w", "mu_w_tilde")}[self.kind]
+        require(len(given) == 1 and given[0] in valid, f"{p} load",
+                f"exactly one of {' / '.join(valid)} for a {self.kind} drive", given)
+        if self.mu_w_tilde is not None:
+            require(finite(self.mu_w_tilde) and 0 < self.mu_w_tilde < 1, f"{p}.mu_w_tilde", "in (0, 1)",
+                    self.mu_w_tilde)
+        if self.u_w is not None:
+            _positive(f"{p}.u_w", self.u_w)
+        if self.mu_w is not None:
+            _positive(f"{p}.mu_w", self.mu_w)
+        if self.duration is not None:
+            _positive(f"{p}.duration", self.duration)
+        _positive(f"{p}.duration_ts", self.duration_ts)
+        _positive(f"{p}.min_duration", self.min_duration, strict=False)
+
+
+@dataclass(frozen=True)
+class Output:
+    """Output intervals in time units sqrt(d/g); each is rounded to a multiple of ``plate`` steps."""
+
+    plate: float = 0.02
+    thermo: float = 0.1
+    atoms: float = 1.0
+    contacts: float = 5.0
+    profiles: float = 0.5
+    restart: float = 2.0
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            _positive(f"output.{f.name}", getattr(self, f.name))
+
+
+@dataclass(frozen=True)
+class Prepare:
+    """Preparation: settle under gravity, then relax under the plate until the kinetic energy per
+    grain is below ``ke_per_grain`` (units m g d with m the mean grain mass), each stage capped."""
+
+    ke_per_grain: float = 1e-5
+    check_every: float = 0.5
+    settle_max: float = 60.0
+    relax_max: float = 40.0
+    plate_gap: float = 0.2
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            _positive(f"prepare.{f.name}", getattr(self, f.name))
+
+
+@dataclass(frozen=True)
+class Config:
+    name: str
+    drives: tuple[Drive, ...]
+    material: Material = field(default_factory=Material)
+    grains: Grains = field(default_factory=Grains)
+    box: Box = field(default_factory=Box)
+    p_w: float = 10.0
+    output: Output = field(default_factory=Output)
+    prepare: Prepare = field(default_factory=Prepare)
+    seeds: tuple[int, ...] = (1,)
+    dt: float | None = None
+
+    def __post_init__(self):
+        require(isinstance(self.name, str) and re.fullmatch(r"[A-Za-z0-9_.-]+", self.name) is not None,
+                "name", "a non-empty name of letters, digits, '_', '-', '.'", self.name)
+        _positive("load.p_w", self.p_w)
+        for key in ("d", "rho_p", "g"):
+            require(getattr(self.material, key) == 1.0, f"material.{key}", "1 (DEM units)",
+                    getattr(self.material, key))
+        if self.grains.dimension == 2:
+            require(self.box.width_z is None, "box.width_z", "absent for a 2D scene (grains.dimension = 2)",
+                    self.box.width_z)
+        require(len(self.drives) >= 1, "drive", "at least one [[drive]] table", len(self.drives))
+        names = [d.name for d in self.drives]
+        require(len(set(names)) == len(names), "drive.name", "unique", names)
+        require(len(self.seeds) >= 1 and all(isinstance(s, int) and 0 < s < 2**31 for s in self.seeds)
+                and len(set(self.seeds)) == len(self.seeds), "seeds", "a list of distinct integers in [1, 2^31)",
+                list(self.seeds))
+        if self.dt is not None:
+            _positive("dt", self.dt)
+            bound = self.contact.dt_max
+            require(self.dt <= bound, "dt",
+                    f"<= t_c/20 = {bound:.4g} (stability bound of this contact law)", self.dt)
+
+    @property
+    def width_z(self) -> float | None:
+        if self.grains.dimension == 2:
+            return None
+        return 8.0 if self.box.width_z is None else self.box.width_z
+
+    @property
+    def contact(self) -> Contact:
+        g = self.grains
+        return Contact(g.contact, g.dimension, self.p_w, g.kappa, g.restitution, g.mu_p, g.kt_over_kn,
+                       g.polydispersity)
+
+    @property
+    def time_step(self) -> float:
+        return self.contact.dt_max if self.dt is None else self.dt
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+_TABLES = {"material": Material, "grains": Grains, "box": Box, "output": Output, "prepare": Prepare}
+_TOP = {"name", "seeds", "dt", "material", "grains", "box", "load", "drive", "output", "prepare"}
+
+
+def _build(cls, table, where):
+    require(isinstance(table, dict), where, "a table", table)
+    known = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(table) - known)
+    require(not unknown, f"[{where}] keys", f"among {sorted(known)}", unknown)
+    try:
+        return cls(**table)
+    except TypeError as exc:  # a missing required key
+        raise ValueError(f"[{where}] {exc}") from None
+
+
+def from_dict(doc: dict) -> Config:
+    """Validated Config from a parsed TOML document; raises ValueError naming the bad parameter."""
+    unknown = sorted(set(doc) - _TOP)
+    require(not unknown, "top-level keys", f"among {sorted(_TOP)}", unknown)
+    kwargs = {k: _build(cls, doc[k], k) for k, cls in _TABLES.items() if k in doc}
+    load = doc.get("load", {})
+    require(isinstance(load, dict) and set(load) <= {"p_w"}, "[load] keys", "['p_w']", load)
+    if "p_w" in load:
+        kwargs["p_w"] = load["p_w"]
+    drives = doc.get("drive", [])
+    require(isinstance(drives, list), "drive", "an array of [[drive]] tables", drives)
+    kwargs["drives"] = tuple(_build(Drive, d, "drive") for d in drives)
+    if "seeds" in doc:
+        require(isinstance(doc["seeds"], list), "seeds", "a list of integers", doc["seeds"])
+        kwargs["seeds"] = tuple(doc["seeds"])
+    if "dt" in doc and doc["dt"] != "auto":
+        kwargs["dt"] = doc["dt"]
+    return Config(name=doc.get("name", "dem"), **kwargs)
+
+
+def parse(text: str) -> Config:
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"config is not valid TOML: {exc}") from None
+    return from_dict(doc)
+
+
+def load(path: str | Path) -> tuple[Config, str]:
+    """Config and its TOML text from a file."""
+    text = Path(path).read_text()
+    return parse(text), text
+
+
+# --- presets -------------------------------------------------------------------------------------
+# 2D disks with mu_p = 0.5: mu(I) estimates (da Cruz et al. 2005 style, mu_s ~ 0.28, slope ~ 1 at
+# small I); 3D spheres: the paper's glass beads.  compare/ calibrates them from steady runs.
+_DISKS = 'mu_s = 0.28\nmu_d = 0.58\nI0 = 0.3\nI_convention = "dem"\nphi = 0.8\n'
+_SPHERES = 'mu_s = 0.3839\nmu_d = 0.6494\nI0 = 0.279\nI_convention = "dem"\nphi = 0.6\n'
+
+PRESETS = {
+    "smoke": f"""# smoke: a few hundred disks, imposed stress above yield; CI check, < 60 s on 2 cores
+name = "smoke"
+seeds = [1]
+[material]
+{_DISKS}[grains]
+dimension = 2
+[box]
+width = 16.0
+depth = 12.0
+[load]
+p_w = 10.0
+[[drive]]
+name = "stress"
+kind = "stress"
+mu_w_tilde = 0.3
+duration = 6.0
+[output]
+plate = 0.02
+thermo = 0.2
+atoms = 1.0
+contacts = 3.0
+profiles = 1.0
+restart = 1.0
+[prepare]
+ke_per_grain = 1e-4
+settle_max = 25.0
+relax_max = 20.0
+""",
+    "quick": f"""# quick: the demo scene in 2D, imposed stress and the matching imposed speed; each < 5 min on 2 cores
+name = "quick"
+seeds = [1]
+[material]
+{_DISKS}[grains]
+dimension = 2
+[box]
+width = 24.0
+[load]
+p_w = 20.0
+[[drive]]
+name = "stress"
+kind = "stress"
+mu_w_tilde = 0.5
+duration_ts = 10.0
+[[drive]]
+name = "speed"
+kind = "speed"
+mu_w_tilde = 0.5
+duration_ts = 10.0
+[output]
+plate = 0.02
+atoms = 0.5
+contacts = 5.0
+profiles = 0.2
+restart = 2.0
+""",
+    "paper": f"""# paper: 3D spheres, mu~_w = 0.9, 0.5, 0.1 imposed stresses and the three matching speeds, 3 beds
+name = "paper"
+seeds = [1, 2, 3]
+[material]
+{_SPHERES}[grains]
+dimension = 3
+[box]
+width = 16.0
+width_z = 8.0
+[load]
+p_w = 40.0
+""" + "".join(f"""[[drive]]
+name = "{kind}-{tag}"
+kind = "{kind}"
+mu_w_tilde = {mt}
+duration_ts = 10.0
+min_duration = 20.0
+""" for kind in ("stress", "speed") for tag, mt in (("0.9", 0.9), ("0.5", 0.5), ("0.1", 0.1))) + """[output]
+plate = 0.02
+atoms = 2.0
+contacts = 10.0
+profiles = 0.5
+restart = 5.0
+""",
+}
+
+
+def preset(name: str) -> tuple[Config, str]:
+    require(name in PRESETS, "preset", f"one of {sorted(PRESETS)}", name)
+    text = PRESETS[name]
+    return parse(text), text

@@ -1,0 +1,100 @@
+"""Contact law: stiffness from the rigidity number kappa, contact time t_c and the time step bound.
+
+DEM units (d = rho_p = g = 1).  Grain diameters are uniform by number in [1 - w, 1 + w].
+
+* Hooke (``pair_coeff * * hooke k_n e ... damping coeff_restitution``): F_n = k_n delta + damping,
+  k_n = kappa p_w d, so the overlap under a typical contact force p_w d is d/kappa.
+* Hertz (``hertz k_n e``): F_n = k_n a delta with contact radius a = sqrt(R_eff delta); equivalent to
+  Hooke when the same force p_w d gives the same overlap d/kappa for two mean grains (R_eff = d/4):
+  k_n = 2 kappa^(3/2) p_w.  Its time step uses the tangent stiffness at 10 d/kappa (impacts).
+* Damping ``coeff_restitution`` sets the normal restitution e for every pair whatever the masses,
+  damping ratio zeta = -ln e / sqrt(pi^2 + ln^2 e); t_c = pi / (omega_0 sqrt(1 - zeta^2)),
+  omega_0 = sqrt(k/m_eff), m_eff = m_min/2 for the two lightest grains (shortest contact).
+* The time step bound is t_c/20; the default time step is that bound.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+DT_FRACTION = 20.0  # dt <= t_c / DT_FRACTION
+HERTZ_OVERLAP_FACTOR = 10.0  # Hertz t_c evaluated at an overlap of this many d/kappa
+
+
+def grain_mass(diameter: float, dimension: int, rho_p: float = 1.0) -> float:
+    """Mass of a disk (2D, per unit thickness: rho_p pi r^2, LAMMPS ``density/disc``) or a sphere."""
+    r = diameter / 2
+    return rho_p * (math.pi * r**2 if dimension == 2 else 4 / 3 * math.pi * r**3)
+
+
+def grain_volume(diameter: float, dimension: int) -> float:
+    return grain_mass(diameter, dimension, 1.0)
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Stiffness, damping and time step of a scene; ``as_dict`` is written into run.json."""
+
+    model: str
+    dimension: int
+    p_w: float
+    kappa: float
+    restitution: float
+    mu_p: float
+    kt_over_kn: float
+    polydispersity: float
+
+    @property
+    def k_n(self) -> float:
+        if self.model == "hooke":
+            return self.kappa * self.p_w
+        return 2.0 * self.kappa**1.5 * self.p_w
+
+    @property
+    def k_t(self) -> float:
+        return self.kt_over_kn * self.k_n
+
+    @property
+    def k_linear(self) -> float:
+        """Stiffness that sets the contact time: k_n (Hooke) or the Hertz tangent stiffness."""
+        if self.model == "hooke":
+            return self.k_n
+        delta = HERTZ_OVERLAP_FACTOR / self.kappa
+        return 1.5 * self.k_n * math.sqrt(0.25 * delta)
+
+    @property
+    def zeta(self) -> float:
+        log_e = math.log(self.restitution)
+        return -log_e / math.sqrt(math.pi**2 + log_e**2)
+
+    @property
+    def m_eff_min(self) -> float:
+        return grain_mass(1.0 - self.polydispersity, self.dimension) / 2
+
+    @property
+    def t_c(self) -> float:
+        omega0 = math.sqrt(self.k_linear / self.m_eff_min)
+        return math.pi / (omega0 * math.sqrt(1.0 - self.zeta**2))
+
+    @property
+    def dt_max(self) -> float:
+        return self.t_c / DT_FRACTION
+
+    def pair_coeff(self) -> str:
+        """The contact law in LAMMPS ``pair_coeff`` / ``fix wall/gran`` syntax."""
+        return (f"{self.model} {self.k_n:.10g} {self.restitution:.10g} "
+                f"tangential linear_history {self.k_t:.10g} 0.5 {self.mu_p:.10g} damping coeff_restitution")
+
+    def as_dict(self) -> dict:
+        return {
+            "model": f"pair_style granular {self.model}, tangential linear_history, damping coeff_restitution",
+            "pair_coeff": self.pair_coeff(),
+            "kappa": self.kappa, "k_n": self.k_n, "k_t": self.k_t, "mu_p": self.mu_p,
+            "restitution": self.restitution, "damping_ratio": self.zeta,
+            "t_c": self.t_c, "dt_max": self.dt_max,
+            "derivation": (
+                "kappa = k_n/(p_w d) (Hooke) or Hertz k_n = 2 kappa^1.5 p_w (same overlap d/kappa under a force "
+                "p_w d between mean grains); t_c = pi/(omega_0 sqrt(1-zeta^2)), omega_0 = sqrt(k/m_eff), "
+                "m_eff = half the lightest grain mass, zeta = -ln e/sqrt(pi^2+ln^2 e), k = k_n (Hooke) or the "
+                f"Hertz tangent stiffness at overlap {HERTZ_OVERLAP_FACTOR:g} d/kappa; dt_max = t_c/{DT_FRACTION:g}"),
+        }
