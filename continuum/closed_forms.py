@@ -1,0 +1,108 @@
+"""The paper's approximate solutions, in its dimensionless variables.
+
+Short time (eq. SolutionSS), long time (eq. SolutionLONG), steady wall-speed approximations
+(eqs. Uwall_asymp, Uwall_muS), the imposed-speed short-time profile
+(eq. muShortTime_VelocityImposed) and the imposed-speed time scales (eqs. TimeScaleMuD, TimeScaleMuW).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import quad
+from scipy.special import erfc, erfcinv
+
+from .rheology import Friction
+from .steady import DELTA_THRESHOLD
+
+#: delta/(Dmu sqrt(t~)) of the erfc solution: 2 erfc^-1(1e-3) = 4.653 (the paper prints 4.66)
+SELF_SIMILAR_DELTA = 2.0 * float(erfcinv(DELTA_THRESHOLD))
+
+
+def self_similar_mu(fr: Friction, mu_w: float, y, t):
+    """mu ~ mu_s + (mu_w - mu_s)(1 - y~) erfc(y~/(2 Dmu sqrt(t~))) (eq. SolutionSS)."""
+    y = np.asarray(y, dtype=float)
+    return fr.mu_s + (mu_w - fr.mu_s) * (1.0 - y) * erfc(y / (2.0 * fr.dmu * np.sqrt(t)))
+
+
+def wall_speed_of_profile(fr: Friction, mu_w: float, mu_of_y) -> float:
+    """u~_w = int_0^1 sqrt(1 + beta_w y~)/Dmu (1/mu~ - 1) dy~ (eq. IreWrittenNonDim) for a profile
+    mu(y~) given as a function, by adaptive quadrature."""
+    beta = fr.beta(mu_w)
+
+    def integrand(y):
+        mt = fr.tilde(mu_of_y(y))
+        return np.sqrt(1.0 + beta * y) / fr.dmu * (1.0 / mt - 1.0)
+
+    return quad(integrand, 0.0, 1.0, limit=200, epsabs=1e-12, epsrel=1e-10)[0]
+
+
+def self_similar_wall_speed(fr: Friction, mu_w: float, t: float) -> float:
+    """Wall speed of the erfc profile (eq. SolutionSS inserted in eq. IreWrittenNonDim)."""
+    return wall_speed_of_profile(fr, mu_w, lambda y: self_similar_mu(fr, mu_w, y, t))
+
+
+class WKB:
+    """Long-time series (eq. SolutionLONG): linearise eq. GranularStokesEqn_muLINlong with
+    (mu_d - mu) ~ Dmu, in y^ = 1 + beta_w y~ in [1, R], R = mu_w/mu_s:
+
+        tau~ ~ 1 + y^(1/8) sum_m Lambda_m exp(-lambda_m^2 t~) sin(m pi z),  z = (y^(3/4) - 1)/(R^(3/4) - 1),
+        lambda_m = (3/4) m pi beta_w Dmu / (R^(3/4) - 1)   (as printed).
+
+    The WKB modes of tau_t = (beta Dmu)^2 sqrt(y^) tau_y^y^ are y^(1/8) sin(m pi z) (amplitude
+    q^(-1/4) with q = y^(-1/2)); the paper prints y^(-1/8).  Lambda_m are the projections that make
+    the series equal the initial condition mu_s y^/mu_w at t~ = 0: the sine coefficients in z of
+    (mu_s y^/mu_w - 1) y^(-1/8).  The printed Lambda_m integrates in dy^ instead of dz.  The tests
+    check that this series reproduces the initial state and the numerics at late times.
+    """
+
+    def __init__(self, fr: Friction, mu_w: float, n_modes: int = 40):
+        self.fr, self.mu_w, self.beta = fr, mu_w, fr.beta(mu_w)
+        self.R = mu_w / fr.mu_s
+        self.span = self.R**0.75 - 1.0
+        m = np.arange(1, n_modes + 1)
+        self.lam = 0.75 * m * np.pi * self.beta * fr.dmu / self.span
+        self.coef = np.array([2 * quad(self._projection_integrand, 0.0, 1.0, args=(k,), limit=400)[0] for k in m])
+
+    def _yhat(self, z):
+        return (1.0 + self.span * z) ** (4.0 / 3.0)
+
+    def _projection_integrand(self, z, m):
+        yh = self._yhat(z)
+        return (self.fr.mu_s * yh / self.mu_w - 1.0) * yh ** (-0.125) * np.sin(m * np.pi * z)
+
+    def tau(self, y, t):
+        """tau~(y~, t~) from the series."""
+        yh = 1.0 + self.beta * np.asarray(y, dtype=float)
+        z = (yh**0.75 - 1.0) / self.span
+        modes = np.sin(np.multiply.outer(z, np.arange(1, len(self.coef) + 1)) * np.pi)
+        return 1.0 + yh**0.125 * (modes @ (self.coef * np.exp(-self.lam**2 * t)))
+
+    def mu(self, y, t):
+        y = np.asarray(y, dtype=float)
+        return self.mu_w * self.tau(y, t) / (1.0 + self.beta * y)
+
+    def wall_speed(self, t: float) -> float:
+        return wall_speed_of_profile(self.fr, self.mu_w, lambda y: self.mu(y, t))
+
+
+def uwall_asymp(fr: Friction, mu_w_tilde):
+    """u~_w^inf ~ -(1/Dmu)[1 + log(mu~_w)/(1 - mu~_w)] + O(beta_w) (eq. Uwall_asymp)."""
+    mt = np.asarray(mu_w_tilde, dtype=float)
+    return -(1.0 + np.log(mt) / (1.0 - mt)) / fr.dmu
+
+
+def uwall_mus(fr: Friction, mu_w):
+    """u~_w^inf ~ mu_s/(2 Dmu^2) (beta_w - 5/2 beta_w^2) for mu_w -> mu_s (eq. Uwall_muS)."""
+    beta = np.asarray(mu_w, dtype=float) / fr.mu_s - 1.0
+    return fr.mu_s / (2.0 * fr.dmu**2) * (beta - 2.5 * beta**2)
+
+
+def speed_short_time_mu(fr: Friction, mu_w_t, y, t):
+    """Imposed speed, t~ <= O(1): mu ~ mu_s + (mu_w(t~) - mu_s) erfc(y~/(2 Dmu sqrt(t~)))
+    (eq. muShortTime_VelocityImposed), mu_w(t~) taken from the numerics."""
+    return fr.mu_s + (mu_w_t - fr.mu_s) * erfc(np.asarray(y, dtype=float) / (2.0 * fr.dmu * np.sqrt(t)))
+
+
+def speed_time_scales(fr: Friction, u_w: float, mu_w_inf: float) -> dict:
+    """Scales of the two imposed-speed stages: t_mud ~ u~_w^2 (eq. TimeScaleMuD) while mu_w ~ mu_d,
+    t_muw ~ (u~_w/(mu_w^inf - mu_s))^2 (eq. TimeScaleMuW) to reach the steady mu_w^inf."""
+    return {"t_mud": u_w**2, "t_muw": (u_w / (mu_w_inf - fr.mu_s)) ** 2}

