@@ -279,7 +279,7 @@ seeds = [1]
 {_DISKS}[grains]
 dimension = 2
 [box]
-width = 16.0
+width = 20.0
 depth = 12.0
 [load]
 p_w = 10.0
@@ -287,13 +287,13 @@ p_w = 10.0
 name = "stress"
 kind = "stress"
 mu_w_tilde = 0.3
-duration = 6.0
+duration = 10.0
 [output]
 plate = 0.02
 thermo = 0.2
 atoms = 1.0
-contacts = 3.0
-profiles = 1.0
+contacts = 5.0
+profiles = 0.5
 restart = 1.0
 [prepare]
 ke_per_grain = 1e-4

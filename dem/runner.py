@@ -27,6 +27,7 @@ import shlex
 import shutil
 import signal
 import subprocess
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +38,7 @@ from continuum.scales import UNITS
 
 from . import lammps_env, outputs, scene
 from .config import Config, parse
+from .contact import grain_mass
 from .sizing import DrivePlan, Plan, plan
 
 _THERMO = re.compile(r"^\s*(\d+)\s+(\S+)")
@@ -99,8 +101,6 @@ def _explain(returncode: int, error: str | None, nonfinite: bool, plan_: Plan) -
         return f"NaN/inf in the thermodynamic output: the integration blew up ({dt})"
     if error:
         return f"LAMMPS error: {error}"
-    if error is None and "loading shared libraries" in (plan_ and "" or ""):
-        return ""
     signals = {137: "killed (SIGKILL: out of memory, or killed by the user or the scheduler)",
                -9: "killed (SIGKILL: out of memory, or killed by the user or the scheduler)",
                143: "terminated (SIGTERM)", -15: "terminated (SIGTERM)",
@@ -125,7 +125,7 @@ class _Lammps:
     def run(self, script: str, cwd: Path, plan_: Plan, total: int, start: int, desc: str) -> dict:
         bar = tqdm(total=total, initial=start, desc=desc, unit="step", disable=not self.progress,
                    dynamic_ncols=True, leave=True)
-        t0, step, error, nonfinite, phases = time.monotonic(), start, None, False, []
+        t0, step, error, nonfinite, phases, in_thermo = time.monotonic(), start, None, False, [], False
         proc = subprocess.Popen(self.command(script), cwd=cwd, env=lammps_env.child_env(),
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
         try:
@@ -137,7 +137,11 @@ class _Lammps:
                 elif line.startswith("PHASE"):
                     phases.append(line.split(None, 1)[1].strip())
                     bar.set_description(f"{desc} {phases[-1].split()[0]}")
-                elif (m := _THERMO.match(line)) and not line.lstrip().startswith("Step"):
+                elif line.lstrip().startswith("Step "):
+                    in_thermo = True
+                elif line.startswith("Loop time"):
+                    in_thermo = False
+                elif in_thermo and (m := _THERMO.match(line)):
                     if _NONFINITE.search(line):
                         nonfinite = True
                         proc.terminate()
@@ -209,7 +213,7 @@ class Runner:
     def new_metadata(self) -> dict:
         p = self.plan
         plate_nx, plate_nz, _, _ = scene.plate_layout(p)
-        plate_mass = plate_nx * plate_nz * (3.141592653589793 / 4 if p.dimension == 2 else 3.141592653589793 / 6)
+        plate_mass = plate_nx * plate_nz * grain_mass(1.0, p.dimension)
         return {
             "name": self.cfg.name, "status": "running", "message": "",
             "units": "DEM units: d = rho_p = g = 1 (see conventions)",
@@ -272,7 +276,7 @@ class Runner:
         (d / "restart").mkdir(parents=True, exist_ok=True)
         segments = sorted((d / "segments").glob("[0-9][0-9][0-9]")) if (d / "segments").exists() else []
         starts = [json.loads((s / "segment.json").read_text())["start"] for s in segments]
-        restarts = [(s, p) for s, p in _restarts(d) if s < dp.steps or s == dp.steps]
+        restarts = [(s, p) for s, p in _restarts(d) if s <= dp.steps]
         start, restart = (restarts[-1] if restarts else (0, prepared))
         seg = d / "segments" / f"{len(segments):03d}"
         seg.mkdir(parents=True)
@@ -369,7 +373,7 @@ def run(cfg: Config, text: str, out: str | Path, np: int = 2, resume: bool = Fal
         meta = runner.new_metadata()
     runner.save(meta)
     previous = signal.getsignal(signal.SIGTERM)
-    in_main = _is_main_thread()
+    in_main = threading.current_thread() is threading.main_thread()
     if in_main:
         signal.signal(signal.SIGTERM, _raise_interrupted)
     try:
@@ -381,9 +385,3 @@ def run(cfg: Config, text: str, out: str | Path, np: int = 2, resume: bool = Fal
 
 def _raise_interrupted(signum, frame):
     raise Interrupted(f"received signal {signum}")
-
-
-def _is_main_thread() -> bool:
-    import threading
-
-    return threading.current_thread() is threading.main_thread()

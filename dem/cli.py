@@ -1,0 +1,60 @@
+"""``granstokes dem run``: run a DEM scene from a TOML config or a preset.
+
+    granstokes dem run CONFIG.toml --out DIR [--np 2] [--resume] [--launcher 'srun -n {np}']
+    granstokes dem run --preset smoke|quick|paper --out DIR
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from . import config as config_mod
+from .lammps_env import LammpsNotFound
+from .runner import run
+from .sizing import plan
+
+
+def _cmd_run(args) -> int:
+    try:
+        if (args.config is None) == (args.preset is None):
+            raise ValueError("give exactly one of CONFIG.toml or --preset")
+        cfg, text = config_mod.load(args.config) if args.config else config_mod.preset(args.preset)
+        print(f"dem: scene '{cfg.name}' -> {args.out}", file=sys.stderr)
+        for reason in plan(cfg).reasons:
+            print(f"  {reason}", file=sys.stderr)
+        result = run(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
+                     progress=not args.quiet)
+    except (ValueError, OSError, LammpsNotFound) as exc:
+        print(f"granstokes dem run: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"dem: {result.status}" + (f": {result.message}" if result.message else "")
+          + f" (see {result.out / 'run.json'})", file=sys.stderr)
+    return {"complete": 0, "interrupted": 130}.get(result.status, 1)
+
+
+def register(subparsers) -> None:
+    """Add the ``dem`` subcommand to the ``granstokes`` parser."""
+    dem = subparsers.add_parser("dem", help="LAMMPS DEM scenes (plate over a granular bed)")
+    sub = dem.add_subparsers(dest="dem_command", required=True)
+    r = sub.add_parser("run", help="run a scene from a TOML config or a preset",
+                       description="Run a DEM scene: prepare the bed(s), then each drive; outputs in --out.")
+    r.add_argument("config", nargs="?", help="TOML config file (see dem/config.py)")
+    r.add_argument("--preset", help=f"one of {sorted(config_mod.PRESETS)}")
+    r.add_argument("--out", required=True, help="run folder (must be new or empty unless --resume)")
+    r.add_argument("--np", type=int, default=2, help="MPI ranks (default 2)")
+    r.add_argument("--resume", action="store_true", help="continue an interrupted run in --out")
+    r.add_argument("--launcher", help="launcher template with {np}, e.g. 'srun -n {np}' (default: the "
+                                      "mpich wheel's mpirun)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=_cmd_run)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="granstokes")
+    register(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
