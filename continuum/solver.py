@@ -41,7 +41,7 @@ class Numerics:
 def check_times(times) -> np.ndarray:
     t = np.asarray(times, dtype=float).ravel()
     require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
-            "times", "a non-empty, strictly increasing list of finite numbers > 0", list(np.atleast_1d(times)))
+            "times", "a non-empty, strictly increasing list of finite numbers > 0", [float(v) for v in np.atleast_1d(times)])
     return t
 
 

@@ -136,9 +136,11 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats):
     X = x
     for i in range(len(rates), len(tab.A)):
         explicit = x[1:] + h * sum(a * r for a, r in zip(tab.A[i][:i], rates) if a != 0.0)
-        # predictor: the explicit part plus the last stage rate for the implicit part
+        # predictor: the explicit part plus the last implicit stage's rate for the implicit part
+        # (F(x_n) of an explicit first stage is not used: after CN steps it carries the
+        # undamped stiff modes and would make a wild guess)
         guess = X.copy()
-        if rates:
+        if len(rates) > int(tab.explicit_first):
             guess[1:] = explicit + matrix.dh * rates[-1]
         X, r = solve_stage(problem, matrix, guess, explicit, weights, newton_tol, stats)
         rates.append(r)
