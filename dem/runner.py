@@ -191,6 +191,18 @@ def _write_json(path: Path, data: dict) -> None:
     os.replace(tmp, path)
 
 
+def _last_plate_step(segment: Path) -> int:
+    path = segment / "plate.csv"
+    if not path.exists():
+        return -1
+    lines = path.read_text().splitlines()
+    for line in reversed(lines[1:]):
+        head = line.split(",", 1)[0]
+        if head.isdigit():
+            return int(head)
+    return -1
+
+
 def _restarts(drive_dir: Path) -> list[tuple[int, Path]]:
     found = []
     for p in (drive_dir / "restart").glob("drive.*.restart"):
@@ -276,8 +288,13 @@ class Runner:
         (d / "restart").mkdir(parents=True, exist_ok=True)
         segments = sorted((d / "segments").glob("[0-9][0-9][0-9]")) if (d / "segments").exists() else []
         starts = [json.loads((s / "segment.json").read_text())["start"] for s in segments]
-        restarts = [(s, p) for s, p in _restarts(d) if s <= dp.steps]
+        # a restart file is complete once LAMMPS wrote output past it (a kill may cut a write short)
+        seen = max((_last_plate_step(s) for s in segments), default=-1)
+        restarts = [(s, p) for s, p in _restarts(d) if s < seen and s <= dp.steps]
         start, restart = (restarts[-1] if restarts else (0, prepared))
+        for s, p in _restarts(d):
+            if s > start:
+                p.unlink()
         seg = d / "segments" / f"{len(segments):03d}"
         seg.mkdir(parents=True)
         rel = os.path.relpath(restart, seg)

@@ -1,0 +1,116 @@
+"""DEM configs, sizing, contact law and output merging: fast tests, no LAMMPS run."""
+import math
+
+import pandas as pd
+import pytest
+
+from dem import cli, config, outputs
+from dem.contact import Contact, grain_mass
+from dem.runner import run
+from dem.sizing import plan
+
+SMOKE = config.PRESETS["smoke"]
+
+
+def with_line(text: str, table: str, line: str) -> str:
+    """Insert ``line`` right after the ``[table]`` header of a preset."""
+    return text.replace(f"[{table}]\n", f"[{table}]\n{line}\n", 1)
+
+
+@pytest.mark.parametrize("name", sorted(config.PRESETS))
+def test_presets_are_valid_and_sized(name):
+    cfg, _ = config.preset(name)
+    p = plan(cfg)
+    assert p.dt <= cfg.contact.dt_max
+    assert p.depth >= 4 and p.n_grains > 0
+    assert all(dp.steps > 0 for dp in p.drives)
+    assert p.intervals["restart"] % p.intervals["profiles"] == 0
+
+
+def test_paper_preset_has_three_stresses_and_matching_speeds():
+    cfg, _ = config.preset("paper")
+    p = plan(cfg)
+    tildes = sorted((d.drive.kind, round(d.scales.mu_w_tilde, 6)) for d in p.drives)
+    assert tildes == sorted((k, t) for k in ("speed", "stress") for t in (0.1, 0.5, 0.9))
+    for dp in p.drives:
+        assert dp.scales.delta_s + cfg.box.margin <= p.depth + 1
+
+
+@pytest.mark.parametrize("text, message", [
+    (with_line(SMOKE, "box", "width = -5.0").replace("width = 20.0\n", ""), "box.width must be"),
+    (SMOKE.replace("depth = 12.0", "depth = -1.0"), "box.depth must be"),
+    (with_line(SMOKE, "grains", "mu_p = -0.1"), "grains.mu_p must be a finite number >= 0"),
+    (SMOKE.replace("p_w = 10.0", "p_w = 0.0"), "load.p_w must be a finite number > 0"),
+    (SMOKE.replace("p_w = 10.0", "p_w = -3.0"), "load.p_w must be"),
+    (with_line(SMOKE, "box", "width_z = 8.0"), "box.width_z must be absent for a 2D scene"),
+    (SMOKE.replace('seeds = [1]', 'seeds = [1]\ndt = 0.01'), "dt must be <= t_c/20"),
+    (with_line(SMOKE, "grains", "restitution = 1.5"), "grains.restitution must be"),
+    (with_line(SMOKE, "grains", "dimension = 4").replace("dimension = 2\n", ""), "grains.dimension must be 2 or 3"),
+    (with_line(SMOKE, "grains", "colour = 'red'"), "[grains] keys must be among"),
+    (SMOKE.replace("mu_w_tilde = 0.3", "mu_w = 0.9"), "mu_w must be in the open interval"),
+    (SMOKE.replace('kind = "stress"', 'kind = "shear"'), "drive[stress].kind must be"),
+    (SMOKE.replace("mu_w_tilde = 0.3", "u_w = 1.0"), "drive[stress] load must be exactly one of"),
+])
+def test_bad_configs_fail_fast_naming_the_parameter(text, message, tmp_path):
+    with pytest.raises(ValueError) as err:
+        cfg = config.parse(text)
+        run(cfg, text, tmp_path / "out")
+    assert message in str(err.value)
+    assert not (tmp_path / "out").exists()
+
+
+def test_unknown_preset_and_cli_errors_write_nothing(tmp_path, capsys):
+    with pytest.raises(ValueError, match="preset must be one of"):
+        config.preset("huge")
+    out = tmp_path / "out"
+    assert cli.main(["dem", "run", "--preset", "huge", "--out", str(out)]) == 2
+    assert "preset must be one of ['paper', 'quick', 'smoke']" in capsys.readouterr().err
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SMOKE.replace("p_w = 10.0", "p_w = -1.0"))
+    assert cli.main(["dem", "run", str(bad), "--out", str(out)]) == 2
+    assert "load.p_w must be a finite number > 0, got -1.0" in capsys.readouterr().err
+    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--np", "0"]) == 2
+    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume"]) == 2
+    assert not out.exists()
+
+
+def test_hooke_and_hertz_stiffness_and_time_step():
+    hooke = Contact("hooke", 3, 10.0, 1e4, 0.5, 0.5, 2 / 7, 0.1)
+    assert hooke.k_n == pytest.approx(1e5)
+    # damped oscillator with m_eff = half the lightest grain: half period, damping ratio from e
+    m_eff = grain_mass(0.9, 3) / 2
+    zeta = -math.log(0.5) / math.sqrt(math.pi**2 + math.log(0.5) ** 2)
+    assert hooke.t_c == pytest.approx(math.pi / math.sqrt(1e5 / m_eff * (1 - zeta**2)))
+    assert hooke.dt_max == pytest.approx(hooke.t_c / 20)
+    # restitution recovered from the damped half period: e = exp(-zeta pi / sqrt(1 - zeta^2))
+    assert math.exp(-hooke.zeta * math.pi / math.sqrt(1 - hooke.zeta**2)) == pytest.approx(0.5)
+    hertz = Contact("hertz", 3, 10.0, 1e4, 0.5, 0.5, 2 / 7, 0.1)
+    overlap = 1e-4  # d/kappa: the Hooke overlap under a force p_w d
+    assert hertz.k_n * math.sqrt(0.25 * overlap) * overlap == pytest.approx(10.0)
+
+
+def test_sizing_follows_delta_s_and_t_s():
+    cfg, _ = config.preset("quick")
+    p = plan(cfg)
+    s = p.drives[0].scales
+    assert p.depth == math.ceil(s.delta_s + cfg.box.margin)
+    assert p.drives[0].duration == pytest.approx(10 * s.t_s)
+    assert p.drives[1].u_w > 0 and p.drives[0].tau_w == pytest.approx(s.mu_w * cfg.p_w)
+
+
+def test_merge_keeps_every_step_once(tmp_path):
+    # segment 0 ran to step 50 but its last restart was at 30; segment 1 resumed from 30
+    a = pd.DataFrame({"step": range(0, 60, 10), "v": 0})
+    b = pd.DataFrame({"step": range(30, 100, 10), "v": 1})
+    merged = outputs.merge_table([a, b], [0, 30])
+    assert list(merged["step"]) == list(range(0, 100, 10))
+    assert list(merged["v"]) == [0, 0, 0, 0, 1, 1, 1, 1, 1, 1]
+    dumps = []
+    for i, steps in enumerate([(0, 20, 40), (20, 40, 60)]):
+        path = tmp_path / f"{i}.dump"
+        path.write_text("".join(f"ITEM: TIMESTEP\n{s}\nITEM: NUMBER OF ATOMS\n1\nseg {i}\n" for s in steps))
+        dumps.append(path)
+    assert outputs.merge_dump(dumps, [0, 20], tmp_path / "all.dump") == 4
+    snapshots = list(outputs._snapshots(tmp_path / "all.dump"))
+    assert [s for s, _ in snapshots] == [0, 20, 40, 60]
+    assert "seg 0" in snapshots[1][1] and "seg 1" in snapshots[2][1]

@@ -1,0 +1,105 @@
+"""The smoke scene run through LAMMPS: physics checks on its output, and kill + resume."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from dem import cli, config, outputs
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory):
+    out = tmp_path_factory.mktemp("dem") / "smoke"
+    t0 = time.monotonic()
+    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--quiet"]) == 0
+    wall = time.monotonic() - t0
+    return out, wall
+
+
+def test_smoke_completes_fast_with_metadata(smoke):
+    out, wall = smoke
+    assert wall < 60
+    meta = json.loads((out / "run.json").read_text())
+    assert meta["status"] == "complete"
+    assert meta["stages"]["seed-1"]["info"]["relaxed"]
+    assert "inertial_number" in meta["conventions"] and "dem_units" in meta["conventions"]
+    assert meta["contact"]["dt_max"] == pytest.approx(meta["contact"]["t_c"] / 20)
+    assert meta["sizing"]["dt"] <= meta["contact"]["dt_max"]
+    assert meta["provenance"]["lammps_version"] > 0 and meta["plate"]["mass_per_area"] > 0
+    assert (out / "config.toml").read_text() == config.PRESETS["smoke"]
+
+
+def test_no_grain_lost(smoke):
+    out, _ = smoke
+    grains = pd.read_csv(out / "seed-1" / "prepare" / "grains.csv")
+    counts = {int(text.split("NUMBER OF ATOMS\n")[1].split()[0])
+              for _, text in outputs._snapshots(out / "seed-1" / "stress" / "atoms.dump")}
+    assert counts == {len(grains)}
+
+
+def test_pressure_grows_hydrostatically_from_p_w(smoke):
+    """Vertical normal stress -s_yy (the pressure of the paper's y momentum balance, eq. StokesEqn2)
+    grows from p_w at the plate with slope phi rho_p g, phi measured in the same bins."""
+    out, _ = smoke
+    cfg, _ = config.preset("smoke")
+    d = out / "seed-1" / "stress"
+    plate, prof = pd.read_csv(d / "plate.csv"), pd.read_csv(d / "profiles.csv")
+    mean = prof.groupby("y").mean(numeric_only=True)
+    surface = plate["y"].mean() - 0.5  # bottom of the plate grains
+    bins = mean[(mean.index >= cfg.box.base_thickness + 3) & (mean.index <= surface - 1.5)]
+    depth = surface - bins.index.to_numpy()
+    slope, intercept = np.polyfit(depth, -bins["s_yy"], 1)
+    phi = bins["phi"].mean()
+    assert len(bins) >= 6
+    assert slope == pytest.approx(phi, rel=0.10), (slope, phi)
+    assert intercept == pytest.approx(cfg.p_w, rel=0.10), intercept
+
+
+def test_plate_moves_and_accelerates_above_yield(smoke):
+    out, _ = smoke
+    plate = pd.read_csv(out / "seed-1" / "stress" / "plate.csv")
+    speeds = [part.mean() for part in np.array_split(plate["u_x"].to_numpy(), 3)]
+    assert 0 < speeds[0] < speeds[1] < speeds[2]
+    assert plate["x"].iloc[-1] - plate["x"].iloc[0] > 5.0
+    assert plate["f_y"].mean() == pytest.approx(10.0, rel=0.1)  # the bed carries the load p_w
+
+
+def test_killed_run_resumes_with_continuous_output(tmp_path):
+    """SIGKILL the whole run (runner and LAMMPS) mid-drive, resume, and find every output step once."""
+    text = config.PRESETS["smoke"].replace("duration = 10.0", "duration = 30.0")
+    cfg_path = tmp_path / "smoke-long.toml"
+    cfg_path.write_text(text)
+    out = tmp_path / "run"
+    args = [sys.executable, "-m", "dem.cli", "dem", "run", str(cfg_path), "--out", str(out), "--quiet"]
+    proc = subprocess.Popen(args, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    plate = out / "seed-1" / "stress" / "segments" / "000" / "plate.csv"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and proc.poll() is None:
+        if plate.exists() and len(plate.read_text().splitlines()) > 400:  # past a few restarts (t ~ 8)
+            break
+        time.sleep(0.02)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert json.loads((out / "run.json").read_text())["status"] == "running"
+    assert cli.main(["dem", "run", str(cfg_path), "--out", str(out), "--resume", "--quiet"]) == 0
+    meta = json.loads((out / "run.json").read_text())
+    info = meta["stages"]["seed-1/stress"]["info"]
+    assert meta["status"] == "complete" and info["segments"] == 2 and info["resumed_from_step"] > 0
+    df = pd.read_csv(out / "seed-1" / "stress" / "plate.csv")
+    steps = df["step"].to_numpy()
+    every = meta["sizing"]["intervals_steps"]["plate"]
+    assert steps[0] == 0 and np.all(np.diff(steps) == every)
+    assert steps[-1] == meta["sizing"]["drives"][0]["steps"] // every * every
+    snaps = [s for s, _ in outputs._snapshots(out / "seed-1" / "stress" / "atoms.dump")]
+    assert np.all(np.diff(snaps) == meta["sizing"]["intervals_steps"]["atoms"]) and snaps[0] == 0
+    prof = pd.read_csv(out / "seed-1" / "stress" / "profiles.csv")
+    assert np.all(np.diff(np.unique(prof["step"])) == meta["sizing"]["intervals_steps"]["profiles"])
+    assert not (out / "seed-1" / "stress" / "segments").exists()
