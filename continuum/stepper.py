@@ -105,7 +105,8 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8):
     """Solve x - dh F(x) = rhs (interior rows), g(x) = 0 (wall row) by simplified Newton.
 
     Stops when the contraction-corrected update theta/(1-theta) |dx| (weighted RMS) is below
-    ``tol`` (Hairer & Wanner 1996, IV.8); returns (x, F(x))."""
+    ``tol`` (Hairer & Wanner 1996, IV.8), then solves the wall row (linear in x[0]) exactly;
+    returns (x, F(x))."""
     x = x.copy()
     rate = problem.rate(x)
     previous = None
@@ -116,13 +117,16 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8):
         if not np.all(np.isfinite(dx)):
             break
         x += problem.step_fraction(x, dx) * dx
-        rate = problem.rate(x)
         size = np.sqrt(np.mean((dx / weights) ** 2))
         theta = 0.5 if previous is None else size / previous
         if theta >= 1.0:
             break
         if size * theta / (1.0 - theta) < tol or size < 1e-3 * tol:
-            return x, rate
+            # the wall row is linear in x[0] for both problems: enforce it exactly
+            g, grad = problem.wall(x)
+            x[0] -= g / grad[0]
+            return x, problem.rate(x)
+        rate = problem.rate(x)
         previous = size
     stats.newton_failures += 1
     raise NewtonFailure("Newton did not converge")

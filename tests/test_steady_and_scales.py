@@ -1,0 +1,115 @@
+"""Exact steady state, the paper's scales and the inertial-number conventions."""
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from continuum.closed_forms import UWALL_MUS_PRINTED_B2, uwall_asymp, uwall_mus
+from continuum.rheology import Friction, convert_I
+from continuum.scales import Material, Scales
+from continuum.steady import mu_w_for_speed, steady_delta, steady_velocity, steady_wall_speed
+
+
+@pytest.mark.parametrize("mu_w_tilde, expected", [(0.9, 0.19940), (0.5, 1.34039), (0.1, 4.62788)])
+def test_paper_steady_wall_speeds(paper_friction, mu_w_tilde, expected):
+    fr = paper_friction
+    mu_w = fr.mu_w_from_tilde(mu_w_tilde)
+    assert steady_wall_speed(fr, mu_w) == pytest.approx(expected, abs=2e-5)
+    # the closed-form antiderivative equals adaptive quadrature of eq. IreWrittenNonDim
+    beta = fr.beta(mu_w)
+    integrand = lambda y: math.sqrt(1 + beta * y) / fr.dmu * (1 / fr.tilde(mu_w / (1 + beta * y)) - 1)
+    for y0 in (0.0, 0.3, 0.9):
+        assert steady_velocity(fr, mu_w, y0) == pytest.approx(quad(integrand, y0, 1, epsrel=1e-13)[0], rel=1e-10)
+
+
+@pytest.mark.parametrize("u_w", [0.01, 0.198, 1.334, 4.629, 20.0])
+def test_speed_inverse(paper_friction, u_w):
+    mu_w = mu_w_for_speed(paper_friction, u_w)
+    assert steady_wall_speed(paper_friction, mu_w) == pytest.approx(u_w, rel=1e-12)
+
+
+def test_steady_delta_is_the_threshold_depth(paper_friction):
+    fr = paper_friction
+    mu_w = fr.mu_w_from_tilde(0.5)
+    d = steady_delta(fr, mu_w)
+    excess = (mu_w / (1 + fr.beta(mu_w) * d) - fr.mu_s) / (mu_w - fr.mu_s)
+    assert excess == pytest.approx(1e-3, rel=1e-12)
+
+
+def test_uwall_mus_expansion_orders(paper_friction):
+    """Derived b2 leaves an O(beta^3) error (ratio 8 per halving); the printed -5/2 an O(beta^2) one."""
+    fr = paper_friction
+    betas = np.array([0.02, 0.01, 0.005])
+    exact = np.array([steady_wall_speed(fr, fr.mu_s * (1 + b)) for b in betas])
+    err = np.abs(uwall_mus(fr, fr.mu_s * (1 + betas)) - exact)
+    err_printed = np.abs(uwall_mus(fr, fr.mu_s * (1 + betas), UWALL_MUS_PRINTED_B2) - exact)
+    assert np.log2(err[:-1] / err[1:]) == pytest.approx([3, 3], abs=0.15)
+    assert np.log2(err_printed[:-1] / err_printed[1:]) == pytest.approx([2, 2], abs=0.1)
+
+
+def test_uwall_asymp_relative_error_is_order_beta(paper_friction):
+    fr = paper_friction
+    rel = []
+    for b in (0.02, 0.01):
+        mw = fr.mu_s * (1 + b)
+        rel.append(uwall_asymp(fr, fr.tilde(mw)) / steady_wall_speed(fr, mw) - 1)
+    assert rel[0] / rel[1] == pytest.approx(2.0, rel=0.05)
+
+
+def test_nu_g_factor_two_makes_U_consistent():
+    """Integrating the dimensional eq. IreWritten over the steady layer gives U * u~_w^inf only
+    with nu_g = (d/(2 phi Dmu I0)) sqrt(p_w/rho) (the paper prints a second version without the 2)."""
+    m = Material(I0=0.3, I_convention="paper", phi=0.58, d=2e-3, rho_p=2500.0, g=9.81)
+    p_w, mu_w = 3000.0, m.friction.mu_w_from_tilde(0.5)
+    sc = Scales(m, p_w, mu_w)
+
+    def dudy(y):  # eq. IreWritten, paper convention
+        p = p_w + m.phi * m.rho_p * m.g * y
+        mu = mu_w * p_w / p
+        return 2 * m.I0 * math.sqrt(p / (m.rho_p * m.d**2)) * (mu - m.mu_s) / (m.mu_d - mu)
+
+    u_w = quad(dudy, 0.0, sc.delta_s, epsrel=1e-12)[0]
+    assert u_w == pytest.approx(sc.U * steady_wall_speed(m.friction, mu_w), rel=1e-9)
+    assert sc.nu_g == pytest.approx(m.d / (2 * m.phi * sc.dmu * m.I0) * math.sqrt(p_w / m.rho_p), rel=1e-14)
+    assert sc.delta_s == pytest.approx(sc.beta_w * p_w / (m.phi * m.rho_p * m.g), rel=1e-14)
+    assert sc.t(sc.t_tilde(1.7)) == pytest.approx(1.7) and sc.y(sc.y_tilde(0.01)) == pytest.approx(0.01)
+
+
+def test_inertial_number_conventions():
+    """The same material, stated in both conventions, gives the same scales and mu at the same shear."""
+    a = Material(I0=0.279, I_convention="dem")
+    b = Material(I0=0.1395, I_convention="paper")
+    assert a.I0_paper == pytest.approx(b.I0_paper)
+    assert convert_I(0.1, "paper", "dem") == pytest.approx(0.2)
+    fr, du_dy, p = a.friction, 0.4, 2.0
+    I_dem, I_paper = du_dy / math.sqrt(p), 0.5 * du_dy / math.sqrt(p)
+    assert fr.mu_of_I(I_dem, a.I0) == pytest.approx(fr.mu_of_I(I_paper, a.I0_paper))
+    assert fr.I_of_mu(fr.mu_of_I(I_dem, a.I0), a.I0) == pytest.approx(I_dem)
+
+
+def test_for_speed_inverts_the_velocity_scale():
+    m = Material()
+    sc = Scales(m, 10.0, m.friction.mu_w_from_tilde(0.3))
+    u_w = sc.U * steady_wall_speed(m.friction, sc.mu_w)
+    assert Scales.for_speed(m, 10.0, u_w).mu_w == pytest.approx(sc.mu_w, rel=1e-10)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"phi": 1.2}, "phi"), ({"d": -1.0}, "d"), ({"I0": float("nan")}, "I0"),
+    ({"mu_s": 0.5, "mu_d": 0.4}, "mu_d"), ({"I_convention": "gdr"}, "I_convention")])
+def test_bad_material(kwargs, name):
+    with pytest.raises(ValueError, match=f"^{name} must be"):
+        Material(**kwargs)
+
+
+def test_bad_loading(paper_friction):
+    m = Material()
+    with pytest.raises(ValueError, match="^p_w must be"):
+        Scales(m, 0.0, 0.5)
+    with pytest.raises(ValueError, match="^mu_w must be"):
+        Scales(m, 1.0, m.mu_d)
+    with pytest.raises(ValueError, match="^u_w must be"):
+        mu_w_for_speed(paper_friction, -1.0)
+    with pytest.raises(ValueError, match="^mu_d must be"):
+        Friction(0.5, 0.5)

@@ -1,0 +1,125 @@
+"""Imposed wall stress (eq. GranularStokesEqn): convergence, growth laws, bounds, closed forms."""
+import numpy as np
+import pytest
+
+from continuum.closed_forms import SELF_SIMILAR_DELTA, WKB, self_similar_mu
+from continuum.mesh import Mesh
+from continuum.problems import ImposedStress
+from continuum.solver import Numerics, solve_stress
+from continuum.steady import steady_wall_speed
+from continuum.stepper import integrate
+
+CASES = (0.9, 0.5, 0.1)
+
+
+@pytest.fixture(scope="module")
+def solutions(paper_friction):
+    times = [1e-4, 1e-3, 1e-2, 1e-1, 1.0, 3.0, 10.0]
+    return {mt: solve_stress(paper_friction, paper_friction.mu_w_from_tilde(mt), times) for mt in CASES}
+
+
+def observed_orders(values):
+    """Orders from successive differences of a refinement sequence (factor 2 each)."""
+    d = np.abs(np.diff(np.asarray(values), axis=0))
+    d = d.reshape(len(d), -1).max(axis=1)
+    return np.log2(d[:-1] / d[1:])
+
+
+def test_space_convergence_is_second_order(paper_friction):
+    """Mesh halving with a fixed map: u~_w(t~) and tau~ at the common nodes converge at order 2."""
+    mu_w = paper_friction.mu_w_from_tilde(0.5)
+    uw, tau = [], []
+    for n in (50, 100, 200, 400):
+        sol = solve_stress(paper_friction, mu_w, [0.01, 0.1, 1.0], Numerics(n_cells=n, rtol=1e-9, atol=1e-11))
+        uw.append(sol.u_w)
+        tau.append(sol.tau[:, :: n // 50])
+    assert observed_orders(uw) == pytest.approx([2.0, 2.0], abs=0.15)
+    assert observed_orders(tau) == pytest.approx([2.0, 2.0], abs=0.15)
+
+
+@pytest.mark.parametrize("method, order", [("sdirk4", 4), ("tr-bdf2", 2), ("crank-nicolson", 2)])
+def test_time_convergence_matches_design_order(paper_friction, method, order):
+    """Fixed log-graded steps from t~ = 1e-8 (k per decade, k doubled): error ratio 2^order."""
+    mu_w = paper_friction.mu_w_from_tilde(0.5)
+    out = [1e-2, 1.0]
+    uw = [solve_stress(paper_friction, mu_w, out, Numerics(n_cells=100, method=method),
+                       fixed_times=np.logspace(-8, 0, 8 * k + 1)).u_w for k in (5, 10, 20, 40)]
+    assert observed_orders(uw) == pytest.approx([order, order], abs=0.3)
+
+
+def test_adaptive_steps_reach_their_tolerance(paper_friction):
+    """The default tolerance gives u~_w(1) to < 1e-6 relative (time error only, same mesh)."""
+    mu_w = paper_friction.mu_w_from_tilde(0.5)
+    ref = solve_stress(paper_friction, mu_w, [1.0], Numerics(rtol=1e-10, atol=1e-12)).u_w[0]
+    assert solve_stress(paper_friction, mu_w, [1.0]).u_w[0] == pytest.approx(ref, rel=1e-6)
+
+
+@pytest.mark.parametrize("mt", CASES)
+def test_delta_grows_as_sqrt_t(solutions, paper_friction, mt):
+    sol = solutions[mt]
+    d1, d2 = sol.delta[:2]
+    assert np.log(d2 / d1) / np.log(10.0) == pytest.approx(0.5, abs=0.02)
+    if mt == 0.9:  # eq. SolutionSS: delta/delta_s = 4.66 Dmu sqrt(t~) (2 erfc^-1(1e-3) = 4.653)
+        coeff = sol.delta[:2] / (paper_friction.dmu * np.sqrt(sol.t[:2]))
+        assert coeff == pytest.approx([4.66, 4.66], rel=0.05)
+        assert coeff == pytest.approx([SELF_SIMILAR_DELTA] * 2, rel=0.01)
+
+
+@pytest.mark.parametrize("mt", CASES)
+def test_wall_speed_grows_to_the_steady_value(paper_friction, mt):
+    """u~_w(t~) increases monotonically (to within the time-step tolerance, 1e-6 relative, once
+    steady); its long-time value converges (order 2 in the mesh) to the exact steady wall speed."""
+    fr = paper_friction
+    mu_w = fr.mu_w_from_tilde(mt)
+    exact = steady_wall_speed(fr, mu_w)
+    gaps = []
+    for n in (100, 200):
+        sol = solve_stress(fr, mu_w, [1e3], Numerics(n_cells=n))
+        assert np.all(np.diff(sol.series["u_w"]) > -1e-6 * exact)
+        gaps.append(sol.u_w[0] - exact)
+    assert abs(gaps[1]) < 2e-4 * exact
+    assert gaps[0] / gaps[1] == pytest.approx(4.0, rel=0.1)
+
+
+@pytest.mark.parametrize("mt", (0.99, 0.5, 0.1, 0.01))
+def test_friction_stays_between_mu_s_and_mu_d(paper_friction, mt):
+    """At every accepted step: mu_s <= mu <= mu_w < mu_d (comparison principle), to round-off."""
+    fr = paper_friction
+    pb = ImposedStress(fr, fr.mu_w_from_tilde(mt), Mesh.graded(200))
+    worst = []
+    integrate(pb, [10.0], observer=lambda t, x: worst.append(
+        (np.min(pb.mu(x) - fr.mu_s), np.max(pb.mu(x) - pb.mu_w))))
+    lo, hi = np.array(worst).T
+    assert lo.min() > -1e-12 and hi.max() < 1e-12
+
+
+def test_erfc_solution_at_short_times(solutions, paper_friction):
+    """eq. SolutionSS holds for t~ << 1 where the diffusivity is ~ Dmu^2 (mu~_w -> 1): for
+    mu~_w = 0.9 within 2 % of the wall excess at t~ <= 1e-2; it fails for mu~_w = 0.1, where the wall
+    diffusivity is (0.1 Dmu)^2 (the paper's figure 2 shows the same)."""
+    fr = paper_friction
+    for mt, tol in ((0.9, 0.02), (0.1, None)):
+        sol = solutions[mt]
+        mu_w = sol.mu_w_inf
+        err = [np.max(np.abs(self_similar_mu(fr, mu_w, sol.mesh.y, t) - sol.mu[k])) / (mu_w - fr.mu_s)
+               for k, t in enumerate(sol.t[:3])]
+        if tol:
+            assert max(err) < tol
+        else:
+            assert min(err) > 0.1
+
+
+def test_wkb_series(solutions, paper_friction):
+    """eq. SolutionLONG: its initial value is the initial state (away from the wall, where the
+    sine series has its Gibbs layer), and for mu~_w = 0.9 it follows the numerics for t~ >= 1 to 2 %
+    of the stress deficit 1 - mu_s/mu_w, better as t~ grows."""
+    fr = paper_friction
+    sol = solutions[0.9]
+    wkb = WKB(fr, sol.mu_w_inf)
+    y = sol.mesh.y[(sol.mesh.y > 0.2) & (sol.mesh.y < 0.95)]
+    initial = fr.mu_s * (1 + sol.beta_w * y) / sol.mu_w_inf
+    assert np.max(np.abs(wkb.tau(y, 0.0) - initial)) < 2e-3
+    deficit = 1 - fr.mu_s / sol.mu_w_inf
+    late = sol.t >= 1.0
+    err = [np.max(np.abs(wkb.tau(sol.mesh.y, t) - tau)) / deficit for t, tau in zip(sol.t[late], sol.tau[late])]
+    assert max(err) < 0.02 and err[-1] < err[0]
