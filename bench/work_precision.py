@@ -1,0 +1,85 @@
+"""Work-precision of the continuum solvers: error of u~_w(t~ = 1) for mu~_w = 0.5 against a
+converged value, versus CPU time, for the project's DIRK steppers (sdirk4, tr-bdf2) and the
+baseline scipy solve_ivp (BDF, Radau) on the same method-of-lines discretisation, all in one
+process.  Writes bench/work_precision.{csv,png} and prints the table for bench/RESULTS.md.
+
+    .venv/bin/python bench/work_precision.py
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from continuum.mol import solve_stress_mol
+from continuum.rheology import Friction
+from continuum.solver import Numerics, solve_stress
+
+HERE = Path(__file__).parent
+FR = Friction(np.tan(np.radians(21.0)), np.tan(np.radians(33.0)))
+MU_W = FR.mu_w_from_tilde(0.5)
+TARGET = 1e-6
+
+
+def reference() -> float:
+    """Richardson extrapolation (mesh halving, second order) of two tightly time-converged solves."""
+    fine, coarse = (solve_stress(FR, MU_W, [1.0], Numerics(n_cells=n, rtol=1e-11, atol=1e-13)).u_w[0]
+                    for n in (800, 400))
+    return (4 * fine - coarse) / 3, abs(fine - coarse) / 3
+
+
+def timed(run, repeats=3):
+    best, value = np.inf, None
+    for _ in range(repeats):
+        start = time.process_time()
+        value = run()
+        best = min(best, time.process_time() - start)
+    return best, value
+
+
+def main():
+    ref, ref_err = reference()
+    rows = []
+    for n in (100, 200, 400, 800, 1600):
+        for rtol in (1e-4, 1e-5, 1e-6, 1e-7, 1e-8):
+            num = Numerics(n_cells=n, rtol=rtol, atol=rtol * 1e-2)
+            runs = {
+                "sdirk4 (granstokes)": lambda: solve_stress(FR, MU_W, [1.0], num).u_w[0],
+                "tr-bdf2 (granstokes)": lambda: solve_stress(FR, MU_W, [1.0], Numerics(n, num.stretch, rtol, num.atol,
+                                                                                        "tr-bdf2")).u_w[0],
+                "solve_ivp BDF (baseline)": lambda: solve_stress_mol(FR, MU_W, [1.0], num, "BDF").u_w[0],
+                "solve_ivp Radau (baseline)": lambda: solve_stress_mol(FR, MU_W, [1.0], num, "Radau").u_w[0],
+            }
+            for name, run in runs.items():
+                cpu, value = timed(run)
+                rows.append({"method": name, "n_cells": n, "rtol": rtol, "cpu_s": cpu,
+                             "rel_error": abs(value / ref - 1)})
+    df = pd.DataFrame(rows)
+    df.to_csv(HERE / "work_precision.csv", index=False)
+
+    fig = Figure(figsize=(7, 5), layout="constrained")
+    ax = fig.subplots()
+    for name, g in df.groupby("method"):
+        ax.scatter(g.cpu_s, g.rel_error, label=name, s=14 + 6 * np.log2(g.n_cells / 100))
+    ax.axhline(TARGET, color="k", lw=0.8, ls="--")
+    ax.set(xscale="log", yscale="log", xlabel="CPU time [s] (one core)",
+           ylabel="relative error of u~_w(t~=1), mu~_w = 0.5",
+           title="Work-precision, imposed stress (marker size ~ log mesh cells)")
+    ax.legend(fontsize=8)
+    fig.savefig(HERE / "work_precision.png", dpi=130)
+
+    best = df[df.rel_error <= TARGET].sort_values("cpu_s").groupby("method").head(1).set_index("method")
+    print(f"reference u~_w(1) = {ref:.10f} (Richardson error estimate {ref_err:.1e})\n")
+    print("| method | cheapest run reaching 1e-6 | CPU [ms] | error |")
+    print("|---|---|---|---|")
+    for name, r in best.sort_values("cpu_s").iterrows():
+        print(f"| {name} | n_cells={r.n_cells}, rtol={r.rtol:g} | {1e3 * r.cpu_s:.1f} | {r.rel_error:.1e} |")
+    ours, base = best.loc["sdirk4 (granstokes)", "cpu_s"], best.loc["solve_ivp BDF (baseline)", "cpu_s"]
+    print(f"\nspeed-up of sdirk4 over solve_ivp BDF at 1e-6: {base / ours:.2f}x")
+
+
+if __name__ == "__main__":
+    main()

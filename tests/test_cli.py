@@ -1,0 +1,107 @@
+"""The granstokes continuum command: JSON contract, table, plot, one-line errors."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from continuum.cli import main
+from continuum.steady import mu_w_for_speed, steady_wall_speed
+
+BEADS = ["--mu-s", str(np.tan(np.radians(21))), "--mu-d", str(np.tan(np.radians(33)))]
+
+
+def exit_code(argv):
+    """main()'s status; argparse usage errors exit through SystemExit."""
+    try:
+        return main(argv)
+    except SystemExit as stop:
+        return stop.code
+
+
+def run(capsys, *args):
+    code = exit_code(["continuum", *BEADS, *args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_json_contract_imposed_stress(capsys, paper_friction):
+    code, out, err = run(capsys, "--mu-w-tilde", "0.5", "--times", "1e-4", "1e-2", "1", "--json")
+    assert code == 0 and err == ""
+    data = json.loads(out)
+    assert set(data) == {"imposed", "mu_s", "mu_d", "mu_w_inf", "beta_w", "t", "u_w", "mu_w", "delta", "steady"}
+    assert data["imposed"] == "stress" and data["t"] == [1e-4, 1e-2, 1.0]
+    assert len(data["u_w"]) == len(data["mu_w"]) == len(data["delta"]) == 3
+    assert data["mu_w_inf"] == pytest.approx(paper_friction.mu_w_from_tilde(0.5), rel=1e-12)
+    assert data["steady"]["u_w"] == pytest.approx(1.34039, abs=2e-5)
+    assert data["mu_w"] == pytest.approx([data["mu_w_inf"]] * 3)
+    assert np.all(np.diff(data["u_w"]) > 0) and np.all(np.diff(data["delta"]) > 0)
+
+
+def test_json_contract_imposed_speed(capsys, paper_friction):
+    code, out, _ = run(capsys, "--u-w", "1.334", "--times", "1e-3", "10", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["imposed"] == "speed"
+    assert data["mu_w_inf"] == pytest.approx(mu_w_for_speed(paper_friction, 1.334), rel=1e-12)
+    assert data["u_w"] == pytest.approx([1.334, 1.334], rel=1e-10)
+    assert data["steady"]["u_w"] == pytest.approx(1.334, rel=1e-12)
+    assert data["mu_w"][0] > data["mu_w"][1] > data["mu_w_inf"] - 1e-4
+
+
+def test_mu_w_and_mu_w_tilde_agree(capsys, paper_friction):
+    mu_w = paper_friction.mu_w_from_tilde(0.3)
+    a = json.loads(run(capsys, "--mu-w", str(float(mu_w)), "--times", "0.1", "--json")[1])
+    b = json.loads(run(capsys, "--mu-w-tilde", "0.3", "--times", "0.1", "--json")[1])
+    assert a["u_w"] == pytest.approx(b["u_w"], rel=1e-12)
+
+
+def test_table_and_plot(capsys, tmp_path):
+    png = tmp_path / "profiles.png"
+    code, out, _ = run(capsys, "--mu-w-tilde", "0.9", "--times", "0.01", "1", "--plot", str(png))
+    assert code == 0 and "delta/delta_s" in out and "steady" in out and "y~ = y/delta_s" in out
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args, name", [
+    (["--mu-w", "0.3", "--times", "1"], "mu_w"),
+    (["--mu-w", "0.7", "--times", "1"], "mu_w"),
+    (["--mu-w-tilde", "0", "--times", "1"], "mu_w_tilde"),
+    (["--mu-w-tilde", "1.5", "--times", "1"], "mu_w_tilde"),
+    (["--mu-w-tilde", "nan", "--times", "1"], "mu_w_tilde"),
+    (["--u-w", "0", "--times", "1"], "u_w"),
+    (["--u-w", "-2", "--times", "1"], "u_w"),
+    (["--u-w", "inf", "--times", "1"], "u_w"),
+    (["--mu-w-tilde", "0.5", "--times", "1", "0.5"], "times"),
+    (["--mu-w-tilde", "0.5", "--times", "0", "1"], "times"),
+    (["--mu-w-tilde", "0.5", "--times", "-1"], "times"),
+    (["--mu-w-tilde", "0.5", "--times", "nan"], "times"),
+    (["--mu-w-tilde", "0.5", "--times", "1", "--n-cells", "3"], "n_cells"),
+    (["--mu-w-tilde", "0.5", "--times", "1", "--plot", "out.pdf"], "--plot"),
+])
+def test_bad_input_is_one_line_naming_the_parameter(capsys, tmp_path, monkeypatch, args, name):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, *args)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and err.startswith(f"granstokes: error: {name} must be")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["continuum", "--mu-s", "-0.1", "--mu-d", "0.6", "--mu-w", "0.3", "--times", "1"], "mu_s must be"),
+    (["continuum", "--mu-s", "0.6", "--mu-d", "0.5", "--mu-w", "0.55", "--times", "1"], "mu_d must be"),
+    (["continuum", *BEADS, "--times", "1"], "one of the arguments"),
+    (["continuum", *BEADS, "--mu-w", "0.5", "--u-w", "1", "--times", "1"], "not allowed with"),
+])
+def test_bad_friction_and_usage_errors(capsys, argv, needle):
+    assert exit_code(argv) == 2
+    err = capsys.readouterr().err
+    assert needle in err and err.count("\n") == 1
+
+
+def test_console_script_exit_status(tmp_path):
+    """The installed entry point: non-zero status and one stderr line on bad input."""
+    proc = subprocess.run([sys.executable, "-m", "continuum.cli", "continuum", *BEADS, "--u-w", "-1",
+                           "--times", "1"], capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.strip() == "granstokes: error: u_w must be a finite number > 0, got -1.0"
