@@ -12,6 +12,8 @@ eq. GranularStokesEqn_muBIS written for tau~ instead of mu~ (same scaling, same 
 """
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
 from .mesh import Mesh
@@ -39,21 +41,25 @@ class ShearStressDiffusion:
     def full(self, x: np.ndarray) -> np.ndarray:
         return np.append(x, 1.0)
 
-    def rate(self, x: np.ndarray) -> np.ndarray:
-        """d tau~/d t~ at the interior nodes 1..N-1."""
-        return self.rate_and_jacobian(x)[0]
-
-    def rate_and_jacobian(self, x: np.ndarray):
-        """Rate at nodes 1..N-1 and its Jacobian: (rate, sub, diag, sup) with sub[i] = dF_i/dtau_{i-1}
-        for rows 1..N-1, diag for rows 1..N-1, sup[i] = dF_i/dtau_{i+1} for rows 1..N-2."""
+    def _terms(self, x: np.ndarray):
         tau = self.full(x)
         cl, cd, cu = self.mesh.d2
         lap = cl * tau[:-2] + cd * tau[1:-1] + cu * tau[2:]
         s = self.friction.mu_d * self.p[1:-1] - self.mu_w * tau[1:-1]
-        diff = s * s / self._p32
-        rate = diff * lap
+        return lap, s, s * s / self._p32
+
+    def rate(self, x: np.ndarray) -> np.ndarray:
+        """d tau~/d t~ at the interior nodes 1..N-1."""
+        lap, _, diff = self._terms(x)
+        return diff * lap
+
+    def rate_and_jacobian(self, x: np.ndarray):
+        """Rate at nodes 1..N-1 and its Jacobian: (rate, sub, diag, sup) with sub[i] = dF_i/dtau_{i-1}
+        for rows 1..N-1, diag for rows 1..N-1, sup[i] = dF_i/dtau_{i+1} for rows 1..N-2."""
+        lap, s, diff = self._terms(x)
+        cl, cd, cu = self.mesh.d2
         diag = diff * cd - 2 * self.mu_w * s / self._p32 * lap
-        return rate, diff * cl, diag, (diff * cu)[:-1]
+        return diff * lap, diff * cl, diag, (diff * cu)[:-1]
 
     def mu(self, x: np.ndarray) -> np.ndarray:
         """Local friction mu = mu_w tau~/p~ at all nodes."""
@@ -71,9 +77,13 @@ class ImposedStress(ShearStressDiffusion):
 
     def wall(self, x: np.ndarray):
         """Wall residual g(x) and its gradient (dense row over nodes 0..N-1)."""
-        grad = np.zeros_like(x)
-        grad[0] = 1.0
-        return x[0] - 1.0, grad
+        return x[0] - 1.0, self._unit
+
+    @cached_property
+    def _unit(self) -> np.ndarray:
+        e = np.zeros(self.mesh.n_cells)
+        e[0] = 1.0
+        return e
 
 
 class ImposedSpeed(ShearStressDiffusion):
