@@ -89,6 +89,14 @@ def run_paper_figures(args) -> int:
     return 0
 
 
+def run_demo(args) -> int:
+    from .report import write_continuum_report
+
+    index = write_continuum_report(args.out)
+    print(f"report: {index.resolve()}")
+    return 0
+
+
 def add_continuum_parser(sub) -> None:
     p = sub.add_parser("continuum", help="solve the paper's problem (imposed wall stress or speed)")
     p.add_argument("--mu-s", type=float, required=True, help="static friction mu_s > 0")
@@ -108,6 +116,10 @@ def add_continuum_parser(sub) -> None:
     f = sub.add_parser("paper-figures", help="regenerate the paper's figures 1-9 (PNG + CSV)")
     f.add_argument("--out", type=Path, required=True, help="output folder")
     f.set_defaults(func=run_paper_figures)
+
+    d = sub.add_parser("demo", help="the quick comparison report (continuum part: paper figures, tables)")
+    d.add_argument("--out", type=Path, default=Path("demo-out"), help="output folder (default %(default)s)")
+    d.set_defaults(func=run_demo)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,93 @@
+"""The continuum report: the paper's figures regenerated, the steady-state table and every place
+where converged numerics disagree with a printed number, as one HTML page (figures beside it)."""
+from __future__ import annotations
+
+import html
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .closed_forms import SELF_SIMILAR_DELTA, UWALL_MUS_PRINTED_B2, WKB, uwall_asymp, uwall_mus
+from .figures import FRICTION, paper_figures
+from .scales import UNITS
+from .solver import solve_speed, solve_stress
+from .steady import steady_wall_speed
+
+STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.4}
+img{max-width:100%;border:1px solid #ddd}table{border-collapse:collapse}
+td,th{border:1px solid #ccc;padding:3px 8px}"""
+
+
+def table_html(df: pd.DataFrame, caption: str) -> str:
+    return f"<p><b>{html.escape(caption)}</b></p>" + df.to_html(index=False, float_format=lambda v: f"{v:.6g}")
+
+
+def steady_table() -> pd.DataFrame:
+    fr = FRICTION
+    rows = []
+    for mt in (0.99, 0.9, 0.5, 0.1, 0.01):
+        mu_w = fr.mu_w_from_tilde(mt)
+        rows.append({"mu~_w": mt, "mu_w": mu_w, "beta_w": fr.beta(mu_w), "u~_w^inf exact": steady_wall_speed(fr, mu_w),
+                     "eq. Uwall_asymp": uwall_asymp(fr, mt), "eq. Uwall_muS (derived b2)": uwall_mus(fr, mu_w),
+                     "eq. Uwall_muS (printed b2=-5/2)": uwall_mus(fr, mu_w, UWALL_MUS_PRINTED_B2)})
+    return pd.DataFrame(rows)
+
+
+def discrepancies() -> pd.DataFrame:
+    """Printed numbers against converged numerics, computed here (nothing hard-coded)."""
+    fr = FRICTION
+    stress = solve_stress(fr, fr.mu_w_from_tilde(0.9), [1e-4, 1e-3, 1.0])
+    speed = solve_speed(fr, 1.334, [1e-4, 1e-3])
+    coeff_stress = stress.delta[:2] / (fr.dmu * np.sqrt(stress.t[:2]))
+    coeff_speed = speed.delta / (fr.dmu * np.sqrt(speed.t))
+    wkb_err = [np.max(np.abs(WKB(fr, stress.mu_w_inf, printed=p).tau(stress.mesh.y, 1.0) - stress.tau[2]))
+               for p in (True, False)]
+    b = 0.01
+    exact = steady_wall_speed(fr, fr.mu_s * (1 + b))
+    mus_err = [abs(uwall_mus(fr, fr.mu_s * (1 + b), b2) / exact - 1) for b2 in (UWALL_MUS_PRINTED_B2, None)]
+    return pd.DataFrame([
+        {"item": "nu_g prefactor", "printed": "d/(2 phi Dmu I0) and d/(phi Dmu I0)",
+         "numerics / derivation": "factor 2: the only one with U = g delta_s^2/(beta_w nu_g) consistent "
+                                  "with eq. IreWritten (tests/test_steady_and_scales.py)"},
+        {"item": "delta/(Dmu sqrt t~), imposed stress, mu~_w = 0.9", "printed": "4.66",
+         "numerics / derivation": f"{coeff_stress.mean():.3f} at t~ = 1e-4..1e-3; erfc gives 2 erfcinv(1e-3) = {SELF_SIMILAR_DELTA:.3f}"},
+        {"item": "delta/(Dmu sqrt t~), imposed speed u~_w = 1.334", "printed": "3.66 (with eq. TimeScaleMu)",
+         "numerics / derivation": f"{coeff_speed.mean():.3f} at t~ = 1e-4..1e-3 (same 1e-3 threshold)"},
+        {"item": "eq. Uwall_muS second-order coefficient", "printed": "-5/2",
+         "numerics / derivation": f"2 mu_s/(3 Dmu) - 1/6 = {2 * fr.mu_s / (3 * fr.dmu) - 1 / 6:.3f}; relative error at "
+                                  f"beta_w = 0.01: printed {mus_err[0]:.1e}, derived {mus_err[1]:.1e}"},
+        {"item": "eq. SolutionLONG amplitude and Lambda_m", "printed": "y^(-1/8), Lambda_m integrated in dy^",
+         "numerics / derivation": f"y^(+1/8) and projection in z; max |tau~ - numerics| at t~ = 1, mu~_w = 0.9: "
+                                  f"printed {wkb_err[0]:.1e}, consistent {wkb_err[1]:.1e}"},
+    ])
+
+
+def write_continuum_report(out_dir) -> Path:
+    """Write out_dir/index.html with the paper's figures (out_dir/paper-figures) and tables."""
+    out = Path(out_dir)
+    figs_dir = out / "paper-figures"
+    result = paper_figures(figs_dir)
+    pngs = {k: Path(v) for k, v in result.items() if k != "timing"}
+    steady, notes = steady_table(), discrepancies()
+    steady.to_csv(out / "steady_wall_speed.csv", index=False)
+    notes.to_csv(out / "paper_discrepancies.csv", index=False)
+    body = [f"<h1>granstokes: Stokes' first problem with mu(I), continuum side</h1>",
+            "<h2>Units and conventions</h2><ul>" + "".join(
+                f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in UNITS.items()) + "</ul>",
+            f"<p>Paper's case: mu_s = tan 21&deg; = {FRICTION.mu_s:.5f}, mu_d = tan 33&deg; = {FRICTION.mu_d:.5f}. "
+            f"Computation of the figure set: {result['timing']['compute']['cpu_s']:.2f} s CPU; "
+            f"plotting {result['timing']['plot']['cpu_s']:.2f} s.</p>",
+            "<h2>Where the numerics disagree with printed numbers</h2>", table_html(notes, "Printed vs computed"),
+            "<h2>Steady wall speed</h2>", table_html(steady, "u~_w^inf: exact quadrature vs the paper's approximations"),
+            "<h2>The paper's figures, regenerated</h2>"]
+    for name, png in sorted(pngs.items()):
+        body.append(f"<h3>{html.escape(name)}</h3><img src='{figs_dir.name}/{png.name}' alt='{html.escape(name)}'>")
+    page = f"<!doctype html><html><head><meta charset='utf-8'><title>granstokes continuum</title>" \
+           f"<style>{STYLE}</style></head><body>{''.join(body)}</body></html>"
+    index = out / "index.html"
+    index.write_text(page)
+    (out / "continuum_report.json").write_text(json.dumps({"figures": {k: str(v) for k, v in pngs.items()},
+                                                           "timing": result["timing"], "units": UNITS}, indent=2))
+    return index
