@@ -27,11 +27,11 @@ def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics 
     x0[0] = 1.0
 
     def rhs(_, z):
-        return problem.rate(np.concatenate(([1.0], z)))
+        return problem.rate(np.concatenate(([1.0], z)))[1:]
 
     def jac(_, z):
-        _, sub, diag, sup = problem.rate_and_jacobian(np.concatenate(([1.0], z)))
-        return sp.diags([sub[1:], diag, sup], [-1, 0, 1], format="csc")
+        sub, diag, sup, _ = problem.jacobian(np.concatenate(([1.0], z)))
+        return sp.diags([sub[1:], diag[1:], sup[1:]], [-1, 0, 1], format="csc")
 
     start = time.process_time()
     sol = solve_ivp(rhs, (0.0, t[-1]), x0[1:], method=method, t_eval=t, jac=jac,

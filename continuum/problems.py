@@ -1,18 +1,16 @@
 """The paper's shear-stress diffusion problem (the evolution rate), apart from the numerics.
 
-Unknowns are tau~ at nodes 0..N-1 of a Mesh; tau~(y~=1) = 1 is fixed.  The interior rate is
-eq. GranularStokesEqn,
+Unknowns x are tau~ at nodes 0..N-1 of a Mesh; tau~(y~=1) = 1 is fixed.  Written as
+M x' = F(x) for continuum.stepper: the interior rows are eq. GranularStokesEqn,
 
     d tau~/d t~ = D(y~, tau~) d2 tau~/dy~2,   D = (mu_d p~ - mu_w tau~)^2 / p~^(3/2),  p~ = 1 + beta_w y~,
 
-and the wall row closes the system: tau~(0) = 1 for an imposed stress, or the integral
-condition eq. GranularStokesEqn_muBIS_BCs for an imposed speed.  With an imposed speed, mu_w is the
-steady mu_w^inf and tau~ = mu p~/mu_w^inf; the interior equation is then exactly
+and row 0 is algebraic (mass 0): tau~(0) = 1 for an imposed stress, or the integral condition
+eq. GranularStokesEqn_muBIS_BCs for an imposed speed.  With an imposed speed, mu_w is the steady
+mu_w^inf and tau~ = mu p~/mu_w^inf; the interior equation is then exactly
 eq. GranularStokesEqn_muBIS written for tau~ instead of mu~ (same scaling, same steady state).
 """
 from __future__ import annotations
-
-from functools import cached_property
 
 import numpy as np
 
@@ -22,7 +20,7 @@ from .steady import mu_w_for_speed
 
 
 class ShearStressDiffusion:
-    """Interior rate of eq. GranularStokesEqn and its tridiagonal Jacobian."""
+    """Interior rate of eq. GranularStokesEqn and its tridiagonal Jacobian; row 0 is the wall."""
 
     imposed: str
 
@@ -33,12 +31,15 @@ class ShearStressDiffusion:
         self.mesh = mesh
         self.p = 1.0 + self.beta * mesh.y
         self._p32 = self.p[1:-1] ** 1.5
+        self.mass = np.ones(mesh.n_cells)
+        self.mass[0] = 0.0
 
     def initial(self) -> np.ndarray:
         """tau~(y~, 0) = mu_s p~/mu_w at nodes 0..N-1 (eq. InitStokesEqn)."""
         return self.friction.mu_s * self.p[:-1] / self.mu_w
 
     def full(self, x: np.ndarray) -> np.ndarray:
+        """tau~ at all nodes 0..N."""
         return np.append(x, 1.0)
 
     def _terms(self, x: np.ndarray):
@@ -49,17 +50,23 @@ class ShearStressDiffusion:
         return lap, s, s * s / self._p32
 
     def rate(self, x: np.ndarray) -> np.ndarray:
-        """d tau~/d t~ at the interior nodes 1..N-1."""
+        """F(x): the wall residual in row 0, d tau~/d t~ at the interior nodes."""
         lap, _, diff = self._terms(x)
-        return diff * lap
+        return np.concatenate(([self.wall_residual(x)], diff * lap))
 
-    def rate_and_jacobian(self, x: np.ndarray):
-        """Rate at nodes 1..N-1 and its Jacobian: (rate, sub, diag, sup) with sub[i] = dF_i/dtau_{i-1}
-        for rows 1..N-1, diag for rows 1..N-1, sup[i] = dF_i/dtau_{i+1} for rows 1..N-2."""
+    def jacobian(self, x: np.ndarray):
+        """dF/dx as (sub, diag, sup, row0): tridiagonal bands, and a dense row 0 or None."""
         lap, s, diff = self._terms(x)
         cl, cd, cu = self.mesh.d2
         diag = diff * cd - 2 * self.mu_w * s / self._p32 * lap
-        return diff * lap, diff * cl, diag, (diff * cu)[:-1]
+        row0 = self.wall_gradient(x)
+        return (diff * cl, np.concatenate(([row0[0]], diag)),
+                np.concatenate(([row0[1]], (diff * cu)[:-1])), row0 if self.dense_wall else None)
+
+    def project(self, x: np.ndarray) -> np.ndarray:
+        """Satisfy the wall row exactly: it is linear in x[0] for both wall conditions."""
+        x[0] -= self.wall_residual(x) / self.wall_gradient(x)[0]
+        return x
 
     def mu(self, x: np.ndarray) -> np.ndarray:
         """Local friction mu = mu_w tau~/p~ at all nodes."""
@@ -74,16 +81,15 @@ class ImposedStress(ShearStressDiffusion):
     """Imposed wall shear stress tau_w = mu_w p_w: tau~(0, t~) = 1."""
 
     imposed = "stress"
+    dense_wall = False
 
-    def wall(self, x: np.ndarray):
-        """Wall residual g(x) and its gradient (dense row over nodes 0..N-1)."""
-        return x[0] - 1.0, self._unit
+    def wall_residual(self, x: np.ndarray) -> float:
+        return x[0] - 1.0
 
-    @cached_property
-    def _unit(self) -> np.ndarray:
-        e = np.zeros(self.mesh.n_cells)
-        e[0] = 1.0
-        return e
+    def wall_gradient(self, x: np.ndarray) -> np.ndarray:
+        g = np.zeros(len(x))
+        g[0] = 1.0
+        return g
 
 
 class ImposedSpeed(ShearStressDiffusion):
@@ -92,7 +98,7 @@ class ImposedSpeed(ShearStressDiffusion):
     quadrature, the one that gives the velocity profile, so the constraint holds to round-off).
 
     The wall unknown is v = 1/mu~(0) (the wall shear rate, up to a factor), in which the
-    constraint is linear: Newton fixes it exactly in one iteration.
+    constraint is linear: it is solved exactly after each Newton solve.
 
     Singular start: the initial state mu~ = 1 carries no velocity, so at t~ = 0+ the whole jump
     u~_w sits in a wall sub-layer where mu~ -> 0 (mu -> mu_d).  In the continuum that sub-layer is
@@ -103,6 +109,7 @@ class ImposedSpeed(ShearStressDiffusion):
     """
 
     imposed = "speed"
+    dense_wall = True
 
     def __init__(self, friction: Friction, u_w: float, mesh: Mesh):
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
@@ -120,10 +127,10 @@ class ImposedSpeed(ShearStressDiffusion):
         tau0 = (fr.mu_d - fr.dmu / x[0]) * self.p[0] / self.mu_w
         return np.concatenate(([tau0], x[1:], [1.0]))
 
-    def rate_and_jacobian(self, x: np.ndarray):
-        rate, sub, diag, sup = super().rate_and_jacobian(x)
+    def jacobian(self, x: np.ndarray):
+        sub, diag, sup, row0 = super().jacobian(x)
         sub[0] *= self.friction.dmu * self.p[0] / (self.mu_w * x[0] ** 2)  # d tau~_0 / d v
-        return rate, sub, diag, sup
+        return sub, diag, sup, row0
 
     def mu_tilde(self, x: np.ndarray) -> np.ndarray:
         """mu~ at nodes 0..N-1."""
@@ -131,12 +138,14 @@ class ImposedSpeed(ShearStressDiffusion):
         mt[0] = 1.0 / x[0]
         return mt
 
-    def wall(self, x: np.ndarray):
+    def wall_residual(self, x: np.ndarray) -> float:
         mt = self.mu_tilde(x)
-        g = self._wq[0] * (x[0] - 1.0) + self._wq[1:] @ (1.0 / mt[1:] - 1.0) - self.u_w
-        grad = self._wq / mt**2 * self.mu_w / (self.p[:-1] * self.friction.dmu)
+        return self._wq[0] * (x[0] - 1.0) + self._wq[1:] @ (1.0 / mt[1:] - 1.0) - self.u_w
+
+    def wall_gradient(self, x: np.ndarray) -> np.ndarray:
+        grad = self._wq / self.mu_tilde(x) ** 2 * self.mu_w / (self.p[:-1] * self.friction.dmu)
         grad[0] = self._wq[0]
-        return g, grad
+        return grad
 
     def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
         """At most halve mu~ at an interior node, or v at the wall, in one Newton update."""

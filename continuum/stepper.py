@@ -1,13 +1,15 @@
-"""Singly diagonally implicit Runge-Kutta (DIRK) time stepping with Newton on the bordered
-tridiagonal system, adaptive steps from an embedded error estimate.
+"""Singly diagonally implicit Runge-Kutta (DIRK) time stepping of  M x' = F(x)  (diagonal mass M,
+zero on algebraic rows), adaptive steps from an embedded error estimate.
 
-Every implicit stage solves  X - h a_ii F(X) = rhs  on the interior rows plus the wall row
-g(X) = 0, by simplified Newton with one tridiagonal factorisation per step (NewtonMatrix).  All tableaux are stiffly accurate (x_{n+1} is the last stage),
-so the wall condition holds exactly at every step (the DAE is index 1).
+Every implicit stage solves  M X - h a_ii F(X) = M x_n + h sum_j a_ij F_j  (algebraic rows:
+F(X) = 0) by simplified Newton: one factorisation of M - h a_ii J per step (all SDIRK stages share
+a_ii).  J is tridiagonal, except that row 0 may be dense (the imposed-speed integral condition); the
+system is solved by bordering with LAPACK gttrf/gttrs.  All tableaux are stiffly accurate
+(x_{n+1} is the last stage), so algebraic rows hold at every step (index-1 DAEs).
 
 Methods (``TABLEAUX``):
 * ``sdirk4``: Hairer & Wanner (1996, Table IV.6.5) 5-stage SDIRK, order 4, L-stable, embedded
-  order 3.  The default: the work-precision benchmark (bench/) shows it is the cheapest to 1e-6.
+  order 3.  The default: cheapest to 1e-6 in the work-precision benchmark (bench/).
 * ``tr-bdf2``: trapezoidal stage then BDF2 (Bank et al. 1985) as a 3-stage ESDIRK, order 2,
   L-stable, embedded order 3 (Hosea & Shampine 1996).
 * ``crank-nicolson``: the paper's scheme, order 2, A-stable but not L-stable (stiff modes excited
@@ -30,7 +32,7 @@ class Tableau:
     A: tuple[tuple[float, ...], ...]
     order: int
     err: tuple[float, ...] | None = None
-    err_order: int = 0  # order of the local error estimate, h^(err_order) -> step exponent
+    err_order: int = 0  # the local error estimate is O(h^err_order): step-size exponent 1/err_order
 
     @property
     def explicit_first(self) -> bool:
@@ -74,46 +76,51 @@ class NewtonFailure(RuntimeError):
 
 
 class NewtonMatrix:
-    """LU factors of I - dh J(x) on the interior rows (tridiagonal, LAPACK gttrf), reused for
-    every Newton iteration and every stage of a step (simplified Newton: SDIRK stages share dh).
+    """LU factors of A = M - dh J(x), reused for every Newton iteration and stage of a step.
 
-    The wall row (Dirichlet, or the dense imposed-speed constraint) is eliminated by bordering:
+    Rows 1.. of A are tridiagonal; row 0 may be dense.  Bordering:
     [[a, c], [b1 e_1, T]] [x0; z] = [r0; r]  =>  x0 = (r0 - c.T^-1 r)/(a - c.T^-1 b1 e_1).
     """
 
     def __init__(self, problem, x, dh):
-        _, sub, diag, sup = problem.rate_and_jacobian(x)
+        sub, diag, sup, row0 = problem.jacobian(x)
+        mass = problem.mass
         self.dh = dh
-        self.factors = dgttrf(-dh * sub[1:], 1.0 - dh * diag, -dh * sup)
+        self.factors = dgttrf(-dh * sub[1:], mass[1:] - dh * diag[1:], -dh * sup[1:])
         if self.factors[-1] != 0:
             raise NewtonFailure("singular Newton matrix")
-        e1 = np.zeros(len(diag))
+        if row0 is None:
+            row0 = np.zeros(len(diag))
+            row0[:2] = diag[0], sup[0]
+        self.row0 = -dh * row0
+        self.row0[0] += mass[0]
+        e1 = np.zeros(len(diag) - 1)
         e1[0] = -dh * sub[0]
         self.zb = self._solve(e1)
+        self.pivot = self.row0[0] - self.row0[1:] @ self.zb
 
     def _solve(self, r):
         return dgttrs(*self.factors[:-1], r)[0]
 
-    def solve(self, grad, r0, r):
-        zr = self._solve(r)
-        c = grad[1:]
-        x0 = (r0 - c @ zr) / (grad[0] - c @ self.zb)
+    def solve(self, r):
+        zr = self._solve(r[1:])
+        x0 = (r[0] - self.row0[1:] @ zr) / self.pivot
         return np.concatenate(([x0], zr - x0 * self.zb))
 
 
 def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8):
-    """Solve x - dh F(x) = rhs (interior rows), g(x) = 0 (wall row) by simplified Newton.
+    """Solve M X - dh F(X) = rhs by simplified Newton from the guess x.
 
     Stops when the contraction-corrected update theta/(1-theta) |dx| (weighted RMS) is below
-    ``tol`` (Hairer & Wanner 1996, IV.8), then solves the wall row (linear in x[0]) exactly;
-    returns (x, F(x))."""
+    ``tol`` (Hairer & Wanner 1996, IV.8), then applies the problem's exact projection onto its
+    algebraic constraints (if any); returns (X, F(X))."""
     x = x.copy()
+    mass, dh = problem.mass, matrix.dh
     rate = problem.rate(x)
     previous = None
     for _ in range(max_iter):
         stats.newton_iterations += 1
-        g, grad = problem.wall(x)
-        dx = matrix.solve(grad, -g, rhs - x[1:] + matrix.dh * rate)
+        dx = matrix.solve(rhs - mass * x + dh * rate)
         if not np.all(np.isfinite(dx)):
             break
         x += problem.step_fraction(x, dx) * dx
@@ -122,9 +129,7 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8):
         if theta >= 1.0:
             break
         if size * theta / (1.0 - theta) < tol or size < 1e-3 * tol:
-            # the wall row is linear in x[0] for both problems: enforce it exactly
-            g, grad = problem.wall(x)
-            x[0] -= g / grad[0]
+            x = problem.project(x)
             return x, problem.rate(x)
         rate = problem.rate(x)
         previous = size
@@ -134,40 +139,46 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8):
 
 def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats):
     """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}) and the local error
-    estimate filtered through (I - h a_ss J)^-1 (Hosea & Shampine 1996), or None."""
+    estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996), or None."""
     matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
+    mass = problem.mass
+    algebraic = mass == 0
     rates = [f] if tab.explicit_first else []
     X = x
     for i in range(len(rates), len(tab.A)):
-        explicit = x[1:] + h * sum(a * r for a, r in zip(tab.A[i][:i], rates) if a != 0.0)
+        rhs = mass * x + h * sum(a * r for a, r in zip(tab.A[i][:i], rates) if a != 0.0)
+        rhs[algebraic] = 0.0
         # predictor: the explicit part plus the last implicit stage's rate for the implicit part
         # (F(x_n) of an explicit first stage is not used: after CN steps it carries the
         # undamped stiff modes and would make a wild guess)
         guess = X.copy()
         if len(rates) > int(tab.explicit_first):
-            guess[1:] = explicit + matrix.dh * rates[-1]
-        X, r = solve_stage(problem, matrix, guess, explicit, weights, newton_tol, stats)
+            differential = ~algebraic
+            guess[differential] = (rhs[differential] + matrix.dh * rates[-1][differential]) / mass[differential]
+        X, r = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats)
         rates.append(r)
     if tab.err is None:
         return X, rates[-1], None
     est = h * sum(e * r for e, r in zip(tab.err, rates) if e != 0.0)
-    _, grad = problem.wall(X)
-    return X, rates[-1], matrix.solve(grad, 0.0, est)
+    est[algebraic] = 0.0
+    return X, rates[-1], matrix.solve(est)
 
 
 def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=0.03,
               fixed_times=None, observer=None, max_steps=200_000):
-    """Integrate ``problem`` from t~ = 0, returning the state at each time of the sorted ``t_out``.
+    """Integrate ``problem`` from t = 0, returning the state at each time of the sorted ``t_out``.
 
-    Adaptive steps keep the RMS local error, weighted by atol + rtol |x|, below 1; with
-    ``fixed_times`` (an increasing array containing every t_out) the steps are those, with no
-    error control (refinement studies).  ``observer(t, x)`` is called after every accepted step.
-    Returns (states, stats), states of shape (len(t_out), N).
+    Adaptive steps keep the RMS local error over the differential rows, weighted by
+    atol + rtol |x|, below 1; with ``fixed_times`` (an increasing array containing every t_out) the
+    steps are those, with no error control (refinement studies, stability maps).
+    ``observer(t, x)`` is called after every accepted step.  Returns (states, stats), states of
+    shape (len(t_out), n).
     """
     tab = TABLEAUX[method]
     if fixed_times is None and tab.err is None:
         raise ValueError(f"method {method!r} has no error estimate: give fixed_times")
     t_out = np.asarray(t_out, dtype=float)
+    differential = problem.mass > 0
     stats = StepStats()
     start = time.process_time()
     x = problem.initial()
@@ -180,7 +191,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
         observer(t, x)
     while k < len(t_out):
         if stats.steps + stats.rejected >= max_steps:
-            raise RuntimeError(f"max_steps = {max_steps} reached at t~ = {t:.3e}")
+            raise RuntimeError(f"max_steps = {max_steps} reached at t = {t:.3e}")
         if schedule is not None:
             h_try = next(schedule) - t
         else:
@@ -197,7 +208,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
             h = 0.25 * h_try
             continue
         if schedule is None:
-            err = max(np.sqrt(np.mean((err_vec[1:] / weights[1:]) ** 2)), 1e-10)
+            err = max(np.sqrt(np.mean((err_vec[differential] / weights[differential]) ** 2)), 1e-10)
             factor = 0.9 * err ** (-1.0 / tab.err_order)
             if err > 1.0:
                 stats.rejected += 1

@@ -20,7 +20,7 @@ def test_constraint_and_bounds_hold_at_every_step(paper_friction, u_w):
 
     def check(t, x):
         mu = pb.mu(x)
-        rows.append((abs(pb.wall(x)[0]) if t > 0 else 0.0, np.min(mu - fr.mu_s), np.max(mu - fr.mu_d)))
+        rows.append((abs(pb.wall_residual(x)) if t > 0 else 0.0, np.min(mu - fr.mu_s), np.max(mu - fr.mu_d)))
 
     integrate(pb, [1e-4, 1.0, 100.0], observer=check)
     residual, lo, hi = np.array(rows).T
