@@ -278,8 +278,9 @@ seeds = [1]
 [material]
 {_DISKS}[grains]
 dimension = 2
+polydispersity = 0.2
 [box]
-width = 20.0
+width = 40.0
 depth = 12.0
 [load]
 p_w = 10.0
@@ -292,7 +293,7 @@ duration = 10.0
 plate = 0.02
 thermo = 0.2
 atoms = 1.0
-contacts = 5.0
+contacts = 1.0
 profiles = 0.5
 restart = 1.0
 [prepare]
@@ -306,8 +307,9 @@ seeds = [1]
 [material]
 {_DISKS}[grains]
 dimension = 2
+polydispersity = 0.2
 [box]
-width = 24.0
+width = 32.0
 [load]
 p_w = 20.0
 [[drive]]

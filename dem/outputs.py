@@ -1,6 +1,6 @@
 """Output files of a drive, assembled from its LAMMPS segments (one per start or resume).
 
-Segment k starts at step S_k (the prepared bed, or the restart it resumed from) and is valid up to
+Segment k (its script kept as in.lammps, then in.resume<k>.lammps) starts at step S_k (the prepared bed, or the restart it resumed from) and is valid up to
 S_(k+1): whatever it wrote after that restart is dropped (it was redone by segment k+1), and every
 step appears once.  Files (all under the drive folder):
 
@@ -11,9 +11,11 @@ step appears once.  Files (all under the drive folder):
   contacts included): id1 id2 dist dx dy dz fn ft_x ft_y ft_z, (dx, dy, dz) = x_1 - x_2 (branch
   vector), normal force on grain 1 = fn (dx, dy, dz)/dist, (ft_x, ft_y, ft_z) the tangential force
   (``pair granular`` single() values);
-* ``profiles.csv``: 1 d bins in y, averaged over each output interval: step, t, y, count, n (number
-  density), phi, u_x, p = -(s_xx + s_yy [+ s_zz])/D and tau = -s_xy (contact stress, kinetic part
-  excluded), s_xx, s_yy, s_zz, s_xy.
+* ``profiles.csv``: bed grains (not base, not plate) in 1 d bins in y, averaged over each output interval: step, t, y, count, n (number
+  density), phi, u_x, p = -(s_xx + s_yy [+ s_zz])/D and tau = -s_xy (contact stress from the per-atom
+  virial, kinetic part excluded), s_xx, s_yy, s_zz, s_xy; and at the plane y_plane = y - 1/2 the
+  method-of-planes stresses p_mop (normal) and tau_mop (shear): the contact force through the plane
+  per area, free of the bin-to-bin scatter that the virial estimator shows in a static packing.
 """
 from __future__ import annotations
 
@@ -24,7 +26,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-PROFILE_RAW = ["chunk", "y", "count", "n", "volume", "u_x", "s_xx", "s_yy", "s_zz", "s_xy"]
+PROFILE_RAW = ["chunk", "y", "count", "n", "volume", "u_x", "s_xx", "s_yy", "s_zz", "s_xy", "fc_x", "fc_y"]
+BIN = 1.0  # profile bin height in d (scene.drive_script)
 
 
 def _ranges(starts: list[int]) -> list[float]:
@@ -89,18 +92,35 @@ def read_chunk_file(path: Path) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["step", *PROFILE_RAW])
 
 
-def profiles_table(raw: pd.DataFrame, dt: float, dimension: int) -> pd.DataFrame:
-    """Per-volume fields from per-atom chunk averages (value per volume = atom average x n)."""
+def profiles_table(raw: pd.DataFrame, plate: pd.DataFrame, every: int, dt: float, dimension: int) -> pd.DataFrame:
+    """Per-volume fields from per-atom chunk averages (value per volume = atom average x n), and the
+    method-of-planes stresses at each bin's lower edge y - 1/2: the contact force that the grains
+    below exert on the grains and the plate above, per area, averaged over the same samples:
+    p_mop = F_y/A (compressive > 0) and tau_mop = -F_x/A (exact momentum balance, kinetic flux aside).
+    ``plate`` is the plate time series (its contact force completes the sum) and ``every`` the
+    profile interval in steps."""
     n = raw["n"]
     trace = raw["s_xx"] + raw["s_yy"] + (raw["s_zz"] if dimension == 3 else 0.0)
-    return pd.DataFrame({
+    out = pd.DataFrame({
         "step": raw["step"].astype(int), "t": raw["step"] * dt, "y": raw["y"], "count": raw["count"], "n": n,
         "phi": raw["volume"] * n, "u_x": raw["u_x"], "p": -trace / dimension * n, "tau": -raw["s_xy"] * n,
         "s_xx": raw["s_xx"] * n, "s_yy": raw["s_yy"] * n, "s_zz": raw["s_zz"] * n, "s_xy": raw["s_xy"] * n,
     })
+    window = (plate["step"] - 1) // every * every + every  # profile output step that averages each row
+    mean_plate = plate[plate["step"] > 0].groupby(window)[["f_x", "f_y"]].mean()
+    per_area = raw[["fc_x", "fc_y"]].mul(n * BIN, axis=0)  # contact force on the bin's grains per area
+    per_area["step"], per_area["y"] = out["step"], out["y"]
+    above = (per_area.sort_values(["step", "y"], ascending=[True, False])
+             .groupby("step")[["fc_x", "fc_y"]].cumsum().sort_index())
+    f_plate = mean_plate.reindex(out["step"]).to_numpy()
+    out["y_plane"] = out["y"] - BIN / 2
+    out["p_mop"] = above["fc_y"].to_numpy() + f_plate[:, 1]
+    out["tau_mop"] = -(above["fc_x"].to_numpy() + f_plate[:, 0])
+    return out
 
 
-def merge_drive(drive_dir: Path, segments: list[Path], starts: list[int], dt: float, dimension: int) -> dict:
+def merge_drive(drive_dir: Path, segments: list[Path], starts: list[int], profile_every: int, dt: float,
+                dimension: int) -> dict:
     """Assemble the drive's output files from its segments; returns a summary for run.json."""
     plates = [pd.read_csv(s / "plate.csv") if (s / "plate.csv").exists() else pd.DataFrame(columns=["step"])
               for s in segments]
@@ -110,15 +130,53 @@ def merge_drive(drive_dir: Path, segments: list[Path], starts: list[int], dt: fl
             plate["mu_w"] = -plate["f_x"] / plate["f_y"]
     plate.to_csv(drive_dir / "plate.csv", index=False)
     profiles = merge_table([read_chunk_file(s / "profiles.txt") for s in segments], starts)
-    profiles_table(profiles, dt, dimension).to_csv(drive_dir / "profiles.csv", index=False)
+    profiles_table(profiles, plate, profile_every, dt, dimension).to_csv(drive_dir / "profiles.csv", index=False)
     n_atoms = merge_dump([s / "atoms.dump" for s in segments], starts, drive_dir / "atoms.dump")
     n_contacts = merge_dump([s / "contacts.dump" for s in segments], starts, drive_dir / "contacts.dump")
     with (drive_dir / "log.lammps").open("w") as log:
-        for s in segments:
+        for k, s in enumerate(segments):
             if (s / "log.lammps").exists():
                 log.write((s / "log.lammps").read_text())
+            if (s / "in.lammps").exists():
+                name = "in.lammps" if k == 0 else f"in.resume{k}.lammps"
+                (drive_dir / name).write_text((s / "in.lammps").read_text())
     return {"plate_rows": len(plate), "last_step": int(plate["step"].max()) if len(plate) else None,
             "profile_rows": len(profiles), "atom_snapshots": n_atoms, "contact_snapshots": n_contacts}
+
+
+def snapshot_table(text: str) -> pd.DataFrame:
+    """One dump snapshot (text from ``_snapshots``) as a table named by its ITEM header."""
+    header, body = text.split("ITEM: ", 4)[-1].split("\n", 1)
+    names = header.split()[1:]
+    return pd.read_csv(io.StringIO(body), sep=r"\s+", names=names, index_col=False)
+
+
+def plane_stress(drive_dir: Path, planes, area: float) -> pd.DataFrame:
+    """Contact stress through horizontal planes (method of planes), one row per plane and snapshot.
+
+    For a plane at height y0, p_yy = (1/A) sum of F_y and tau_xy = -(1/A) sum of F_x over contacts that
+    cross it, F the force on the upper grain of the pair (normal fn (dx, dy, dz)/dist plus tangential
+    (ft_x, ft_y, ft_z) on grain 1).  In a static region p_yy is exactly p_w plus the weight above per
+    area; the kinetic momentum flux is not included.  Needs atom and contact snapshots at the same steps.
+    """
+    atoms = {step: text for step, text in _snapshots(drive_dir / "atoms.dump")}
+    planes = np.asarray(planes, dtype=float)
+    rows = []
+    for step, text in _snapshots(drive_dir / "contacts.dump"):
+        if step not in atoms:
+            continue
+        y = snapshot_table(atoms[step]).set_index("id")["y"]
+        c = snapshot_table(text)
+        y1 = y.reindex(c["id1"]).to_numpy()
+        y2 = y1 - c["dy"].to_numpy()
+        f = c[["dx", "dy"]].to_numpy() * (c["fn"] / c["dist"]).to_numpy()[:, None] + c[["ft_x", "ft_y"]].to_numpy()
+        sign = np.where(y1 > y2, 1.0, -1.0)[:, None]  # force on the upper grain
+        f_up = sign * f
+        lo, hi = np.minimum(y1, y2), np.maximum(y1, y2)
+        crossing = (lo[None, :] < planes[:, None]) & (planes[:, None] < hi[None, :])
+        rows.append(pd.DataFrame({"step": step, "y": planes, "p_yy": crossing @ f_up[:, 1] / area,
+                                  "tau_xy": -(crossing @ f_up[:, 0]) / area}))
+    return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=["step", "y", "p_yy", "tau_xy"])
 
 
 def grains_table(dump: Path) -> pd.DataFrame:

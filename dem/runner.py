@@ -308,7 +308,8 @@ class Runner:
         try:
             self._stage(meta, key, st, lambda: self.lmp.run("in.lammps", seg, self.plan, dp.steps, start, key))
         finally:
-            st.info.update(outputs.merge_drive(d, segments, starts, self.plan.dt, self.plan.dimension))
+            st.info.update(outputs.merge_drive(d, segments, starts, self.plan.intervals["profiles"],
+                                                self.plan.dt, self.plan.dimension))
             meta["stages"][key] = dataclasses.asdict(st)
             self.save(meta)
         st.status, st.message = "complete", f"{dp.steps} steps ({dp.duration:.4g} time units)"

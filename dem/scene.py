@@ -253,14 +253,15 @@ fix load plate addforce {fx / n_plate:.10g} {-cfg.p_w * area / n_plate:.10g} 0.0
         ybound = plan.depth + cfg.box.base_thickness + 4.0
         vol = "PI*radius^2" if dim == 2 else "4.0/3.0*PI*radius^3"
         blocks.append(f"""
-# --- plate time series: unwrapped x, velocity, force of the bed on the plate per area ---
+# --- plate time series: unwrapped x, velocity, force of the bed on the plate per area (sum of the
+#     plate grains' forces, normal and tangential, minus the applied load) ---
 variable px equal f_plate[1][1]+f_plate[1][13]*lx
 variable py equal f_plate[1][2]
 variable pux equal f_plate[1][4]
 variable puy equal f_plate[1][5]
-compute bed_on_plate plate group/group all pair yes
-variable pfx equal c_bed_on_plate[1]/{area:.10g}
-variable pfy equal c_bed_on_plate[2]/{area:.10g}
+compute plate_forces plate reduce sum fx fy
+variable pfx equal (c_plate_forces[1]-{fx:.10g})/{area:.10g}
+variable pfy equal (c_plate_forces[2]+{cfg.p_w * area:.10g})/{area:.10g}
 fix plate_out all print {iv["plate"]} "$(step),$(v_t:%.8g),$(v_px:%.10g),$(v_py:%.10g),$(v_pux:%.8g),$(v_puy:%.8g),$(v_pfx:%.8g),$(v_pfy:%.8g)" file plate.csv screen no title "{PLATE_COLUMNS}"
 """)
         blocks.append(f"""
@@ -273,12 +274,14 @@ dump contacts all local {iv["contacts"]} contacts.dump c_pair_ids[1] c_pair_ids[
 dump_modify contacts format float %.8g {" ".join(f"colname {i + 1} {n}" for i, n in enumerate(CONTACT_COLUMNS))}
 """)
         blocks.append(f"""
-# --- depth profiles in 1 d bins: number density, mean grain volume, vx and the contact stress
-#     (per-atom averages; multiply by density/number for per-volume values) ---
-compute bins all chunk/atom bin/1d y 0.0 1.0 bound y 0.0 {ybound:.10g} units box discard yes
-compute stress all stress/atom NULL pair
+# --- depth profiles of the bed grains in 1 d bins (per-atom averages; times density/number gives
+#     per-volume values): number density, grain volume, vx, contact stress (virial), and the contact
+#     force on the grains (f + m g), whose sum over the grains above a plane is the force through it ---
+compute bins bed chunk/atom bin/1d y 0.0 1.0 bound y 0.0 {ybound:.10g} units box discard yes
+compute stress bed stress/atom NULL pair
 variable volume atom {vol}
-fix profiles all ave/chunk {iv["plate"]} {nrep} {iv["profiles"]} bins density/number v_volume vx c_stress[1] c_stress[2] c_stress[3] c_stress[4] file profiles.txt
+variable contact_fy atom fy+mass
+fix profiles bed ave/chunk {iv["plate"]} {nrep} {iv["profiles"]} bins density/number v_volume vx c_stress[1] c_stress[2] c_stress[3] c_stress[4] fx v_contact_fy file profiles.txt
 """)
         blocks.append(f"""
 # --- restart files every {iv["restart"]} steps (granular pair styles do not restart bit-exactly) ---

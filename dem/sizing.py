@@ -118,6 +118,8 @@ def plan(cfg: Config) -> Plan:
     plate_steps = max(1, round(cfg.output.plate / dt))
     intervals = {k: max(1, round(getattr(cfg.output, k) / dt / plate_steps)) * plate_steps
                  for k in ("plate", "thermo", "atoms", "contacts", "profiles")}
+    # contact snapshots coincide with atom snapshots (plane stresses need the positions)
+    intervals["contacts"] = max(1, round(intervals["contacts"] / intervals["atoms"])) * intervals["atoms"]
     # restarts fall on profile-window boundaries so that a resumed run loses no averaging window
     intervals["restart"] = max(1, round(cfg.output.restart / dt / intervals["profiles"])) * intervals["profiles"]
     intervals["check"] = max(1, round(cfg.prepare.check_every / dt))

@@ -46,21 +46,22 @@ def test_no_grain_lost(smoke):
 
 
 def test_pressure_grows_hydrostatically_from_p_w(smoke):
-    """Vertical normal stress -s_yy (the pressure of the paper's y momentum balance, eq. StokesEqn2)
-    grows from p_w at the plate with slope phi rho_p g, phi measured in the same bins."""
+    """Time-averaged normal stress on horizontal planes (method of planes, the pressure of the paper's
+    y momentum balance, eq. StokesEqn2) grows from p_w at the plate with slope phi rho_p g."""
     out, _ = smoke
     cfg, _ = config.preset("smoke")
     d = out / "seed-1" / "stress"
     plate, prof = pd.read_csv(d / "plate.csv"), pd.read_csv(d / "profiles.csv")
-    mean = prof.groupby("y").mean(numeric_only=True)
+    mean = prof.groupby("y_plane").mean(numeric_only=True)
     surface = plate["y"].mean() - 0.5  # bottom of the plate grains
-    bins = mean[(mean.index >= cfg.box.base_thickness + 3) & (mean.index <= surface - 1.5)]
+    bins = mean[(mean.index >= cfg.box.base_thickness + 2.5) & (mean.index <= surface - 1.0)]
     depth = surface - bins.index.to_numpy()
-    slope, intercept = np.polyfit(depth, -bins["s_yy"], 1)
+    slope, intercept = np.polyfit(depth, bins["p_mop"], 1)
     phi = bins["phi"].mean()
-    assert len(bins) >= 6
-    assert slope == pytest.approx(phi, rel=0.10), (slope, phi)
+    assert len(bins) >= 8
+    assert slope == pytest.approx(phi * 1.0 * 1.0, rel=0.10), (slope, phi)  # phi rho_p g, DEM units
     assert intercept == pytest.approx(cfg.p_w, rel=0.10), intercept
+    assert plate["f_y"].mean() == pytest.approx(cfg.p_w, rel=0.05)  # the bed carries the load p_w
 
 
 def test_plate_moves_and_accelerates_above_yield(smoke):
@@ -69,12 +70,11 @@ def test_plate_moves_and_accelerates_above_yield(smoke):
     speeds = [part.mean() for part in np.array_split(plate["u_x"].to_numpy(), 3)]
     assert 0 < speeds[0] < speeds[1] < speeds[2]
     assert plate["x"].iloc[-1] - plate["x"].iloc[0] > 5.0
-    assert plate["f_y"].mean() == pytest.approx(10.0, rel=0.1)  # the bed carries the load p_w
 
 
 def test_killed_run_resumes_with_continuous_output(tmp_path):
     """SIGKILL the whole run (runner and LAMMPS) mid-drive, resume, and find every output step once."""
-    text = config.PRESETS["smoke"].replace("duration = 10.0", "duration = 30.0")
+    text = config.PRESETS["smoke"].replace("duration = 10.0", "duration = 20.0")
     cfg_path = tmp_path / "smoke-long.toml"
     cfg_path.write_text(text)
     out = tmp_path / "run"
@@ -83,7 +83,7 @@ def test_killed_run_resumes_with_continuous_output(tmp_path):
     plate = out / "seed-1" / "stress" / "segments" / "000" / "plate.csv"
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and proc.poll() is None:
-        if plate.exists() and len(plate.read_text().splitlines()) > 400:  # past a few restarts (t ~ 8)
+        if plate.exists() and len(plate.read_text().splitlines()) > 300:  # past a few restarts (t ~ 6)
             break
         time.sleep(0.02)
     os.killpg(proc.pid, signal.SIGKILL)
