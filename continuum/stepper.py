@@ -92,15 +92,19 @@ class NewtonMatrix:
         if row0 is None:
             row0 = np.zeros(len(diag))
             row0[:2] = diag[0], sup[0]
-        self.row0 = -dh * row0
-        self.row0[0] += mass[0]
         e1 = np.zeros(len(diag) - 1)
         e1[0] = -dh * sub[0]
         self.zb = self._solve(e1)
-        self.pivot = self.row0[0] - self.row0[1:] @ self.zb
+        self.refresh_row0(mass[0], row0)
 
     def _solve(self, r):
         return dgttrs(*self.factors[:-1], r)[0]
+
+    def refresh_row0(self, mass0, row0):
+        """Replace the dense row 0 by its value at the current iterate (cheap: T is unchanged)."""
+        self.row0 = -self.dh * row0
+        self.row0[0] += mass0
+        self.pivot = self.row0[0] - self.row0[1:] @ self.zb
 
     def solve(self, r):
         zr = self._solve(r[1:])
@@ -120,6 +124,8 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8):
     previous = None
     for _ in range(max_iter):
         stats.newton_iterations += 1
+        if problem.dense_wall:  # the integral condition's row changes fast: keep it current
+            matrix.refresh_row0(mass[0], problem.wall_gradient(x))
         dx = matrix.solve(rhs - mass * x + dh * rate)
         if not np.all(np.isfinite(dx)):
             break
