@@ -5,7 +5,7 @@ S_(k+1): whatever it wrote after that restart is dropped (it was redone by segme
 step appears once.  Files (all under the drive folder):
 
 * ``plate.csv``: step, t, x (unwrapped), y, u_x, u_y, f_x, f_y (force of the bed on the plate per
-  plate area), mu_w = -f_x/f_y;
+  plate area), mu_w = -f_x/f_y (empty while the plate is out of contact, f_y <= 0);
 * ``atoms.dump``: LAMMPS text dump (id type x y z vx vy vz radius), sorted by id;
 * ``contacts.dump``: LAMMPS local dump, one line per contact (r < r_1 + r_2, plate and base
   contacts included): id1 id2 dist dx dy dz fn ft_x ft_y ft_z, (dx, dy, dz) = x_1 - x_2 (branch
@@ -125,9 +125,8 @@ def merge_drive(drive_dir: Path, segments: list[Path], starts: list[int], profil
     plates = [pd.read_csv(s / "plate.csv") if (s / "plate.csv").exists() else pd.DataFrame(columns=["step"])
               for s in segments]
     plate = merge_table(plates, starts)
-    if len(plate):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            plate["mu_w"] = -plate["f_x"] / plate["f_y"]
+    if len(plate):  # no friction coefficient while the plate is out of contact
+        plate["mu_w"] = (-plate["f_x"] / plate["f_y"]).where(plate["f_y"] > 0)
     plate.to_csv(drive_dir / "plate.csv", index=False)
     profiles = merge_table([read_chunk_file(s / "profiles.txt") for s in segments], starts)
     profiles_table(profiles, plate, profile_every, dt, dimension).to_csv(drive_dir / "profiles.csv", index=False)

@@ -1,6 +1,8 @@
 """DEM configs, sizing, contact law and output merging: fast tests, no LAMMPS run."""
+import json
 import math
 import re
+import shlex
 
 import pandas as pd
 import pytest
@@ -115,3 +117,26 @@ def test_merge_keeps_every_step_once(tmp_path):
     snapshots = list(outputs._snapshots(tmp_path / "all.dump"))
     assert [s for s, _ in snapshots] == [0, 20, 40, 60]
     assert "seg 0" in snapshots[1][1] and "seg 1" in snapshots[2][1]
+
+
+@pytest.mark.parametrize("script, code, message", [
+    ("exit 139", 1, "segmentation fault inside LAMMPS (exit code 139)"),
+    ("exit 245", 1, "exit code 245"),
+    ("kill -9 $$", 1, "killed (SIGKILL"),
+    ("echo 'ERROR: Lost atoms: original 218 current 217 (src/thermo.cpp:488)'; exit 1", 1,
+     "grains were lost from the box"),
+    ("echo 'Step v_t c_ke_bed Atoms'; echo '  100 0.01 nan 218'; sleep 5", 1, "NaN/inf in the thermodynamic output"),
+])
+def test_lammps_failures_are_explained_in_run_json(tmp_path, script, code, message):
+    """A stand-in launcher plays LAMMPS failing; the run folder says what happened."""
+    cfg, text = config.preset("smoke")
+    out = tmp_path / "out"
+    launcher = "sh -c " + shlex.quote(script) + " {np}"
+    result = run(cfg, text, out, np=2, launcher=launcher, progress=False)
+    meta = json.loads((out / "run.json").read_text())
+    assert result.status == meta["status"] == "failed"
+    assert message in meta["message"] and message in meta["stages"]["seed-1"]["message"]
+    assert meta["stages"]["seed-1"]["status"] == "failed"
+    assert (out / "config.toml").read_text() == text and (out / "seed-1" / "prepare" / "prepare.in").exists()
+    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume", "--quiet",
+                     "--launcher", launcher]) == code
