@@ -44,6 +44,8 @@ def discrepancies() -> pd.DataFrame:
     coeff_speed = speed.delta / (fr.dmu * np.sqrt(speed.t))
     wkb_err = [np.max(np.abs(WKB(fr, stress.mu_w_inf, printed=p).tau(stress.mesh.y, 1.0) - stress.tau[2]))
                for p in (True, False)]
+    slow = solve_speed(fr, 0.198, [5 * 0.198**2])  # inside the 1/sqrt(t~) stage, t_mud < t~ < t_muw
+    prefactor = (slow.mu_w[0] - fr.mu_s) * np.sqrt(slow.t[0]) / 0.198
     b = 0.01
     exact = steady_wall_speed(fr, fr.mu_s * (1 + b))
     mus_err = [abs(uwall_mus(fr, fr.mu_s * (1 + b), b2) / exact - 1) for b2 in (UWALL_MUS_PRINTED_B2, None)]
@@ -55,6 +57,9 @@ def discrepancies() -> pd.DataFrame:
          "numerics / derivation": f"{coeff_stress.mean():.3f} at t~ = 1e-4..1e-3; erfc gives 2 erfcinv(1e-3) = {SELF_SIMILAR_DELTA:.3f}"},
         {"item": "delta/(Dmu sqrt t~), imposed speed u~_w = 1.334", "printed": "3.66 (with eq. TimeScaleMu)",
          "numerics / derivation": f"{coeff_speed.mean():.3f} at t~ = 1e-4..1e-3 (same 1e-3 threshold)"},
+        {"item": "eq. TimeScaleMu prefactor of u~_w/sqrt(t~)", "printed": f"1/(3.66 Dmu) = {1 / (3.66 * fr.dmu):.2f}",
+         "numerics / derivation": f"{prefactor:.2f} (u~_w = 0.198, t~ = 5 u~_w^2); a momentum balance in the tilde "
+                                  "variables gives (mu_w - mu_s) ~ Dmu u~_w delta~/t~: Dmu belongs in the numerator"},
         {"item": "eq. Uwall_muS second-order coefficient", "printed": "-5/2",
          "numerics / derivation": f"2 mu_s/(3 Dmu) - 1/6 = {2 * fr.mu_s / (3 * fr.dmu) - 1 / 6:.3f}; relative error at "
                                   f"beta_w = 0.01: printed {mus_err[0]:.1e}, derived {mus_err[1]:.1e}"},
