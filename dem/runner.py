@@ -117,10 +117,14 @@ class _Lammps:
     def __init__(self, np_: int, launcher: str | None, progress: bool):
         self.np, self.launcher, self.progress = np_, launcher, progress
 
+    def prefix(self) -> list[str]:
+        """The launcher: the template, the mpich wheel's mpirun, or nothing for one rank."""
+        if self.launcher:
+            return shlex.split(self.launcher.format(np=self.np))
+        return [] if self.np == 1 else [str(lammps_env.mpirun()), "-np", str(self.np)]
+
     def command(self, script: str) -> list[str]:
-        prefix = (shlex.split(self.launcher.format(np=self.np)) if self.launcher
-                  else [] if self.np == 1 else [str(lammps_env.mpirun()), "-np", str(self.np)])
-        return [*prefix, str(lammps_env.lmp_binary()), "-in", script, "-log", "log.lammps", "-nocite"]
+        return [*self.prefix(), str(lammps_env.lmp_binary()), "-in", script, "-log", "log.lammps", "-nocite"]
 
     def run(self, script: str, cwd: Path, plan_: Plan, total: int, start: int, desc: str) -> dict:
         bar = tqdm(total=total, initial=start, desc=desc, unit="step", disable=not self.progress,
@@ -240,7 +244,8 @@ class Runner:
                 "granstokes": importlib.metadata.version("granstokes"), "git": _git_hash(),
                 **lammps_env.lammps_info(), "python": platform.python_version(), "host": platform.node(),
                 "machine": platform.machine(), "cpus": os.cpu_count(), "np": self.lmp.np,
-                "launcher": shlex.join(self.lmp.command("in.lammps")[:-5]) or "(direct)",
+                "launcher": shlex.join(self.lmp.prefix()) or "(none: one rank)",
+                "lmp": str(lammps_env.lmp_binary()),
             },
             "stages": {}, "timings": {"started": _now()},
         }
@@ -262,7 +267,7 @@ class Runner:
         meta["stages"][key] = dataclasses.asdict(st)
         self.save(meta)
         c = self.plan.config.prepare
-        total = round((c.settle_max + c.relax_max) / self.plan.dt) + 1
+        total = scene.free_fall_steps(self.plan) + round((c.settle_max + c.relax_max) / self.plan.dt)
         info = self._stage(meta, key, st, lambda: self.lmp.run("prepare.in", d, self.plan, total, 0,
                                                                f"{key} prepare"))
         relaxed = [ph for ph in info["phases"] if ph.startswith("relaxed")]

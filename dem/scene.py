@@ -77,6 +77,12 @@ create_box 3 box
     return text, top
 
 
+def free_fall_steps(plan: Plan) -> int:
+    """Steps of the first settling run: 1.5 times the free-fall time from the top of the column."""
+    _, top = _box(plan)
+    return math.ceil(1.5 * math.sqrt(2 * top) / plan.dt)
+
+
 def _density(group: str, dim: int) -> str:
     return f"set group {group} density/disc 1.0" if dim == 2 else f"set group {group} density 1.0"
 
@@ -88,7 +94,7 @@ def prepare_script(plan: Plan, seed: int) -> str:
     box, top = _box(plan)
     zrange = "INF INF"
     m_mean = grain_mass(1.0, dim)
-    fall_steps = math.ceil(1.5 * math.sqrt(2 * top) / dt)
+    fall_steps = free_fall_steps(plan)
     check = plan.intervals["check"]
     n_settle = max(1, math.ceil(cfg.prepare.settle_max / (check * dt)))
     n_relax = max(1, math.ceil(cfg.prepare.relax_max / (check * dt)))
@@ -215,13 +221,12 @@ def drive_script(plan: Plan, drive: DrivePlan, restart: str, fresh: bool, output
     nx, nz, _, _ = plate_layout(plan)
     n_plate = nx * nz
     enforce = "fix two_d all enforce2d" if dim == 2 else ""
-    zflag = "off"
     if drive.drive.kind == "stress":
-        flags, fx = f"force * on on {zflag}", drive.tau_w * area
+        flags, fx = "force * on on off", drive.tau_w * area
         what = f"imposed stress: x force tau_w A = {fx:.6g} (tau_w = {drive.tau_w:.6g})"
         set_speed = ""
     else:
-        flags, fx = f"force * off on {zflag}", 0.0
+        flags, fx = "force * off on off", 0.0
         what = f"imposed speed: plate x velocity held at u_w = {drive.u_w:.6g} (rigid-body x force off)"
         set_speed = f"velocity plate set {drive.u_w:.10g} NULL NULL units box" if fresh else ""
     blocks = [
@@ -250,7 +255,7 @@ fix load plate addforce {fx / n_plate:.10g} {-cfg.p_w * area / n_plate:.10g} 0.0
     thermo_extra = ""
     if outputs:
         nrep = iv["profiles"] // iv["plate"]
-        ybound = plan.depth + cfg.box.base_thickness + 4.0
+        ybound = plan.depth + cfg.box.base_thickness + 8.0  # above the plate: every bed grain is binned
         vol = "PI*radius^2" if dim == 2 else "4.0/3.0*PI*radius^3"
         blocks.append(f"""
 # --- plate time series: unwrapped x, velocity, force of the bed on the plate per area (sum of the
