@@ -1,0 +1,247 @@
+"""Velocity-form mu(I) solver for the DEM's own scene: a bed of finite depth H on a rough base,
+a plate with mass, any initial state (paper eqs. StokesEqn1-2 without the stress-diffusion rewrite).
+
+    phi rho_p du/dt = d sigma_xy/dy + b   on 0 < y < H (y downward from the plate),   u(H) = 0,
+    sigma_xy = s(g, p) from a YieldRule (continuum.rules), g = 1/2 du/dy, p = p_w + phi rho_p g y,
+    plate:  imposed speed u(0) = u_w,  or imposed stress  (m_p + phi rho_p h_0/2) du_w/dt = tau_w + sigma_xy(0+).
+
+Finite volumes: velocities at the nodes of a Mesh scaled to [0, H], stresses at the faces; the
+Jacobian is tridiagonal and the system goes through the same DIRK stepper as the paper's problem.
+Dimensional: the material's units (DEM units d = rho_p = g = 1 by default).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import brentq
+
+from .mesh import Mesh
+from .rheology import finite, require
+from .rules import ShearLaw, YieldRule
+from .scales import Material, Scales
+from .steady import DELTA_THRESHOLD
+from .stepper import StepStats, integrate
+
+
+@dataclass(frozen=True)
+class BedScene:
+    """A bed of depth H under a plate of mass m_p per unit area, pressed with p_w; ``body_force``
+    is a uniform horizontal force per unit volume (0 for the DEM's horizontal bed).
+
+    The paper's initial state tau = mu_s p is a static equilibrium only with
+    body_force = mu_s phi rho_p g (a bed tilted to tan(theta) = mu_s): a horizontal bed cannot hold a
+    shear stress that grows with depth.  The stress-diffusion equation does not see this (it only
+    involves d(du/dy)/dt, blind to a uniform acceleration), so to compare with it from that state
+    the velocity form needs that body force (tests, report)."""
+
+    material: Material
+    p_w: float
+    depth: float
+    plate_mass: float = 0.0
+    body_force: float = 0.0
+
+    def __post_init__(self):
+        require(finite(self.p_w) and self.p_w > 0, "p_w", "a finite number > 0", self.p_w)
+        require(finite(self.depth) and self.depth > 0, "depth", "a finite number > 0", self.depth)
+        require(finite(self.plate_mass) and self.plate_mass >= 0, "plate_mass",
+                "a finite number >= 0 (mass per unit plate area)", self.plate_mass)
+        require(finite(self.body_force), "body_force", "a finite number", self.body_force)
+
+    @property
+    def weight_gradient(self) -> float:
+        m = self.material
+        return m.phi * m.rho_p * m.g
+
+
+@dataclass(frozen=True)
+class VelocityNumerics:
+    n_cells: int = 200
+    stretch: float = 2.0
+    rtol: float = 1e-5
+    atol: float = 1e-9
+    method: str = "sdirk4"
+
+
+class VelocityProblem:
+    """M u' = F(u) with unknowns u at nodes 0..N-1 (u_N = 0 at the base)."""
+
+    def __init__(self, scene: BedScene, rule: YieldRule, mesh_unit: Mesh, *, tau_w=None, u_w=None, u0=None):
+        m = scene.material
+        self.scene, self.rule = scene, rule
+        self.y = mesh_unit.y * scene.depth
+        self.h = np.diff(self.y)
+        self.p_face = scene.p_w + scene.weight_gradient * (self.y[:-1] + self.h / 2)
+        self.law = ShearLaw(rule, m.friction, m.I0_paper, m.d, m.rho_p)
+        self.rho_b = rho_b = m.phi * m.rho_p
+        n = len(self.y) - 1
+        self.mass = np.empty(n)
+        self.mass[1:] = rho_b * (self.h[:-1] + self.h[1:]) / 2
+        self.tau_w, self.u_w = tau_w, u_w
+        self.imposed = "stress" if tau_w is not None else "speed"
+        self.mass[0] = scene.plate_mass + rho_b * self.h[0] / 2 if tau_w is not None else 0.0
+        self.u0 = np.zeros(n) if u0 is None else np.asarray(u0, dtype=float)[:n].copy()
+        if u_w is not None:
+            self.u0[0] = u_w
+
+    dense_wall = False
+
+    def initial(self) -> np.ndarray:
+        return self.u0.copy()
+
+    def full(self, x):
+        return np.append(x, 0.0)
+
+    def faces(self, x):
+        """Face shear g = 1/2 du/dy, stress sigma_xy and its derivative ds/dg."""
+        g = 0.5 * np.diff(self.full(x)) / self.h
+        s, ds = self.law.stress(g, self.p_face)
+        return g, s, ds
+
+    def rate(self, x):
+        _, s, _ = self.faces(x)
+        f = np.empty_like(x)
+        f[1:] = s[1:] - s[:-1] + self.scene.body_force * self.mass[1:] / self.rho_b
+        f[0] = self.tau_w + s[0] + self.scene.body_force * self.h[0] / 2 if self.imposed == "stress" else x[0] - self.u_w
+        return f
+
+    def jacobian(self, x):
+        _, _, ds = self.faces(x)
+        k = 0.5 * ds / self.h  # d s_j / d u_{j+1} = k_j, d s_j / d u_j = -k_j
+        diag = np.empty_like(x)
+        diag[1:] = -k[1:] - k[:-1]
+        sub = k[:-1].copy()          # dF_i/du_{i-1} = k_{i-1}, rows 1..N-1
+        sup = k[1:-1].copy()         # dF_i/du_{i+1} = k_i, rows 1..N-2
+        if self.imposed == "stress":
+            diag[0], sup0 = -k[0], k[0]
+        else:
+            diag[0], sup0 = 1.0, 0.0
+        return sub, diag, np.concatenate(([sup0], sup)), None
+
+    def project(self, x):
+        if self.imposed == "speed":
+            x[0] = self.u_w
+        return x
+
+    def step_fraction(self, x, dx):
+        return 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class VelocitySolution:
+    """u at the nodes and sigma_xy at the faces at the requested times, per-step series, metadata.
+    Dimensional (the material's units); ``scales`` converts to the paper's variables."""
+
+    scene: BedScene
+    rule: YieldRule
+    imposed: str
+    y: np.ndarray
+    y_face: np.ndarray
+    t: np.ndarray
+    u: np.ndarray
+    s: np.ndarray
+    series: pd.DataFrame
+    stats: StepStats
+    scales: Scales
+
+    @property
+    def mu(self) -> np.ndarray:
+        """|sigma_xy|/p at the faces."""
+        return np.abs(self.s) / (self.scene.p_w + self.scene.weight_gradient * self.y_face)
+
+    @property
+    def u_w(self) -> np.ndarray:
+        return self.u[:, 0]
+
+
+def _yield_front(mu, y_face, mu_s):
+    """Deepest face where mu >= mu_s (linear interpolation of mu - mu_s); 0 if none."""
+    flowing = mu >= mu_s
+    if not flowing.any():
+        return 0.0
+    j = len(mu) - 1 - np.argmax(flowing[::-1])
+    if j == len(mu) - 1:
+        return float(y_face[j])
+    a, b = mu[j] - mu_s, mu[j + 1] - mu_s
+    return float(y_face[j] + a / (a - b) * (y_face[j + 1] - y_face[j]))
+
+
+def _layer_thickness(mu, y_face, mu_s, mu_wall):
+    """Depth where (mu - mu_s) falls to DELTA_THRESHOLD of (mu_wall - mu_s) (as continuum.observables)."""
+    excess = (mu - mu_s) / (mu_wall - mu_s)
+    below = np.nonzero(excess < DELTA_THRESHOLD)[0]
+    if len(below) == 0:
+        return float(y_face[-1])
+    j = below[0]
+    if j == 0:
+        return 0.0
+    a, b = excess[j - 1] - DELTA_THRESHOLD, excess[j] - DELTA_THRESHOLD
+    return float(y_face[j - 1] + a / (a - b) * (y_face[j] - y_face[j - 1]))
+
+
+def initial_at_yield(problem: VelocityProblem) -> np.ndarray:
+    """The paper's initial state tau = mu_s p (eq. InitStokesEqn) as a velocity field: on each
+    face the creep rate g < 0 with |s(g)| = mu_s p (exists for the regularised law: |s| rises
+    from 0 to mu(I) p >= mu_s p), integrated up from u(H) = 0.  Tends to u = 0 as eps -> 0."""
+    mu_s = problem.scene.material.mu_s
+    g = np.empty(len(problem.h))
+    for j, p in enumerate(problem.p_face):
+        target = mu_s * p
+        f = lambda a: -problem.law.stress(np.array([-a]), np.array([p]))[0][0] - target
+        hi = problem.rule.eps
+        while f(hi) < 0:
+            hi *= 10
+        g[j] = -brentq(f, 0.0, hi, xtol=1e-300, rtol=1e-14)
+    du = 2 * g * problem.h
+    return -np.cumsum(du[::-1])[::-1]
+
+
+def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRule = YieldRule(),
+                   initial: str = "rest", numerics: VelocityNumerics = VelocityNumerics(),
+                   compare_steady: bool = True, fixed_times=None) -> VelocitySolution:
+    """Solve the velocity form with an imposed plate stress (mu_w = tau_w/p_w) or speed (u_w).
+
+    ``initial``: "rest" (unsheared bed, u = 0, sigma_xy = 0) or "yield" (tau = mu_s p, the paper's
+    state).  ``compare_steady`` requires H >= delta_s so the steady state is the paper's
+    (eq. MuSteadyState); set it False to run a shallower bed.
+    """
+    m, fr = scene.material, scene.material.friction
+    require((mu_w is None) != (u_w is None), "mu_w/u_w", "exactly one of them", (mu_w, u_w))
+    require(initial in ("rest", "yield"), "initial", "'rest' or 'yield'", initial)
+    if mu_w is not None:
+        scales = Scales(m, scene.p_w, fr.check_mu_w(mu_w))
+    else:
+        require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
+        scales = Scales.for_speed(m, scene.p_w, u_w)
+    if compare_steady:
+        require(scene.depth >= scales.delta_s, "depth",
+                f">= delta_s = {scales.delta_s:.6g} for a steady comparison (or compare_steady=False)", scene.depth)
+    t = np.asarray(times, dtype=float)
+    require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
+            "times", "a non-empty, strictly increasing list of finite numbers > 0", list(map(float, t)))
+    mesh = Mesh.graded(numerics.n_cells, numerics.stretch)
+    tau_w = None if mu_w is None else mu_w * scene.p_w
+    problem = VelocityProblem(scene, rule, mesh, tau_w=tau_w, u_w=u_w)
+    if initial == "yield":
+        problem.u0 = initial_at_yield(problem)
+        if u_w is not None:
+            problem.u0[0] = u_w
+    y_face = problem.y[:-1] + problem.h / 2
+    rows = []
+
+    def observe(time, x):
+        _, s, _ = problem.faces(x)
+        mu = np.abs(s) / problem.p_face
+        tau_plate = tau_w if tau_w is not None else -s[0]
+        mu_wall = tau_plate / scene.p_w
+        rows.append((time, x[0], tau_plate, mu_wall, _layer_thickness(mu, y_face, m.mu_s, max(mu_wall, mu[0])),
+                     _yield_front(mu, y_face, m.mu_s)))
+
+    states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
+                              h0=1e-9 * scales.t_s, fixed_times=fixed_times, observer=observe)
+    s = np.array([problem.faces(x)[1] for x in states])
+    u = np.column_stack([states, np.zeros(len(t))])
+    series = pd.DataFrame(rows, columns=["t", "u_w", "tau_w", "mu_w", "delta", "yield_front"])
+    return VelocitySolution(scene, rule, problem.imposed, problem.y, y_face, t, u, s, series, stats, scales)
