@@ -7,7 +7,8 @@ a_ii).  J is tridiagonal, except that row 0 may be dense (the imposed-speed inte
 system is solved by bordering with LAPACK gttrf/gttrs.  All tableaux are stiffly accurate
 (x_{n+1} is the last stage), so algebraic rows hold at every step (index-1 DAEs).
 
-Methods (``TABLEAUX``):
+Methods (``TABLEAUX``), plus ``explicit_euler`` (first order, conditionally stable: the
+stability map's foil):
 * ``sdirk4``: Hairer & Wanner (1996, Table IV.6.5) 5-stage SDIRK, order 4, L-stable, embedded
   order 3.  The default: cheapest to 1e-6 in the work-precision benchmark (bench/).
 * ``tr-bdf2``: trapezoidal stage then BDF2 (Bank et al. 1985) as a 3-stage ESDIRK, order 2,
@@ -112,19 +113,22 @@ class NewtonMatrix:
         return np.concatenate(([x0], zr - x0 * self.zb))
 
 
-def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8):
+def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8, full=False):
     """Solve M X - dh F(X) = rhs by simplified Newton from the guess x.
 
     Stops when the contraction-corrected update theta/(1-theta) |dx| (weighted RMS) is below
     ``tol`` (Hairer & Wanner 1996, IV.8), then applies the problem's exact projection onto its
-    algebraic constraints (if any); returns (X, F(X))."""
+    algebraic constraints (if any); returns (X, F(X)).  ``full``: refactorise at every iterate
+    (full Newton, the fallback when the frozen matrix does not contract)."""
     x = x.copy()
     mass, dh = problem.mass, matrix.dh
     rate = problem.rate(x)
     previous = None
     for _ in range(max_iter):
         stats.newton_iterations += 1
-        if problem.dense_wall:  # the integral condition's row changes fast: keep it current
+        if full:
+            matrix = NewtonMatrix(problem, x, dh)
+        elif problem.dense_wall:  # the integral condition's row changes fast: keep it current
             matrix.refresh_row0(mass[0], problem.wall_gradient(x))
         dx = matrix.solve(rhs - mass * x + dh * rate)
         if not np.all(np.isfinite(dx)):
@@ -161,7 +165,10 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats):
         if len(rates) > int(tab.explicit_first):
             differential = ~algebraic
             guess[differential] = (rhs[differential] + matrix.dh * rates[-1][differential]) / mass[differential]
-        X, r = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats)
+        try:
+            X, r = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats)
+        except NewtonFailure:
+            X, r = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats, max_iter=15, full=True)
         rates.append(r)
     if tab.err is None:
         return X, rates[-1], None
@@ -232,3 +239,31 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
             raise ValueError("fixed_times must contain every output time")
     stats.cpu_seconds = time.process_time() - start
     return states, stats
+
+
+def explicit_euler(problem, t_out, fixed_times, observer=None):
+    """Forward Euler on the differential rows, x += dt F(x)/M, then the problem's projection onto
+    its algebraic rows; stable only for dt < 2/|lambda_max(M^-1 J)| (continuum.stability)."""
+    t_out = np.asarray(t_out, dtype=float)
+    differential = problem.mass > 0
+    stats = StepStats()
+    start = time.process_time()
+    x = problem.project(problem.initial())
+    states = np.empty((len(t_out), len(x)))
+    t, k = 0.0, 0
+    for t_next in np.asarray(fixed_times, dtype=float):
+        f = problem.rate(x)
+        x = x.copy()
+        x[differential] += (t_next - t) * f[differential] / problem.mass[differential]
+        x = problem.project(x)
+        t = t_next
+        stats.steps += 1
+        if not np.all(np.isfinite(x)):
+            raise FloatingPointError(f"explicit Euler blew up at t = {t:.3e}")
+        if observer is not None:
+            observer(t, x)
+        while k < len(t_out) and np.isclose(t, t_out[k], rtol=1e-13, atol=0.0):
+            states[k] = x
+            k += 1
+    stats.cpu_seconds = time.process_time() - start
+    return states[:k], stats

@@ -1,0 +1,295 @@
+"""Stability map: where each method stops being trustworthy (issue: velocity form + stability map).
+
+For each method, a grid of the physical parameter (mu~_w for an imposed stress, u~_w for an imposed
+speed) against a numerical one (cells, time step or eps); every cell runs the method at that
+setting and at a refined one, and is classified (first match wins):
+
+* ``blown up``: an exception (Newton failure, overflow), non-finite or |tau~| > 1e3;
+* ``out of bounds``: mu outside [mu_s, mu_d] where the model keeps it inside (stress-diffusion);
+* ``constraint-violating``: the imposed-speed integral condition off by more than 1e-8;
+* ``oscillating``: the final tau~ profile has more extrema than the reference (ringing);
+* ``inaccurate``: u~_w at the final time more than 1e-3 (relative) from the reference, or grid
+  dependence with an observed order below 1.5;
+* ``converged``: otherwise (the observed order is kept).
+
+The explicit scheme's bound is derived, not guessed: dt* = 2/|lambda_min(D L)| with the largest
+diffusivity a state can have, D = Dmu^2 sqrt(p~) (mu = mu_s, since D = sqrt(p~)(mu_d - mu)^2), and
+L the mesh's second difference (a symmetrisable tridiagonal matrix: eigvalsh_tridiagonal).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.linalg import eigvalsh_tridiagonal
+
+from . import observables as obs
+from .mesh import Mesh
+from .mol import solve_stress_mol
+from .problems import ImposedSpeed, ImposedStress
+from .rheology import Friction
+from .rules import YieldRule, wellposedness
+from .scales import Material, Scales
+from .solver import Numerics, solve_speed, solve_stress
+from .steady import steady_mu
+from .stepper import explicit_euler, integrate
+from .velocity import BedScene, VelocityNumerics, solve_velocity
+
+CLASSES = ("converged", "inaccurate", "oscillating", "constraint-violating", "out of bounds", "blown up")
+COLORS = {"converged": "#2ca02c", "inaccurate": "#ffbf00", "oscillating": "#9467bd",
+          "constraint-violating": "#17becf", "out of bounds": "#ff7f0e", "blown up": "#d62728"}
+MU_W_TILDE = (0.01, 0.03, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99)
+U_W = (0.01, 0.1, 1.0, 5.0, 20.0)
+T_END = 1.0
+
+
+def explicit_bound(fr: Friction, mu_w: float, mesh: Mesh) -> float:
+    """Largest stable forward-Euler step for eq. GranularStokesEqn on ``mesh``: 2/|lambda_min(D L)|
+    with D = Dmu^2 sqrt(p~) (the largest diffusivity any admissible state has)."""
+    p = 1.0 + fr.beta(mu_w) * mesh.y[1:-1]
+    D = fr.dmu**2 * np.sqrt(p)
+    cl, cd, cu = mesh.d2
+    off = np.sqrt((D[1:] * cl[1:]) * (D[:-1] * cu[:-1]))
+    lam = eigvalsh_tridiagonal(D * cd, off, select="i", select_range=(0, 0))[0]
+    return 2.0 / abs(lam)
+
+
+def extrema(profile: np.ndarray) -> int:
+    """Number of interior extrema (sign changes of the first difference, ignoring round-off)."""
+    d = np.diff(profile)
+    d = d[np.abs(d) > 1e-12 * max(1.0, np.abs(profile).max())]
+    return int(np.sum(np.sign(d[1:]) != np.sign(d[:-1])))
+
+
+@dataclass
+class Outcome:
+    u_w: float = math.nan
+    tau: np.ndarray | None = None
+    mu_range: tuple[float, float] = (math.nan, math.nan)
+    constraint: float = 0.0
+    error: str = ""
+
+
+def _stress_outcome(sol) -> Outcome:
+    return Outcome(float(sol.u_w[-1]), sol.tau[-1], (float(sol.mu.min()), float(sol.mu.max())))
+
+
+def _explicit(fr, mu_w, n, factor) -> Outcome:
+    mesh = Mesh.graded(n, 0.0)
+    pb = ImposedStress(fr, mu_w, mesh)
+    dt = factor * explicit_bound(fr, mu_w, mesh)
+    steps = int(math.ceil(T_END / dt))
+    states, _ = explicit_euler(pb, [steps * dt], np.arange(1, steps + 1) * dt)
+    tau = pb.full(states[-1])
+    mu = obs.friction_profile(fr, mu_w, mesh, tau)
+    return Outcome(float(mesh.weights @ obs.shear_rate(fr, mu_w, mesh, tau)), tau, (mu.min(), mu.max()))
+
+
+def _speed(fr, u_w, n) -> Outcome:
+    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=n))
+    pb = ImposedSpeed(fr, u_w, sol.mesh)
+    x = np.concatenate(([1.0 / fr.tilde(sol.mu_w[-1])], sol.tau[-1, 1:-1]))
+    out = _stress_outcome(sol)
+    out.u_w = float(sol.mu_w[-1])  # the speed is imposed: the wall friction is the result
+    out.constraint = abs(pb.wall_residual(x))
+    return out
+
+
+def _velocity(fr, mu_w, rule, n) -> Outcome:
+    m = Material(mu_s=fr.mu_s, mu_d=fr.mu_d)
+    sc = Scales(m, 10.0, mu_w)
+    scene = BedScene(m, 10.0, sc.delta_s, body_force=m.mu_s * m.phi * m.rho_p * m.g)
+    sol = solve_velocity(scene, [0.1 * sc.t_s], mu_w=mu_w, rule=rule, initial="yield",
+                         numerics=VelocityNumerics(n_cells=n))
+    mu = sol.mu[-1]
+    tau = np.abs(sol.s[-1]) / (mu_w * scene.p_w)
+    return Outcome(float(sol.u_w[-1] / sc.U), tau, (float(mu.max()), float(mu.max())))
+
+
+@dataclass(frozen=True)
+class MethodMap:
+    """One method: the physical parameter, the numerical axis and the runner."""
+
+    name: str
+    param: str
+    params: tuple
+    axis: str
+    values: tuple
+    refine: tuple  # the refined setting for each value (order/grid dependence)
+
+    def run(self, fr: Friction, param, value) -> Outcome:
+        mu_w = fr.mu_w_from_tilde(param) if self.param == "mu_w_tilde" else None
+        if self.name == "stress SDIRK4 (adaptive)":
+            return _stress_outcome(solve_stress(fr, mu_w, [T_END], Numerics(n_cells=value)))
+        if self.name == "stress Crank-Nicolson (uniform dt)":
+            n = max(1, int(round(T_END / value)))
+            steps = T_END * np.arange(1, n + 1) / n
+            return _stress_outcome(solve_stress(fr, mu_w, [T_END], Numerics(n_cells=100, method="crank-nicolson"),
+                                                fixed_times=steps))
+        if self.name == "stress explicit Euler (dt / dt*)":
+            return _explicit(fr, mu_w, 40, value)
+        if self.name == "stress solve_ivp BDF (baseline)":
+            return _stress_outcome(solve_stress_mol(fr, mu_w, [T_END], Numerics(n_cells=value)))
+        if self.name == "speed SDIRK4 (adaptive)":
+            return _speed(fr, param, value)
+        if self.name == "velocity form, regularised (eps)":
+            return _velocity(fr, mu_w, YieldRule("regularised", value), 200)
+        if self.name == "velocity form, Barker-Gray":
+            return _velocity(fr, mu_w, YieldRule("barker-gray", 1e-5), value)
+        raise ValueError(f"unknown method {self.name!r}")
+
+
+METHODS = (
+    MethodMap("stress SDIRK4 (adaptive)", "mu_w_tilde", MU_W_TILDE, "n_cells", (25, 50, 100, 200), (50, 100, 200, 400)),
+    MethodMap("stress Crank-Nicolson (uniform dt)", "mu_w_tilde", MU_W_TILDE, "dt", (0.1, 0.03, 0.01, 0.003),
+              (0.05, 0.015, 0.005, 0.0015)),
+    MethodMap("stress explicit Euler (dt / dt*)", "mu_w_tilde", MU_W_TILDE, "dt/dt*", (2.0, 1.1, 0.9, 0.5),
+              (1.0, 0.55, 0.45, 0.25)),
+    MethodMap("stress solve_ivp BDF (baseline)", "mu_w_tilde", MU_W_TILDE, "n_cells", (25, 50, 100, 200),
+              (50, 100, 200, 400)),
+    MethodMap("speed SDIRK4 (adaptive)", "u_w", U_W, "n_cells", (25, 50, 100, 200), (50, 100, 200, 400)),
+    MethodMap("velocity form, regularised (eps)", "mu_w_tilde", MU_W_TILDE[1::2], "eps", (1e-2, 1e-3, 1e-4, 1e-5),
+              (5e-3, 5e-4, 5e-5, 5e-6)),
+    MethodMap("velocity form, Barker-Gray", "mu_w_tilde", MU_W_TILDE[1::2], "n_cells", (50, 100, 200),
+              (100, 200, 400)),
+)
+
+
+def reference(fr: Friction, method: MethodMap, param) -> Outcome:
+    """Converged reference of the same model: SDIRK4 on 400 cells at rtol 1e-8 (the velocity form:
+    the paper's stress-diffusion solution, to which it converges as eps -> 0)."""
+    if method.param == "u_w":
+        sol = solve_speed(fr, param, [T_END], Numerics(n_cells=400, rtol=1e-8, atol=1e-10))
+        return Outcome(float(sol.mu_w[-1]), sol.tau[-1])
+    mu_w = fr.mu_w_from_tilde(param)
+    t_end = 0.1 if method.name.startswith("velocity") else T_END
+    sol = solve_stress(fr, mu_w, [t_end], Numerics(n_cells=400, rtol=1e-8, atol=1e-10))
+    return Outcome(float(sol.u_w[-1]), sol.tau[-1])
+
+
+def classify(fr: Friction, out: Outcome, fine: Outcome, ref: Outcome, bounded: bool) -> tuple[str, float]:
+    """The class of a run and its observed order (nan when not measurable)."""
+    for o in (out, fine):
+        if o.error or not np.isfinite(o.u_w) or o.tau is None or not np.all(np.isfinite(o.tau)) \
+                or np.abs(o.tau).max() > 1e3:
+            return "blown up", math.nan
+    if bounded and (out.mu_range[0] < fr.mu_s - 1e-9 or out.mu_range[1] > fr.mu_d):
+        return "out of bounds", math.nan
+    if out.constraint > 1e-8:
+        return "constraint-violating", math.nan
+    if extrema(out.tau) > extrema(ref.tau) + 1:
+        return "oscillating", math.nan
+    err, err_fine = abs(out.u_w / ref.u_w - 1), abs(fine.u_w / ref.u_w - 1)
+    order = math.log2(err / err_fine) if err > 0 and err_fine > 0 else math.nan
+    if err > 1e-3 or (err > 1e-6 and not order >= 1.5):
+        return "inaccurate", order
+    return "converged", order
+
+
+def _safe(method, fr, param, value) -> Outcome:
+    try:
+        with np.errstate(all="ignore"):
+            return method.run(fr, param, value)
+    except (RuntimeError, FloatingPointError, ValueError, ArithmeticError) as err:
+        return Outcome(error=f"{type(err).__name__}: {err}")
+
+
+def stability_table(fr: Friction, methods=METHODS) -> pd.DataFrame:
+    rows = []
+    for method in methods:
+        for param in method.params:
+            ref = reference(fr, method, param)
+            for value, finer in zip(method.values, method.refine):
+                start = time.process_time()
+                out, fine = _safe(method, fr, param, value), _safe(method, fr, param, finer)
+                label, order = classify(fr, out, fine, ref, bounded=not method.name.startswith("velocity"))
+                rows.append({"method": method.name, "param": method.param, "param_value": param, "axis": method.axis,
+                             "axis_value": value, "class": label, "order": order,
+                             "rel_error": abs(out.u_w / ref.u_w - 1) if np.isfinite(out.u_w) else math.nan,
+                             "cpu_s": time.process_time() - start, "error": out.error or fine.error})
+    return pd.DataFrame(rows)
+
+
+def plot_maps(table: pd.DataFrame, out: Path) -> list[Path]:
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    paths = []
+    for name, g in table.groupby("method", sort=False):
+        params, values = sorted(g.param_value.unique()), list(dict.fromkeys(g.axis_value))
+        fig = Figure(figsize=(7.5, 3.6), layout="constrained")
+        ax = fig.subplots()
+        for _, r in g.iterrows():
+            i, j = params.index(r.param_value), values.index(r.axis_value)
+            ax.add_patch(__import__("matplotlib.patches", fromlist=["Rectangle"]).Rectangle(
+                (i - 0.5, j - 0.5), 1, 1, color=COLORS[r["class"]]))
+            label = f"{r.order:.1f}" if np.isfinite(r.order) and r["class"] == "converged" else ""
+            ax.text(i, j, label, ha="center", va="center", fontsize=8)
+        ax.set(xlim=(-0.5, len(params) - 0.5), ylim=(-0.5, len(values) - 0.5),
+               xticks=range(len(params)), yticks=range(len(values)),
+               xlabel={"mu_w_tilde": "mu~_w = (mu_d - mu_w)/Dmu", "u_w": "u~_w"}[g.param.iloc[0]],
+               ylabel=g.axis.iloc[0], title=f"{name} (numbers: observed order)")
+        ax.set_xticklabels([f"{p:g}" for p in params])
+        ax.set_yticklabels([f"{v:g}" for v in values])
+        present = [c for c in CLASSES if c in set(g["class"])]
+        ax.legend(handles=[Patch(color=COLORS[c], label=c) for c in present], fontsize=7,
+                  loc="upper left", bbox_to_anchor=(1.01, 1))
+        path = out / f"stability_{''.join(ch if ch.isalnum() else '_' for ch in name.lower()).strip('_')}.png"
+        fig.savefig(path, dpi=120)
+        paths.append(path)
+    return paths
+
+
+def wellposedness_profiles(materials: dict[str, Material], mu_w_tildes=(0.9, 0.5, 0.1), n=400) -> pd.DataFrame:
+    """Barker et al. (2015) eq. 3.9 along the steady layer y~ in [0, 1]: I(y~) from the steady
+    mu(y~) (eq. MuSteadyState) through the inverse mu(I) law; negative = well posed."""
+    rows = []
+    y = np.linspace(0.0, 1.0, n + 1)[:-1]
+    for label, m in materials.items():
+        fr = m.friction
+        for mt in mu_w_tildes:
+            mu = steady_mu(fr, fr.mu_w_from_tilde(mt), y)
+            I = fr.I_of_mu(mu, m.I0_paper)
+            rows.append(pd.DataFrame({"material": label, "mu_w_tilde": mt, "y": y, "I_paper": I,
+                                      "criterion": wellposedness(fr, m.I0_paper, I)}))
+    return pd.concat(rows, ignore_index=True)
+
+
+def plot_wellposedness(df: pd.DataFrame, path: Path) -> Path:
+    from matplotlib.figure import Figure
+
+    materials = list(dict.fromkeys(df.material))
+    fig = Figure(figsize=(5 * len(materials), 4), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(materials), sharey=True))
+    for ax, label in zip(axes, materials):
+        for mt, g in df[df.material == label].groupby("mu_w_tilde"):
+            ax.plot(g.criterion, g.y, label=f"mu~_w = {mt:g}")
+        ax.axvline(0.0, color="k", lw=0.8)
+        ax.axvspan(0.0, max(df.criterion.max(), 0.01), color="r", alpha=0.08, label="ill posed (> 0)")
+        ax.set(xlabel="4 nu^2 - 4 nu + mu^2 (1 - nu/2)^2  (Barker et al. 2015, eq. 3.9)", title=label)
+    axes[0].set_ylabel("y~ = y/delta_s (steady layer)")
+    axes[0].invert_yaxis()
+    axes[0].legend(fontsize=8)
+    fig.savefig(path, dpi=120)
+    return path
+
+
+def write_stability(out_dir, calibrated: Material | None = None) -> dict:
+    """Run every map; write PNGs, stability.csv and the well-posedness plot into ``out_dir``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paper = Material()
+    fr = paper.friction
+    table = stability_table(fr)
+    table.to_csv(out / "stability.csv", index=False)
+    maps = plot_maps(table, out)
+    materials = {"paper (mu_s = tan 21, mu_d = tan 33, I0_dem = 0.279)": paper}
+    if calibrated is not None:
+        materials["DEM-calibrated"] = calibrated
+    wp = wellposedness_profiles(materials)
+    wp.to_csv(out / "wellposedness.csv", index=False)
+    return {"table": table, "maps": maps, "wellposedness": plot_wellposedness(wp, out / "wellposedness.png")}
