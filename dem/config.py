@@ -1,24 +1,21 @@
 """DEM scene configuration: TOML schema, validation (before anything runs) and the presets.
 
-A config is a TOML document (DEM units: d = rho_p = g = 1)::
+A config is a TOML document (DEM units: d = rho_p = g = 1); this example is valid::
 
     name = "demo"
-    seeds = [1]                 # one prepared bed per seed (ensembles)
-    dt = 2e-4                   # optional; default t_c/20, never above it
-    [material]                  # the bed's expected mu(I) parameters (continuum.scales.Material)
-    mu_s = 0.28; mu_d = 0.58; I0 = 0.3; I_convention = "dem"; phi = 0.8
-    [grains]                    # dimension 2 (disks) or 3 (spheres); diameters uniform by number in [1-w, 1+w]
-    dimension = 2; polydispersity = 0.15; mu_p = 0.5; restitution = 0.5; contact = "hooke"; kappa = 1e4
-    [box]                       # widths and depth in d; depth omitted -> max delta_s + margin
-    width = 20.0; margin = 10.0
-    [load]
-    p_w = 20.0
-    [[drive]]                   # kind "stress" (mu_w or mu_w_tilde) or "speed" (u_w, or mu_w_tilde: matching speed)
-    name = "stress"; kind = "stress"; mu_w_tilde = 0.5; duration_ts = 10.0
-    [output]                    # intervals in time units sqrt(d/g)
-    plate = 0.02; atoms = 1.0; contacts = 5.0; profiles = 0.5; restart = 2.0; thermo = 0.1
-    [prepare]
-    ke_per_grain = 1e-5
+    seeds = [1]           # one prepared bed per seed (ensembles)
+    dt = "auto"           # or a number <= t_c/20 (the default, t_c from the contact law)
+    # the bed's expected mu(I) parameters (continuum.scales.Material), used for sizing
+    material = {mu_s = 0.28, mu_d = 0.58, I0 = 0.3, I_convention = "dem", phi = 0.8}
+    # dimension 2 (disks) or 3 (spheres); diameters uniform by number in [1-w, 1+w] d
+    grains = {dimension = 2, polydispersity = 0.2, mu_p = 0.5, restitution = 0.5, contact = "hooke", kappa = 1e4}
+    box = {width = 32.0, margin = 10.0}   # widths and depth in d; no depth -> max delta_s + margin
+    load = {p_w = 20.0}
+    # kind "stress" (mu_w or mu_w_tilde) or "speed" (u_w, or mu_w_tilde: the matching steady speed)
+    drive = [{name = "stress", kind = "stress", mu_w_tilde = 0.5, duration_ts = 10.0},
+             {name = "speed", kind = "speed", u_w = 5.0, duration = 20.0}]
+    output = {plate = 0.02, thermo = 0.1, atoms = 1.0, contacts = 5.0, profiles = 0.5, restart = 2.0}
+    prepare = {ke_per_grain = 1e-5}
 
 Every key is optional except the drives; unknown keys are errors.
 """

@@ -140,3 +140,9 @@ def test_lammps_failures_are_explained_in_run_json(tmp_path, script, code, messa
     assert (out / "config.toml").read_text() == text and (out / "seed-1" / "prepare" / "prepare.in").exists()
     assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume", "--quiet",
                      "--launcher", launcher]) == code
+
+
+def test_documented_example_is_valid():
+    example = config.__doc__.split("this example is valid::\n", 1)[1].split("\n\n", 1)[0]
+    cfg = config.parse("\n".join(line[4:] for line in example.splitlines()))
+    assert [d.kind for d in cfg.drives] == ["stress", "speed"] and plan(cfg).depth > 0
