@@ -15,6 +15,7 @@ import numpy as np
 from .rheology import Friction, finite, require
 from .scales import UNITS
 from .solver import Numerics, Solution, check_times, solve_speed, solve_stress
+from dem.cli import register as dem_register
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -98,6 +99,23 @@ def run_demo(args) -> int:
     return 0
 
 
+def run_stability(args) -> int:
+    from .stability import write_stability
+    from .scales import Material
+
+    calibrated = None
+    if args.calibration is not None:
+        require(args.calibration.is_file(), "--calibration", "an existing metrics.json from granstokes compare",
+                str(args.calibration))
+        cal = json.loads(args.calibration.read_text())
+        calibrated = Material(mu_s=cal["mu_s"], mu_d=cal["mu_d"], I0=cal["I0"], I_convention=cal["I0_convention"])
+    result = write_stability(args.out, calibrated)
+    counts = result["table"].groupby(["method", "class"]).size().unstack(fill_value=0)
+    print(counts.to_string())
+    print(f"maps: {', '.join(p.name for p in result['maps'])}; well-posedness: {result['wellposedness'].name}")
+    return 0
+
+
 def add_continuum_parser(sub) -> None:
     p = sub.add_parser("continuum", help="solve the paper's problem (imposed wall stress or speed)")
     p.add_argument("--mu-s", type=float, required=True, help="static friction mu_s > 0")
@@ -118,6 +136,11 @@ def add_continuum_parser(sub) -> None:
     f.add_argument("--out", type=Path, required=True, help="output folder")
     f.set_defaults(func=run_paper_figures)
 
+    s = sub.add_parser("stability", help="stability maps of every method, and the mu(I) well-posedness along the layer")
+    s.add_argument("--out", type=Path, required=True, help="output folder")
+    s.add_argument("--calibration", type=Path, help="metrics.json of a DEM calibration (mu_s, mu_d, I0, I0_convention)")
+    s.set_defaults(func=run_stability)
+
     d = sub.add_parser("demo", help="the quick comparison report (continuum part: paper figures, tables)")
     d.add_argument("--out", type=Path, default=Path("demo-out"), help="output folder (default %(default)s)")
     d.set_defaults(func=run_demo)
@@ -128,6 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     # subcommands
     add_continuum_parser(sub)
+    dem_register(sub)
     return parser
 
 

@@ -1,0 +1,112 @@
+"""Velocity-form solver (continuum/velocity.py) and yield rules (continuum/rules.py)."""
+import numpy as np
+import pytest
+
+from continuum.rules import ShearLaw, YieldRule, well_posed_range, wellposedness
+from continuum.scales import Material, Scales
+from continuum.solver import Numerics, solve_stress
+from continuum.steady import steady_mu, steady_velocity
+from continuum.velocity import BedScene, solve_velocity
+
+M = Material()
+P_W = 10.0
+MU_W = M.friction.mu_w_from_tilde(0.5)
+SC = Scales(M, P_W, MU_W)
+
+
+def test_eps_to_zero_approaches_stress_diffusion():
+    """From the paper's state tau = mu_s p (held by the body force mu_s phi rho g, the only way a bed
+    holds it at rest), u_w(t~ = 0.1) converges to the stress-diffusion value as eps -> 0 at the
+    measured rate 2/3: the state at yield creeps at |g| ~ eps^(2/3) (|s(g)| = mu_s p needs
+    eps^2/(2 g^2) ~ (Dmu/mu_s) I/I0)."""
+    scene = BedScene(M, P_W, SC.delta_s, body_force=M.mu_s * M.phi * M.rho_p * M.g)
+    paper = solve_stress(M.friction, MU_W, [0.1], Numerics(n_cells=400)).u_w[0] * SC.U
+    eps = np.array([1e-4, 3e-5, 1e-5])
+    err = [abs(solve_velocity(scene, [0.1 * SC.t_s], mu_w=MU_W, rule=YieldRule(eps=e), initial="yield").u_w[0]
+               / paper - 1) for e in eps]
+    rates = np.log(np.array(err[:-1]) / err[1:]) / np.log(eps[:-1] / eps[1:])
+    assert np.all(np.diff(err) < 0) and err[-1] < 0.02
+    assert rates == pytest.approx([2 / 3, 2 / 3], abs=0.1)
+
+
+@pytest.fixture(scope="module")
+def unsheared():
+    scene = BedScene(M, P_W, 1.5 * SC.delta_s)
+    times = np.array([0.01, 0.1, 1.0, 50.0]) * SC.t_s
+    return solve_velocity(scene, times, mu_w=MU_W, rule=YieldRule(eps=1e-4), initial="rest")
+
+
+def test_unsheared_start_reaches_the_paper_steady_state(unsheared):
+    """From a bed at rest (sigma_xy = 0), the yield front h(t) deepens monotonically to delta_s and the
+    steady state is eq. MuSteadyState with its velocity profile (creep below delta_s ~ eps)."""
+    sol = unsheared
+    front = sol.series["yield_front"].to_numpy()
+    assert np.all(np.diff(front) > -1e-6 * SC.delta_s)
+    assert front[-1] == pytest.approx(SC.delta_s, rel=0.01)
+    y = sol.y / SC.delta_s
+    u_paper = SC.U * steady_velocity(M.friction, MU_W, y)
+    assert np.max(np.abs(sol.u[-1] - u_paper)) < 5e-3 * u_paper[0]
+    yf = sol.y_face / SC.delta_s
+    layer = yf < 0.99
+    assert np.max(np.abs(sol.mu[-1][layer] - steady_mu(M.friction, MU_W, yf[layer]))) < 1e-3
+
+
+def test_yield_front_grows_as_sqrt_t_early(unsheared):
+    h = [np.interp(t, unsheared.series.t, unsheared.series.yield_front) for t in unsheared.t[:2]]
+    assert np.log10(h[1] / h[0]) == pytest.approx(0.5, abs=0.1)
+
+
+def test_plate_inertia_acts_early_and_vanishes_as_mass_goes_to_zero():
+    """The plate's mass delays u_w(t) while it is comparable with the bed mass set moving
+    (phi rho delta(t)); its effect on u_w is linear in m_p as m_p -> 0 and gone in steady state."""
+    scene = lambda m_p: BedScene(M, P_W, 1.2 * SC.delta_s, plate_mass=m_p)
+    times = np.array([0.01, 100.0]) * SC.t_s
+    run = lambda m_p: solve_velocity(scene(m_p), times, mu_w=MU_W, rule=YieldRule(eps=1e-3)).u_w
+    base = run(0.0)
+    early = [abs(run(m)[0] - base[0]) for m in (1e-4, 1e-3, 1e-2)]  # m_p << bed mass in the layer
+    assert early[1] / early[0] == pytest.approx(10, rel=0.3) and early[2] / early[1] == pytest.approx(10, rel=0.3)
+    heavy = run(1.0)
+    assert abs(heavy[0] - base[0]) > 0.5 * base[0]
+    assert heavy[1] == pytest.approx(base[1], rel=2e-3)
+
+
+def test_imposed_speed_and_stress_meet_at_the_same_steady_state():
+    scene = BedScene(M, P_W, 1.2 * SC.delta_s)
+    stress = solve_velocity(scene, [60 * SC.t_s], mu_w=MU_W, rule=YieldRule(eps=1e-3))
+    speed = solve_velocity(scene, [60 * SC.t_s], u_w=stress.u_w[-1], rule=YieldRule(eps=1e-3))
+    assert speed.series["mu_w"].iloc[-1] == pytest.approx(MU_W, rel=1e-4)
+    assert np.max(np.abs(speed.u[-1] - stress.u[-1])) < 1e-4 * stress.u_w[-1]
+
+
+def test_barker_gray_law_is_c1_and_well_posed_below_its_threshold():
+    fr = M.friction
+    law = ShearLaw(YieldRule("barker-gray", 1e-5), fr, M.I0_paper, M.d, M.rho_p)
+    i_n = law.barker_gray[0]
+    assert i_n == pytest.approx(well_posed_range(fr, M.I0_paper)[0])
+    mu, slope = law.mu_and_slope(np.array([i_n * (1 - 1e-9), i_n * (1 + 1e-9)]))
+    assert mu[0] == pytest.approx(mu[1], rel=1e-6) and slope[0] == pytest.approx(slope[1], rel=1e-5)
+    I = np.logspace(-12, np.log10(i_n) - 0.01, 50)
+    mu, slope = law.mu_and_slope(I)
+    nu = I * slope / mu
+    assert np.all(4 * nu**2 - 4 * nu + mu**2 * (1 - nu / 2) ** 2 < 0)
+
+
+def test_wellposedness_of_the_steady_layer():
+    """Barker et al. (2015): the bottom of every steady layer (I -> 0) is ill posed; for mu~_w = 0.5
+    the top is well posed; for mu~_w = 0.1 the wall region (high I) is ill posed too."""
+    fr, I0 = M.friction, M.I0_paper
+    for mt, wall_ok in ((0.5, True), (0.1, False)):
+        mu = steady_mu(fr, fr.mu_w_from_tilde(mt), np.array([0.0, 0.999]))
+        crit = wellposedness(fr, I0, fr.I_of_mu(mu, I0))
+        assert (crit[0] < 0) == wall_ok and crit[1] > 0
+
+
+@pytest.mark.parametrize("make, name", [
+    (lambda: YieldRule(eps=0.0), "eps"), (lambda: YieldRule(eps=-1e-3), "eps"),
+    (lambda: BedScene(M, P_W, SC.delta_s, plate_mass=-1.0), "plate_mass"),
+    (lambda: solve_velocity(BedScene(M, P_W, 0.5 * SC.delta_s), [1.0], mu_w=MU_W), "depth"),
+    (lambda: YieldRule(kind="bingham"), "rule"),
+])
+def test_bad_inputs_are_refused(make, name):
+    with pytest.raises(ValueError, match=f"^{name} must be"):
+        make()
