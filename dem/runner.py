@@ -391,9 +391,9 @@ def run(cfg: Config, text: str, out: str | Path, np: int = 2, resume: bool = Fal
     else:
         if out.exists() and any(out.iterdir()):
             raise ValueError(f"output folder {out} is not empty: choose a new --out or pass --resume")
+        meta = runner.new_metadata()  # queries the LAMMPS library: fails before anything is written
         out.mkdir(parents=True, exist_ok=True)
         (out / "config.toml").write_text(text)
-        meta = runner.new_metadata()
     runner.save(meta)
     previous = signal.getsignal(signal.SIGTERM)
     in_main = threading.current_thread() is threading.main_thread()

