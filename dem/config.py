@@ -22,7 +22,6 @@ Every key is optional except the drives; unknown keys are errors.
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 import tomllib
 from dataclasses import dataclass, field

@@ -104,3 +104,24 @@ def test_killed_run_resumes_with_continuous_output(tmp_path):
     prof = pd.read_csv(out / "seed-1" / "stress" / "profiles.csv")
     assert np.all(np.diff(np.unique(prof["step"])) == meta["sizing"]["intervals_steps"]["profiles"])
     assert not (out / "seed-1" / "stress" / "segments").exists()
+
+
+def test_contact_dump_balances_the_static_bed(smoke):
+    """At step 0 (the relaxed bed) the contact forces through any horizontal plane, read from the
+    contact dump (normal + tangential, force on grain 1 as documented), carry the plate load and
+    the weight of the bed grains above the plane: checks the dump's columns and sign conventions."""
+    out, _ = smoke
+    d = out / "seed-1" / "stress"
+    area = json.loads((out / "run.json").read_text())["plate"]["area"]
+    atoms = outputs.snapshot_table(next(outputs._snapshots(d / "atoms.dump"))[1])
+    grains = pd.read_csv(out / "seed-1" / "prepare" / "grains.csv").set_index("id")
+    plate_y = atoms.loc[atoms["type"] == 3, "y"].mean()
+    planes = np.arange(4.0, plate_y - 2.0, 1.0)
+    stress = outputs.plane_stress(d, planes, area)
+    first = stress[stress["step"] == 0]
+    f_y = pd.read_csv(d / "plate.csv")["f_y"].iloc[0]
+    bed = atoms[atoms["type"] == 1]
+    mass = grains["mass"].reindex(bed["id"]).to_numpy()
+    weight_above = np.array([mass[bed["y"].to_numpy() > y].sum() / area for y in planes])
+    assert np.allclose(first["p_yy"], f_y + weight_above, rtol=0.03)
+    assert np.all(np.abs(first["tau_xy"]) < 0.05 * first["p_yy"])
