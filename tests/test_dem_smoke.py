@@ -74,8 +74,10 @@ def test_plate_moves_and_accelerates_above_yield(smoke):
 
 
 def test_killed_run_resumes_with_continuous_output(tmp_path):
-    """SIGKILL the whole run (runner and LAMMPS) mid-drive, resume, and find every output step once."""
-    text = config.PRESETS["smoke"].replace("duration = 10.0", "duration = 20.0")
+    """SIGKILL the whole run (runner and LAMMPS) mid-drive, resume, and find every output step once
+    (the smoke scene, narrower and longer so that the kill lands mid-drive)."""
+    text = config.PRESETS["smoke"].replace("duration = 10.0", "duration = 20.0").replace("width = 40.0",
+                                                                                         "width = 16.0")
     cfg_path = tmp_path / "smoke-long.toml"
     cfg_path.write_text(text)
     out = tmp_path / "run"
