@@ -62,9 +62,10 @@ def predict(material: Material, p_w: float, depth: float, plate_mass: float, kin
     else:
         sc = Scales.for_speed(material, p_w, value)
     rule = YieldRule(eps=1e-3 * sc.U / sc.delta_s)
-    scene = BedScene(material, p_w, max(depth, sc.delta_s), plate_mass=plate_mass)
+    scene = BedScene(material, p_w, depth, plate_mass=plate_mass)
     drive = {"mu_w": value / p_w} if kind == "stress" else {"u_w": value}
-    vel = solve_velocity(scene, times, rule=rule, initial="rest", numerics=VelocityNumerics(n_cells=200), **drive)
+    vel = solve_velocity(scene, times, rule=rule, initial="rest", numerics=VelocityNumerics(n_cells=200),
+                         compare_steady=False, **drive)
     vel_mu_w = vel.series.set_index("t")["mu_w"].reindex(times, method="nearest").to_numpy()
     vel_prof = pd.DataFrame({"t": np.repeat(times, len(vel.y)), "depth": np.tile(vel.y, len(times)),
                              "u": vel.u.ravel(), "mu": np.concatenate([np.interp(vel.y, vel.y_face, m) for m in vel.mu])})

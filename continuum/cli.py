@@ -15,6 +15,7 @@ import numpy as np
 from .rheology import Friction, finite, require
 from .scales import UNITS
 from .solver import Numerics, Solution, check_times, solve_speed, solve_stress
+from compare.cli import register as compare_register
 from dem.cli import register as dem_register
 
 
@@ -92,9 +93,9 @@ def run_paper_figures(args) -> int:
 
 
 def run_demo(args) -> int:
-    from .report import write_continuum_report
+    from compare.demo import run_demo as demo
 
-    index = write_continuum_report(args.out)
+    index = demo(args.out)
     print(f"report: {index.resolve()}")
     return 0
 
@@ -141,7 +142,7 @@ def add_continuum_parser(sub) -> None:
     s.add_argument("--calibration", type=Path, help="metrics.json of a DEM calibration (mu_s, mu_d, I0, I0_convention)")
     s.set_defaults(func=run_stability)
 
-    d = sub.add_parser("demo", help="the quick comparison report (continuum part: paper figures, tables)")
+    d = sub.add_parser("demo", help="the quick continuum-vs-DEM comparison: paper figures, quick DEM presets, report")
     d.add_argument("--out", type=Path, default=Path("demo-out"), help="output folder (default %(default)s)")
     d.set_defaults(func=run_demo)
 
@@ -152,6 +153,7 @@ def build_parser() -> argparse.ArgumentParser:
     # subcommands
     add_continuum_parser(sub)
     dem_register(sub)
+    compare_register(sub)
     return parser
 
 

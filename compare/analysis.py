@@ -1,0 +1,180 @@
+"""From DEM run folders to continuum-comparable observables, a mu(I) calibration and predictions.
+
+For every drive (pooled over its seeds): the plate record (u_w, mu_w), coarse-grained profiles
+(compare.profiles) in the depth below the plate, zeta = y_plate - d/2 - y (the plate's grains have
+unit diameter), the steady window (compare.plate.steady_state on the free response), delta_u(t)
+from the instantaneous velocity profiles (compare.predict.depth_at_fraction), then a mu(I)/phi(I)
+calibration pooled over all drives' steady windows (compare.calibrate) and, from it alone, the
+continuum predictions (compare.predict).  DEM units throughout.
+"""
+from __future__ import annotations
+
+import json
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import calibrate
+from .plate import PlateRecord, power_law, steady_state
+from .predict import U_FRACTION, Prediction, depth_at_fraction, predict
+from .profiles import CGSettings, DepthProfiles, ensemble
+from .reader import BED, DriveFolder
+
+PLATE_RADIUS = 0.5  # d: the plate's glued grains have unit diameter (dem/scene.py)
+
+
+@dataclass
+class DriveGroup:
+    """One drive of one run, over its seeds."""
+
+    run: Path
+    name: str
+    kind: str
+    value: float                 # tau_w (stress) or u_w (speed)
+    p_w: float
+    depth: float                 # bed depth below the plate
+    plate_mass: float            # per unit plate area
+    folders: list[DriveFolder]
+    plates: list[PlateRecord] = field(default_factory=list)
+    profiles: list[DepthProfiles] = field(default_factory=list)
+    series: pd.DataFrame | None = None
+    steady: dict | None = None
+    steady_profile: pd.DataFrame | None = None
+    delta: pd.DataFrame | None = None
+    predictions: list[Prediction] = field(default_factory=list)
+
+    @property
+    def label(self) -> str:
+        return f"{self.run.name}/{self.name}"
+
+    @property
+    def cost(self) -> float:
+        """grains x steps of the drive summed over seeds (the DEM's work)."""
+        meta = self.folders[0].meta
+        steps = next(d["steps"] for d in meta["sizing"]["drives"] if d["name"] == self.name)
+        return float(len(self.folders) * len(self.folders[0].grains) * steps)
+
+
+def drive_groups(run_dir: Path) -> list[DriveGroup]:
+    meta = json.loads((Path(run_dir) / "run.json").read_text())
+    require_complete = [k for k, s in meta.get("stages", {}).items() if s.get("status") != "complete"]
+    if require_complete:
+        raise ValueError(f"{run_dir}: run not complete ({', '.join(require_complete)}); resume it first")
+    groups = []
+    for d in meta["sizing"]["drives"]:
+        folders = [DriveFolder(Path(run_dir) / f"seed-{s}" / d["name"]) for s in meta["seeds"]]
+        value = d["tau_w"] if d["kind"] == "stress" else d["u_w"]
+        groups.append(DriveGroup(Path(run_dir), d["name"], d["kind"], float(value), float(meta["config"]["p_w"]),
+                                 float(meta["sizing"]["depth"]), float(meta["plate"]["mass_per_area"]), folders))
+    return groups
+
+
+def _ensemble_series(plates: list[PlateRecord]) -> pd.DataFrame:
+    t = plates[0].t
+    cols = {}
+    for name in ("u_w", "mu_w"):
+        values = np.array([np.interp(t, p.t, getattr(p, name)) for p in plates])
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # mu_w is nan while the plate is out of contact
+            mean = np.nanmean(values, axis=0)
+        half = 1.96 * np.nanstd(values, axis=0, ddof=1) / np.sqrt(len(plates)) if len(plates) > 1 else np.nan * mean
+        cols.update({name: mean, f"{name}_lo": mean - half, f"{name}_hi": mean + half})
+    return pd.DataFrame({"t": t, **cols})
+
+
+def _surface(plate: PlateRecord, drive: DriveFolder, t) -> np.ndarray:
+    y = drive.plate()["y"].to_numpy()
+    return np.interp(t, plate.t, y) - PLATE_RADIUS * drive.d
+
+
+def analyse_drive(group: DriveGroup, settings: CGSettings) -> DriveGroup:
+    group.plates = [PlateRecord.read(f.path, group.kind) for f in group.folders]
+    group.series = _ensemble_series(group.plates)
+    response = group.series.u_w if group.kind == "stress" else group.series.mu_w
+    group.steady = steady_state(group.series.t.to_numpy(), response.to_numpy())
+    group.steady["u_w"] = steady_state(group.series.t.to_numpy(), group.series.u_w.to_numpy())
+    group.steady["mu_w"] = steady_state(group.series.t.to_numpy(), group.series.mu_w.to_numpy())
+    first = group.folders[0]
+    grid = settings.grid_for(next(first.frames([0])))
+    group.profiles = [DepthProfiles(f, settings, grid).run() for f in group.folders]
+    t_end = group.series.t.iloc[-1]
+    t0 = group.steady["t_steady"] if np.isfinite(group.steady["t_steady"]) else 0.7 * t_end
+    t0 = min(t0, 0.7 * t_end)
+    win = ensemble(group.profiles, t0, t_end)
+    surface = float(np.mean(_surface(group.plates[0], first, [t0, t_end])))
+    win.insert(1, "depth", surface - win.y)
+    group.steady_profile = win
+    inst = ensemble(group.profiles)
+    rows = []
+    for (step, t), g in inst.groupby(["step", "t"]):
+        depth = _surface(group.plates[0], first, t) - g.y.to_numpy()
+        order = np.argsort(depth)
+        inside = depth[order] >= 0
+        u_w = float(np.interp(t, group.series.t, group.series.u_w))
+        if t > 0 and u_w > 1e-2 * group.steady["u_w"]["value"]:
+            rows.append((t, depth_at_fraction(depth[order][inside], g.u_x.to_numpy()[order][inside], u_w)))
+    group.delta = pd.DataFrame(rows, columns=["t", "delta_u"])
+    return group
+
+
+def steady_pairs(groups: list[DriveGroup], wall_exclusion: float = calibrate.WALL_EXCLUSION) -> pd.DataFrame:
+    """(mu, I_dem, phi) of every grid point of every steady window, away from plate and base."""
+    rows = []
+    for g in groups:
+        p = g.steady_profile
+        inside = (p.depth > wall_exclusion) & (p.depth < g.depth - wall_exclusion)
+        rows.append(p.loc[inside, ["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(drive=g.label))
+    return pd.concat(rows, ignore_index=True)
+
+
+def bulk_phi(groups: list[DriveGroup], wall_exclusion: float = calibrate.WALL_EXCLUSION) -> float:
+    pairs = steady_pairs(groups, wall_exclusion)
+    return float(pairs.phi.mean())
+
+
+def mass_error(group: DriveGroup) -> float:
+    """Relative error of the integral of the coarse-grained phi over y against the bed grains'
+    volume per unit area (first frame of the first seed; 2D: disk areas per unit length)."""
+    drive, res = group.folders[0], group.profiles[0].results
+    frame = next(drive.frames([0]))
+    bed = frame.types == BED
+    r = frame.radius[bed]
+    volume = np.pi * r**2 if drive.dimension == 2 else 4 / 3 * np.pi * r**3
+    widths = frame.box[:, 1] - frame.box[:, 0]
+    area = widths[0] if drive.dimension == 2 else widths[0] * widths[2]
+    integral = np.trapezoid(res.additive["phi"][0], res.y)
+    return float(integral / (volume.sum() / area) - 1)
+
+
+def analyse(run_dirs, settings: CGSettings = CGSettings(), n_times: int = 60) -> dict:
+    """Everything the report needs: drive groups with predictions, the calibration, the pairs."""
+    groups = [analyse_drive(g, settings) for run in run_dirs for g in drive_groups(Path(run))]
+    pairs = steady_pairs(groups)
+    cal = calibrate.fit(pairs)
+    phi = bulk_phi(groups)
+    material = cal.material(phi=phi)
+    for g in groups:
+        t_end = float(g.series.t.iloc[-1])
+        times = np.geomspace(t_end / 300, t_end, n_times)
+        g.predictions = predict(material, g.p_w, g.depth, g.plate_mass, g.kind, g.value, times)
+    return {"groups": groups, "pairs": pairs, "calibration": cal, "material": material, "phi_bulk": phi,
+            "mass_error": mass_error(groups[0]), "settings": settings}
+
+
+def early_exponents(g: DriveGroup) -> dict:
+    """alpha of u_w ~ t^alpha (imposed stress) and delta_u ~ t^alpha over the early window:
+    from the first output to the time u_w (delta_u) reaches half its steady value."""
+    out = {}
+    t, u = g.series.t.to_numpy(), g.series.u_w.to_numpy()
+    if g.kind == "stress":
+        half = t[np.argmax(u >= 0.5 * g.steady["u_w"]["value"])]
+        out["alpha_u"] = power_law(t, u, t[1], half)
+    d = g.delta.dropna()
+    if len(d) >= 4:
+        final = d.delta_u.iloc[-len(d) // 4:].mean()
+        half = d.t.iloc[np.argmax(d.delta_u.to_numpy() >= 0.5 * final)]
+        out["alpha_delta"] = power_law(d.t.to_numpy(), d.delta_u.to_numpy(), d.t.iloc[0], max(half, d.t.iloc[3]))
+    return out

@@ -1,0 +1,29 @@
+"""``granstokes compare RUN_DIR... --out REPORT_DIR [--json]``."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from continuum.rheology import require
+
+
+def run_compare(args) -> int:
+    for run in args.runs:
+        require((run / "run.json").is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
+                str(run))
+    from .report import write_report
+
+    m = write_report(args.runs, args.out)
+    if args.json:
+        print(json.dumps(m, default=float))
+    else:
+        print(f"report: {(args.out / 'index.html').resolve()}")
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("compare", help="coarse-grain DEM runs, calibrate mu(I), predict and write the report")
+    p.add_argument("runs", type=Path, nargs="+", metavar="RUN_DIR", help="run folders of granstokes dem run")
+    p.add_argument("--out", type=Path, required=True, help="report folder (index.html, CSV, metrics.json)")
+    p.add_argument("--json", action="store_true", help="also print metrics.json to stdout")
+    p.set_defaults(func=run_compare)

@@ -1,0 +1,105 @@
+"""The comparison's numbers (metrics.json), defined once.  DEM units; I0 in the named convention."""
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+from continuum.scales import UNITS
+
+from .analysis import DriveGroup, early_exponents
+from .calibrate import WALL_EXCLUSION
+from .plate import STEADY_CHANGE, STEADY_WINDOW
+
+DEFINITIONS = {
+    "steady": f"running mean over {STEADY_WINDOW:.0%} of the record within max(3 stderr, "
+              f"{STEADY_CHANGE:.0%} of the total change) of the final-quarter mean",
+    "delta_u": "depth below the plate where the coarse-grained u falls to 5 % of u_w (DEM and continuum alike; "
+               "the paper's 1e-3 threshold on mu - mu_s is below the DEM's noise)",
+    "t90": "time for u_w (imposed stress) or mu_w (imposed speed) to cover 90 % of its change",
+    "wall_exclusion": f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base",
+    "creep": "u/u_w of the DEM's steady profile at the continuum's delta_s, and the e-folding length of u below it",
+    "units": UNITS["dem_units"],
+    "inertial_number": UNITS["inertial_number"],
+}
+
+
+def t90(t, y) -> float:
+    y = np.asarray(y, dtype=float)
+    ok = np.isfinite(y)
+    t, y = np.asarray(t)[ok], y[ok]
+    start, final = y[0], np.mean(y[-max(1, len(y) // 10):])
+    reached = np.abs(y - start) >= 0.9 * abs(final - start)
+    return float(t[np.argmax(reached)]) if reached.any() else np.nan
+
+
+def drive_metrics(g: DriveGroup) -> dict:
+    vel, paper = g.predictions
+    p = g.steady_profile
+    inside = (p.depth > WALL_EXCLUSION) & (p.depth < g.depth - WALL_EXCLUSION)
+    slope = stats.linregress(p.depth[inside], p.p[inside])
+    tau_plate = g.steady["mu_w"]["value"] * g.p_w if g.kind == "speed" else g.value
+    delta_s = vel.steady["delta_s"]
+    layer = inside & (p.depth < min(delta_s, g.depth - WALL_EXCLUSION))
+    tau_uniformity = float(np.nanmax(np.abs(p.tau[layer] - tau_plate)) / tau_plate) if layer.any() else np.nan
+    steady_delta = g.delta.delta_u[g.delta.t >= 0.7 * g.delta.t.max()]
+    u_w = g.steady["u_w"]["value"]
+    below = inside & (p.depth >= delta_s) & (p.u_x > 0)
+    creep_len = -1 / stats.linregress(p.depth[below], np.log(p.u_x[below])).slope if below.sum() >= 3 else np.nan
+    response = "u_w" if g.kind == "stress" else "mu_w"
+    dem_resp = g.steady[response]
+    cont_resp = vel.series[response].iloc[-1]
+    expo = early_exponents(g)
+    out = {
+        "kind": g.kind, "imposed": g.value, "p_w": g.p_w, "seeds": len(g.folders), "grains_x_steps": g.cost,
+        "pressure_slope": slope.slope, "pressure_slope_stderr": slope.stderr,
+        "tau_uniformity": tau_uniformity,
+        "u_w_inf": {"dem": u_w, "dem_stderr": g.steady["u_w"]["stderr"], "velocity_form": vel.series.u_w.iloc[-1],
+                    "paper": paper.steady["u_w"]},
+        "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_stderr": g.steady["mu_w"]["stderr"],
+                     "velocity_form": vel.series.mu_w.iloc[-1], "paper": paper.steady["mu_w"]},
+        "delta_s": {"dem": float(steady_delta.mean()), "dem_stderr": float(steady_delta.std(ddof=1) / np.sqrt(len(steady_delta)))
+                    if len(steady_delta) > 1 else np.nan, "velocity_form": vel.series.delta_u.iloc[-1],
+                    "paper": paper.series.delta_u.iloc[-1], "paper_delta_s": delta_s},
+        "rel_error_response": float(cont_resp / dem_resp["value"] - 1),
+        "t90": {"dem": t90(g.series.t, g.series[response]), "velocity_form": t90(vel.series.t, vel.series[response]),
+                "paper": t90(paper.series.t, paper.series[response])},
+        "creep_at_delta_s": float(np.interp(delta_s, p.depth[::-1], p.u_x[::-1]) / u_w) if delta_s < g.depth else np.nan,
+        "creep_length": float(creep_len),
+        "alpha_u": expo.get("alpha_u", {}).get("alpha", np.nan),
+        "alpha_delta": expo.get("alpha_delta", {}).get("alpha", np.nan),
+    }
+    out["t90"]["ratio_dem_to_velocity_form"] = out["t90"]["dem"] / out["t90"]["velocity_form"]
+    return out
+
+
+def _clean(v):
+    """JSON-ready: numpy scalars to float, non-finite numbers to None (valid JSON, pandas-readable)."""
+    if isinstance(v, dict):
+        return {k: _clean(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_clean(x) for x in v]
+    if isinstance(v, (float, np.floating, int, np.integer)) and not isinstance(v, bool):
+        return float(v) if np.isfinite(v) else None
+    return v
+
+
+def metrics(result: dict) -> dict:
+    """metrics.json: the issue's keys at the top level (taken from the first imposed-stress drive
+    where a key is per drive) and every drive's numbers under ``drives``."""
+    cal = result["calibration"]
+    groups = result["groups"]
+    per = {g.label: drive_metrics(g) for g in groups}
+    main = next((per[g.label] for g in groups if g.kind == "stress"), per[groups[0].label])
+    mass = [g.profiles[0].results for g in groups]
+    return _clean({
+        "phi_bulk": result["phi_bulk"],
+        "pressure_slope": main["pressure_slope"],
+        "tau_uniformity": main["tau_uniformity"],
+        "mass_error": result["mass_error"],
+        "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
+        "calibration": cal.as_dict(),
+        "u_w_inf": main["u_w_inf"], "delta_s": main["delta_s"],
+        "alpha_delta": main["alpha_delta"], "alpha_u": main["alpha_u"],
+        "drives": per, "definitions": DEFINITIONS, "runs": sorted({str(g.run) for g in groups}),
+        "frames_analysed": int(sum(len(r.steps) for r in mass)),
+    })
