@@ -53,11 +53,9 @@ class Kernel:
         s = np.asarray(s, dtype=float)
         w, c = self.width, self.cutoff
         if self.name == "gaussian":
-            k = np.exp(-0.5 * (s / w) ** 2) / (_GAUSS_Z * w)
-        else:
-            q = np.abs(s) / c
-            k = 5.0 / (4.0 * c) * (1.0 + 3.0 * q) * (1.0 - q) ** 3
-        return np.where(np.abs(s) < c, k, 0.0)
+            return np.where(np.abs(s) < c, np.exp(-0.5 * (s / w) ** 2) / (_GAUSS_Z * w), 0.0)
+        q = np.minimum(np.abs(s) / c, 1.0)  # the polynomial vanishes at q = 1
+        return 5.0 / (4.0 * c) * (1.0 + 3.0 * q) * (1.0 - q) ** 3
 
     def cdf(self, s) -> np.ndarray:
         """F(s) = int_{-inf}^s K: 0 below -c, 1 above c, exact (erf or the Lucy polynomial)."""
@@ -68,8 +66,8 @@ class Kernel:
             f = 0.5 + 0.5 * erf(np.clip(s, -c, c) / (math.sqrt(2.0) * w)) / math.erf(GAUSS_CUT / math.sqrt(2.0))
         else:
             q = np.minimum(np.abs(s) / c, 1.0)
-            g = q - 2.0 * q ** 3 + 2.0 * q ** 4 - 0.6 * q ** 5  # G(1) = 2/5
-            f = 0.5 + np.sign(s) * 1.25 * g
+            g = q * (1.0 + q * q * (-2.0 + q * (2.0 - 0.6 * q)))  # G(q), G(1) = 2/5
+            f = np.where(q < 1.0, 0.5 + np.sign(s) * 1.25 * g, np.where(s > 0, 1.0, 0.0))  # exact tails
         return np.clip(f, 0.0, 1.0)
 
     def line_ry(self, y, y2, y1) -> np.ndarray:
@@ -77,14 +75,18 @@ class Kernel:
         weighted by the branch's y component; broadcasts)."""
         return self.cdf(np.asarray(y) - y2) - self.cdf(np.asarray(y) - y1)
 
-    def line(self, y, y2, y1) -> np.ndarray:
+    def line(self, y, y2, y1, line_ry=None) -> np.ndarray:
         """int_0^1 K(y - y2 - l (y1 - y2)) dl: the kernel averaged along the branch from y2 to y1; for
-        |y1 - y2| < 1e-6 w the branch is horizontal and the average is K at its height (error O(r_y^2))."""
+        |y1 - y2| < 1e-6 w the branch is horizontal and the average is K at its height (error O(r_y^2)).
+        ``line_ry``: the already computed ``line_ry(y, y2, y1)``, if at hand."""
         y, y2, y1 = np.broadcast_arrays(np.asarray(y, dtype=float), y2, y1)
         ry = y1 - y2
         flat = np.abs(ry) < 1e-6 * self.width
-        out = self(y - 0.5 * (y1 + y2))
-        np.divide(self.line_ry(y, y2, y1), ry, out=out, where=~flat)
+        lr = self.line_ry(y, y2, y1) if line_ry is None else line_ry
+        if not flat.any():
+            return lr / ry
+        out = np.array(self(y - 0.5 * (y1 + y2)), dtype=float)
+        np.divide(lr, ry, out=out, where=~flat)
         return out
 
     def describe(self) -> dict:

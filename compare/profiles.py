@@ -60,7 +60,7 @@ from scipy import stats
 from continuum.rheology import finite, require
 
 from .kernels import Kernel
-from .reader import BED, DriveFolder, Frame
+from .reader import BED, CONTACT_COLUMNS, DriveFolder, Frame
 
 COMPONENTS = ("xx", "yy", "zz", "xy")
 ADDITIVE = ("rho", "phi", "j_x", "j_y", "j_z", *(f"sigma_k_{c}" for c in COMPONENTS),
@@ -132,19 +132,30 @@ class CGSettings:
         return Grid(lo, hi, h)
 
 
-def _scatter(grid: Grid, centres: np.ndarray, weights, values: dict, reach: float) -> dict:
-    """sum_i values[i] * weights(y_g, i) on the grid for every entry of ``values``; weights(yg (n, S), i-rows)
-    is evaluated only on the S grid points within ``reach`` of each centre (compact support)."""
-    y = grid.y
-    h, n = grid.spacing, len(y)
-    if len(centres) == 0:
-        return {k: np.zeros(n) for k in values}
-    s = int(math.ceil(2 * reach / h)) + 2
-    idx = np.floor((centres - reach - grid.lo) / h).astype(np.int64)[:, None] + np.arange(s)
-    inside = (idx >= 0) & (idx < n)
-    w = np.where(inside, weights(grid.lo + idx * h), 0.0)
-    flat = np.clip(idx, 0, n - 1).ravel()
-    return {k: np.bincount(flat, weights=(w * np.asarray(v)[:, None]).ravel(), minlength=n) for k, v in values.items()}
+class _Spread:
+    """Weights w(y_g, i) of N items on the grid points within ``reach`` of each centre (compact support):
+    (N, S) heights ``yg`` and weights ``w`` = ``weights(yg)`` (0 off the grid); ``sum`` scatters all
+    fields with one ``np.bincount``."""
+
+    def __init__(self, grid: Grid, centres: np.ndarray, weights, reach: float):
+        h, n = grid.spacing, len(grid.y)
+        s = int(math.ceil(2 * reach / h)) + 2
+        idx = np.floor((centres - reach - grid.lo) / h).astype(np.int64)[:, None] + np.arange(s)
+        self.inside = (idx >= 0) & (idx < n)
+        self.yg = grid.lo + idx * h
+        self.w = weights(self.yg) if len(centres) else np.zeros((0, s))
+        self.w[~self.inside] = 0.0
+        self._idx, self._n = np.clip(idx, 0, n - 1), n
+
+    def sum(self, values: dict, w: np.ndarray | None = None) -> dict:
+        """sum_i values[i] w(y_g, i) on the grid for every entry of ``values`` (``w``: other weights on the
+        same support)."""
+        w = self.w if w is None else w
+        k, n = len(values), self._n
+        v = np.array([np.asarray(x, dtype=float) for x in values.values()]).reshape(k, len(w))
+        idx = self._idx[None] + n * np.arange(k)[:, None, None]
+        out = np.bincount(idx.ravel(), weights=(v[:, :, None] * w[None]).ravel(), minlength=k * n)
+        return dict(zip(values, out.reshape(k, n)))
 
 
 def _check_reach(grid: Grid, ymin: float, ymax: float, c: float) -> None:
@@ -171,14 +182,12 @@ def coarse_grain(frame: Frame, contacts: pd.DataFrame | None, settings: CGSettin
         _check_reach(grid, x[:, 1].min(), x[:, 1].max(), c)
     vol = np.pi * r ** 2 if dimension == 2 else 4.0 / 3.0 * np.pi * r ** 3
     yb = x[:, 1]
-    kern = lambda yg: K(yg - yb[:, None])  # noqa: E731
-    out = _scatter(grid, yb, kern, {"rho": m, "phi": vol, "j_x": m * v[:, 0], "j_y": m * v[:, 1],
-                                    "j_z": m * v[:, 2]}, c)
+    spread = _Spread(grid, yb, lambda yg: K(yg - yb[:, None]), c)
+    out = spread.sum({"rho": m, "phi": vol, "j_x": m * v[:, 0], "j_y": m * v[:, 1], "j_z": m * v[:, 2]})
     rho = out["rho"]
     u = [np.divide(out[f"j_{a}"], rho, out=np.zeros_like(rho), where=rho > 0) for a in "xyz"]
     vp = v - np.stack([np.interp(yb, grid.y, ua) for ua in u], axis=1)
-    out.update(_scatter(grid, yb, kern, {f"sigma_k_{ab}": m * vp[:, _AXIS[ab[0]]] * vp[:, _AXIS[ab[1]]]
-                                         for ab in COMPONENTS}, c))
+    out.update(spread.sum({f"sigma_k_{ab}": m * vp[:, _AXIS[ab[0]]] * vp[:, _AXIS[ab[1]]] for ab in COMPONENTS}))
     out.update(contact_stress(frame, contacts, K, grid))
     return {k: out[k] / area for k in ADDITIVE}
 
@@ -189,16 +198,16 @@ def contact_stress(frame: Frame, contacts: pd.DataFrame | None, K: Kernel, grid:
     names = [f"sigma_c_{c}" for c in COMPONENTS] + ["sigma_c_yx", "b_x", "b_y"]
     if contacts is None:
         return {k: np.full(len(grid.y), np.nan) for k in names}
-    pos = np.searchsorted(frame.ids, contacts["id1"].to_numpy())
-    pos2 = np.searchsorted(frame.ids, contacts["id2"].to_numpy())
-    if len(contacts) and (pos.max() >= len(frame.ids) or pos2.max() >= len(frame.ids)
-                          or (frame.ids[pos] != contacts["id1"].to_numpy()).any()
-                          or (frame.ids[pos2] != contacts["id2"].to_numpy()).any()):
+    cols = list(CONTACT_COLUMNS)
+    table = (contacts if list(contacts.columns) == cols else contacts[cols]).to_numpy(np.float64)
+    id1, id2 = table[:, 0].astype(np.int64), table[:, 1].astype(np.int64)
+    pos, pos2 = np.searchsorted(frame.ids, id1), np.searchsorted(frame.ids, id2)
+    if len(table) and (max(pos.max(), pos2.max()) >= len(frame.ids) or (frame.ids[pos] != id1).any()
+                       or (frame.ids[pos2] != id2).any()):
         raise ValueError(f"step {frame.step}: contact ids not in the atom snapshot")
     t1, t2 = frame.types[pos] == BED, frame.types[pos2] == BED
-    dist = contacts["dist"].to_numpy()
-    rvec = contacts[["dx", "dy", "dz"]].to_numpy()
-    f = rvec * (contacts["fn"].to_numpy() / dist)[:, None] + contacts[["ft_x", "ft_y", "ft_z"]].to_numpy()
+    dist, rvec, fn, ft = table[:, 2], table[:, 3:6], table[:, 6], table[:, 7:10]
+    f = rvec * (fn / dist)[:, None] + ft
     y1 = frame.x[pos, 1]
     y2 = y1 - rvec[:, 1]
     delta = frame.radius[pos] + frame.radius[pos2] - dist
@@ -217,15 +226,14 @@ def contact_stress(frame: Frame, contacts: pd.DataFrame | None, K: Kernel, grid:
     wall = (w1 | w2)[keep]
     mid = 0.5 * (start + top)
     reach = 0.5 * np.abs(branch[:, 1]).max(initial=0.0) + K.cutoff
-    ry = lambda yg: K.line_ry(yg, start[:, None], top[:, None])  # noqa: E731
-    full = lambda yg: K.line(yg, start[:, None], top[:, None])  # noqa: E731
-    out = _scatter(grid, mid, ry, {f"sigma_c_{a}y": force[:, _AXIS[a]] for a in "xyz"}, reach)
-    out.update(_scatter(grid, mid, full, {"sigma_c_xx": force[:, 0] * branch[:, 0],
-                                          "sigma_c_zz": force[:, 2] * branch[:, 2],
-                                          "sigma_c_yx": force[:, 1] * branch[:, 0]}, reach))
+    lines = _Spread(grid, mid, lambda yg: K.line_ry(yg, start[:, None], top[:, None]), reach)
+    out = lines.sum({f"sigma_c_{a}y": force[:, _AXIS[a]] for a in "xyz"})
+    full = np.where(lines.inside, K.line(lines.yg, start[:, None], top[:, None], lines.w), 0.0)
+    out.update(lines.sum({"sigma_c_xx": force[:, 0] * branch[:, 0], "sigma_c_zz": force[:, 2] * branch[:, 2],
+                          "sigma_c_yx": force[:, 1] * branch[:, 0]}, w=full))
     cy = start[wall]
-    out.update(_scatter(grid, cy, lambda yg: K(yg - cy[:, None]),
-                        {"b_x": force[wall, 0], "b_y": force[wall, 1]}, K.cutoff))
+    out.update(_Spread(grid, cy, lambda yg: K(yg - cy[:, None]), K.cutoff).sum(
+        {"b_x": force[wall, 0], "b_y": force[wall, 1]}))
     return {k: out[k] for k in names}
 
 

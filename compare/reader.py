@@ -227,15 +227,22 @@ class DriveFolder:
         if not 0 <= k < len(self.atoms):
             raise IndexError(f"{self.path / ATOMS}: snapshot {k} is not one of the {len(self.atoms)} whole ones")
         ts = u.trajectory.ts if u.trajectory.ts.frame == k else u.trajectory[k]
-        ids = np.sort(u.atoms.ids)  # MDAnalysis orders each snapshot by atom id
-        g = self.grains.reindex(ids)
-        if g["mass"].isna().any():
-            raise ValueError(f"{self.path}: atom ids missing from the grains table")
+        ids, types, radius, mass = self._per_grain(u)
         box = self.atoms.box[k]
-        return Frame(step=int(self.atoms.steps[k]), t=float(self.atoms.steps[k] * self.dt), ids=np.asarray(ids),
-                     types=g["type"].to_numpy(np.int64),
+        return Frame(step=int(self.atoms.steps[k]), t=float(self.atoms.steps[k] * self.dt), ids=ids, types=types,
                      x=ts.positions.astype(np.float64) + box[:, 0], v=ts.velocities.astype(np.float64),
-                     radius=g["radius"].to_numpy(np.float64), mass=g["mass"].to_numpy(np.float64), box=box)
+                     radius=radius, mass=mass, box=box)
+
+    def _per_grain(self, u) -> tuple:
+        """Sorted ids (MDAnalysis orders each snapshot by atom id) and their type, radius, mass (float64)."""
+        if getattr(self, "_grain_arrays", (None,))[0] is not u:
+            ids = np.sort(u.atoms.ids)
+            g = self.grains.reindex(ids)
+            if g["mass"].isna().any():
+                raise ValueError(f"{self.path}: atom ids missing from the grains table")
+            self._grain_arrays = (u, ids, g["type"].to_numpy(np.int64), g["radius"].to_numpy(np.float64),
+                                  g["mass"].to_numpy(np.float64))
+        return self._grain_arrays[1:]
 
     def contacts_at(self, step: int) -> pd.DataFrame | None:
         """The contact table (float64) written at ``step``, or None if contacts.dump has none there."""
