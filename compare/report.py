@@ -146,12 +146,12 @@ def write_report(run_dirs, out_dir) -> dict:
     result["pairs"].to_csv(out / "calibration_pairs.csv", index=False)
     figs = [calibration_figure(result, out), cost_figure(m, out)]
     for g in result["groups"]:
-        slug = slug(g.label)
-        g.series.to_csv(out / f"series_{slug}.csv", index=False)
-        g.steady_profile.to_csv(out / f"steady_profile_{slug}.csv", index=False)
-        g.delta.to_csv(out / f"delta_{slug}.csv", index=False)
+        stem = slug(g.label)
+        g.series.to_csv(out / f"series_{stem}.csv", index=False)
+        g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False)
+        g.delta.to_csv(out / f"delta_{stem}.csv", index=False)
         for i, p in enumerate(g.predictions):
-            p.series.assign(model=p.model).to_csv(out / f"prediction_{slug}_{i}.csv", index=False)
+            p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{i}.csv", index=False)
         figs += [drive_figure(g, out), profiles_figure(g, result["material"], out)]
     rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{_fmt(v)}</td></tr>" for k, v in m.items()
                    if k not in ("drives", "definitions", "calibration", "runs"))
