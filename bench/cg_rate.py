@@ -55,14 +55,15 @@ def main(argv=None) -> int:
     ap.add_argument("--width", type=float, default=0.5)
     ap.add_argument("--append", action="store_true", help="append the result to bench/RESULTS.md")
     args = ap.parse_args(argv)
-    if args.drive is None and not (DEFAULT / "run.json").exists():
+    if args.drive is None and not (DEFAULT / "run" / "run.json").exists():
         from continuum.cli import main as granstokes_main
         from dem import config
 
         DEFAULT.mkdir(parents=True, exist_ok=True)
-        text = config.PRESETS["smoke"].replace("atoms = 1.0", "atoms = 0.05").replace("contacts = 1.0", "contacts = 0.05")
-        (DEFAULT / "smoke.toml").write_text(text)
-        assert granstokes_main(["dem", "run", str(DEFAULT / "smoke.toml"), "--out", str(DEFAULT / "run"), "--quiet"]) == 0
+        text = config.PRESETS["smoke"].replace("atoms = 1.0", "atoms = 0.05")
+        (DEFAULT / "smoke.toml").write_text(text.replace("contacts = 1.0", "contacts = 0.05"))
+        argv = ["dem", "run", str(DEFAULT / "smoke.toml"), "--out", str(DEFAULT / "run"), "--quiet"]
+        assert granstokes_main(argv) == 0, "the DEM run failed"
     drive = find_drives(args.drive or DEFAULT / "run")[0]
     warnings.simplefilter("ignore")
     n_atoms, n_frames = int(drive.atoms.rows[0]), len(drive.atoms)
@@ -74,7 +75,8 @@ def main(argv=None) -> int:
     prof = DepthProfiles(drive, CGSettings("lucy", args.width)).run()
     n_y = len(prof.results.y)
     core = max(t_cg - t_read - t_contacts, 0.0)
-    cmd = "bench/cg_rate.py" + (f" {args.drive}" if args.drive else "") + (f" --width {args.width}" if args.width != 0.5 else "")
+    cmd = "bench/cg_rate.py" + (f" {args.drive}" if args.drive else "")
+    cmd += f" --width {args.width}" if args.width != 0.5 else ""
     lines = [
         "", "## Coarse-graining (issue 4)", "",
         f"Command: `.venv/bin/python {cmd}`; machine: 2 cores ({platform.machine()}), one process, CPU time "
@@ -88,7 +90,7 @@ def main(argv=None) -> int:
         f"| MDAnalysis bare read (positions touched) | {t_read:.3f} | {gf / t_read:,.0f} |",
         f"| contact snapshots (pandas) | {t_contacts:.3f} | {gf / t_contacts:,.0f} |",
         f"| coarse-graining, end to end (`DepthProfiles.run`) | {t_cg:.3f} | {gf / t_cg:,.0f} |",
-        f"| of which CG arithmetic (end to end - reads) | {core:.3f} | {gf / core:,.0f} |" if core > 0 else "",
+        f"| of which CG arithmetic (end to end - reads) | {core:.3f} | {gf / max(core, 1e-9):,.0f} |",
         "",
         f"Ratio of the coarse-graining rate to the bare read rate: {t_read / t_cg:.2f} (1 = the CG costs nothing "
         f"beyond MDAnalysis's read).  Shares of the end-to-end time: CG arithmetic {core / t_cg:.0%}, atom read "
@@ -98,7 +100,7 @@ def main(argv=None) -> int:
         + f"{1e3 * core / n_frames:.2f} ms CG, {1e3 * t_read / n_frames:.2f} ms MDAnalysis read).",
         "",
     ]
-    block = "\n".join(line for line in lines if line is not None)
+    block = "\n".join(lines)
     print(block)
     if args.append:
         with open(Path(__file__).with_name("RESULTS.md"), "a") as fh:

@@ -101,16 +101,17 @@ def index_dump(path) -> DumpIndex:
         for a, b in zip(offsets[:-1], offsets[1:]):
             fh.seek(a)
             block = fh.read(b - a)
-            lines = block.split(b"\n")
+            lines = block.split(b"\n", 9)
             try:
                 step, n = int(lines[1]), int(lines[3])
                 box = np.array([[float(v) for v in lines[5 + i].split()[:2]] for i in range(3)])
                 cols = tuple(lines[8].decode().split()[2:])
             except (IndexError, ValueError):
                 break
-            body = lines[9:]
-            whole = (block.endswith(b"\n") and len(body) == n + 1
-                     and (n == 0 or len(body[n - 1].split()) == len(cols)))
+            body = lines[9] if len(lines) > 9 else b""
+            last = body[:-1].rsplit(b"\n", 1)[-1]
+            whole = (block.endswith(b"\n") and body.count(b"\n") == n
+                     and (n == 0 or len(last.split()) == len(cols)))
             if not whole:
                 break
             columns = columns or cols
