@@ -261,10 +261,12 @@ class DriveFolder:
 
 def find_drives(*paths, **kwargs) -> list[DriveFolder]:
     """Drive folders under ``paths`` (run folders, seed folders or drive folders): every folder holding
-    atoms.dump, sorted by path; ``kwargs`` go to ``DriveFolder``.  ``FileNotFoundError`` if none."""
+    atoms.dump, except the raw per-segment outputs of an unfinished run (``DRIVE/segments/NNN``, see
+    dem/runner.py), sorted by path; ``kwargs`` go to ``DriveFolder``.  ``FileNotFoundError`` if none."""
     found = []
     for p in map(Path, paths):
-        found += [p] if (p / ATOMS).exists() else sorted(q.parent for q in p.glob(f"**/{ATOMS}"))
+        found += [p] if (p / ATOMS).exists() else sorted(q.parent for q in p.glob(f"**/{ATOMS}")
+                                                         if "segments" not in q.relative_to(p).parts)
     if not found:
         raise FileNotFoundError(f"no drive folder ({ATOMS}) under {', '.join(map(str, paths))}")
     return [DriveFolder(p, **kwargs) for p in sorted(set(found))]

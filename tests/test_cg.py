@@ -228,6 +228,9 @@ def test_drive_folder_streams_frames_with_matching_contacts(tmp_path):
     assert (e["band_over"] == "seeds").all() and np.allclose(e["rho"], w["rho"])
     inst = ensemble([prof, prof])
     assert sorted(inst["step"].unique()) == [0, 100, 200]
+    raw = d / "segments" / "000"  # an unfinished run's raw segment output is no drive folder
+    raw.mkdir(parents=True)
+    (raw / "atoms.dump").write_text((d / "atoms.dump").read_text())
     assert [p.name for p in find_drives(tmp_path, dimension=2, dt=0.01)] == ["seed-1/stress"]
 
 
