@@ -25,6 +25,9 @@ demo: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python bench/work_precision.py
+	$(BIN)/granstokes stability --out bench/stability
+	$(BIN)/python bench/dem_throughput.py
+	$(BIN)/python bench/cg_rate.py
 
 clean:
 	rm -rf $(VENV) $(DEMO) *.egg-info

@@ -32,7 +32,9 @@ def drive_figure(g: DriveGroup, out: Path) -> Path:
     ax = fig.subplots(2, 2).ravel()
     s = g.series
     for k, name in enumerate(("u_w", "mu_w")):
-        ax[k].plot(s.t, s[name], color="C0", lw=0.8, label=f"DEM ({len(g.folders)} seed(s))")
+        ax[k].plot(s.t, s[name], color="C0", lw=0.5, alpha=0.5, label=f"DEM ({len(g.folders)} seed(s))")
+        smooth = s[name].rolling(max(1, len(s) // 50), center=True, min_periods=1).mean()
+        ax[k].plot(s.t, smooth, color="C0", lw=1.8, label="DEM, running mean (2 % of the record)")
         if len(g.folders) > 1:
             ax[k].fill_between(s.t, s[f"{name}_lo"], s[f"{name}_hi"], color="C0", alpha=0.25, label="95 % band")
         for i, p in enumerate(g.predictions):

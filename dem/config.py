@@ -320,8 +320,8 @@ mu_w_tilde = 0.5
 duration_ts = 10.0
 [output]
 plate = 0.02
-atoms = 0.5
-contacts = 5.0
+atoms = 0.25
+contacts = 0.25
 profiles = 0.2
 restart = 2.0
 """,
