@@ -22,7 +22,7 @@ from continuum.rules import YieldRule
 from continuum.scales import Material, Scales
 from continuum.solver import solve_speed, solve_stress
 from continuum.steady import steady_wall_speed
-from continuum.velocity import BedScene, VelocityNumerics, solve_velocity
+from continuum.velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 U_FRACTION = 0.05
 
@@ -64,7 +64,7 @@ def predict(material: Material, p_w: float, depth: float, plate_mass: float, kin
     rule = YieldRule(eps=1e-3 * sc.U / sc.delta_s)
     scene = BedScene(material, p_w, depth, plate_mass=plate_mass)
     drive = {"mu_w": value / p_w} if kind == "stress" else {"u_w": value}
-    vel = solve_velocity(scene, times, rule=rule, initial="rest", numerics=VelocityNumerics(n_cells=200),
+    vel = solve_velocity(scene, times, rule=rule, initial="rest", numerics=VELOCITY_NUMERICS,
                          compare_steady=False, **drive)
     vel_mu_w = vel.series.set_index("t")["mu_w"].reindex(times, method="nearest").to_numpy()
     vel_prof = pd.DataFrame({"t": np.repeat(times, len(vel.y)), "depth": np.tile(vel.y, len(times)),

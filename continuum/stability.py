@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +37,7 @@ from .scales import Material, Scales
 from .solver import Numerics, solve_speed, solve_stress
 from .steady import steady_mu
 from .stepper import explicit_euler, integrate
-from .velocity import BedScene, VelocityNumerics, solve_velocity
+from .velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 CLASSES = ("converged", "inaccurate", "oscillating", "constraint-violating", "out of bounds", "blown up")
 COLORS = {"converged": "#2ca02c", "inaccurate": "#ffbf00", "oscillating": "#9467bd",
@@ -104,7 +104,7 @@ def _velocity(fr, mu_w, rule, n, t_tilde=0.1) -> Outcome:
     sc = Scales(m, 10.0, mu_w)
     scene = BedScene(m, 10.0, sc.delta_s, body_force=m.mu_s * m.phi * m.rho_p * m.g)
     sol = solve_velocity(scene, [t_tilde * sc.t_s], mu_w=mu_w, rule=rule, initial="yield",
-                         numerics=VelocityNumerics(n_cells=n))
+                         numerics=replace(VELOCITY_NUMERICS, n_cells=n))
     mu = sol.mu[-1]
     return Outcome(float(sol.u_w[-1] / sc.U), np.abs(sol.s[-1]) / (mu_w * scene.p_w), (float(mu.min()), float(mu.max())))
 

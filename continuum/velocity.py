@@ -22,6 +22,7 @@ from .mesh import Mesh
 from .rheology import finite, require
 from .rules import ShearLaw, YieldRule
 from .scales import Material, Scales
+from .solver import Numerics
 from .steady import DELTA_THRESHOLD
 from .stepper import StepStats, integrate
 
@@ -56,13 +57,9 @@ class BedScene:
         return m.phi * m.rho_p * m.g
 
 
-@dataclass(frozen=True)
-class VelocityNumerics:
-    n_cells: int = 200
-    stretch: float = 2.0
-    rtol: float = 1e-5
-    atol: float = 1e-9
-    method: str = "sdirk4"
+#: the velocity form's defaults: a milder wall grading (no singular wall layer), tolerances for
+#: dimensional velocities of O(1-10) in DEM units
+VELOCITY_NUMERICS = Numerics(n_cells=200, stretch=2.0, rtol=1e-5, atol=1e-9)
 
 
 class VelocityProblem:
@@ -199,7 +196,7 @@ def initial_at_yield(problem: VelocityProblem) -> np.ndarray:
 
 
 def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRule = YieldRule(),
-                   initial: str = "rest", numerics: VelocityNumerics = VelocityNumerics(),
+                   initial: str = "rest", numerics: Numerics = VELOCITY_NUMERICS,
                    compare_steady: bool = True, fixed_times=None) -> VelocitySolution:
     """Solve the velocity form with an imposed plate stress (mu_w = tau_w/p_w) or speed (u_w).
 
@@ -221,7 +218,7 @@ def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRu
     t = np.asarray(times, dtype=float)
     require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
             "times", "a non-empty, strictly increasing list of finite numbers > 0", list(map(float, t)))
-    mesh = Mesh.graded(numerics.n_cells, numerics.stretch)
+    mesh = numerics.mesh()
     tau_w = None if mu_w is None else mu_w * scene.p_w
     problem = VelocityProblem(scene, rule, mesh, tau_w=tau_w, u_w=u_w)
     if initial == "yield":
