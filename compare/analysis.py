@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from continuum.scales import Scales
+
 from . import calibrate
 from .plate import PlateRecord, power_law, steady_state
 from .predict import U_FRACTION, Prediction, depth_at_fraction, predict
@@ -45,6 +47,7 @@ class DriveGroup:
     steady_profile: pd.DataFrame | None = None
     delta: pd.DataFrame | None = None
     predictions: list[Prediction] = field(default_factory=list)
+    scales: Scales | None = None  # the paper's scales with the calibrated material
 
     @property
     def label(self) -> str:
@@ -120,6 +123,14 @@ def analyse_drive(group: DriveGroup, settings: CGSettings) -> DriveGroup:
     return group
 
 
+def snapshot_times(g: DriveGroup, n: int = 5) -> np.ndarray:
+    """About ``n`` log-spaced times of the drive's atom snapshots (t > 0): the transient profiles."""
+    t = g.folders[0].times()
+    t = t[t > 0]
+    picks = np.unique(np.searchsorted(t, np.geomspace(t[0], t[-1], n)).clip(0, len(t) - 1))
+    return t[picks]
+
+
 def steady_pairs(groups: list[DriveGroup], wall_exclusion: float = calibrate.WALL_EXCLUSION) -> pd.DataFrame:
     """(mu, I_dem, phi) of every grid point of every steady window, away from plate and base."""
     rows = []
@@ -158,8 +169,10 @@ def analyse(run_dirs, settings: CGSettings = CGSettings(), n_times: int = 60) ->
     material = cal.material(phi=phi)
     for g in groups:
         t_end = float(g.series.t.iloc[-1])
-        times = np.geomspace(t_end / 300, t_end, n_times)
+        times = np.union1d(np.geomspace(t_end / 300, t_end, n_times), snapshot_times(g))
         g.predictions = predict(material, g.p_w, g.depth, g.plate_mass, g.kind, g.value, times)
+        g.scales = (Scales(material, g.p_w, g.value / g.p_w) if g.kind == "stress"
+                    else Scales.for_speed(material, g.p_w, g.value))
     return {"groups": groups, "pairs": pairs, "calibration": cal, "material": material, "phi_bulk": phi,
             "mass_error": mass_error(groups[0]), "settings": settings}
 

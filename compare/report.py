@@ -10,9 +10,12 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from continuum.scales import UNITS
+from continuum.closed_forms import SELF_SIMILAR_DELTA
 from continuum.steady import steady_mu
 
-from .analysis import DriveGroup, analyse
+from .analysis import PLATE_RADIUS, DriveGroup, analyse, snapshot_times
+from .checks import lammps_crosscheck, width_check
+from .profiles import ensemble
 from .calibrate import mu_law
 from .metrics import DEFINITIONS, metrics
 
@@ -45,6 +48,9 @@ def drive_figure(g: DriveGroup, out: Path) -> Path:
     for i, p in enumerate(g.predictions):
         ax[2].plot(p.series.t, p.series.delta_u, label=p.model, **MODEL_STYLE[i])
     ax[2].axhline(g.predictions[0].steady["delta_s"], color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
+    tt = g.predictions[0].series.t
+    ax[2].plot(tt, SELF_SIMILAR_DELTA * g.scales.dmu * np.sqrt(g.scales.nu_g * tt), color="C3", lw=0.8, ls=":",
+               label="eq. SolutionSS: 4.65 Dmu sqrt(nu_g t) (mu threshold)")
     t = g.delta.t[g.delta.t > 0]
     if len(t):
         ref = g.delta.delta_u[g.delta.t > 0].iloc[0] * np.sqrt(t / t.iloc[0])
@@ -90,6 +96,32 @@ def profiles_figure(g: DriveGroup, material, out: Path) -> Path:
     axes[0].legend(fontsize=7)
     fig.suptitle(f"{g.label}: steady profiles (kernel width and bands: see metadata); continuum from the calibration")
     path = out / f"profiles_{slug(g.label)}.png"
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def transient_figure(g: DriveGroup, out: Path) -> Path:
+    """u and mu against depth at a few snapshot times: DEM (instantaneous, seed-averaged) solid,
+    the velocity-form prediction at the same times dashed."""
+    inst = ensemble(g.profiles)
+    times = snapshot_times(g)
+    vel = g.predictions[0].profiles
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    a, b = fig.subplots(1, 2, sharey=True)
+    for k, t in enumerate(times):
+        dem = inst[np.isclose(inst.t, t)]
+        depth = float(np.interp(t, g.plates[0].t, g.folders[0].plate()["y"])) - PLATE_RADIUS - dem.y
+        cont = vel[np.isclose(vel.t, t)]
+        color = f"C{k}"
+        a.plot(dem.u_x, depth, color=color, label=f"t = {t:.3g}")
+        a.plot(cont.u, cont.depth, color=color, ls="--")
+        b.plot(dem.mu, depth, color=color)
+        b.plot(cont.mu, cont.depth, color=color, ls="--")
+    a.set(xlabel="u [sqrt(g d)]", ylabel="depth below the plate [d]", ylim=(g.depth, 0))
+    b.set(xlabel="mu = tau/p", xlim=(0, 1))
+    a.legend(fontsize=7, title="solid DEM, dashed velocity form", title_fontsize=7)
+    fig.suptitle(f"{g.label}: transient profiles")
+    path = out / f"transient_{slug(g.label)}.png"
     fig.savefig(path, dpi=110)
     return path
 
@@ -154,7 +186,18 @@ def write_report(run_dirs, out_dir) -> dict:
         g.delta.to_csv(out / f"delta_{stem}.csv", index=False)
         for i, p in enumerate(g.predictions):
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{i}.csv", index=False)
-        figs += [drive_figure(g, out), profiles_figure(g, result["material"], out)]
+        figs += [drive_figure(g, out), profiles_figure(g, result["material"], out), transient_figure(g, out)]
+    first = result["groups"][0]
+    t_end = float(first.series.t.iloc[-1])
+    widths = width_check(first.folders[0], 0.7 * t_end, t_end)
+    widths.to_csv(out / "width_check.csv", index=False)
+    cross = lammps_crosscheck(first.profiles[0])
+    cross.to_csv(out / "lammps_crosscheck.csv", index=False)
+    bulk = cross[(cross.y > first.steady_profile.y.min() + 4) & (cross.y < first.steady_profile.y.max() - 4)]
+    cross_rows = "".join(
+        f"<tr><th>{q}</th><td>{np.nanmean(np.abs(bulk[q + '_diff'])) / np.nanmean(np.abs(bulk[q + '_lammps'])):.1%}</td></tr>"
+        for q in ("phi", "u_x", "p", "tau_yx", "p_mop", "tau_mop"))
+    plateau = widths[widths.width < widths.width.max()].groupby(["field", "width"]).plateau.mean().unstack()
     rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{_fmt(v)}</td></tr>" for k, v in m.items()
                    if k not in ("drives", "definitions", "calibration", "runs"))
     drive_rows = "".join(f"<h3>{html.escape(k)}</h3><table>" + "".join(
@@ -174,6 +217,13 @@ def write_report(run_dirs, out_dir) -> dict:
                                               for k, v in DEFINITIONS.items()) + "</ul>",
         "<h2>Figures</h2>" + "".join(f"<p><img src='{f.name}' alt='{f.stem}'></p>" for f in figs),
         "<h2>Per drive</h2>" + drive_rows,
+        f"<h2>Checks of the coarse-graining ({html.escape(first.label)})</h2>"
+        "<p>Width check (fraction of heights where a field plateaus, |f_w - f_2w| within 5 %, going from width "
+        "w to the next; last 30 % of the run; width_check.csv):</p>" + plateau.to_html(float_format="{:.0%}".format)
+        + "<p>Against LAMMPS's own 1 d chunk averages (profiles.csv; mean |CG - LAMMPS| / mean |LAMMPS| in the bulk; "
+        "lammps_crosscheck.csv). They differ because LAMMPS bins grain centres (no kernel), puts the virial at grain "
+        "centres (no stress line) and has no wall term; the method-of-planes values are the same quantity as the "
+        "CG stress line, so p_mop and tau_mop agree best:</p><table>" + cross_rows + "</table>",
     ]
     (out / "index.html").write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>granstokes compare"
                                     f"</title><style>{STYLE}</style></head><body>{''.join(body)}</body></html>")
