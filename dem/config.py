@@ -288,8 +288,8 @@ duration = 10.0
 [output]
 plate = 0.02
 thermo = 0.2
-atoms = 1.0
-contacts = 1.0
+atoms = 0.25
+contacts = 0.25
 profiles = 0.5
 restart = 1.0
 [prepare]
