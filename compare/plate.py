@@ -45,7 +45,8 @@ class PlateRecord:
 def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
     """Final value (mean over the last quarter), its standard error (block means, 5 blocks) and the
     time from which the running mean stays in the band (STEADY_WINDOW, STEADY_CHANGE); t_steady is
-    nan when the record never settles (the last quarter then still drifts)."""
+    nan when the record has not settled: the last quarter's linear trend still moves it by more
+    than the band (``drift``: that slope)."""
     ok = np.isfinite(y)
     t, y = t[ok], y[ok]
     last = y[t >= t[0] + 0.75 * (t[-1] - t[0])]
@@ -57,8 +58,11 @@ def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
     band = max(3 * stderr, STEADY_CHANGE * abs(value - y[0]))
     outside = np.nonzero(np.abs(running - value) > band)[0]
     t_steady = float(t[outside[-1] + 1]) if len(outside) and outside[-1] + 1 < len(t) else float(t[0])
-    drift = abs(np.mean(blocks[-1]) - np.mean(blocks[0])) > 3 * stderr * np.sqrt(2) + band
-    return {"value": value, "stderr": stderr, "t_steady": np.nan if drift else t_steady, "band": band}
+    tail = t >= t[0] + 0.75 * (t[-1] - t[0])
+    slope = stats.linregress(t[tail], y[tail]).slope
+    drift = abs(slope) * (t[-1] - t[tail][0]) > band  # still moving by more than the band: not steady
+    return {"value": value, "stderr": stderr, "t_steady": np.nan if drift else t_steady, "band": band,
+            "drift": float(slope)}
 
 
 def power_law(t: np.ndarray, y: np.ndarray, t_min: float, t_max: float) -> dict:

@@ -1,0 +1,81 @@
+"""compare/: calibration, plate observables, delta_u, and the report on a smoke DEM run."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from compare.calibrate import fit, mu_law
+from compare.plate import power_law, steady_state
+from compare.predict import depth_at_fraction
+from continuum.cli import main as granstokes_main
+
+
+def test_calibration_recovers_a_known_law_within_its_interval():
+    rng = np.random.default_rng(1)
+    I = np.geomspace(3e-3, 0.5, 300)
+    truth = (0.26, 0.62, 0.28)
+    mu = mu_law(I, *truth) + rng.normal(0, 0.01, I.size)
+    phi = 0.82 - 0.3 * I + rng.normal(0, 0.002, I.size)
+    cal = fit(pd.DataFrame({"I_dem": I, "mu": mu, "phi": phi}))
+    for name, value in zip(("mu_s", "mu_d", "I0_dem"), truth):
+        lo, hi = cal.ci95[name]
+        assert lo < value < hi and hi - lo < 0.3 * value
+    assert cal.phi_max == pytest.approx(0.82, abs=0.002) and cal.phi_slope == pytest.approx(0.3, abs=0.02)
+    assert cal.rms_mu == pytest.approx(0.01, rel=0.15)
+    assert cal.I0_paper == pytest.approx(cal.I0_dem / 2)
+
+
+def test_too_few_points_are_refused():
+    with pytest.raises(ValueError, match="^calibration points must be"):
+        fit(pd.DataFrame({"I_dem": [0.1, 0.2], "mu": [0.3, 0.4], "phi": [0.8, 0.8]}))
+
+
+def test_steady_state_and_power_law_on_known_series():
+    rng = np.random.default_rng(2)
+    t = np.linspace(0, 50, 5001)
+    y = 3 * (1 - np.exp(-t / 4)) + rng.normal(0, 0.05, t.size)
+    st = steady_state(t, y)
+    assert st["value"] == pytest.approx(3, abs=0.02)
+    # the running mean enters the band max(3 stderr, 5 % of 3) = 0.15 near t = 4 ln(3/0.15) = 12
+    assert st["t_steady"] == pytest.approx(4 * np.log(3 / st["band"]), abs=1.5)
+    growing = steady_state(t, t)
+    assert np.isnan(growing["t_steady"])
+    fit_ = power_law(t, 0.7 * np.sqrt(t), 0.1, 10)
+    assert fit_["alpha"] == pytest.approx(0.5, abs=1e-9)
+
+
+def test_depth_at_fraction_interpolates():
+    depth = np.linspace(0, 10, 11)
+    u = 10 - depth  # u_w = 10: 5 % (0.5) at depth 9.5
+    assert depth_at_fraction(depth, u, 10.0) == pytest.approx(9.5)
+    assert np.isnan(depth_at_fraction(depth, u + 5, 10.0))
+
+
+@pytest.mark.slow
+def test_compare_report_on_a_smoke_run(tmp_path, capsys):
+    """granstokes compare on a real (smoke) run: strict JSON with the issue's keys, numbers that
+    check the coarse-graining (mass to round-off, pressure slope phi rho g within 15 %), a
+    calibration with mu_s < mu_d, and the report's page and figures."""
+    run = tmp_path / "run"
+    assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(run), "--quiet"]) == 0
+    capsys.readouterr()
+    assert granstokes_main(["compare", str(run), "--out", str(tmp_path / "report"), "--json"]) == 0
+    m = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"non-JSON constant {c}"))
+    for key in ("phi_bulk", "pressure_slope", "tau_uniformity", "mass_error", "mu_s", "mu_d", "I0",
+                "u_w_inf", "delta_s", "alpha_delta", "alpha_u"):
+        assert key in m
+    assert m["I0_convention"] == "dem"
+    assert abs(m["mass_error"]) < 1e-6
+    assert m["pressure_slope"] == pytest.approx(m["phi_bulk"], rel=0.15)
+    assert 0 < m["mu_s"] < m["mu_d"]
+    assert m["u_w_inf"]["dem"] > 0 and m["u_w_inf"]["velocity_form"] > 0
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert "continuum vs DEM" in page and page.count("<img") >= 5
+    assert json.loads((tmp_path / "report" / "metrics.json").read_text())["mu_s"] == m["mu_s"]
+
+
+def test_compare_refuses_a_folder_that_is_not_a_run(tmp_path, capsys):
+    assert granstokes_main(["compare", str(tmp_path), "--out", str(tmp_path / "r")]) == 2
+    assert "RUN_DIR must be" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
