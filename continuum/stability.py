@@ -304,7 +304,8 @@ def write_stability(out_dir, calibrated: Material | None = None) -> dict:
     maps = plot_maps(table, out)
     materials = {"paper's beads (tan 21, tan 33, I0_dem 0.279)": paper}
     if calibrated is not None:
-        materials["DEM-calibrated"] = calibrated
+        m = calibrated
+        materials[f"DEM-calibrated ({m.mu_s:.3f}, {m.mu_d:.3f}, I0_{m.I_convention} {m.I0:.3g})"] = m
     wp = wellposedness_profiles(materials)
     wp.to_csv(out / "wellposedness.csv", index=False)
     return {"table": table, "maps": maps, "wellposedness": plot_wellposedness(wp, out / "wellposedness.png")}
