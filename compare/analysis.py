@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from continuum.scales import Scales
+from continuum.steady import DELTA_THRESHOLD
 
 from . import calibrate
 from .plate import PlateRecord, power_law, steady_state
@@ -123,6 +124,25 @@ def analyse_drive(group: DriveGroup, settings: CGSettings) -> DriveGroup:
     return group
 
 
+def delta_mu(g: DriveGroup, mu_s: float) -> np.ndarray:
+    """The paper's definition on the DEM (continuum.steady.DELTA_THRESHOLD): the first depth below
+    the wall layer where (mu - mu_s)/(mu_w(t) - mu_s) falls under 1e-3, mu_s the calibrated one.
+    Reported beside delta_u; single-frame mu fluctuates by more than the threshold, so it is noise-bound."""
+    inst = ensemble(g.profiles)
+    out = []
+    for t in g.delta.t:
+        frame = inst[np.isclose(inst.t, t)]
+        depth = _surface(g.plates[0], g.folders[0], t) - frame.y.to_numpy()
+        order = np.argsort(depth)
+        depth, mu = depth[order], frame.mu.to_numpy()[order]
+        mu_w = float(np.interp(t, g.series.t, g.series.mu_w.rolling(25, center=True, min_periods=1).mean()))
+        keep = (depth >= calibrate.WALL_EXCLUSION) & np.isfinite(mu)
+        excess = (mu[keep] - mu_s) / (mu_w - mu_s)
+        below = np.nonzero(excess < DELTA_THRESHOLD)[0]
+        out.append(float(depth[keep][below[0]]) if len(below) else np.nan)
+    return np.array(out)
+
+
 def snapshot_times(g: DriveGroup, n: int = 5) -> np.ndarray:
     """About ``n`` log-spaced times of the drive's atom snapshots (t > 0): the transient profiles."""
     t = g.folders[0].times()
@@ -173,6 +193,7 @@ def analyse(run_dirs, settings: CGSettings = CGSettings(), n_times: int = 60) ->
         g.predictions = predict(material, g.p_w, g.depth, g.plate_mass, g.kind, g.value, times)
         g.scales = (Scales(material, g.p_w, g.value / g.p_w) if g.kind == "stress"
                     else Scales.for_speed(material, g.p_w, g.value))
+        g.delta["delta_mu"] = delta_mu(g, material.mu_s)
     return {"groups": groups, "pairs": pairs, "calibration": cal, "material": material, "phi_bulk": phi,
             "mass_error": mass_error(groups[0]), "settings": settings}
 

@@ -14,8 +14,9 @@ from .plate import STEADY_CHANGE, STEADY_WINDOW
 DEFINITIONS = {
     "steady": f"running mean over {STEADY_WINDOW:.0%} of the record within max(3 stderr, "
               f"{STEADY_CHANGE:.0%} of the total change) of the final-quarter mean",
-    "delta_u": "depth below the plate where the coarse-grained u falls to 5 % of u_w (DEM and continuum alike; "
-               "the paper's 1e-3 threshold on mu - mu_s is below the DEM's noise)",
+    "delta_u": "depth below the plate where the coarse-grained u falls to 5 % of u_w (DEM and continuum alike): "
+               "the layer thickness used in the metrics.  delta_mu, the paper's definition ((mu - mu_s) at 1e-3 of "
+               "the wall excess, calibrated mu_s), is reported beside it but is bound by single-frame noise in mu",
     "t90": "time for the running mean (5 % of the record) of u_w (imposed stress) or mu_w (imposed speed) "
            "to cover 90 % of its change; the continuum series are treated alike",
     "wall_exclusion": f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base",

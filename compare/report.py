@@ -10,7 +10,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from continuum.scales import UNITS
-from continuum.closed_forms import SELF_SIMILAR_DELTA
+from continuum.closed_forms import SELF_SIMILAR_DELTA, self_similar_wall_speed
 from continuum.steady import steady_mu
 
 from .analysis import PLATE_RADIUS, DriveGroup, analyse, snapshot_times
@@ -43,8 +43,14 @@ def drive_figure(g: DriveGroup, out: Path) -> Path:
         for i, p in enumerate(g.predictions):
             ax[k].plot(p.series.t, p.series[name], label=p.model, **MODEL_STYLE[i])
         ax[k].set(xlabel="t [sqrt(d/g)]", ylabel={"u_w": "u_w [sqrt(g d)]", "mu_w": "mu_w = tau_w/p"}[name])
+    if g.kind == "stress":
+        sc, tt = g.scales, g.predictions[0].series.t.to_numpy()
+        ss = [sc.u(self_similar_wall_speed(sc.material.friction, sc.mu_w, sc.t_tilde(t))) for t in tt]
+        ax[0].plot(tt, ss, color="C3", lw=0.8, ls=":", label="eq. SolutionSS (erfc), calibrated scales")
     ax[0].legend(fontsize=7)
-    ax[2].plot(g.delta.t, g.delta.delta_u, "o", color="C0", label="DEM (coarse-grained u)")
+    ax[2].plot(g.delta.t, g.delta.delta_u, "o", color="C0", label="DEM delta_u (coarse-grained u)")
+    ax[2].plot(g.delta.t, g.delta.delta_mu, "x", color="C0", alpha=0.4, ms=4,
+               label="DEM delta_mu (paper's 1e-3 mu threshold: noise-bound)")
     for i, p in enumerate(g.predictions):
         ax[2].plot(p.series.t, p.series.delta_u, label=p.model, **MODEL_STYLE[i])
     ax[2].axhline(g.predictions[0].steady["delta_s"], color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
@@ -100,27 +106,33 @@ def profiles_figure(g: DriveGroup, material, out: Path) -> Path:
     return path
 
 
-def transient_figure(g: DriveGroup, out: Path) -> Path:
-    """u and mu against depth at a few snapshot times: DEM (instantaneous, seed-averaged) solid,
-    the velocity-form prediction at the same times dashed."""
+def transient_figure(g: DriveGroup, material, out: Path) -> Path:
+    """u, phi, p, tau, mu, I against depth at a few snapshot times: DEM (instantaneous, seed-averaged)
+    solid, the velocity-form prediction at the same times dashed (its phi is the calibrated constant,
+    p hydrostatic, I from the calibrated law)."""
     inst = ensemble(g.profiles)
-    times = snapshot_times(g)
     vel = g.predictions[0].profiles
-    fig = Figure(figsize=(11, 4.5), layout="constrained")
-    a, b = fig.subplots(1, 2, sharey=True)
-    for k, t in enumerate(times):
+    fig = Figure(figsize=(16, 4.5), layout="constrained")
+    axes = fig.subplots(1, 6, sharey=True)
+    fields = ("u_x", "phi", "p", "tau", "mu", "I_dem")
+    for k, t in enumerate(snapshot_times(g)):
         dem = inst[np.isclose(inst.t, t)]
         depth = float(np.interp(t, g.plates[0].t, g.folders[0].plate()["y"])) - PLATE_RADIUS - dem.y
         cont = vel[np.isclose(vel.t, t)]
-        color = f"C{k}"
-        a.plot(dem.u_x, depth, color=color, label=f"t = {t:.3g}")
-        a.plot(cont.u, cont.depth, color=color, ls="--")
-        b.plot(dem.mu, depth, color=color)
-        b.plot(cont.mu, cont.depth, color=color, ls="--")
-    a.set(xlabel="u [sqrt(g d)]", ylabel="depth below the plate [d]", ylim=(g.depth, 0))
-    b.set(xlabel="mu = tau/p", xlim=(0, 1))
-    a.legend(fontsize=7, title="solid DEM, dashed velocity form", title_fontsize=7)
-    fig.suptitle(f"{g.label}: transient profiles")
+        p = g.p_w + material.phi * material.rho_p * material.g * cont.depth
+        model = {"u_x": cont.u, "phi": np.full(len(cont), material.phi), "p": p, "tau": cont.mu * p,
+                 "mu": cont.mu, "I_dem": material.friction.I_of_mu(cont.mu.clip(upper=material.mu_d - 1e-9),
+                                                                   material.I0)}
+        for ax, f in zip(axes, fields):
+            ax.plot(dem[f], depth, color=f"C{k}", label=f"t = {t:.3g}")
+            ax.plot(model[f], cont.depth, color=f"C{k}", ls="--")
+    for ax, f in zip(axes, fields):
+        ax.set_xlabel(f)
+    axes[4].set_xlim(0, 1)
+    axes[5].set(xscale="log", xlim=(1e-5, 2))
+    axes[0].set(ylabel="depth below the plate [d]", ylim=(g.depth, 0))
+    axes[0].legend(fontsize=7, title="solid DEM, dashed velocity form", title_fontsize=7)
+    fig.suptitle(f"{g.label}: transient profiles (DEM units; I in the DEM convention)")
     path = out / f"transient_{slug(g.label)}.png"
     fig.savefig(path, dpi=110)
     return path
@@ -186,7 +198,7 @@ def write_report(run_dirs, out_dir) -> dict:
         g.delta.to_csv(out / f"delta_{stem}.csv", index=False)
         for i, p in enumerate(g.predictions):
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{i}.csv", index=False)
-        figs += [drive_figure(g, out), profiles_figure(g, result["material"], out), transient_figure(g, out)]
+        figs += [drive_figure(g, out), profiles_figure(g, result["material"], out), transient_figure(g, result["material"], out)]
     first = result["groups"][0]
     t_end = float(first.series.t.iloc[-1])
     widths = width_check(first.folders[0], 0.7 * t_end, t_end)
