@@ -99,8 +99,13 @@ def analyse_drive(group: DriveGroup, settings: CGSettings) -> DriveGroup:
     group.series = _ensemble_series(group.plates)
     response = group.series.u_w if group.kind == "stress" else group.series.mu_w
     group.steady = steady_state(group.series.t.to_numpy(), response.to_numpy())
-    group.steady["u_w"] = steady_state(group.series.t.to_numpy(), group.series.u_w.to_numpy())
-    group.steady["mu_w"] = steady_state(group.series.t.to_numpy(), group.series.mu_w.to_numpy())
+    for name in ("u_w", "mu_w"):
+        group.steady[name] = steady_state(group.series.t.to_numpy(), group.series[name].to_numpy())
+        group.steady[name]["stderr_over"] = "blocks of the final quarter"
+        if len(group.plates) > 1:  # an ensemble: the error of the mean is the spread over seeds
+            finals = [steady_state(p.t, getattr(p, name))["value"] for p in group.plates]
+            group.steady[name]["stderr"] = float(np.std(finals, ddof=1) / np.sqrt(len(finals)))
+            group.steady[name]["stderr_over"] = "seeds"
     first = group.folders[0]
     grid = settings.grid_for(next(first.frames([0])))
     group.profiles = [DepthProfiles(f, settings, grid).run() for f in group.folders]
