@@ -28,6 +28,7 @@ bench: $(STAMP)
 	$(BIN)/granstokes stability --out bench/stability
 	$(BIN)/python bench/dem_throughput.py
 	$(BIN)/python bench/cg_rate.py
+	$(BIN)/python bench/dem_cost_noise.py
 
 clean:
 	rm -rf $(VENV) $(DEMO) *.egg-info

@@ -79,24 +79,24 @@ class NewtonFailure(RuntimeError):
 class NewtonMatrix:
     """LU factors of A = M - dh J(x), reused for every Newton iteration and stage of a step.
 
-    Rows 1.. of A are tridiagonal; row 0 may be dense.  Bordering:
+    A is tridiagonal (LAPACK gttrf/gttrs, partial pivoting), except that row 0 may be dense (the
+    imposed-speed integral condition); then it is eliminated by bordering:
     [[a, c], [b1 e_1, T]] [x0; z] = [r0; r]  =>  x0 = (r0 - c.T^-1 r)/(a - c.T^-1 b1 e_1).
     """
 
     def __init__(self, problem, x, dh):
         sub, diag, sup, row0 = problem.jacobian(x)
         mass = problem.mass
-        self.dh = dh
-        self.factors = dgttrf(-dh * sub[1:], mass[1:] - dh * diag[1:], -dh * sup[1:])
+        self.dh, self.dense = dh, row0 is not None
+        first = 1 if self.dense else 0
+        self.factors = dgttrf(-dh * sub[first:], mass[first:] - dh * diag[first:], -dh * sup[first:])
         if self.factors[-1] != 0:
             raise NewtonFailure("singular Newton matrix")
-        if row0 is None:
-            row0 = np.zeros(len(diag))
-            row0[:2] = diag[0], sup[0]
-        e1 = np.zeros(len(diag) - 1)
-        e1[0] = -dh * sub[0]
-        self.zb = self._solve(e1)
-        self.refresh_row0(mass[0], row0)
+        if self.dense:
+            e1 = np.zeros(len(diag) - 1)
+            e1[0] = -dh * sub[0]
+            self.zb = self._solve(e1)
+            self.refresh_row0(mass[0], row0)
 
     def _solve(self, r):
         return dgttrs(*self.factors[:-1], r)[0]
@@ -108,6 +108,8 @@ class NewtonMatrix:
         self.pivot = self.row0[0] - self.row0[1:] @ self.zb
 
     def solve(self, r):
+        if not self.dense:
+            return self._solve(r)
         zr = self._solve(r[1:])
         x0 = (r[0] - self.row0[1:] @ zr) / self.pivot
         return np.concatenate(([x0], zr - x0 * self.zb))
@@ -135,8 +137,8 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8, full=F
             break
         x += problem.step_fraction(x, dx) * dx
         size = np.sqrt(np.mean((dx / weights) ** 2))
-        theta = 0.5 if previous is None else size / previous
-        if theta >= 1.0:
+        theta = 0.5 if previous is None else min(size / previous, 0.99 if full else np.inf)
+        if theta >= 1.0:  # the frozen matrix does not contract: give up (the caller tries full Newton)
             break
         if size * theta / (1.0 - theta) < tol or size < 1e-3 * tol:
             x = problem.project(x)
