@@ -151,7 +151,7 @@ def markdown(res: dict) -> str:
         f"Harness overhead (all outputs, progress bar, merge; 2 ranks): {q['harness_wall']:.1f} s vs bare "
         f"{q['mpi2']['wall']:.1f} s -> {100 * q['overhead']:+.1f} % (target <= 10 %).",
         "",
-        f"2D vs 3D, same depth (12 d) and x width (12 d; 3D z width 6 d), p_w = 10, LAMMPS loop time per "
+        "2D vs 3D, same depth (12 d) and x width (12 d; 3D z width 6 d), p_w = 10, LAMMPS loop time per "
         "sqrt(d/g), best of serial and 2 ranks for each:",
         "",
         "| bed | grains | serial: atom-steps/s, s per sqrt(d/g) | 2 ranks: atom-steps/s, s per sqrt(d/g) |",

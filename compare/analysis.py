@@ -22,7 +22,7 @@ from continuum.steady import DELTA_THRESHOLD
 
 from . import calibrate
 from .plate import PlateRecord, power_law, steady_state
-from .predict import U_FRACTION, Prediction, depth_at_fraction, predict
+from .predict import Prediction, depth_at_fraction, predict
 from .profiles import CGSettings, DepthProfiles, ensemble
 from .reader import BED, DriveFolder
 

@@ -10,7 +10,6 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
 
 from .rheology import Friction, finite, require
 from .scales import UNITS
@@ -50,6 +49,8 @@ def run_continuum(args) -> int:
         print(format_table(sol))
     if args.plot is not None:
         plot_profiles(sol, args.plot)
+    if args.save is not None:
+        sol.save(args.save)
     return 0
 
 
@@ -128,6 +129,8 @@ def add_continuum_parser(sub) -> None:
     p.add_argument("--times", type=float, nargs="+", required=True, help="output times t~ > 0, increasing")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.add_argument("--plot", type=Path, help="draw the profiles at the requested times into FILE.png")
+    p.add_argument("--save", type=Path, metavar="DIR",
+                   help="write continuum_profiles.csv, continuum_series.csv (every step) and continuum.json")
     p.add_argument("--n-cells", type=int, default=Numerics.n_cells, help="mesh cells (default %(default)s)")
     p.add_argument("--rtol", type=float, default=Numerics.rtol, help="time-step tolerance (default %(default)s)")
     p.add_argument("--method", default=Numerics.method, help="time stepper: sdirk4 or tr-bdf2")

@@ -78,7 +78,7 @@ def write_continuum_report(out_dir) -> Path:
     steady, notes = steady_table(), discrepancies()
     steady.to_csv(out / "steady_wall_speed.csv", index=False)
     notes.to_csv(out / "paper_discrepancies.csv", index=False)
-    body = [f"<h1>granstokes: Stokes' first problem with mu(I), continuum side</h1>",
+    body = ["<h1>granstokes: Stokes' first problem with mu(I), continuum side</h1>",
             "<h2>Units and conventions</h2><ul>" + "".join(
                 f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in UNITS.items()) + "</ul>",
             f"<p>Paper's case: mu_s = tan 21&deg; = {FRICTION.mu_s:.5f}, mu_d = tan 33&deg; = {FRICTION.mu_d:.5f}. "

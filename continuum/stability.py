@@ -36,7 +36,7 @@ from .rules import YieldRule, wellposedness
 from .scales import Material, Scales
 from .solver import Numerics, solve_speed, solve_stress
 from .steady import steady_mu
-from .stepper import explicit_euler, integrate
+from .stepper import explicit_euler
 from .velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 CLASSES = ("converged", "inaccurate", "oscillating", "constraint-violating", "out of bounds", "blown up")

@@ -12,7 +12,6 @@ Dimensional: the material's units (DEM units d = rho_p = g = 1 by default).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 import pandas as pd

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from continuum.cli import main
-from continuum.steady import mu_w_for_speed, steady_wall_speed
+from continuum.steady import mu_w_for_speed
 
 BEADS = ["--mu-s", str(np.tan(np.radians(21))), "--mu-d", str(np.tan(np.radians(33)))]
 
@@ -105,3 +105,18 @@ def test_console_script_exit_status(tmp_path):
                            "--times", "1"], capture_output=True, text=True, cwd=tmp_path)
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.strip() == "granstokes: error: u_w must be a finite number > 0, got -1.0"
+
+
+def test_save_writes_pandas_readable_tables_and_metadata(capsys, tmp_path):
+    import pandas as pd
+
+    code, _, _ = run(capsys, "--u-w", "1.334", "--times", "0.01", "1", "--save", str(tmp_path / "out"))
+    assert code == 0
+    prof = pd.read_csv(tmp_path / "out" / "continuum_profiles.csv")
+    series = pd.read_csv(tmp_path / "out" / "continuum_series.csv")
+    meta = json.loads((tmp_path / "out" / "continuum.json").read_text())
+    assert sorted(prof.t.unique()) == [0.01, 1.0]
+    wall = prof[prof.y == 0.0].sort_values("t")
+    assert wall.u.to_numpy() == pytest.approx([1.334, 1.334], rel=1e-9)  # the imposed speed, at the wall
+    assert series.u_w.iloc[1:].to_numpy() == pytest.approx(1.334, rel=1e-8)
+    assert meta["units"]["inertial_number"].startswith("paper:") and meta["stats"]["steps"] == len(series) - 1

@@ -113,3 +113,14 @@ def test_bad_loading(paper_friction):
         mu_w_for_speed(paper_friction, -1.0)
     with pytest.raises(ValueError, match="^mu_d must be"):
         Friction(0.5, 0.5)
+
+
+def test_conversions_are_consistent_with_hydrostatics():
+    """p~ = 1 + beta_w y~ must be the hydrostatic p(y)/p_w (eq. StokesEqn2) given delta_s; tau~ = 1 is
+    tau_w = mu_w p_w; u~ converts with U."""
+    m = Material(phi=0.58)
+    sc = Scales(m, 12.0, m.friction.mu_w_from_tilde(0.4))
+    for y_t in (0.0, 0.3, 1.0):
+        assert sc.p_tilde(sc.pressure(sc.y(y_t))) == pytest.approx(1 + sc.beta_w * y_t, rel=1e-14)
+    assert sc.tau(1.0) == pytest.approx(sc.mu_w * 12.0) and sc.tau_tilde(sc.tau(0.7)) == pytest.approx(0.7)
+    assert sc.u(sc.u_tilde(2.5)) == pytest.approx(2.5) and sc.p(sc.p_tilde(13.0)) == pytest.approx(13.0)
