@@ -46,9 +46,11 @@ class DriveGroup:
     series: pd.DataFrame | None = None
     steady: dict | None = None
     steady_profile: pd.DataFrame | None = None
+    mean_profile: pd.DataFrame | None = None  # the whole run: hydrostatics need no steady state
     delta: pd.DataFrame | None = None
     predictions: list[Prediction] = field(default_factory=list)
     scales: Scales | None = None  # the paper's scales with the calibrated material
+    prediction_note: str = ""     # why there is no prediction, when there is none
 
     @property
     def label(self) -> str:
@@ -116,6 +118,9 @@ def analyse_drive(group: DriveGroup, settings: CGSettings) -> DriveGroup:
     surface = float(np.mean(_surface(group.plates[0], first, [t0, t_end])))
     win.insert(1, "depth", surface - win.y)
     group.steady_profile = win
+    whole = ensemble(group.profiles, float(group.profiles[0].results.t[0]), t_end)
+    whole.insert(1, "depth", float(np.mean(_surface(group.plates[0], first, group.profiles[0].results.t))) - whole.y)
+    group.mean_profile = whole
     inst = ensemble(group.profiles)
     rows = []
     for (step, t), g in inst.groupby(["step", "t"]):
@@ -156,13 +161,16 @@ def snapshot_times(g: DriveGroup, n: int = 5) -> np.ndarray:
     return t[picks]
 
 
-def steady_pairs(groups: list[DriveGroup], wall_exclusion: float = calibrate.WALL_EXCLUSION) -> pd.DataFrame:
-    """(mu, I_dem, phi) of every grid point of every steady window, away from plate and base."""
+def steady_pairs(groups: list[DriveGroup], wall_exclusion: float = calibrate.WALL_EXCLUSION,
+                 spacing: float = calibrate.PAIR_SPACING) -> pd.DataFrame:
+    """(mu, I_dem, phi) of every steady window, away from plate and base, one point per ``spacing``
+    in depth (the kernel correlates neighbouring grid points: the fit's intervals need independent ones)."""
     rows = []
     for g in groups:
         p = g.steady_profile
-        inside = (p.depth > wall_exclusion) & (p.depth < g.depth - wall_exclusion)
-        rows.append(p.loc[inside, ["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(drive=g.label))
+        inside = p[(p.depth > wall_exclusion) & (p.depth < g.depth - wall_exclusion)]
+        step = max(1, int(round(spacing / abs(np.diff(inside.y.to_numpy()[:2])[0]))))
+        rows.append(inside.iloc[::step][["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(drive=g.label))
     return pd.concat(rows, ignore_index=True)
 
 
@@ -195,10 +203,15 @@ def analyse(run_dirs, settings: CGSettings = CGSettings(), n_times: int = 60) ->
     for g in groups:
         t_end = float(g.series.t.iloc[-1])
         times = np.union1d(np.geomspace(t_end / 300, t_end, n_times), snapshot_times(g))
-        g.predictions = predict(material, g.p_w, g.depth, g.plate_mass, g.kind, g.value, times)
-        g.scales = (Scales(material, g.p_w, g.value / g.p_w) if g.kind == "stress"
-                    else Scales.for_speed(material, g.p_w, g.value))
         g.delta["delta_mu"] = delta_mu(g, material.mu_s)
+        try:
+            g.scales = (Scales(material, g.p_w, g.value / g.p_w) if g.kind == "stress"
+                        else Scales.for_speed(material, g.p_w, g.value))
+        except ValueError as err:  # e.g. tau_w >= mu_d p_w: local mu(I) has no steady state at all
+            g.prediction_note = (f"no continuum prediction: {err} (the calibrated mu(I) cannot sustain this drive: "
+                                 "the plate would accelerate forever)")
+            continue
+        g.predictions = predict(material, g.p_w, g.depth, g.plate_mass, g.kind, g.value, times)
     return {"groups": groups, "pairs": pairs, "calibration": cal, "material": material, "phi_bulk": phi,
             "mass_error": mass_error(groups[0]), "settings": settings}
 

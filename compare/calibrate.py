@@ -4,7 +4,8 @@ mu(I) = mu_s + (mu_d - mu_s)/(1 + I0/I) (paper eq. MuI) and phi(I) = phi_max - b
 scipy.optimize.curve_fit on (I, mu, phi) pooled over depth and runs from steady-state windows,
 excluding the layers within ``wall_exclusion`` of the plate and of the base (their stress and
 shear rate carry the wall's layering) and the creeping points I < ``I_min`` (local mu(I) has no
-creep).  I in the DEM convention (I_dem = |du/dy| d/sqrt(p/rho_p)); I0 is reported in both.
+creep), one point per PAIR_SPACING of depth (neighbouring kernel-smoothed points are not
+independent).  I in the DEM convention (I_dem = |du/dy| d/sqrt(p/rho_p)); I0 is reported in both.
 Intervals: 95 % from the covariance (Student t on n - 3 degrees of freedom).
 """
 from __future__ import annotations
@@ -21,6 +22,7 @@ from continuum.scales import Material
 
 WALL_EXCLUSION = 2.0  # d
 I_MIN = 1e-3
+PAIR_SPACING = 1.0  # d: one (mu, I) pair per d of depth, about the coarse-graining's correlation length
 
 
 def mu_law(I, mu_s, mu_d, I0):

@@ -20,6 +20,8 @@ DEFINITIONS = {
     "t90": "time for the running mean (5 % of the record) of u_w (imposed stress) or mu_w (imposed speed) "
            "to cover 90 % of its change; the continuum series are treated alike",
     "wall_exclusion": f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base",
+    "pressure_slope": "dp/d(depth) in rho_p g over the bulk, from the whole run's mean profile (the y momentum "
+                      "balance needs no steady state; a long average beats the force-chain noise)",
     "creep": "u/u_w of the DEM's steady profile at the continuum's delta_s, and the e-folding length of u below it",
     "units": UNITS["dem_units"],
     "inertial_number": UNITS["inertial_number"],
@@ -38,42 +40,49 @@ def t90(t, y) -> float:
 
 
 def drive_metrics(g: DriveGroup) -> dict:
-    vel, paper = g.predictions
+    """One drive's numbers: the DEM's own (always) and the comparison with the continuum (when the
+    calibrated mu(I) admits a prediction; otherwise ``prediction`` says why not)."""
+    whole = g.mean_profile
+    bulk = (whole.depth > WALL_EXCLUSION) & (whole.depth < g.depth - WALL_EXCLUSION)
+    slope = stats.linregress(whole.depth[bulk], whole.p[bulk])
     p = g.steady_profile
     inside = (p.depth > WALL_EXCLUSION) & (p.depth < g.depth - WALL_EXCLUSION)
-    slope = stats.linregress(p.depth[inside], p.p[inside])
     tau_plate = g.steady["mu_w"]["value"] * g.p_w if g.kind == "speed" else g.value
-    delta_s = vel.steady["delta_s"]
-    layer = inside & (p.depth < min(delta_s, g.depth - WALL_EXCLUSION))
-    tau_uniformity = float(np.nanmax(np.abs(p.tau[layer] - tau_plate)) / tau_plate) if layer.any() else np.nan
     steady_delta = g.delta.delta_u[g.delta.t >= 0.7 * g.delta.t.max()]
-    u_w = g.steady["u_w"]["value"]
-    below = inside & (p.depth >= delta_s) & (p.u_x > 0)
-    creep_len = -1 / stats.linregress(p.depth[below], np.log(p.u_x[below])).slope if below.sum() >= 3 else np.nan
     response = "u_w" if g.kind == "stress" else "mu_w"
-    dem_resp = g.steady[response]
-    cont_resp = vel.series[response].iloc[-1]
     expo = early_exponents(g)
     out = {
         "kind": g.kind, "imposed": g.value, "p_w": g.p_w, "seeds": len(g.folders), "grains_x_steps": g.cost,
         "pressure_slope": slope.slope, "pressure_slope_stderr": slope.stderr,
-        "tau_uniformity": tau_uniformity,
-        "u_w_inf": {"dem": u_w, "dem_stderr": g.steady["u_w"]["stderr"], "velocity_form": vel.series.u_w.iloc[-1],
-                    "paper": paper.steady["u_w"]},
-        "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_stderr": g.steady["mu_w"]["stderr"],
-                     "velocity_form": vel.series.mu_w.iloc[-1], "paper": paper.steady["mu_w"]},
-        "delta_s": {"dem": float(steady_delta.mean()), "dem_stderr": float(steady_delta.std(ddof=1) / np.sqrt(len(steady_delta)))
-                    if len(steady_delta) > 1 else np.nan, "velocity_form": vel.series.delta_u.iloc[-1],
-                    "paper": paper.series.delta_u.iloc[-1], "paper_delta_s": delta_s},
-        "rel_error_response": float(cont_resp / dem_resp["value"] - 1),
-        "t90": {"dem": t90(g.series.t, g.series[response]), "velocity_form": t90(vel.series.t, vel.series[response]),
-                "paper": t90(paper.series.t, paper.series[response])},
-        "creep_at_delta_s": float(np.interp(delta_s, p.depth[::-1], p.u_x[::-1]) / u_w) if delta_s < g.depth else np.nan,
-        "creep_length": float(creep_len),
+        "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_stderr": g.steady["u_w"]["stderr"]},
+        "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_stderr": g.steady["mu_w"]["stderr"]},
+        "delta_s": {"dem": float(steady_delta.mean()),
+                    "dem_stderr": float(steady_delta.std(ddof=1) / np.sqrt(len(steady_delta)))
+                    if len(steady_delta) > 1 else np.nan},
+        "t90": {"dem": t90(g.series.t, g.series[response])},
         "alpha_u": expo.get("alpha_u", {}).get("alpha", np.nan),
         "alpha_delta": expo.get("alpha_delta", {}).get("alpha", np.nan),
+        "prediction": g.prediction_note or "velocity form and paper's model from the calibration",
     }
+    if not g.predictions:
+        return out
+    vel, paper = g.predictions
+    delta_s = vel.steady["delta_s"]
+    layer = inside & (p.depth < min(delta_s, g.depth - WALL_EXCLUSION))
+    below = inside & (p.depth >= delta_s) & (p.u_x > 0)
+    u_w = g.steady["u_w"]["value"]
+    for name, key in (("u_w_inf", "u_w"), ("mu_w_inf", "mu_w")):
+        out[name].update({"velocity_form": vel.series[key].iloc[-1], "paper": paper.steady[key]})
+    out["delta_s"].update({"velocity_form": vel.series.delta_u.iloc[-1], "paper": paper.series.delta_u.iloc[-1],
+                           "paper_delta_s": delta_s})
+    out["t90"].update({"velocity_form": t90(vel.series.t, vel.series[response]),
+                       "paper": t90(paper.series.t, paper.series[response])})
     out["t90"]["ratio_dem_to_velocity_form"] = out["t90"]["dem"] / out["t90"]["velocity_form"]
+    out["rel_error_response"] = float(vel.series[response].iloc[-1] / g.steady[response]["value"] - 1)
+    out["tau_uniformity"] = float(np.nanmax(np.abs(p.tau[layer] - tau_plate)) / tau_plate) if layer.any() else np.nan
+    out["creep_at_delta_s"] = float(np.interp(delta_s, p.depth[::-1], p.u_x[::-1]) / u_w) if delta_s < g.depth else np.nan
+    out["creep_length"] = (float(-1 / stats.linregress(p.depth[below], np.log(p.u_x[below])).slope)
+                           if below.sum() >= 3 else np.nan)
     return out
 
 
@@ -94,17 +103,18 @@ def metrics(result: dict) -> dict:
     cal = result["calibration"]
     groups = result["groups"]
     per = {g.label: drive_metrics(g) for g in groups}
-    main = next((per[g.label] for g in groups if g.kind == "stress"), per[groups[0].label])
+    predicted = [g for g in groups if g.predictions]
+    main = next((per[g.label] for g in predicted if g.kind == "stress"), per[(predicted or groups)[0].label])
     mass = [g.profiles[0].results for g in groups]
     return _clean({
         "phi_bulk": result["phi_bulk"],
-        "pressure_slope": main["pressure_slope"],
-        "tau_uniformity": main["tau_uniformity"],
+        "pressure_slope": main.get("pressure_slope"),
+        "tau_uniformity": main.get("tau_uniformity"),
         "mass_error": result["mass_error"],
         "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
         "calibration": cal.as_dict(),
-        "u_w_inf": main["u_w_inf"], "delta_s": main["delta_s"],
-        "alpha_delta": main["alpha_delta"], "alpha_u": main["alpha_u"],
+        "u_w_inf": main["u_w_inf"], "delta_s": main.get("delta_s"),
+        "alpha_delta": main.get("alpha_delta"), "alpha_u": main.get("alpha_u"),
         "drives": per, "definitions": DEFINITIONS, "runs": sorted({str(g.run) for g in groups}),
         "frames_analysed": int(sum(len(r.steps) for r in mass)),
     })

@@ -166,7 +166,7 @@ def cost_figure(m: dict, out: Path) -> Path:
     for label, d in m["drives"].items():
         cost = d["grains_x_steps"]
         ax.loglog(cost, d["u_w_inf"]["dem_stderr"] / abs(d["u_w_inf"]["dem"]), "o", label=f"u_w_inf {label}")
-        if np.isfinite(d["delta_s"]["dem_stderr"]):
+        if d["delta_s"]["dem_stderr"] is not None and np.isfinite(d["delta_s"]["dem_stderr"]):
             ax.loglog(cost, d["delta_s"]["dem_stderr"] / d["delta_s"]["dem"], "s", label=f"delta_s {label}")
     ax.set(xlabel="grains x steps (x seeds)", ylabel="relative standard error", title="DEM cost vs noise")
     ax.legend(fontsize=7)
@@ -197,7 +197,9 @@ def write_report(run_dirs, out_dir) -> dict:
         g.delta.to_csv(out / f"delta_{stem}.csv", index=False)
         for i, p in enumerate(g.predictions):
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{i}.csv", index=False)
-        figs += [drive_figure(g, out), profiles_figure(g, result["material"], out), transient_figure(g, result["material"], out)]
+        if g.predictions:
+            figs += [drive_figure(g, out), profiles_figure(g, result["material"], out),
+                     transient_figure(g, result["material"], out)]
     first = result["groups"][0]
     t_end = float(first.series.t.iloc[-1])
     widths = width_check(first.folders[0], 0.7 * t_end, t_end)

@@ -288,8 +288,8 @@ duration = 10.0
 [output]
 plate = 0.02
 thermo = 0.2
-atoms = 0.25
-contacts = 0.25
+atoms = 0.05
+contacts = 0.05
 profiles = 0.5
 restart = 1.0
 [prepare]
@@ -320,8 +320,8 @@ mu_w_tilde = 0.5
 duration_ts = 10.0
 [output]
 plate = 0.02
-atoms = 0.25
-contacts = 0.25
+atoms = 0.1
+contacts = 0.1
 profiles = 0.2
 restart = 2.0
 """,
