@@ -23,6 +23,9 @@ DEFINITIONS = {
     "pressure_slope": "dp/d(depth) in rho_p g over the bulk, from the whole run's mean profile (the y momentum "
                       "balance needs no steady state; a long average beats the force-chain noise)",
     "creep": "u/u_w of the DEM's steady profile at the continuum's delta_s, and the e-folding length of u below it",
+    "alpha": "exponents of u_w ~ t^alpha and delta_u ~ t^alpha by least squares on log-log from the first output to "
+             "half the final value; alpha_fits gives the 95 % interval and the number of points (few points: "
+             "the DEM layer is established within a few frames, and the exponent is then undetermined)",
     "units": UNITS["dem_units"],
     "inertial_number": UNITS["inertial_number"],
 }
@@ -62,6 +65,7 @@ def drive_metrics(g: DriveGroup) -> dict:
         "t90": {"dem": t90(g.series.t, g.series[response])},
         "alpha_u": expo.get("alpha_u", {}).get("alpha", np.nan),
         "alpha_delta": expo.get("alpha_delta", {}).get("alpha", np.nan),
+        "alpha_fits": {k: {"ci95": v["ci95"], "n": v["n"]} for k, v in expo.items()},
         "prediction": g.prediction_note or "velocity form and paper's model from the calibration",
     }
     if not g.predictions:
@@ -115,6 +119,7 @@ def metrics(result: dict) -> dict:
         "calibration": cal.as_dict(),
         "u_w_inf": main["u_w_inf"], "delta_s": main.get("delta_s"),
         "alpha_delta": main.get("alpha_delta"), "alpha_u": main.get("alpha_u"),
+        "alpha_fits": main.get("alpha_fits"),
         "drives": per, "definitions": DEFINITIONS, "runs": sorted({str(g.run) for g in groups}),
         "frames_analysed": int(sum(len(r.steps) for r in mass)),
     })
