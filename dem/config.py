@@ -297,9 +297,9 @@ ke_per_grain = 1e-4
 settle_max = 25.0
 relax_max = 20.0
 """,
-    "quick": f"""# quick: the demo scene in 2D, imposed stress and the matching imposed speed; each < 5 min on 2 cores
+    "quick": f"""# quick: the demo scene in 2D, imposed stress and the matching imposed speed, 3 beds; each < 5 min on 2 cores
 name = "quick"
-seeds = [1]
+seeds = [1, 2, 3]
 [material]
 {_DISKS}[grains]
 dimension = 2
