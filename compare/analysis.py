@@ -47,6 +47,7 @@ class DriveGroup:
     steady: dict | None = None
     steady_profile: pd.DataFrame | None = None
     mean_profile: pd.DataFrame | None = None  # the whole run: hydrostatics need no steady state
+    instant: pd.DataFrame | None = None       # seed-averaged profiles of every snapshot, with depth
     delta: pd.DataFrame | None = None
     predictions: list[Prediction] = field(default_factory=list)
     scales: Scales | None = None  # the paper's scales with the calibrated material
@@ -91,11 +92,6 @@ def _ensemble_series(plates: list[PlateRecord]) -> pd.DataFrame:
     return pd.DataFrame({"t": t, **cols})
 
 
-def _surface(plate: PlateRecord, drive: DriveFolder, t) -> np.ndarray:
-    y = drive.plate()["y"].to_numpy()
-    return np.interp(t, plate.t, y) - PLATE_RADIUS * drive.d
-
-
 def analyse_drive(group: DriveGroup, settings: CGSettings) -> DriveGroup:
     group.plates = [PlateRecord.read(f.path, group.kind) for f in group.folders]
     group.series = _ensemble_series(group.plates)
@@ -111,25 +107,25 @@ def analyse_drive(group: DriveGroup, settings: CGSettings) -> DriveGroup:
     first = group.folders[0]
     grid = settings.grid_for(next(first.frames([0])))
     group.profiles = [DepthProfiles(f, settings, grid).run() for f in group.folders]
+    surface = lambda t: group.plates[0].surface(t, PLATE_RADIUS * first.d)  # noqa: E731
     t_end = group.series.t.iloc[-1]
     t0 = group.steady["t_steady"] if np.isfinite(group.steady["t_steady"]) else 0.7 * t_end
     t0 = min(t0, 0.7 * t_end)
     win = ensemble(group.profiles, t0, t_end)
-    surface = float(np.mean(_surface(group.plates[0], first, [t0, t_end])))
-    win.insert(1, "depth", surface - win.y)
+    win.insert(1, "depth", float(np.mean(surface([t0, t_end]))) - win.y)
     group.steady_profile = win
     whole = ensemble(group.profiles, float(group.profiles[0].results.t[0]), t_end)
-    whole.insert(1, "depth", float(np.mean(_surface(group.plates[0], first, group.profiles[0].results.t))) - whole.y)
+    whole.insert(1, "depth", float(np.mean(surface(group.profiles[0].results.t))) - whole.y)
     group.mean_profile = whole
     inst = ensemble(group.profiles)
+    inst.insert(3, "depth", surface(inst.t.to_numpy()) - inst.y.to_numpy())
+    group.instant = inst
     rows = []
-    for (step, t), g in inst.groupby(["step", "t"]):
-        depth = _surface(group.plates[0], first, t) - g.y.to_numpy()
-        order = np.argsort(depth)
-        inside = depth[order] >= 0
+    for t, g in inst.groupby("t"):
+        g = g[g.depth >= 0].sort_values("depth")
         u_w = float(np.interp(t, group.series.t, group.series.u_w))
         if t > 0 and u_w > 1e-2 * group.steady["u_w"]["value"]:
-            rows.append((t, depth_at_fraction(depth[order][inside], g.u_x.to_numpy()[order][inside], u_w)))
+            rows.append((t, depth_at_fraction(g.depth.to_numpy(), g.u_x.to_numpy(), u_w)))
     group.delta = pd.DataFrame(rows, columns=["t", "delta_u"])
     return group
 
@@ -138,18 +134,15 @@ def delta_mu(g: DriveGroup, mu_s: float) -> np.ndarray:
     """The paper's definition on the DEM (continuum.steady.DELTA_THRESHOLD): the first depth below
     the wall layer where (mu - mu_s)/(mu_w(t) - mu_s) falls under 1e-3, mu_s the calibrated one.
     Reported beside delta_u; single-frame mu fluctuates by more than the threshold, so it is noise-bound."""
-    inst = ensemble(g.profiles)
+    mu_w_smooth = g.series.mu_w.rolling(25, center=True, min_periods=1).mean()
     out = []
     for t in g.delta.t:
-        frame = inst[np.isclose(inst.t, t)]
-        depth = _surface(g.plates[0], g.folders[0], t) - frame.y.to_numpy()
-        order = np.argsort(depth)
-        depth, mu = depth[order], frame.mu.to_numpy()[order]
-        mu_w = float(np.interp(t, g.series.t, g.series.mu_w.rolling(25, center=True, min_periods=1).mean()))
-        keep = (depth >= calibrate.WALL_EXCLUSION) & np.isfinite(mu)
-        excess = (mu[keep] - mu_s) / (mu_w - mu_s)
+        frame = g.instant[np.isclose(g.instant.t, t)].sort_values("depth")
+        keep = (frame.depth >= calibrate.WALL_EXCLUSION) & np.isfinite(frame.mu)
+        mu_w = float(np.interp(t, g.series.t, mu_w_smooth))
+        excess = (frame.mu[keep].to_numpy() - mu_s) / (mu_w - mu_s)
         below = np.nonzero(excess < DELTA_THRESHOLD)[0]
-        out.append(float(depth[keep][below[0]]) if len(below) else np.nan)
+        out.append(float(frame.depth[keep].iloc[below[0]]) if len(below) else np.nan)
     return np.array(out)
 
 

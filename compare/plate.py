@@ -25,11 +25,16 @@ class PlateRecord:
     u_w: np.ndarray
     tau_w: np.ndarray
     p: np.ndarray
+    y: np.ndarray      # height of the plate grains' centres
 
     @classmethod
     def read(cls, drive_dir: Path, kind: str) -> "PlateRecord":
         df = pd.read_csv(Path(drive_dir) / "plate.csv")
-        return cls(kind, df.t.to_numpy(), df.u_x.to_numpy(), -df.f_x.to_numpy(), df.f_y.to_numpy())
+        return cls(kind, df.t.to_numpy(), df.u_x.to_numpy(), -df.f_x.to_numpy(), df.f_y.to_numpy(), df.y.to_numpy())
+
+    def surface(self, t, radius: float):
+        """Height of the plate's contact plane (grain centres minus their radius) at times t."""
+        return np.interp(t, self.t, self.y) - radius
 
     @property
     def mu_w(self) -> np.ndarray:

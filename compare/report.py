@@ -12,9 +12,8 @@ from continuum.scales import UNITS
 from continuum.closed_forms import SELF_SIMILAR_DELTA, self_similar_wall_speed
 from continuum.steady import steady_mu
 
-from .analysis import PLATE_RADIUS, DriveGroup, analyse, snapshot_times
+from .analysis import DriveGroup, analyse, snapshot_times
 from .checks import lammps_crosscheck, width_check
-from .profiles import ensemble
 from .calibrate import mu_law
 from .metrics import DEFINITIONS, metrics
 
@@ -109,14 +108,13 @@ def transient_figure(g: DriveGroup, material, out: Path) -> Path:
     """u, phi, p, tau, mu, I against depth at a few snapshot times: DEM (instantaneous, seed-averaged)
     solid, the velocity-form prediction at the same times dashed (its phi is the calibrated constant,
     p hydrostatic, I from the calibrated law)."""
-    inst = ensemble(g.profiles)
     vel = g.predictions[0].profiles
     fig = Figure(figsize=(16, 4.5), layout="constrained")
     axes = fig.subplots(1, 6, sharey=True)
     fields = ("u_x", "phi", "p", "tau", "mu", "I_dem")
     for k, t in enumerate(snapshot_times(g)):
-        dem = inst[np.isclose(inst.t, t)]
-        depth = float(np.interp(t, g.plates[0].t, g.folders[0].plate()["y"])) - PLATE_RADIUS - dem.y
+        dem = g.instant[np.isclose(g.instant.t, t)]
+        depth = dem.depth
         cont = vel[np.isclose(vel.t, t)]
         p = g.p_w + material.phi * material.rho_p * material.g * cont.depth
         model = {"u_x": cont.u, "phi": np.full(len(cont), material.phi), "p": p, "tau": cont.mu * p,
