@@ -56,11 +56,11 @@ def main(argv=None) -> int:
     ap.add_argument("--append", action="store_true", help="append the result to bench/RESULTS.md")
     args = ap.parse_args(argv)
     if args.drive is None and not (DEFAULT / "run" / "run.json").exists():
-        from continuum.cli import main as granstokes_main
+        from granstokes.cli import main as granstokes_main
         from dem import config
 
         DEFAULT.mkdir(parents=True, exist_ok=True)
-        text = config.PRESETS["smoke"].replace("atoms = 1.0", "atoms = 0.05")
+        text = config.preset_text("smoke").replace("atoms = 1.0", "atoms = 0.05")
         (DEFAULT / "smoke.toml").write_text(text.replace("contacts = 1.0", "contacts = 0.05"))
         argv = ["dem", "run", str(DEFAULT / "smoke.toml"), "--out", str(DEFAULT / "run"), "--quiet"]
         assert granstokes_main(argv) == 0, "the DEM run failed"

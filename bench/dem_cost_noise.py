@@ -18,13 +18,14 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from compare.analysis import analyse_drive, drive_groups
+from compare.analysis import analyse_drive, drive_specs
+from compare.plate import STEADY_WINDOW_LATEST
 from compare.profiles import CGSettings
 from dem import config
 from dem.runner import run
 
 HERE = Path(__file__).parent
-SMOKE = config.PRESETS["smoke"]
+SMOKE = config.preset_text("smoke")
 VARIANTS = {
     "2D, 40 d wide, 1 seed": SMOKE,
     "2D, 40 d wide, 3 seeds": SMOKE.replace("seeds = [1]", "seeds = [1, 2, 3]"),
@@ -48,11 +49,11 @@ def main():
                 raise RuntimeError(f"{name}: {result.status} {result.message}")
         stages = json.loads((folder / "run.json").read_text())["stages"].values()
         wall = sum(st["wall_time"] for st in stages)  # LAMMPS wall time of every stage of the run
-        (g,) = drive_groups(folder)
-        g = analyse_drive(g, CGSettings())
-        late = g.delta[g.delta.t >= 0.7 * g.delta.t.max()].delta_u
-        rows.append({"variant": name, "grains": len(g.folders[0].grains), "seeds": len(g.folders),
-                     "grains_x_steps": g.cost, "wall_s": wall, "stderr_over": g.steady["u_w"]["stderr_over"], "u_w_inf": g.steady["u_w"]["value"],
+        (spec,) = drive_specs(folder)
+        g = analyse_drive(spec, CGSettings())
+        late = g.delta[g.delta.t >= STEADY_WINDOW_LATEST * g.delta.t.max()].delta_u
+        rows.append({"variant": name, "grains": len(spec.folders[0].grains), "seeds": len(spec.folders),
+                     "grains_x_steps": spec.cost, "wall_s": wall, "stderr_over": g.steady["u_w"]["stderr_over"], "u_w_inf": g.steady["u_w"]["value"],
                      "rel_stderr_u_w_inf": g.steady["u_w"]["stderr"] / g.steady["u_w"]["value"],
                      "delta_s": late.mean(), "rel_stderr_delta_s": late.std(ddof=1) / np.sqrt(len(late)) / late.mean()})
     df = pd.DataFrame(rows)

@@ -92,7 +92,7 @@ def main() -> dict:
     res = {"machine": {"cpus": os.cpu_count()}, "lammps": info}
 
     # quick scene, stress drive shortened to 4 time units; harness run with every output
-    quick = config.PRESETS["quick"].replace("duration_ts = 10.0", "duration = 4.0")
+    quick = config.preset_text("quick").replace("duration_ts = 10.0", "duration = 4.0")
     cfg, harness = prepared_bed(quick, root / "quick")
     steps = harness.metadata["sizing"]["drives"][0]["steps"]
     prepared = root / "quick" / "seed-1" / "prepare" / "prepared.restart"
@@ -104,7 +104,7 @@ def main() -> dict:
                     "speedup_mpi2": mpi2["atom_steps_per_s"] / serial["atom_steps_per_s"]}
 
     # 2D vs 3D at the same depth
-    base = config.PRESETS["smoke"].replace("atoms = 1.0", "atoms = 100.0").replace("contacts = 1.0",
+    base = config.preset_text("smoke").replace("atoms = 1.0", "atoms = 100.0").replace("contacts = 1.0",
                                                                                    "contacts = 100.0")
     base = base.replace("width = 40.0", "width = 12.0").replace("duration = 10.0", "duration = 0.5")
     three = base.replace("dimension = 2", "dimension = 3").replace("width = 12.0", "width = 12.0\nwidth_z = 6.0")

@@ -17,7 +17,8 @@ import pandas as pd
 from scipy import stats
 from scipy.optimize import curve_fit
 
-from continuum.rheology import convert_I, require
+from continuum.rheology import convert_I, jop_law
+from granstokes.validate import require
 from continuum.scales import Material
 
 WALL_EXCLUSION = 2.0  # d
@@ -26,7 +27,8 @@ PAIR_SPACING = 1.0  # d: one (mu, I) pair per d of depth, about the coarse-grain
 
 
 def mu_law(I, mu_s, mu_d, I0):
-    return mu_s + (mu_d - mu_s) * I / (I + I0)
+    """The Jop law's value (continuum.rheology.jop_law) as curve_fit's model function."""
+    return jop_law(I, mu_s, mu_d, I0)[0]
 
 
 @dataclass(frozen=True)

@@ -40,11 +40,15 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from continuum.rheology import finite, require
+from granstokes.validate import finite, require
 
 from .kernels import KERNELS
 from .profiles import ADDITIVE, CGSettings, DepthProfiles, _nanmean, coarse_grain, derive
 from .reader import DriveFolder
+
+
+#: the cross-check's bulk: this far (d) above the lowest and below the highest grid point
+CROSSCHECK_MARGIN = 4.0
 
 
 def width_check(drive: DriveFolder, t0: float, t1: float, widths=(0.25, 0.5, 1.0, 2.0), fields=("phi", "sigma_xy"),

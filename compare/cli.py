@@ -4,16 +4,18 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from continuum.rheology import require
+from dem.layout import RUN_JSON
+from granstokes.validate import require
 
 
 def run_compare(args) -> int:
     for run in args.runs:
-        require((run / "run.json").is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
+        require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
+    from .comparison import build
     from .report import write_report
 
-    m = write_report(args.runs, args.out)
+    m = write_report(build(args.runs), args.out)
     if args.json:
         print(json.dumps(m, default=float))
     else:

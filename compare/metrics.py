@@ -7,9 +7,9 @@ from scipy import stats
 
 from continuum.scales import UNITS
 
-from .analysis import DriveGroup, early_exponents
 from .calibrate import WALL_EXCLUSION
-from .plate import STEADY_CHANGE, STEADY_WINDOW
+from .comparison import Comparison, DriveComparison, early_exponents
+from .plate import STEADY_CHANGE, STEADY_WINDOW, STEADY_WINDOW_LATEST
 
 DEFINITIONS = {
     "steady": f"running mean over {STEADY_WINDOW:.0%} of the record within max(3 stderr, "
@@ -42,20 +42,22 @@ def t90(t, y) -> float:
     return float(t[np.argmax(reached)]) if reached.any() else np.nan
 
 
-def drive_metrics(g: DriveGroup) -> dict:
+def drive_metrics(dc: DriveComparison) -> dict:
     """One drive's numbers: the DEM's own (always) and the comparison with the continuum (when the
     calibrated mu(I) admits a prediction; otherwise ``prediction`` says why not)."""
+    g, spec = dc.dem, dc.dem.spec
     whole = g.mean_profile
-    bulk = (whole.depth > WALL_EXCLUSION) & (whole.depth < g.depth - WALL_EXCLUSION)
+    bulk = (whole.depth > WALL_EXCLUSION) & (whole.depth < spec.depth - WALL_EXCLUSION)
     slope = stats.linregress(whole.depth[bulk], whole.p[bulk])
     p = g.steady_profile
-    inside = (p.depth > WALL_EXCLUSION) & (p.depth < g.depth - WALL_EXCLUSION)
-    tau_plate = g.steady["mu_w"]["value"] * g.p_w if g.kind == "speed" else g.value
-    steady_delta = g.delta.delta_u[g.delta.t >= 0.7 * g.delta.t.max()]
-    response = "u_w" if g.kind == "stress" else "mu_w"
+    inside = (p.depth > WALL_EXCLUSION) & (p.depth < spec.depth - WALL_EXCLUSION)
+    tau_plate = g.steady["mu_w"]["value"] * spec.p_w if spec.kind == "speed" else spec.value
+    steady_delta = g.delta.delta_u[g.delta.t >= STEADY_WINDOW_LATEST * g.delta.t.max()]
+    response = g.response
     expo = early_exponents(g)
     out = {
-        "kind": g.kind, "imposed": g.value, "p_w": g.p_w, "seeds": len(g.folders), "grains_x_steps": g.cost,
+        "kind": spec.kind, "imposed": spec.value, "p_w": spec.p_w, "seeds": len(spec.folders),
+        "grains_x_steps": spec.cost,
         "pressure_slope": slope.slope, "pressure_slope_stderr": slope.stderr,
         "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_stderr": g.steady["u_w"]["stderr"]},
         "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_stderr": g.steady["mu_w"]["stderr"]},
@@ -66,13 +68,13 @@ def drive_metrics(g: DriveGroup) -> dict:
         "alpha_u": expo.get("alpha_u", {}).get("alpha", np.nan),
         "alpha_delta": expo.get("alpha_delta", {}).get("alpha", np.nan),
         "alpha_fits": {k: {"ci95": v["ci95"], "n": v["n"]} for k, v in expo.items()},
-        "prediction": g.prediction_note or "velocity form and paper's model from the calibration",
+        "prediction": dc.note or "velocity form and paper's model from the calibration",
     }
-    if not g.predictions:
+    if not dc.predictions:
         return out
-    vel, paper = g.predictions
+    vel, paper = dc.predictions
     delta_s = vel.steady["delta_s"]
-    layer = inside & (p.depth < min(delta_s, g.depth - WALL_EXCLUSION))
+    layer = inside & (p.depth < min(delta_s, spec.depth - WALL_EXCLUSION))
     below = inside & (p.depth >= delta_s) & (p.u_x > 0)
     u_w = g.steady["u_w"]["value"]
     for name, key in (("u_w_inf", "u_w"), ("mu_w_inf", "mu_w")):
@@ -84,7 +86,8 @@ def drive_metrics(g: DriveGroup) -> dict:
     out["t90"]["ratio_dem_to_velocity_form"] = out["t90"]["dem"] / out["t90"]["velocity_form"]
     out["rel_error_response"] = float(vel.series[response].iloc[-1] / g.steady[response]["value"] - 1)
     out["tau_uniformity"] = float(np.nanmax(np.abs(p.tau[layer] - tau_plate)) / tau_plate) if layer.any() else np.nan
-    out["creep_at_delta_s"] = float(np.interp(delta_s, p.depth[::-1], p.u_x[::-1]) / u_w) if delta_s < g.depth else np.nan
+    out["creep_at_delta_s"] = (float(np.interp(delta_s, p.depth[::-1], p.u_x[::-1]) / u_w)
+                               if delta_s < spec.depth else np.nan)
     out["creep_length"] = (float(-1 / stats.linregress(p.depth[below], np.log(p.u_x[below])).slope)
                            if below.sum() >= 3 else np.nan)
     return out
@@ -101,25 +104,24 @@ def _clean(v):
     return v
 
 
-def metrics(result: dict) -> dict:
+def metrics(c: Comparison) -> dict:
     """metrics.json: the issue's keys at the top level (taken from the first imposed-stress drive
     where a key is per drive) and every drive's numbers under ``drives``."""
-    cal = result["calibration"]
-    groups = result["groups"]
-    per = {g.label: drive_metrics(g) for g in groups}
-    predicted = [g for g in groups if g.predictions]
-    main = next((per[g.label] for g in predicted if g.kind == "stress"), per[(predicted or groups)[0].label])
-    mass = [g.profiles[0].results for g in groups]
+    cal = c.calibration
+    per = {dc.label: drive_metrics(dc) for dc in c.drives}
+    predicted = [dc for dc in c.drives if dc.predictions]
+    main = next((per[dc.label] for dc in predicted if dc.dem.spec.kind == "stress"),
+                per[(predicted or list(c.drives))[0].label])
     return _clean({
-        "phi_bulk": result["phi_bulk"],
+        "phi_bulk": c.phi_bulk,
         "pressure_slope": main.get("pressure_slope"),
         "tau_uniformity": main.get("tau_uniformity"),
-        "mass_error": result["mass_error"],
+        "mass_error": c.mass_error,
         "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
         "calibration": cal.as_dict(),
         "u_w_inf": main["u_w_inf"], "delta_s": main.get("delta_s"),
         "alpha_delta": main.get("alpha_delta"), "alpha_u": main.get("alpha_u"),
         "alpha_fits": main.get("alpha_fits"),
-        "drives": per, "definitions": DEFINITIONS, "runs": sorted({str(g.run) for g in groups}),
-        "frames_analysed": int(sum(len(r.steps) for r in mass)),
+        "drives": per, "definitions": DEFINITIONS, "runs": [str(r) for r in c.runs],
+        "frames_analysed": int(sum(len(dc.dem.profiles[0].results.steps) for dc in c.drives)),
     })

@@ -13,38 +13,39 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from dem.layout import PLATE_CSV
+
 #: steady-state criterion (stated in every report): the running mean over 5 % of the record stays
 #: within max(3 standard errors of the final-quarter mean, 5 % of the total change) of that mean
 STEADY_WINDOW, STEADY_CHANGE = 0.05, 0.05
+#: the steady window starts at t_steady, but no later than this fraction of the record (and there
+#: when no steady state was detected): the profiles always average the final 30 % at least
+STEADY_WINDOW_LATEST = 0.7
+
+
+def steady_window_start(t_steady: float, t_end: float) -> float:
+    """Start of the window whose profiles stand for the steady state."""
+    latest = STEADY_WINDOW_LATEST * t_end
+    return min(t_steady, latest) if np.isfinite(t_steady) else latest
 
 
 @dataclass(frozen=True, eq=False)
 class PlateRecord:
-    kind: str          # "stress" or "speed"
     t: np.ndarray
     u_w: np.ndarray
     tau_w: np.ndarray
     p: np.ndarray
-    y: np.ndarray      # height of the plate grains' centres
+    y: np.ndarray      # height of the plate's centre of mass
 
     @classmethod
-    def read(cls, drive_dir: Path, kind: str) -> "PlateRecord":
-        df = pd.read_csv(Path(drive_dir) / "plate.csv")
-        return cls(kind, df.t.to_numpy(), df.u_x.to_numpy(), -df.f_x.to_numpy(), df.f_y.to_numpy(), df.y.to_numpy())
-
-    def surface(self, t, radius: float):
-        """Height of the plate's contact plane (grain centres minus their radius) at times t."""
-        return np.interp(t, self.t, self.y) - radius
+    def read(cls, drive_dir: Path) -> "PlateRecord":
+        df = pd.read_csv(Path(drive_dir) / PLATE_CSV)
+        return cls(df.t.to_numpy(), df.u_x.to_numpy(), -df.f_x.to_numpy(), df.f_y.to_numpy(), df.y.to_numpy())
 
     @property
     def mu_w(self) -> np.ndarray:
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(self.p > 0, self.tau_w / self.p, np.nan)
-
-    @property
-    def response(self) -> np.ndarray:
-        """What the drive leaves free: u_w under an imposed stress, mu_w under an imposed speed."""
-        return self.u_w if self.kind == "stress" else self.mu_w
 
 
 def steady_state(t: np.ndarray, y: np.ndarray) -> dict:

@@ -4,7 +4,7 @@ Two models, both with no parameter beyond the calibration (mu_s, mu_d, I0) and t
 p_w, phi, bed depth H and plate mass:
 
 * ``velocity form``: continuum.velocity on the DEM's scene (bed of depth H at rest, sigma_xy = 0,
-  no-slip base, plate with its mass, eps-regularised mu(I) with eps = 1e-3 U/delta_s);
+  no-slip base, plate with its mass, eps-regularised mu(I) with eps = EPS_FRACTION U/delta_s);
 * ``paper``: the stress-diffusion model (continuum.solver, semi-infinite bed truncated at delta_s,
   initial state tau = mu_s p), scaled with continuum.scales.Scales.
 
@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from continuum.crossing import crossing_depth
 from continuum.rules import YieldRule
 from continuum.scales import Material, Scales
 from continuum.solver import solve_speed, solve_stress
@@ -25,18 +26,17 @@ from continuum.steady import steady_wall_speed
 from continuum.velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 U_FRACTION = 0.05
+#: regularisation of the velocity form's predictions, eps = EPS_FRACTION U/delta_s: the creep it adds
+#: below yield scales as eps^(2/3) (tests/continuum): 1e-3 of the layer's shear rate keeps it at ~1 %
+EPS_FRACTION = 1e-3
 
 
 def depth_at_fraction(depth: np.ndarray, u: np.ndarray, u_w: float, frac: float = U_FRACTION) -> float:
-    """First depth (from the plate) where u falls below frac u_w, linearly interpolated; nan if never."""
+    """delta_u: the first depth (from the plate) where u falls below frac u_w (continuum.crossing,
+    linear); nan if never or if u_w is not a positive number."""
     if not (np.isfinite(u_w) and u_w > 0):
         return np.nan
-    below = np.nonzero(u < frac * u_w)[0]
-    if len(below) == 0 or below[0] == 0:
-        return np.nan if len(below) == 0 else float(depth[0])
-    j = below[0]
-    a, b = u[j - 1] - frac * u_w, u[j] - frac * u_w
-    return float(depth[j - 1] + a / (a - b) * (depth[j] - depth[j - 1]))
+    return crossing_depth(depth, np.asarray(u) / u_w, frac)
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +61,7 @@ def predict(material: Material, p_w: float, depth: float, plate_mass: float, kin
         sc = Scales(material, p_w, value / p_w)
     else:
         sc = Scales.for_speed(material, p_w, value)
-    rule = YieldRule(eps=1e-3 * sc.U / sc.delta_s)
+    rule = YieldRule(eps=EPS_FRACTION * sc.U / sc.delta_s)
     scene = BedScene(material, p_w, depth, plate_mass=plate_mass)
     drive = {"mu_w": value / p_w} if kind == "stress" else {"u_w": value}
     vel = solve_velocity(scene, times, rule=rule, initial="rest", numerics=VELOCITY_NUMERICS,

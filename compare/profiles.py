@@ -50,7 +50,6 @@ mean +- t_{0.975, n-1} standard error of the per-sample derived value, samples =
 """
 from __future__ import annotations
 
-import json
 import math
 import warnings
 from dataclasses import asdict, dataclass
@@ -60,10 +59,11 @@ import pandas as pd
 from MDAnalysis.analysis.base import AnalysisBase
 from scipy import stats
 
-from continuum.rheology import finite, require
+from dem.layout import BED, CONTACT_COLUMNS
+from granstokes.validate import finite, require
 
 from .kernels import Kernel
-from .reader import BED, CONTACT_COLUMNS, DriveFolder, Frame
+from .reader import DriveFolder, Frame
 
 COMPONENTS = ("xx", "yy", "zz", "xy")
 ADDITIVE = ("rho", "phi", "j_x", "j_y", "j_z", *(f"sigma_k_{c}" for c in COMPONENTS),
@@ -401,10 +401,3 @@ def ensemble(profiles: list[DepthProfiles], t0: float | None = None, t1: float |
         block.insert(0, "step", s)
         rows.append(block)
     return pd.concat(rows, ignore_index=True)
-
-
-def write(table: pd.DataFrame, meta: dict, stem) -> None:
-    """Write ``stem``.csv and ``stem``.json (metadata with units and conventions)."""
-    table.to_csv(f"{stem}.csv", index=False)
-    with open(f"{stem}.json", "w") as fh:
-        json.dump(meta, fh, indent=2, default=float)

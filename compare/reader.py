@@ -1,16 +1,6 @@
 """Drive folders of dem/ runs: metadata, per-grain table, and the atom and contact dumps streamed snapshot
-by snapshot (never a whole trajectory in memory).
-
-Layout written by ``granstokes dem run`` (dem/runner.py, dem/outputs.py)::
-
-    RUN/run.json                      metadata (dimension, dt, material, plate, p_w, ...)
-    RUN/seed-K/prepare/grains.csv     per-grain id, type, radius, mass (or grains.dump: LAMMPS text)
-    RUN/seed-K/DRIVE/atoms.dump       LAMMPS text dump: id type x y z vx vy vz radius, sorted by id
-    RUN/seed-K/DRIVE/contacts.dump    LAMMPS local dump: id1 id2 dist dx dy dz fn ft_x ft_y ft_z
-    RUN/seed-K/DRIVE/plate.csv        plate time series; profiles.csv: LAMMPS in-run chunk averages
-
-A *drive folder* is RUN/seed-K/DRIVE (any folder holding ``atoms.dump``).  Atom types (dem/scene.py):
-1 bed grains (the coarse-grained material), 2 frozen base grains, 3 plate grains (walls).
+by snapshot (never a whole trajectory in memory).  The folder layout, file names, dump columns and atom
+types are dem.layout's.  A *drive folder* is RUN/seed-K/DRIVE (any folder holding atoms.dump).
 
 Reading and precision.  Atom snapshots go through MDAnalysis (``format="LAMMPSDUMP"``), which parses
 positions and velocities as float32 and shifts positions by the box's lower corner.  ``Frame`` holds
@@ -35,9 +25,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-BED, BASE, PLATE = 1, 2, 3  # atom types (dem/scene.py)
-ATOMS, CONTACTS = "atoms.dump", "contacts.dump"
-CONTACT_COLUMNS = ("id1", "id2", "dist", "dx", "dy", "dz", "fn", "ft_x", "ft_y", "ft_z")
+from dem.layout import (ATOMS, CONTACT_COLUMNS, CONTACTS, PLATE_CSV, PROFILES_CSV, RUN_JSON, SEGMENTS,
+                        grains_table)
+
 _MARK = b"ITEM: TIMESTEP"
 _CHUNK = 1 << 24
 
@@ -144,19 +134,6 @@ class Frame:
     box: np.ndarray
 
 
-def _grains_table(drive: Path) -> pd.DataFrame:
-    for p in (drive / "grains.csv", drive / "grains.dump",
-              drive.parent / "prepare" / "grains.csv", drive.parent / "prepare" / "grains.dump"):
-        if p.exists():
-            if p.suffix == ".csv":
-                return pd.read_csv(p)
-            text = p.read_text().split("ITEM: ATOMS", 1)[1]
-            header, body = text.split("\n", 1)
-            return pd.read_csv(io.StringIO(body), sep=r"\s+", names=header.split())
-    raise FileNotFoundError(f"drive folder {drive}: no grains table (grains.csv or grains.dump here or in "
-                            f"../prepare/): needed for the grain masses and radii")
-
-
 class DriveFolder:
     """One drive of one seed: metadata, grains, plate and LAMMPS profile tables, and snapshot streams.
 
@@ -181,7 +158,7 @@ class DriveFolder:
             if not (self.path / name).exists():
                 raise FileNotFoundError(f"drive folder {self.path}: no {name} (the coarse-graining needs both "
                                         f"{ATOMS} and {CONTACTS}; was the drive run with outputs?)")
-        run_json = self.path.parent.parent / "run.json"
+        run_json = self.path.parent.parent / RUN_JSON
         self.meta = json.loads(run_json.read_text()) if run_json.exists() else {}
         cfg = self.meta.get("config", {})
         self.dimension = int(dimension or cfg.get("grains", {}).get("dimension", 0))
@@ -194,7 +171,7 @@ class DriveFolder:
         self.rho_p = float(rho_p or material.get("rho_p", 1.0))
         self.p_w = cfg.get("p_w")
         self.name = f"{self.path.parent.name}/{self.path.name}"
-        self.grains = _grains_table(self.path).set_index("id").sort_index()
+        self.grains = grains_table(self.path).set_index("id").sort_index()
         self.atoms = index_dump(self.path / ATOMS)
         self.contacts = index_dump(self.path / CONTACTS)
         if self.contacts.columns != CONTACT_COLUMNS:
@@ -252,11 +229,11 @@ class DriveFolder:
 
     def plate(self) -> pd.DataFrame:
         """plate.csv: step, t, x, y, u_x, u_y, f_x, f_y (force of the bed on the plate per area), mu_w."""
-        return pd.read_csv(self.path / "plate.csv")
+        return pd.read_csv(self.path / PLATE_CSV)
 
     def lammps_profiles(self) -> pd.DataFrame:
         """profiles.csv: LAMMPS in-run 1 d bin averages (see dem/outputs.py)."""
-        return pd.read_csv(self.path / "profiles.csv")
+        return pd.read_csv(self.path / PROFILES_CSV)
 
 
 def find_drives(*paths, **kwargs) -> list[DriveFolder]:
@@ -266,7 +243,7 @@ def find_drives(*paths, **kwargs) -> list[DriveFolder]:
     found = []
     for p in map(Path, paths):
         found += [p] if (p / ATOMS).exists() else sorted(q.parent for q in p.glob(f"**/{ATOMS}")
-                                                         if "segments" not in q.relative_to(p).parts)
+                                                         if SEGMENTS not in q.relative_to(p).parts)
     if not found:
         raise FileNotFoundError(f"no drive folder ({ATOMS}) under {', '.join(map(str, paths))}")
     return [DriveFolder(p, **kwargs) for p in sorted(set(found))]

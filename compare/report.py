@@ -11,14 +11,13 @@ from matplotlib.figure import Figure
 from continuum.scales import UNITS
 from continuum.closed_forms import SELF_SIMILAR_DELTA, self_similar_wall_speed
 from continuum.steady import steady_mu
+from granstokes.page import page
 
-from .analysis import DriveGroup, analyse, snapshot_times
-from .checks import lammps_crosscheck, width_check
+from .analysis import snapshot_times
 from .calibrate import mu_law
+from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
 
-STYLE = """body{font-family:sans-serif;max-width:1150px;margin:2em auto;line-height:1.4}
-img{max-width:100%;border:1px solid #ddd}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px}"""
 MODEL_STYLE = {0: dict(color="C1", ls="-"), 1: dict(color="C2", ls="--")}
 
 
@@ -26,34 +25,35 @@ def slug(label: str) -> str:
     return "".join(c if c.isalnum() else "_" for c in label)
 
 
-def drive_figure(g: DriveGroup, out: Path) -> Path:
+def drive_figure(dc: DriveComparison, out: Path) -> Path:
     """u_w(t), mu_w(t), delta_u(t) DEM (band over seeds) against both continuum models, and the
     steady velocity profile (log scale: creep below delta_s)."""
+    g, spec = dc.dem, dc.dem.spec
     fig = Figure(figsize=(12, 8.5), layout="constrained")
     ax = fig.subplots(2, 2).ravel()
     s = g.series
     for k, name in enumerate(("u_w", "mu_w")):
-        ax[k].plot(s.t, s[name], color="C0", lw=0.5, alpha=0.5, label=f"DEM ({len(g.folders)} seed(s))")
+        ax[k].plot(s.t, s[name], color="C0", lw=0.5, alpha=0.5, label=f"DEM ({len(spec.folders)} seed(s))")
         smooth = s[name].rolling(max(1, len(s) // 50), center=True, min_periods=1).mean()
         ax[k].plot(s.t, smooth, color="C0", lw=1.8, label="DEM, running mean (2 % of the record)")
-        if len(g.folders) > 1:
+        if len(spec.folders) > 1:
             ax[k].fill_between(s.t, s[f"{name}_lo"], s[f"{name}_hi"], color="C0", alpha=0.25, label="95 % band")
-        for i, p in enumerate(g.predictions):
+        for i, p in enumerate(dc.predictions):
             ax[k].plot(p.series.t, p.series[name], label=p.model, **MODEL_STYLE[i])
         ax[k].set(xlabel="t [sqrt(d/g)]", ylabel={"u_w": "u_w [sqrt(g d)]", "mu_w": "mu_w = tau_w/p"}[name])
-    if g.kind == "stress":
-        sc, tt = g.scales, g.predictions[0].series.t.to_numpy()
+    if spec.kind == "stress":
+        sc, tt = dc.scales, dc.predictions[0].series.t.to_numpy()
         ss = [sc.u(self_similar_wall_speed(sc.material.friction, sc.mu_w, sc.t_tilde(t))) for t in tt]
         ax[0].plot(tt, ss, color="C3", lw=0.8, ls=":", label="eq. SolutionSS (erfc), calibrated scales")
     ax[0].legend(fontsize=7)
     ax[2].plot(g.delta.t, g.delta.delta_u, "o", color="C0", label="DEM delta_u (coarse-grained u)")
-    ax[2].plot(g.delta.t, g.delta.delta_mu, "x", color="C0", alpha=0.4, ms=4,
+    ax[2].plot(g.delta.t, dc.delta_mu, "x", color="C0", alpha=0.4, ms=4,
                label="DEM delta_mu (paper's 1e-3 mu threshold: noise-bound)")
-    for i, p in enumerate(g.predictions):
+    for i, p in enumerate(dc.predictions):
         ax[2].plot(p.series.t, p.series.delta_u, label=p.model, **MODEL_STYLE[i])
-    ax[2].axhline(g.predictions[0].steady["delta_s"], color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
-    tt = g.predictions[0].series.t
-    ax[2].plot(tt, SELF_SIMILAR_DELTA * g.scales.dmu * np.sqrt(g.scales.nu_g * tt), color="C3", lw=0.8, ls=":",
+    ax[2].axhline(dc.predictions[0].steady["delta_s"], color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
+    tt = dc.predictions[0].series.t
+    ax[2].plot(tt, SELF_SIMILAR_DELTA * dc.scales.dmu * np.sqrt(dc.scales.nu_g * tt), color="C3", lw=0.8, ls=":",
                label="eq. SolutionSS: 4.65 Dmu sqrt(nu_g t) (mu threshold)")
     t = g.delta.t[g.delta.t > 0]
     if len(t):
@@ -63,40 +63,41 @@ def drive_figure(g: DriveGroup, out: Path) -> Path:
     ax[2].legend(fontsize=7)
     p = g.steady_profile
     ax[3].semilogx(p.u_x.clip(lower=1e-6), p.depth, color="C0", label="DEM steady window")
-    for i, pr in enumerate(g.predictions):
+    for i, pr in enumerate(dc.predictions):
         last = pr.profiles[pr.profiles.t == pr.profiles.t.max()]
         ax[3].semilogx(last.u.clip(lower=1e-6), last.depth, label=pr.model, **MODEL_STYLE[i])
-    ax[3].set(xlabel="u [sqrt(g d)] (log: creep)", ylabel="depth below the plate [d]", ylim=(g.depth, 0))
-    fig.suptitle(f"{g.label}: imposed {g.kind} ({'tau_w' if g.kind == 'stress' else 'u_w'} = {g.value:.4g}), "
-                 f"p_w = {g.p_w:g}; DEM units")
+    ax[3].set(xlabel="u [sqrt(g d)] (log: creep)", ylabel="depth below the plate [d]", ylim=(spec.depth, 0))
+    fig.suptitle(f"{g.label}: imposed {spec.kind} ({'tau_w' if spec.kind == 'stress' else 'u_w'} = {spec.value:.4g}), "
+                 f"p_w = {spec.p_w:g}; DEM units")
     path = out / f"drive_{slug(g.label)}.png"
     fig.savefig(path, dpi=110)
     return path
 
 
-def profiles_figure(g: DriveGroup, material, out: Path) -> Path:
+def profiles_figure(dc: DriveComparison, material, out: Path) -> Path:
     """Steady-window profiles u, phi, p, tau, mu, I (bands over seeds or frames) with the continuum's."""
+    g, spec = dc.dem, dc.dem.spec
     p = g.steady_profile
     fig = Figure(figsize=(15, 4.2), layout="constrained")
     axes = fig.subplots(1, 6, sharey=True)
     fields = ("u_x", "phi", "p", "tau", "mu", "I_dem")
-    vel = g.predictions[0]
+    vel = dc.predictions[0]
     last = vel.profiles[vel.profiles.t == vel.profiles.t.max()]
     for ax, f in zip(axes, fields):
         ax.plot(p[f], p.depth, color="C0", label="DEM")
         ax.fill_betweenx(p.depth, p[f"{f}_lo"], p[f"{f}_hi"], color="C0", alpha=0.25)
         ax.set_xlabel(f if f != "I_dem" else "I_dem = |du/dy| d/sqrt(p/rho_p)")
-    z = np.linspace(0, g.depth, 200)
+    z = np.linspace(0, spec.depth, 200)
     axes[0].plot(last.u, last.depth, **MODEL_STYLE[0], label="velocity form")
     axes[1].axvline(material.phi, **MODEL_STYLE[0])
-    axes[2].plot(g.p_w + material.phi * material.rho_p * material.g * z, z, **MODEL_STYLE[0])
-    tau_w = vel.steady["mu_w"] * g.p_w
+    axes[2].plot(spec.p_w + material.phi * material.rho_p * material.g * z, z, **MODEL_STYLE[0])
+    tau_w = vel.steady["mu_w"] * spec.p_w
     axes[3].axvline(tau_w, **MODEL_STYLE[0])
     mu = steady_mu(material.friction, vel.steady["mu_w"], z / vel.steady["delta_s"])
     axes[4].plot(mu, z, **MODEL_STYLE[0])
     axes[5].plot(material.friction.I_of_mu(mu, material.I0), z, **MODEL_STYLE[0])
     axes[5].set_xscale("log")
-    axes[0].set(ylabel="depth below the plate [d]", ylim=(g.depth, 0))
+    axes[0].set(ylabel="depth below the plate [d]", ylim=(spec.depth, 0))
     axes[0].legend(fontsize=7)
     fig.suptitle(f"{g.label}: steady profiles (kernel width and bands: see metadata); continuum from the calibration")
     path = out / f"profiles_{slug(g.label)}.png"
@@ -104,11 +105,12 @@ def profiles_figure(g: DriveGroup, material, out: Path) -> Path:
     return path
 
 
-def transient_figure(g: DriveGroup, material, out: Path) -> Path:
+def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
     """u, phi, p, tau, mu, I against depth at a few snapshot times: DEM (instantaneous, seed-averaged)
     solid, the velocity-form prediction at the same times dashed (its phi is the calibrated constant,
     p hydrostatic, I from the calibrated law)."""
-    vel = g.predictions[0].profiles
+    g, spec = dc.dem, dc.dem.spec
+    vel = dc.predictions[0].profiles
     fig = Figure(figsize=(16, 4.5), layout="constrained")
     axes = fig.subplots(1, 6, sharey=True)
     fields = ("u_x", "phi", "p", "tau", "mu", "I_dem")
@@ -116,7 +118,7 @@ def transient_figure(g: DriveGroup, material, out: Path) -> Path:
         dem = g.instant[np.isclose(g.instant.t, t)]
         depth = dem.depth
         cont = vel[np.isclose(vel.t, t)]
-        p = g.p_w + material.phi * material.rho_p * material.g * cont.depth
+        p = spec.p_w + material.phi * material.rho_p * material.g * cont.depth
         model = {"u_x": cont.u, "phi": np.full(len(cont), material.phi), "p": p, "tau": cont.mu * p,
                  "mu": cont.mu, "I_dem": material.friction.I_of_mu(cont.mu.clip(upper=material.mu_d - 1e-9),
                                                                    material.I0)}
@@ -127,7 +129,7 @@ def transient_figure(g: DriveGroup, material, out: Path) -> Path:
         ax.set_xlabel(f)
     axes[4].set_xlim(0, 1)
     axes[5].set(xscale="log", xlim=(1e-5, 2))
-    axes[0].set(ylabel="depth below the plate [d]", ylim=(g.depth, 0))
+    axes[0].set(ylabel="depth below the plate [d]", ylim=(spec.depth, 0))
     axes[0].legend(fontsize=7, title="solid DEM, dashed velocity form", title_fontsize=7)
     fig.suptitle(f"{g.label}: transient profiles (DEM units; I in the DEM convention)")
     path = out / f"transient_{slug(g.label)}.png"
@@ -135,8 +137,8 @@ def transient_figure(g: DriveGroup, material, out: Path) -> Path:
     return path
 
 
-def calibration_figure(result: dict, out: Path) -> Path:
-    cal, pairs = result["calibration"], result["pairs"]
+def calibration_figure(c: Comparison, out: Path) -> Path:
+    cal, pairs = c.calibration, c.pairs
     fig = Figure(figsize=(11, 4.2), layout="constrained")
     a, b = fig.subplots(1, 2)
     for label, g in pairs.groupby("drive"):
@@ -179,36 +181,27 @@ def _fmt(v):
     return f"{v:.4g}" if isinstance(v, (float, np.floating)) else html.escape(str(v))
 
 
-def write_report(run_dirs, out_dir) -> dict:
-    """Analyse ``run_dirs`` and write the report into ``out_dir``; returns metrics.json's dict."""
+def write_report(c: Comparison, out_dir) -> dict:
+    """Render ``c`` into ``out_dir``: metrics.json, CSV tables, figures, index.html; returns the metrics."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    result = analyse(run_dirs)
-    m = metrics(result)
+    m = metrics(c)
     (out / "metrics.json").write_text(json.dumps(m, indent=2, default=float))
-    result["pairs"].to_csv(out / "calibration_pairs.csv", index=False)
-    figs = [calibration_figure(result, out), cost_figure(m, out)]
-    for g in result["groups"]:
-        stem = slug(g.label)
+    c.pairs.to_csv(out / "calibration_pairs.csv", index=False)
+    figs = [calibration_figure(c, out), cost_figure(m, out)]
+    for dc in c.drives:
+        g, stem = dc.dem, slug(dc.label)
         g.series.to_csv(out / f"series_{stem}.csv", index=False)
         g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False)
-        g.delta.to_csv(out / f"delta_{stem}.csv", index=False)
-        for i, p in enumerate(g.predictions):
+        g.delta.assign(delta_mu=dc.delta_mu).to_csv(out / f"delta_{stem}.csv", index=False)
+        for i, p in enumerate(dc.predictions):
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{i}.csv", index=False)
-        if g.predictions:
-            figs += [drive_figure(g, out), profiles_figure(g, result["material"], out),
-                     transient_figure(g, result["material"], out)]
-    first = result["groups"][0]
-    t_end = float(first.series.t.iloc[-1])
-    widths = width_check(first.folders[0], 0.7 * t_end, t_end)
-    widths.to_csv(out / "width_check.csv", index=False)
-    cross = lammps_crosscheck(first.profiles[0])
-    cross.to_csv(out / "lammps_crosscheck.csv", index=False)
-    bulk = cross[(cross.y > first.steady_profile.y.min() + 4) & (cross.y < first.steady_profile.y.max() - 4)]
-    cross_rows = "".join(
-        f"<tr><th>{q}</th><td>{np.nanmean(np.abs(bulk[q + '_diff'])) / np.nanmean(np.abs(bulk[q + '_lammps'])):.1%}</td></tr>"
-        for q in ("phi", "u_x", "p", "tau_yx", "p_mop", "tau_mop"))
-    plateau = widths[widths.width < widths.width.max()].groupby(["field", "width"]).plateau.mean().unstack()
+        if dc.predictions:
+            figs += [drive_figure(dc, out), profiles_figure(dc, c.material, out), transient_figure(dc, c.material, out)]
+    ch = c.checks
+    ch.width.to_csv(out / "width_check.csv", index=False)
+    ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False)
+    cross_rows = "".join(f"<tr><th>{q}</th><td>{v:.1%}</td></tr>" for q, v in ch.crosscheck_bulk.items())
     rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{_fmt(v)}</td></tr>" for k, v in m.items()
                    if k not in ("drives", "definitions", "calibration", "runs"))
     drive_rows = "".join(f"<h3>{html.escape(k)}</h3><table>" + "".join(
@@ -228,14 +221,12 @@ def write_report(run_dirs, out_dir) -> dict:
                                               for k, v in DEFINITIONS.items()) + "</ul>",
         "<h2>Figures</h2>" + "".join(f"<p><img src='{f.name}' alt='{f.stem}'></p>" for f in figs),
         "<h2>Per drive</h2>" + drive_rows,
-        f"<h2>Checks of the coarse-graining ({html.escape(first.label)})</h2>"
+        f"<h2>Checks of the coarse-graining ({html.escape(ch.drive)})</h2>"
         "<p>Width check (fraction of heights where a field plateaus, |f_w - f_2w| within 5 %, going from width "
-        "w to the next; last 30 % of the run; width_check.csv):</p>" + plateau.to_html(float_format="{:.0%}".format)
+        "w to the next; last 30 % of the run; width_check.csv):</p>" + ch.plateau.to_html(float_format="{:.0%}".format)
         + "<p>Against LAMMPS's own 1 d chunk averages (profiles.csv; mean |CG - LAMMPS| / mean |LAMMPS| in the bulk; "
         "lammps_crosscheck.csv). They differ because LAMMPS bins grain centres (no kernel), puts the virial at grain "
-        "centres (no stress line) and has no wall term; the method-of-planes values are the same quantity as the "
-        "CG stress line, so p_mop and tau_mop agree best:</p><table>" + cross_rows + "</table>",
+        "centres (no stress line) and has no wall term:</p><table>" + cross_rows + "</table>",
     ]
-    (out / "index.html").write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>granstokes compare"
-                                    f"</title><style>{STYLE}</style></head><body>{''.join(body)}</body></html>")
+    (out / "index.html").write_text(page("granstokes compare", "".join(body)))
     return m

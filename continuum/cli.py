@@ -1,28 +1,15 @@
-"""The ``granstokes`` command: a thin layer over the library.
+"""``granstokes continuum``: solve the paper's problem (imposed wall stress or speed).
 
-Every error from bad input is one line on stderr naming the parameter and its valid range, with
-exit status 2, raised before any computation or file is written.
-"""
+Bad input raises ``ValueError`` naming the parameter and its range before any work; the root parser
+(granstokes.cli) prints it as one line with exit status 2."""
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 from pathlib import Path
-
 
 from .rheology import Friction, finite, require
 from .scales import UNITS
 from .solver import Numerics, Solution, check_times, solve_speed, solve_stress
-from compare.cli import register as compare_register
-from dem.cli import register as dem_register
-
-
-class OneLineParser(argparse.ArgumentParser):
-    """argparse that reports errors on a single line."""
-
-    def error(self, message):
-        self.exit(2, f"granstokes: error: {message}\n")
 
 
 def _friction_and_case(args) -> tuple[Friction, str, float]:
@@ -84,41 +71,8 @@ def plot_profiles(sol: Solution, path: Path) -> None:
     fig.savefig(path, dpi=120)
 
 
-def run_paper_figures(args) -> int:
-    from .figures import paper_figures
-
-    result = paper_figures(args.out)
-    names = sorted(k for k in result if k != "timing")
-    print(f"wrote the paper's figures into {args.out}: " + ", ".join(names))
-    return 0
-
-
-def run_demo(args) -> int:
-    from compare.demo import run_demo as demo
-
-    index = demo(args.out)
-    print(f"report: {index.resolve()}")
-    return 0
-
-
-def run_stability(args) -> int:
-    from .stability import write_stability
-    from .scales import Material
-
-    calibrated = None
-    if args.calibration is not None:
-        require(args.calibration.is_file(), "--calibration", "an existing metrics.json from granstokes compare",
-                str(args.calibration))
-        cal = json.loads(args.calibration.read_text())
-        calibrated = Material(mu_s=cal["mu_s"], mu_d=cal["mu_d"], I0=cal["I0"], I_convention=cal["I0_convention"])
-    result = write_stability(args.out, calibrated)
-    counts = result["table"].groupby(["method", "class"]).size().unstack(fill_value=0)
-    print(counts.to_string())
-    print(f"maps: {', '.join(p.name for p in result['maps'])}; well-posedness: {result['wellposedness'].name}")
-    return 0
-
-
-def add_continuum_parser(sub) -> None:
+def register(sub) -> None:
+    """Add the ``continuum`` subcommand to the ``granstokes`` parser."""
     p = sub.add_parser("continuum", help="solve the paper's problem (imposed wall stress or speed)")
     p.add_argument("--mu-s", type=float, required=True, help="static friction mu_s > 0")
     p.add_argument("--mu-d", type=float, required=True, help="dynamic friction mu_d > mu_s")
@@ -135,39 +89,3 @@ def add_continuum_parser(sub) -> None:
     p.add_argument("--rtol", type=float, default=Numerics.rtol, help="time-step tolerance (default %(default)s)")
     p.add_argument("--method", default=Numerics.method, help="time stepper: sdirk4 or tr-bdf2")
     p.set_defaults(func=run_continuum)
-
-    f = sub.add_parser("paper-figures", help="regenerate the paper's figures 1-9 (PNG + CSV)")
-    f.add_argument("--out", type=Path, required=True, help="output folder")
-    f.set_defaults(func=run_paper_figures)
-
-    s = sub.add_parser("stability", help="stability maps of every method, and the mu(I) well-posedness along the layer")
-    s.add_argument("--out", type=Path, required=True, help="output folder")
-    s.add_argument("--calibration", type=Path, help="metrics.json of a DEM calibration (mu_s, mu_d, I0, I0_convention)")
-    s.set_defaults(func=run_stability)
-
-    d = sub.add_parser("demo", help="the quick continuum-vs-DEM comparison: paper figures, quick DEM presets, report")
-    d.add_argument("--out", type=Path, default=Path("demo-out"), help="output folder (default %(default)s)")
-    d.set_defaults(func=run_demo)
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = OneLineParser(prog="granstokes", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
-    # subcommands
-    add_continuum_parser(sub)
-    dem_register(sub)
-    compare_register(sub)
-    return parser
-
-
-def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except ValueError as err:
-        print(f"granstokes: error: {err}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -10,10 +10,11 @@ The same material has I_dem = 2 I_paper, hence I0_dem = 2 I0_paper; mu_s, mu_d a
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from granstokes.validate import finite, require
 
 #: |gamma_dot| = SHEAR_RATE_FACTOR[convention] * |du/dy|
 SHEAR_RATE_FACTOR = {"paper": 0.5, "dem": 1.0}
@@ -27,14 +28,12 @@ def convert_I(value, source: str, target: str):
     return value * SHEAR_RATE_FACTOR[target] / SHEAR_RATE_FACTOR[source]
 
 
-def require(ok: bool, name: str, valid: str, value) -> None:
-    """Raise ``ValueError`` naming the parameter and its valid range unless ``ok``."""
-    if not ok:
-        raise ValueError(f"{name} must be {valid}, got {value!r}")
-
-
-def finite(x) -> bool:
-    return isinstance(x, (int, float, np.floating, np.integer)) and math.isfinite(float(x))
+def jop_law(I, mu_s, mu_d, I0):
+    """mu(I) = mu_s + (mu_d - mu_s)/(1 + I0/I) (eq. MuI, Jop et al. 2006) and its slope dmu/dI;
+    I and I0 in the same convention.  The package's one implementation of the law."""
+    I = np.asarray(I, dtype=float)
+    dmu = mu_d - mu_s
+    return mu_s + dmu * I / (I + I0), dmu * I0 / (I + I0) ** 2
 
 
 @dataclass(frozen=True)
@@ -72,10 +71,12 @@ class Friction:
         """beta_w = mu_w/mu_s - 1, the relative wall-stress surplus (eq. ShearLayerThickness)."""
         return mu_w / self.mu_s - 1.0
 
+    def mu_and_slope(self, I, I0: float):
+        """mu(I) (eq. MuI) and dmu/dI; I and I0 in the same convention."""
+        return jop_law(I, self.mu_s, self.mu_d, I0)
+
     def mu_of_I(self, I, I0: float):
-        """mu(I) = mu_s + Delta mu / (1 + I0/I) (eq. MuI); I and I0 in the same convention."""
-        I = np.asarray(I, dtype=float)
-        return self.mu_s + self.dmu * I / (I + I0)
+        return self.mu_and_slope(I, I0)[0]
 
     def I_of_mu(self, mu, I0: float):
         """Inverse of eq. MuI: I = I0 (mu - mu_s)/(mu_d - mu) for mu_s <= mu < mu_d."""

@@ -23,15 +23,17 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import brentq
 
-from .rheology import Friction, finite, require
+from granstokes.validate import finite, require
+
+from .rheology import Friction
 
 
 def wellposedness(fr: Friction, I0: float, I):
     """Barker et al. (2015) eq. 3.9 function: 4 nu^2 - 4 nu + mu^2 (1 - nu/2)^2 (< 0: well posed),
     nu = I mu'(I)/mu(I).  Convention-free (nu is invariant under I -> 2I with I0 -> 2 I0)."""
     I = np.asarray(I, dtype=float)
-    mu = fr.mu_of_I(I, I0)
-    nu = I * fr.dmu * I0 / (I + I0) ** 2 / mu
+    mu, slope = fr.mu_and_slope(I, I0)
+    nu = I * slope / mu
     return 4 * nu**2 - 4 * nu + mu**2 * (1 - nu / 2) ** 2
 
 
@@ -74,16 +76,14 @@ class ShearLaw:
         require(span is not None, "mu(I) parameters", "a law that is well posed somewhere (Barker et al. 2015)",
                 (self.fr.mu_s, self.fr.mu_d, self.I0))
         i_n = span[0]
-        mu_n = float(self.fr.mu_of_I(i_n, self.I0))
-        nu_n = i_n * self.fr.dmu * self.I0 / (i_n + self.I0) ** 2 / mu_n
+        mu_n, slope_n = map(float, self.fr.mu_and_slope(i_n, self.I0))
+        nu_n = i_n * slope_n / mu_n
         alpha = mu_n**2 / (2 * nu_n)
         return i_n, alpha, i_n * np.exp(alpha / mu_n**2)
 
     def mu_and_slope(self, I):
         """mu(I) and dmu/dI for the rule's friction law."""
-        fr, I0 = self.fr, self.I0
-        mu = fr.mu_s + fr.dmu * I / (I + I0)
-        slope = fr.dmu * I0 / (I + I0) ** 2
+        mu, slope = self.fr.mu_and_slope(I, self.I0)
         if self.rule.kind == "barker-gray":
             i_n, alpha, A = self.barker_gray
             low = I < i_n

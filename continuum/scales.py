@@ -16,7 +16,9 @@ from dataclasses import dataclass
 
 from scipy.optimize import brentq
 
-from .rheology import SHEAR_RATE_FACTOR, Friction, convert_I, finite, require
+from granstokes.validate import finite, require
+
+from .rheology import SHEAR_RATE_FACTOR, Friction, convert_I
 from .steady import steady_wall_speed
 
 UNITS = {

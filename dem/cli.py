@@ -5,7 +5,6 @@
 """
 from __future__ import annotations
 
-import argparse
 import sys
 
 from . import config as config_mod
@@ -39,7 +38,7 @@ def register(subparsers) -> None:
     r = sub.add_parser("run", help="run a scene from a TOML config or a preset",
                        description="Run a DEM scene: prepare the bed(s), then each drive; outputs in --out.")
     r.add_argument("config", nargs="?", help="TOML config file (see dem/config.py)")
-    r.add_argument("--preset", help=f"one of {sorted(config_mod.PRESETS)}")
+    r.add_argument("--preset", help=f"one of {list(config_mod.PRESETS)}")
     r.add_argument("--out", required=True, help="run folder (must be new or empty unless --resume)")
     r.add_argument("--np", type=int, default=2, help="MPI ranks (default 2)")
     r.add_argument("--resume", action="store_true", help="continue an interrupted run in --out")
@@ -47,14 +46,3 @@ def register(subparsers) -> None:
                                       "mpich wheel's mpirun)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
-
-
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="granstokes")
-    register(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(argv)
-    return args.func(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -27,7 +27,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from continuum.rheology import finite, require
+from granstokes.validate import finite, require
 from continuum.scales import Material
 
 from .contact import Contact
@@ -261,98 +261,16 @@ def load(path: str | Path) -> tuple[Config, str]:
     return parse(text), text
 
 
-# --- presets -------------------------------------------------------------------------------------
-# 2D disks with mu_p = 0.5: mu(I) estimates (da Cruz et al. 2005 style, mu_s ~ 0.28, slope ~ 1 at
-# small I); 3D spheres: the paper's glass beads.  compare/ calibrates them from steady runs.
-_DISKS = 'mu_s = 0.28\nmu_d = 0.58\nI0 = 0.3\nI_convention = "dem"\nphi = 0.8\n'
-_SPHERES = 'mu_s = 0.3839\nmu_d = 0.6494\nI0 = 0.279\nI_convention = "dem"\nphi = 0.6\n'
+# --- presets: TOML files shipped in dem/presets/, loaded by the same validator as user configs ---
+PRESET_DIR = Path(__file__).parent / "presets"
+PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
 
-PRESETS = {
-    "smoke": f"""# smoke: a few hundred disks, imposed stress above yield; CI check, < 60 s on 2 cores
-name = "smoke"
-seeds = [1]
-[material]
-{_DISKS}[grains]
-dimension = 2
-polydispersity = 0.2
-[box]
-width = 40.0
-depth = 12.0
-[load]
-p_w = 10.0
-[[drive]]
-name = "stress"
-kind = "stress"
-mu_w_tilde = 0.3
-duration = 10.0
-[output]
-plate = 0.02
-thermo = 0.2
-atoms = 0.05
-contacts = 0.05
-profiles = 0.5
-restart = 1.0
-[prepare]
-ke_per_grain = 1e-4
-settle_max = 25.0
-relax_max = 20.0
-""",
-    "quick": f"""# quick: the demo scene in 2D, imposed stress and the matching imposed speed, 3 beds; each < 5 min on 2 cores
-name = "quick"
-seeds = [1, 2, 3]
-[material]
-{_DISKS}[grains]
-dimension = 2
-polydispersity = 0.2
-[box]
-width = 32.0
-[load]
-p_w = 20.0
-[[drive]]
-name = "stress"
-kind = "stress"
-mu_w_tilde = 0.5
-duration_ts = 10.0
-[[drive]]
-name = "speed"
-kind = "speed"
-mu_w_tilde = 0.5
-duration_ts = 10.0
-[output]
-plate = 0.02
-atoms = 0.1
-contacts = 0.1
-profiles = 0.2
-restart = 2.0
-""",
-    "paper": f"""# paper: 3D spheres, mu~_w = 0.9, 0.5, 0.1 imposed stresses and the three matching speeds, 3 beds
-name = "paper"
-seeds = [1, 2, 3]
-[material]
-{_SPHERES}[grains]
-dimension = 3
-[box]
-width = 16.0
-width_z = 8.0
-[load]
-p_w = 40.0
-""" + "".join(f"""[[drive]]
-name = "{kind}-{tag}"
-kind = "{kind}"
-mu_w_tilde = {mt}
-duration_ts = 10.0
-min_duration = 20.0
-""" for kind in ("stress", "speed") for tag, mt in (("0.9", 0.9), ("0.5", 0.5), ("0.1", 0.1))) + """[output]
-plate = 0.02
-atoms = 2.0
-contacts = 10.0
-profiles = 0.5
-restart = 5.0
-""",
-}
+
+def preset_text(name: str) -> str:
+    require(name in PRESETS, "preset", f"one of {list(PRESETS)}", name)
+    return (PRESET_DIR / f"{name}.toml").read_text()
 
 
 def preset(name: str) -> tuple[Config, str]:
-    require(name in PRESETS, "preset", f"one of {sorted(PRESETS)}", name)
-    text = PRESETS[name]
+    text = preset_text(name)
     return parse(text), text

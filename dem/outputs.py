@@ -19,15 +19,16 @@ step appears once.  Files (all under the drive folder):
 """
 from __future__ import annotations
 
-import io
 import math
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from .layout import (ATOMS, CONTACTS, LOG, PLATE_CSV, PROFILE_BIN, PROFILES_CSV, dump_snapshots,
+                     snapshot_table)
+
 PROFILE_RAW = ["chunk", "y", "count", "n", "volume", "u_x", "s_xx", "s_yy", "s_zz", "s_xy", "fc_x", "fc_y"]
-BIN = 1.0  # profile bin height in d (scene.drive_script)
 
 
 def _ranges(starts: list[int]) -> list[float]:
@@ -45,31 +46,12 @@ def merge_table(frames: list[pd.DataFrame], starts: list[int]) -> pd.DataFrame:
     return pd.concat(kept, ignore_index=True) if kept else (frames[0].iloc[0:0] if frames else pd.DataFrame())
 
 
-def _snapshots(path: Path):
-    """Yield (step, text) of each snapshot of a LAMMPS text dump."""
-    if not path.exists():
-        return
-    with path.open() as fh:
-        block, step = [], None
-        for line in fh:
-            if line.startswith("ITEM: TIMESTEP"):
-                if block:
-                    yield step, "".join(block)
-                block = [line]
-                step = int(next(fh))
-                block.append(f"{step}\n")
-                continue
-            block.append(line)
-        if block:
-            yield step, "".join(block)
-
-
 def merge_dump(paths: list[Path], starts: list[int], target: Path) -> int:
     """Write the valid snapshots of per-segment dumps to ``target``; returns their number."""
     n, last = 0, -math.inf
     with target.open("w") as out:
         for path, hi in zip(paths, _ranges(starts)):
-            for step, text in _snapshots(path):
+            for step, text in dump_snapshots(path):
                 if last < step <= hi:
                     out.write(text)
                     last, n = step, n + 1
@@ -108,12 +90,12 @@ def profiles_table(raw: pd.DataFrame, plate: pd.DataFrame, every: int, dt: float
     })
     window = (plate["step"] - 1) // every * every + every  # profile output step that averages each row
     mean_plate = plate[plate["step"] > 0].groupby(window)[["f_x", "f_y"]].mean()
-    per_area = raw[["fc_x", "fc_y"]].mul(n * BIN, axis=0)  # contact force on the bin's grains per area
+    per_area = raw[["fc_x", "fc_y"]].mul(n * PROFILE_BIN, axis=0)  # contact force on the bin's grains per area
     per_area["step"], per_area["y"] = out["step"], out["y"]
     above = (per_area.sort_values(["step", "y"], ascending=[True, False])
              .groupby("step")[["fc_x", "fc_y"]].cumsum().sort_index())
     f_plate = mean_plate.reindex(out["step"]).to_numpy()
-    out["y_plane"] = out["y"] - BIN / 2
+    out["y_plane"] = out["y"] - PROFILE_BIN / 2
     out["p_mop"] = above["fc_y"].to_numpy() + f_plate[:, 1]
     out["tau_mop"] = -(above["fc_x"].to_numpy() + f_plate[:, 0])
     return out
@@ -122,32 +104,25 @@ def profiles_table(raw: pd.DataFrame, plate: pd.DataFrame, every: int, dt: float
 def merge_drive(drive_dir: Path, segments: list[Path], starts: list[int], profile_every: int, dt: float,
                 dimension: int) -> dict:
     """Assemble the drive's output files from its segments; returns a summary for run.json."""
-    plates = [pd.read_csv(s / "plate.csv") if (s / "plate.csv").exists() else pd.DataFrame(columns=["step"])
+    plates = [pd.read_csv(s / PLATE_CSV) if (s / PLATE_CSV).exists() else pd.DataFrame(columns=["step"])
               for s in segments]
     plate = merge_table(plates, starts)
     if len(plate):  # no friction coefficient while the plate is out of contact
         plate["mu_w"] = (-plate["f_x"] / plate["f_y"]).where(plate["f_y"] > 0)
-    plate.to_csv(drive_dir / "plate.csv", index=False)
+    plate.to_csv(drive_dir / PLATE_CSV, index=False)
     profiles = merge_table([read_chunk_file(s / "profiles.txt") for s in segments], starts)
-    profiles_table(profiles, plate, profile_every, dt, dimension).to_csv(drive_dir / "profiles.csv", index=False)
-    n_atoms = merge_dump([s / "atoms.dump" for s in segments], starts, drive_dir / "atoms.dump")
-    n_contacts = merge_dump([s / "contacts.dump" for s in segments], starts, drive_dir / "contacts.dump")
-    with (drive_dir / "log.lammps").open("w") as log:
+    profiles_table(profiles, plate, profile_every, dt, dimension).to_csv(drive_dir / PROFILES_CSV, index=False)
+    n_atoms = merge_dump([s / ATOMS for s in segments], starts, drive_dir / ATOMS)
+    n_contacts = merge_dump([s / CONTACTS for s in segments], starts, drive_dir / CONTACTS)
+    with (drive_dir / LOG).open("w") as log:
         for k, s in enumerate(segments):
-            if (s / "log.lammps").exists():
-                log.write((s / "log.lammps").read_text())
+            if (s / LOG).exists():
+                log.write((s / LOG).read_text())
             if (s / "in.lammps").exists():
                 name = "in.lammps" if k == 0 else f"in.resume{k}.lammps"
                 (drive_dir / name).write_text((s / "in.lammps").read_text())
     return {"plate_rows": len(plate), "last_step": int(plate["step"].max()) if len(plate) else None,
             "profile_rows": len(profiles), "atom_snapshots": n_atoms, "contact_snapshots": n_contacts}
-
-
-def snapshot_table(text: str) -> pd.DataFrame:
-    """One dump snapshot (text from ``_snapshots``) as a table named by its ITEM header."""
-    header, body = text.split("ITEM: ", 4)[-1].split("\n", 1)
-    names = header.split()[1:]
-    return pd.read_csv(io.StringIO(body), sep=r"\s+", names=names, index_col=False)
 
 
 def plane_stress(drive_dir: Path, planes, area: float) -> pd.DataFrame:
@@ -158,10 +133,10 @@ def plane_stress(drive_dir: Path, planes, area: float) -> pd.DataFrame:
     (ft_x, ft_y, ft_z) on grain 1).  In a static region p_yy is exactly p_w plus the weight above per
     area; the kinetic momentum flux is not included.  Needs atom and contact snapshots at the same steps.
     """
-    atoms = {step: text for step, text in _snapshots(drive_dir / "atoms.dump")}
+    atoms = {step: text for step, text in dump_snapshots(drive_dir / ATOMS)}
     planes = np.asarray(planes, dtype=float)
     rows = []
-    for step, text in _snapshots(drive_dir / "contacts.dump"):
+    for step, text in dump_snapshots(drive_dir / CONTACTS):
         if step not in atoms:
             continue
         y = snapshot_table(atoms[step]).set_index("id")["y"]
@@ -176,10 +151,3 @@ def plane_stress(drive_dir: Path, planes, area: float) -> pd.DataFrame:
         rows.append(pd.DataFrame({"step": step, "y": planes, "p_yy": crossing @ f_up[:, 1] / area,
                                   "tau_xy": -(crossing @ f_up[:, 0]) / area}))
     return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=["step", "y", "p_yy", "tau_xy"])
-
-
-def grains_table(dump: Path) -> pd.DataFrame:
-    """The one-off per-grain table (id, type, radius, mass) from ``write_dump`` text."""
-    text = dump.read_text().split("ITEM: ATOMS", 1)[1]
-    header, body = text.split("\n", 1)
-    return pd.read_csv(io.StringIO(body), sep=r"\s+", names=header.split())

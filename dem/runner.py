@@ -1,14 +1,6 @@
 """Run a DEM scene: prepare one bed per seed, then every drive from it, as LAMMPS subprocesses.
 
-Run folder::
-
-    OUT/config.toml                 the config as given (presets: the preset text)
-    OUT/run.json                    metadata: status, units, conventions, contact law, sizing, provenance
-    OUT/seed-S/prepare/             prepare.in, log.lammps, prepared.restart, grains.csv (id, type, radius, mass)
-    OUT/seed-S/<drive>/             plate.csv, profiles.csv, atoms.dump, contacts.dump, log.lammps
-    OUT/seed-S/<drive>/restart/     drive.<step>.restart (latest kept), segments/NNN/ (raw LAMMPS output
-                                    of each start/resume, removed once the drive completes)
-
+The run folder's layout is dem.layout's.
 LAMMPS runs under the mpich wheel's ``mpirun -np N`` (or a ``launcher`` template such as
 ``srun -n {np}``), its screen output feeding a tqdm bar.  A failed, killed or interrupted run leaves
 run.json saying what happened and the outputs assembled up to that point; ``resume=True`` continues
@@ -18,10 +10,8 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as _dt
-import importlib.metadata
 import json
 import os
-import platform
 import re
 import shlex
 import shutil
@@ -35,10 +25,10 @@ from pathlib import Path
 from tqdm import tqdm
 
 from continuum.scales import UNITS
+from granstokes.provenance import provenance
 
-from . import lammps_env, outputs, scene
+from . import lammps_env, layout, outputs, scene
 from .config import Config, parse
-from .contact import grain_mass
 from .sizing import DrivePlan, Plan, plan
 
 _THERMO = re.compile(r"^\s*(\d+)\s+(\S+)")
@@ -177,18 +167,6 @@ def _stop(proc: subprocess.Popen) -> None:
             proc.wait()
 
 
-def _git_hash() -> str | None:
-    try:
-        root = Path(__file__).resolve().parent.parent
-        out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
-                             timeout=10)
-        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-        return out.stdout.strip() + ("-dirty" if dirty else "") if out.returncode == 0 else None
-    except (OSError, subprocess.SubprocessError):
-        return None
-
-
 def _write_json(path: Path, data: dict) -> None:
     tmp = path.with_suffix(".json.tmp")
     tmp.write_text(json.dumps(data, indent=2, default=str))
@@ -196,7 +174,7 @@ def _write_json(path: Path, data: dict) -> None:
 
 
 def _last_plate_step(segment: Path) -> int:
-    path = segment / "plate.csv"
+    path = segment / layout.PLATE_CSV
     if not path.exists():
         return -1
     lines = path.read_text().splitlines()
@@ -209,7 +187,7 @@ def _last_plate_step(segment: Path) -> int:
 
 def _restarts(drive_dir: Path) -> list[tuple[int, Path]]:
     found = []
-    for p in (drive_dir / "restart").glob("drive.*.restart"):
+    for p in (drive_dir / layout.RESTART_DIR).glob("drive.*.restart"):
         m = re.fullmatch(r"drive\.(\d+)\.restart", p.name)
         if m and p.stat().st_size > 0:
             found.append((int(m.group(1)), p))
@@ -223,13 +201,11 @@ class Runner:
         self.plan = plan(cfg)
         self.cfg, self.text, self.out = cfg, text, Path(out)
         self.lmp = _Lammps(np_, launcher, progress)
-        self.meta_path = self.out / "run.json"
+        self.meta_path = self.out / layout.RUN_JSON
 
     # --- metadata --------------------------------------------------------------------------------
     def new_metadata(self) -> dict:
         p = self.plan
-        plate_nx, plate_nz, _, _ = scene.plate_layout(p)
-        plate_mass = plate_nx * plate_nz * grain_mass(1.0, p.dimension)
         return {
             "name": self.cfg.name, "status": "running", "message": "",
             "units": "DEM units: d = rho_p = g = 1 (see conventions)",
@@ -237,13 +213,10 @@ class Runner:
             "config": self.cfg.as_dict(),
             "contact": self.cfg.contact.as_dict(),
             "sizing": p.as_dict(),
-            "plate": {"grains": plate_nx * plate_nz, "mass": plate_mass, "mass_per_area": plate_mass / p.area,
-                      "area": p.area},
+            "plate": scene.plate_geometry(p),
             "seeds": list(self.cfg.seeds),
             "provenance": {
-                "granstokes": importlib.metadata.version("granstokes"), "git": _git_hash(),
-                **lammps_env.lammps_info(), "python": platform.python_version(), "host": platform.node(),
-                "machine": platform.machine(), "cpus": os.cpu_count(), "np": self.lmp.np,
+                **provenance(), **lammps_env.lammps_info(), "np": self.lmp.np,
                 "launcher": shlex.join(self.lmp.prefix()) or "(none: one rank)",
                 "lmp": str(lammps_env.lmp_binary()),
             },
@@ -255,8 +228,8 @@ class Runner:
 
     # --- stages ----------------------------------------------------------------------------------
     def prepare(self, seed: int, meta: dict) -> Path:
-        key, d = f"seed-{seed}", self.out / f"seed-{seed}" / "prepare"
-        restart = d / "prepared.restart"
+        key, d = layout.stage_key(seed), layout.prepare_dir(self.out, seed)
+        restart = d / layout.PREPARED_RESTART
         if meta["stages"].get(key, {}).get("status") == "complete" and restart.exists():
             return restart
         if d.exists():
@@ -273,8 +246,8 @@ class Runner:
         relaxed = [ph for ph in info["phases"] if ph.startswith("relaxed")]
         values = dict(kv.split("=") for kv in relaxed[-1].split()[1:]) if relaxed else {}
         ke = float(values.get("ke_grain", "nan"))
-        outputs.grains_table(d / "grains.dump").to_csv(d / "grains.csv", index=False)
-        (d / "grains.dump").unlink()
+        layout.grains_table(d).to_csv(d / layout.GRAINS_CSV, index=False)
+        (d / layout.GRAINS_DUMP).unlink()
         st.info = {"ke_per_grain": ke, "relaxed": ke < c.ke_per_grain, "plate_y": float(values.get("plate_y", "nan")),
                    "threshold": c.ke_per_grain, "lammps": info}
         st.status = "complete"
@@ -285,13 +258,14 @@ class Runner:
         return restart
 
     def drive(self, seed: int, dp: DrivePlan, prepared: Path, meta: dict) -> None:
-        key = f"seed-{seed}/{dp.drive.name}"
-        d = self.out / f"seed-{seed}" / dp.drive.name
+        key = layout.stage_key(seed, dp.drive.name)
+        d = layout.drive_dir(self.out, seed, dp.drive.name)
         old = meta["stages"].get(key, {})
         if old.get("status") == "complete":
             return
-        (d / "restart").mkdir(parents=True, exist_ok=True)
-        segments = sorted((d / "segments").glob("[0-9][0-9][0-9]")) if (d / "segments").exists() else []
+        (d / layout.RESTART_DIR).mkdir(parents=True, exist_ok=True)
+        segdir = d / layout.SEGMENTS
+        segments = sorted(segdir.glob("[0-9][0-9][0-9]")) if segdir.exists() else []
         starts = [json.loads((s / "segment.json").read_text())["start"] for s in segments]
         # a restart file is complete once LAMMPS wrote output past it (a kill may cut a write short)
         seen = max((_last_plate_step(s) for s in segments), default=-1)
@@ -300,7 +274,7 @@ class Runner:
         for s, p in _restarts(d):
             if s > start:
                 p.unlink()
-        seg = d / "segments" / f"{len(segments):03d}"
+        seg = segdir / f"{len(segments):03d}"
         seg.mkdir(parents=True)
         rel = os.path.relpath(restart, seg)
         (seg / "in.lammps").write_text(scene.drive_script(self.plan, dp, rel, fresh=(start == 0)))
@@ -320,7 +294,7 @@ class Runner:
         st.status, st.message = "complete", f"{dp.steps} steps ({dp.duration:.4g} time units)"
         for _, p in _restarts(d)[:-1]:
             p.unlink()
-        shutil.rmtree(d / "segments")
+        shutil.rmtree(segdir)
         meta["stages"][key] = dataclasses.asdict(st)
         self.save(meta)
 
@@ -378,13 +352,13 @@ def run(cfg: Config, text: str, out: str | Path, np: int = 2, resume: bool = Fal
     out = Path(out)
     runner = Runner(cfg, text, out, np, launcher, progress)  # sizing: raises on loads outside mu(I)
     lammps_env.lmp_binary(), lammps_env.mpirun()
-    meta_path = out / "run.json"
+    meta_path = out / layout.RUN_JSON
     if resume:
         if not meta_path.exists():
             raise ValueError(f"--resume needs an existing run folder with run.json, {out} has none")
-        stored = parse((out / "config.toml").read_text())
+        stored = parse((out / layout.CONFIG_TOML).read_text())
         if stored.as_dict() != cfg.as_dict():
-            raise ValueError(f"--resume: the config differs from the one stored in {out / 'config.toml'}")
+            raise ValueError(f"--resume: the config differs from the one stored in {out / layout.CONFIG_TOML}")
         meta = json.loads(meta_path.read_text())
         meta["status"], meta["message"] = "running", ""
         meta.setdefault("resumes", []).append(_now())
@@ -393,7 +367,7 @@ def run(cfg: Config, text: str, out: str | Path, np: int = 2, resume: bool = Fal
             raise ValueError(f"output folder {out} is not empty: choose a new --out or pass --resume")
         meta = runner.new_metadata()  # queries the LAMMPS library: fails before anything is written
         out.mkdir(parents=True, exist_ok=True)
-        (out / "config.toml").write_text(text)
+        (out / layout.CONFIG_TOML).write_text(text)
     runner.save(meta)
     previous = signal.getsignal(signal.SIGTERM)
     in_main = threading.current_thread() is threading.main_thread()

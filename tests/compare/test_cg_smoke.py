@@ -24,7 +24,7 @@ import pytest
 from compare.checks import lammps_crosscheck, width_check
 from compare.profiles import CGSettings, DepthProfiles
 from compare.reader import find_drives
-from continuum.cli import main as granstokes_main
+from granstokes.cli import main as granstokes_main
 from dem import config
 
 pytestmark = pytest.mark.slow
@@ -34,7 +34,7 @@ T0, T1 = 5.0, 10.0
 @pytest.fixture(scope="module")
 def smoke(tmp_path_factory):
     root = tmp_path_factory.mktemp("cg")
-    text = re.sub(r"(?m)^(atoms|contacts) = .*$", r"\1 = 0.05", config.PRESETS["smoke"])
+    text = re.sub(r"(?m)^(atoms|contacts) = .*$", r"\1 = 0.05", config.preset_text("smoke"))
     (root / "smoke.toml").write_text(text)
     assert granstokes_main(["dem", "run", str(root / "smoke.toml"), "--out", str(root / "run"), "--quiet"]) == 0
     (drive,) = find_drives(root / "run")

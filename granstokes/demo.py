@@ -9,11 +9,13 @@ import json
 import time
 from pathlib import Path
 
-from continuum.report import write_continuum_report
+from compare.comparison import build
+from compare.report import slug, write_report
+from continuum.paper.report import write_continuum_report
 from dem import config as dem_config
 from dem.runner import run as dem_run
 
-from .report import slug, write_report
+from .page import page
 
 
 def _dem(preset: str, run_dir: Path) -> Path:
@@ -40,17 +42,15 @@ def run_demo(out_dir, presets: tuple[str, ...] = ("quick", "smoke")) -> Path:
     run_dirs = [_dem(preset, out / f"dem-{preset}") for preset in presets]
     clock["dem"] = time.perf_counter() - start
     start = time.perf_counter()
-    m = write_report(run_dirs, out / "compare")
+    m = write_report(build(run_dirs), out / "compare")
     clock["compare"] = time.perf_counter() - start
     keys = ("phi_bulk", "pressure_slope", "mu_s", "mu_d", "I0", "alpha_u", "alpha_delta")
     rows = "".join(f"<tr><th>{k}</th><td>{m[k]:.4g}</td></tr>" for k in keys if m.get(k) is not None)
     timing = ", ".join(f"{k} {v:.0f} s" for k, v in clock.items())
-    page = (f"<!doctype html><html><head><meta charset='utf-8'><title>granstokes demo</title></head>"
-            f"<body style='font-family:sans-serif;max-width:900px;margin:2em auto'><h1>granstokes demo</h1>"
-            f"<ul><li><a href='compare/index.html'>continuum vs DEM ({html.escape(', '.join(presets))} presets)</a></li>"
+    body = (f"<h1>granstokes demo</h1><ul><li><a href='compare/index.html'>continuum vs DEM ({html.escape(', '.join(presets))} presets)</a></li>"
             f"<li><a href='continuum/index.html'>continuum: the paper's figures regenerated</a></li></ul>"
             f"<table>{rows}</table><p>Wall time: {html.escape(timing)}.</p>"
-            f"<p><img src='compare/drive_{slug(run_dirs[0].name + '/stress')}.png' style='max-width:100%'></p></body></html>")
+            f"<p><img src='compare/drive_{slug(str(run_dirs[0]) + '/stress')}.png' alt='quick preset, imposed stress'></p>")
     index = out / "index.html"
-    index.write_text(page)
+    index.write_text(page("granstokes demo", body))
     return index

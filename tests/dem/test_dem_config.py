@@ -7,12 +7,13 @@ import shlex
 import pandas as pd
 import pytest
 
-from dem import cli, config, lammps_env, outputs
+from dem import config, lammps_env, layout, outputs
 from dem.contact import Contact, grain_mass
 from dem.runner import run
 from dem.sizing import plan
+from granstokes.cli import main as granstokes_main
 
-SMOKE = config.PRESETS["smoke"]
+SMOKE = config.preset_text("smoke")
 
 
 def with_line(text: str, table: str, line: str) -> str:
@@ -66,14 +67,14 @@ def test_unknown_preset_and_cli_errors_write_nothing(tmp_path, capsys):
     with pytest.raises(ValueError, match="preset must be one of"):
         config.preset("huge")
     out = tmp_path / "out"
-    assert cli.main(["dem", "run", "--preset", "huge", "--out", str(out)]) == 2
+    assert granstokes_main(["dem", "run", "--preset", "huge", "--out", str(out)]) == 2
     assert "preset must be one of ['paper', 'quick', 'smoke']" in capsys.readouterr().err
     bad = tmp_path / "bad.toml"
     bad.write_text(SMOKE.replace("p_w = 10.0", "p_w = -1.0"))
-    assert cli.main(["dem", "run", str(bad), "--out", str(out)]) == 2
+    assert granstokes_main(["dem", "run", str(bad), "--out", str(out)]) == 2
     assert "load.p_w must be a finite number > 0, got -1.0" in capsys.readouterr().err
-    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--np", "0"]) == 2
-    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume"]) == 2
+    assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--np", "0"]) == 2
+    assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume"]) == 2
     assert not out.exists()
 
 
@@ -114,7 +115,7 @@ def test_merge_keeps_every_step_once(tmp_path):
         path.write_text("".join(f"ITEM: TIMESTEP\n{s}\nITEM: NUMBER OF ATOMS\n1\nseg {i}\n" for s in steps))
         dumps.append(path)
     assert outputs.merge_dump(dumps, [0, 20], tmp_path / "all.dump") == 4
-    snapshots = list(outputs._snapshots(tmp_path / "all.dump"))
+    snapshots = list(layout.dump_snapshots(tmp_path / "all.dump"))
     assert [s for s, _ in snapshots] == [0, 20, 40, 60]
     assert "seg 0" in snapshots[1][1] and "seg 1" in snapshots[2][1]
 
@@ -138,7 +139,7 @@ def test_lammps_failures_are_explained_in_run_json(tmp_path, script, code, messa
     assert message in meta["message"] and message in meta["stages"]["seed-1"]["message"]
     assert meta["stages"]["seed-1"]["status"] == "failed"
     assert (out / "config.toml").read_text() == text and (out / "seed-1" / "prepare" / "prepare.in").exists()
-    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume", "--quiet",
+    assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume", "--quiet",
                      "--launcher", launcher]) == code
 
 
@@ -154,6 +155,6 @@ def test_missing_mpi_wheel_fails_before_writing(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setattr(lammps_env, "mpirun", missing)
     out = tmp_path / "out"
-    assert cli.main(["dem", "run", "--preset", "smoke", "--out", str(out), "--quiet"]) == 2
+    assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--quiet"]) == 2
     assert "the 'mpich' wheel is not installed" in capsys.readouterr().err
     assert not out.exists()

@@ -1,13 +1,15 @@
 """Stability map: the explicit scheme's derived bound, and the classification of runs."""
 import math
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from continuum.mesh import Mesh
 from continuum.problems import ImposedStress
 from continuum.scales import Material
-from continuum.stability import MethodMap, explicit_bound, plot_maps, stability_table
+from continuum.paper.stability import METHODS, explicit_bound, plot_maps, stability_table
 from continuum.stepper import explicit_euler
 
 FR = Material().friction
@@ -57,9 +59,9 @@ def test_classification_and_maps(tmp_path):
     """A small map: SDIRK4 converges at order ~2 on fine meshes and is inaccurate on the coarsest;
     explicit Euler blows up at 2 dt* and is stable at dt*/2, with the first-order error of ~1e-3
     that its time step (dt* ~ h^2/(2 Dmu^2)) leaves after the singular start."""
-    methods = (MethodMap("stress SDIRK4 (adaptive)", "mu_w_tilde", (0.5,), "n_cells", (25, 100), (50, 200)),
-               MethodMap("stress explicit Euler (dt / dt*)", "mu_w_tilde", (0.5,), "dt/dt*", (2.0, 0.5), (1.0, 0.25),
-                         design_order=1.0))
+    sdirk4, euler = (replace(m, params=(0.5,), values=v, refine=r) for m, v, r in
+                     ((METHODS[0], (25, 100), (50, 200)), (METHODS[2], (2.0, 0.5), (1.0, 0.25))))
+    methods = (sdirk4, euler)
     table = stability_table(FR, methods)
     sdirk = table[table.method.str.startswith("stress SDIRK4")].set_index("axis_value")
     assert sdirk.loc[25, "class"] == "inaccurate" and sdirk.loc[100, "class"] == "converged"

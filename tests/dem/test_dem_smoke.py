@@ -10,8 +10,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from continuum.cli import main as granstokes_main  # the `granstokes` console script
-from dem import cli, config, outputs
+from dem import config, layout, outputs
+from granstokes.cli import main as granstokes_main  # the `granstokes` console script
 
 pytestmark = pytest.mark.slow
 
@@ -35,14 +35,14 @@ def test_smoke_completes_fast_with_metadata(smoke):
     assert meta["contact"]["dt_max"] == pytest.approx(meta["contact"]["t_c"] / 20)
     assert meta["sizing"]["dt"] <= meta["contact"]["dt_max"]
     assert meta["provenance"]["lammps_version"] > 0 and meta["plate"]["mass_per_area"] > 0
-    assert (out / "config.toml").read_text() == config.PRESETS["smoke"]
+    assert (out / "config.toml").read_text() == config.preset_text("smoke")
 
 
 def test_no_grain_lost(smoke):
     out, _ = smoke
     grains = pd.read_csv(out / "seed-1" / "prepare" / "grains.csv")
     counts = {int(text.split("NUMBER OF ATOMS\n")[1].split()[0])
-              for _, text in outputs._snapshots(out / "seed-1" / "stress" / "atoms.dump")}
+              for _, text in layout.dump_snapshots(out / "seed-1" / "stress" / "atoms.dump")}
     assert counts == {len(grains)}
 
 
@@ -76,12 +76,12 @@ def test_plate_moves_and_accelerates_above_yield(smoke):
 def test_killed_run_resumes_with_continuous_output(tmp_path):
     """SIGKILL the whole run (runner and LAMMPS) mid-drive, resume, and find every output step once
     (the smoke scene, narrower and longer so that the kill lands mid-drive)."""
-    text = config.PRESETS["smoke"].replace("duration = 10.0", "duration = 20.0").replace("width = 40.0",
+    text = config.preset_text("smoke").replace("duration = 10.0", "duration = 20.0").replace("width = 40.0",
                                                                                          "width = 16.0")
     cfg_path = tmp_path / "smoke-long.toml"
     cfg_path.write_text(text)
     out = tmp_path / "run"
-    args = [sys.executable, "-m", "dem.cli", "dem", "run", str(cfg_path), "--out", str(out), "--quiet"]
+    args = [sys.executable, "-m", "granstokes.cli", "dem", "run", str(cfg_path), "--out", str(out), "--quiet"]
     proc = subprocess.Popen(args, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     plate = out / "seed-1" / "stress" / "segments" / "000" / "plate.csv"
     deadline = time.monotonic() + 60
@@ -92,7 +92,7 @@ def test_killed_run_resumes_with_continuous_output(tmp_path):
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     assert json.loads((out / "run.json").read_text())["status"] == "running"
-    assert cli.main(["dem", "run", str(cfg_path), "--out", str(out), "--resume", "--quiet"]) == 0
+    assert granstokes_main(["dem", "run", str(cfg_path), "--out", str(out), "--resume", "--quiet"]) == 0
     meta = json.loads((out / "run.json").read_text())
     info = meta["stages"]["seed-1/stress"]["info"]
     assert meta["status"] == "complete" and info["segments"] == 2 and info["resumed_from_step"] > 0
@@ -101,7 +101,7 @@ def test_killed_run_resumes_with_continuous_output(tmp_path):
     every = meta["sizing"]["intervals_steps"]["plate"]
     assert steps[0] == 0 and np.all(np.diff(steps) == every)
     assert steps[-1] == meta["sizing"]["drives"][0]["steps"] // every * every
-    snaps = [s for s, _ in outputs._snapshots(out / "seed-1" / "stress" / "atoms.dump")]
+    snaps = [s for s, _ in layout.dump_snapshots(out / "seed-1" / "stress" / "atoms.dump")]
     assert np.all(np.diff(snaps) == meta["sizing"]["intervals_steps"]["atoms"]) and snaps[0] == 0
     prof = pd.read_csv(out / "seed-1" / "stress" / "profiles.csv")
     assert np.all(np.diff(np.unique(prof["step"])) == meta["sizing"]["intervals_steps"]["profiles"])
@@ -115,7 +115,7 @@ def test_contact_dump_balances_the_static_bed(smoke):
     out, _ = smoke
     d = out / "seed-1" / "stress"
     area = json.loads((out / "run.json").read_text())["plate"]["area"]
-    atoms = outputs.snapshot_table(next(outputs._snapshots(d / "atoms.dump"))[1])
+    atoms = layout.snapshot_table(next(layout.dump_snapshots(d / "atoms.dump"))[1])
     grains = pd.read_csv(out / "seed-1" / "prepare" / "grains.csv").set_index("id")
     plate_y = atoms.loc[atoms["type"] == 3, "y"].mean()
     planes = np.arange(4.0, plate_y - 2.0, 1.0)

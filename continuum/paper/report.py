@@ -9,15 +9,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .closed_forms import SELF_SIMILAR_DELTA, UWALL_MUS_PRINTED_B2, WKB, uwall_asymp, uwall_mus
+from ..closed_forms import SELF_SIMILAR_DELTA, UWALL_MUS_PRINTED_B2, WKB, uwall_asymp, uwall_mus
 from .figures import FRICTION, paper_figures
-from .scales import UNITS
-from .solver import solve_speed, solve_stress
-from .steady import steady_wall_speed
+from ..scales import UNITS
+from ..solver import solve_speed, solve_stress
+from ..steady import steady_wall_speed
+from granstokes.page import page
 
-STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.4}
-img{max-width:100%;border:1px solid #ddd}table{border-collapse:collapse}
-td,th{border:1px solid #ccc;padding:3px 8px}"""
 
 
 def table_html(df: pd.DataFrame, caption: str) -> str:
@@ -89,10 +87,8 @@ def write_continuum_report(out_dir) -> Path:
             "<h2>The paper's figures, regenerated</h2>"]
     for name, png in sorted(pngs.items()):
         body.append(f"<h3>{html.escape(name)}</h3><img src='{figs_dir.name}/{png.name}' alt='{html.escape(name)}'>")
-    page = f"<!doctype html><html><head><meta charset='utf-8'><title>granstokes continuum</title>" \
-           f"<style>{STYLE}</style></head><body>{''.join(body)}</body></html>"
     index = out / "index.html"
-    index.write_text(page)
+    index.write_text(page("granstokes continuum", "".join(body)))
     (out / "continuum_report.json").write_text(json.dumps({"figures": {k: str(v) for k, v in pngs.items()},
                                                            "timing": result["timing"], "units": UNITS}, indent=2))
     return index

@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 
 from continuum.closed_forms import SELF_SIMILAR_DELTA
-from continuum.figures import FRICTION, paper_figures
+from continuum.paper.figures import FRICTION, paper_figures
 from continuum.steady import mu_w_for_speed, steady_delta
 
 

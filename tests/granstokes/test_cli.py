@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from continuum.cli import main
+from granstokes.cli import main
 from continuum.steady import mu_w_for_speed
 
 BEADS = ["--mu-s", str(np.tan(np.radians(21))), "--mu-d", str(np.tan(np.radians(33)))]
@@ -101,7 +101,7 @@ def test_bad_friction_and_usage_errors(capsys, argv, needle):
 
 def test_console_script_exit_status(tmp_path):
     """The installed entry point: non-zero status and one stderr line on bad input."""
-    proc = subprocess.run([sys.executable, "-m", "continuum.cli", "continuum", *BEADS, "--u-w", "-1",
+    proc = subprocess.run([sys.executable, "-m", "granstokes.cli", "continuum", *BEADS, "--u-w", "-1",
                            "--times", "1"], capture_output=True, text=True, cwd=tmp_path)
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.strip() == "granstokes: error: u_w must be a finite number > 0, got -1.0"
@@ -120,3 +120,26 @@ def test_save_writes_pandas_readable_tables_and_metadata(capsys, tmp_path):
     assert wall.u.to_numpy() == pytest.approx([1.334, 1.334], rel=1e-9)  # the imposed speed, at the wall
     assert series.u_w.iloc[1:].to_numpy() == pytest.approx(1.334, rel=1e-8)
     assert meta["units"]["inertial_number"].startswith("paper:") and meta["stats"]["steps"] == len(series) - 1
+
+
+def test_version_names_the_package_and_the_commit(capsys):
+    from granstokes import __version__
+    from granstokes.provenance import git_hash
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    out = capsys.readouterr().out.strip()
+    assert out == f"granstokes {__version__} (git {git_hash() or 'unknown'})" and __version__ != "0+unknown"
+
+
+def test_layering_no_package_imports_the_one_above():
+    """continuum/ imports neither dem nor compare; dem/ does not import compare (issue 8)."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    rules = {"continuum": r"^\s*(from|import) (dem|compare)\b", "dem": r"^\s*(from|import) compare\b"}
+    for package, pattern in rules.items():
+        offenders = [str(p) for p in (root / package).rglob("*.py") if re.search(pattern, p.read_text(), re.M)]
+        assert offenders == []

@@ -8,7 +8,7 @@ import pytest
 from compare.calibrate import fit, mu_law
 from compare.plate import power_law, steady_state
 from compare.predict import depth_at_fraction
-from continuum.cli import main as granstokes_main
+from granstokes.cli import main as granstokes_main
 
 
 def test_calibration_recovers_a_known_law_within_its_interval():

@@ -22,22 +22,23 @@ import math
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import pandas as pd
 from scipy.linalg import eigvalsh_tridiagonal
 
-from . import observables as obs
-from .mesh import Mesh
-from .mol import solve_stress_mol
-from .problems import ImposedSpeed, ImposedStress
-from .rheology import Friction
-from .rules import YieldRule, wellposedness
-from .scales import Material, Scales
-from .solver import Numerics, solve_speed, solve_stress
-from .steady import steady_mu
-from .stepper import explicit_euler
-from .velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
+from .. import observables as obs
+from ..mesh import Mesh
+from ..mol import solve_stress_mol
+from ..problems import ImposedSpeed, ImposedStress
+from ..rheology import Friction
+from ..rules import YieldRule, wellposedness
+from ..scales import Material, Scales
+from ..solver import Numerics, solve_speed, solve_stress
+from ..steady import steady_mu
+from ..stepper import explicit_euler
+from ..velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 CLASSES = ("converged", "inaccurate", "oscillating", "constraint-violating", "out of bounds", "blown up")
 COLORS = {"converged": "#2ca02c", "inaccurate": "#ffbf00", "oscillating": "#9467bd",
@@ -45,6 +46,8 @@ COLORS = {"converged": "#2ca02c", "inaccurate": "#ffbf00", "oscillating": "#9467
 MU_W_TILDE = (0.01, 0.03, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99)
 U_W = (0.01, 0.1, 1.0, 5.0, 20.0)
 T_END = 1.0
+VELOCITY_T_TILDE = 0.1  # the velocity-form maps stop here (the yield front has reached the bed)
+VELOCITY_P_W = 10.0     # plate pressure of the velocity-form maps (the tilde results do not depend on it)
 
 
 def explicit_bound(fr: Friction, mu_w: float, mesh: Mesh) -> float:
@@ -99,10 +102,10 @@ def _speed(fr, u_w, n) -> Outcome:
     return out
 
 
-def _velocity(fr, mu_w, rule, n, t_tilde=0.1) -> Outcome:
+def _velocity(fr, mu_w, rule, n, t_tilde=VELOCITY_T_TILDE) -> Outcome:
     m = Material(mu_s=fr.mu_s, mu_d=fr.mu_d)
-    sc = Scales(m, 10.0, mu_w)
-    scene = BedScene(m, 10.0, sc.delta_s, body_force=m.mu_s * m.phi * m.rho_p * m.g)
+    sc = Scales(m, VELOCITY_P_W, mu_w)
+    scene = BedScene(m, VELOCITY_P_W, sc.delta_s, body_force=m.mu_s * m.phi * m.rho_p * m.g)
     sol = solve_velocity(scene, [t_tilde * sc.t_s], mu_w=mu_w, rule=rule, initial="yield",
                          numerics=replace(VELOCITY_NUMERICS, n_cells=n))
     mu = sol.mu[-1]
@@ -110,14 +113,45 @@ def _velocity(fr, mu_w, rule, n, t_tilde=0.1) -> Outcome:
 
 
 TIGHT = dict(rtol=1e-8, atol=1e-10)
+REFERENCE_CELLS = 400
+
+
+def _stress_sdirk4(fr, mu_w, n):
+    return _stress_outcome(solve_stress(fr, mu_w, [T_END], Numerics(n_cells=n)))
+
+
+def _stress_cn(fr, mu_w, dt):
+    n = max(1, int(round(T_END / dt)))
+    steps = T_END * np.arange(1, n + 1) / n
+    return _stress_outcome(solve_stress(fr, mu_w, [T_END], Numerics(n_cells=CN_CELLS, method="crank-nicolson"),
+                                        fixed_times=steps))
+
+
+def _stress_bdf(fr, mu_w, n):
+    return _stress_outcome(solve_stress_mol(fr, mu_w, [T_END], Numerics(n_cells=n)))
+
+
+def _stress_reference(cells, t_end=T_END):
+    """The stress-diffusion solution at rtol 1e-8 on ``cells`` cells."""
+    return lambda fr, mu_w: _stress_outcome(solve_stress(fr, mu_w, [t_end], Numerics(n_cells=cells, **TIGHT)))
+
+
+def _speed_reference(fr, u_w):
+    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, **TIGHT))
+    return Outcome(float(sol.mu_w[-1]), sol.tau[-1])
+
+
+EXPLICIT_CELLS, CN_CELLS, BARKER_GRAY_EPS = 40, 100, 1e-5
 
 
 @dataclass(frozen=True)
 class MethodMap:
     """One method: the physical parameter, the numerical axis, the runner and its reference.
 
-    ``design_order``: the order expected along the axis; ``tolerance``: the relative error of u~_w
-    (of mu_w for an imposed speed) at the final time above which a run is inaccurate."""
+    ``run(friction, param, value)`` and ``reference(friction, param)`` return an ``Outcome``; for
+    ``param = "mu_w_tilde"`` they receive mu_w, for ``"u_w"`` the speed.  ``design_order``: the order
+    expected along the axis; ``tolerance``: the relative error of u~_w (of mu_w for an imposed speed)
+    at the final time above which a run is inaccurate; ``bounded``: the model keeps mu_s <= mu."""
 
     name: str
     param: str
@@ -125,60 +159,37 @@ class MethodMap:
     axis: str
     values: tuple
     refine: tuple  # the refined setting for each value (order/grid dependence)
+    run: Callable
+    reference: Callable
     design_order: float = 2.0
     tolerance: float = 1e-3
+    bounded: bool = True
 
-    def run(self, fr: Friction, param, value) -> Outcome:
-        mu_w = fr.mu_w_from_tilde(param) if self.param == "mu_w_tilde" else None
-        if self.name == "stress SDIRK4 (adaptive)":
-            return _stress_outcome(solve_stress(fr, mu_w, [T_END], Numerics(n_cells=value)))
-        if self.name == "stress Crank-Nicolson (uniform dt)":
-            n = max(1, int(round(T_END / value)))
-            steps = T_END * np.arange(1, n + 1) / n
-            return _stress_outcome(solve_stress(fr, mu_w, [T_END], Numerics(n_cells=100, method="crank-nicolson"),
-                                                fixed_times=steps))
-        if self.name == "stress explicit Euler (dt / dt*)":
-            return _explicit(fr, mu_w, 40, value)
-        if self.name == "stress solve_ivp BDF (baseline)":
-            return _stress_outcome(solve_stress_mol(fr, mu_w, [T_END], Numerics(n_cells=value)))
-        if self.name == "speed SDIRK4 (adaptive)":
-            return _speed(fr, param, value)
-        if self.name == "velocity form, regularised (eps)":
-            return _velocity(fr, mu_w, YieldRule("regularised", value), 200)
-        if self.name == "velocity form, Barker-Gray":
-            return _velocity(fr, mu_w, YieldRule("barker-gray", 1e-5), value)
-        raise ValueError(f"unknown method {self.name!r}")
-
-    def reference(self, fr: Friction, param) -> Outcome:
-        """What the axis should converge to: the stress-diffusion solution on 400 cells at rtol 1e-8;
-        on the run's own mesh for the time-step axes (isolating the time error); the paper's
-        solution for the eps axis (eps -> 0); Barker-Gray itself on 800 cells."""
-        mu_w = fr.mu_w_from_tilde(param) if self.param == "mu_w_tilde" else None
-        if self.param == "u_w":
-            sol = solve_speed(fr, param, [T_END], Numerics(n_cells=400, **TIGHT))
-            return Outcome(float(sol.mu_w[-1]), sol.tau[-1])
-        if self.name == "velocity form, Barker-Gray":
-            return _velocity(fr, mu_w, YieldRule("barker-gray", 1e-5), 800)
-        if self.name == "stress explicit Euler (dt / dt*)":
-            return _stress_outcome(solve_stress(fr, mu_w, [T_END], Numerics(n_cells=40, stretch=0.0, **TIGHT)))
-        cells = 100 if self.name == "stress Crank-Nicolson (uniform dt)" else 400
-        t_end = 0.1 if self.name.startswith("velocity") else T_END
-        return _stress_outcome(solve_stress(fr, mu_w, [t_end], Numerics(n_cells=cells, **TIGHT)))
+    def physical(self, fr: Friction, param):
+        return fr.mu_w_from_tilde(param) if self.param == "mu_w_tilde" else param
 
 
 METHODS = (
-    MethodMap("stress SDIRK4 (adaptive)", "mu_w_tilde", MU_W_TILDE, "n_cells", (25, 50, 100, 200), (50, 100, 200, 400)),
+    MethodMap("stress SDIRK4 (adaptive)", "mu_w_tilde", MU_W_TILDE, "n_cells", (25, 50, 100, 200), (50, 100, 200, 400),
+              _stress_sdirk4, _stress_reference(REFERENCE_CELLS)),
     MethodMap("stress Crank-Nicolson (uniform dt)", "mu_w_tilde", MU_W_TILDE, "dt", (0.1, 0.03, 0.01, 0.003),
-              (0.05, 0.015, 0.005, 0.0015)),
+              (0.05, 0.015, 0.005, 0.0015), _stress_cn, _stress_reference(CN_CELLS)),
     MethodMap("stress explicit Euler (dt / dt*)", "mu_w_tilde", MU_W_TILDE, "dt/dt*", (2.0, 1.1, 0.9, 0.5),
-              (1.0, 0.55, 0.45, 0.25), design_order=1.0),
+              (1.0, 0.55, 0.45, 0.25), lambda fr, mu_w, f: _explicit(fr, mu_w, EXPLICIT_CELLS, f),
+              lambda fr, mu_w: _stress_outcome(solve_stress(fr, mu_w, [T_END],
+                                                            Numerics(n_cells=EXPLICIT_CELLS, stretch=0.0, **TIGHT))),
+              design_order=1.0),
     MethodMap("stress solve_ivp BDF (baseline)", "mu_w_tilde", MU_W_TILDE, "n_cells", (25, 50, 100, 200),
-              (50, 100, 200, 400)),
-    MethodMap("speed SDIRK4 (adaptive)", "u_w", U_W, "n_cells", (25, 50, 100, 200), (50, 100, 200, 400)),
+              (50, 100, 200, 400), _stress_bdf, _stress_reference(REFERENCE_CELLS)),
+    MethodMap("speed SDIRK4 (adaptive)", "u_w", U_W, "n_cells", (25, 50, 100, 200), (50, 100, 200, 400),
+              _speed, _speed_reference),
     MethodMap("velocity form, regularised (eps)", "mu_w_tilde", MU_W_TILDE[1::2], "eps", (1e-2, 1e-3, 1e-4, 1e-5),
-              (5e-3, 5e-4, 5e-5, 5e-6), design_order=2 / 3, tolerance=1e-2),
+              (5e-3, 5e-4, 5e-5, 5e-6), lambda fr, mu_w, eps: _velocity(fr, mu_w, YieldRule("regularised", eps), 200),
+              _stress_reference(REFERENCE_CELLS, VELOCITY_T_TILDE), design_order=2 / 3, tolerance=1e-2, bounded=False),
     MethodMap("velocity form, Barker-Gray", "mu_w_tilde", MU_W_TILDE[1::2], "n_cells", (50, 100, 200),
-              (100, 200, 400)),
+              (100, 200, 400), lambda fr, mu_w, n: _velocity(fr, mu_w, YieldRule("barker-gray", BARKER_GRAY_EPS), n),
+              lambda fr, mu_w: _velocity(fr, mu_w, YieldRule("barker-gray", BARKER_GRAY_EPS), 2 * REFERENCE_CELLS),
+              bounded=False),
 )
 
 #: below this relative error the refinement study sees the time-step tolerance, not the order
@@ -191,8 +202,7 @@ def classify(fr: Friction, method: MethodMap, out: Outcome, fine: Outcome, ref: 
         if o.error or not np.isfinite(o.u_w) or o.tau is None or not np.all(np.isfinite(o.tau)) \
                 or np.abs(o.tau).max() > 1e3:
             return "blown up", math.nan
-    bounded = not method.name.startswith("velocity")  # the velocity form may sit below yield
-    if out.mu_range[1] > fr.mu_d or (bounded and out.mu_range[0] < fr.mu_s - 1e-9):
+    if out.mu_range[1] > fr.mu_d or (method.bounded and out.mu_range[0] < fr.mu_s - 1e-9):
         return "out of bounds", math.nan
     if out.constraint > 1e-8:
         return "constraint-violating", math.nan
@@ -209,7 +219,7 @@ def classify(fr: Friction, method: MethodMap, out: Outcome, fine: Outcome, ref: 
 def _safe(method, fr, param, value) -> Outcome:
     try:
         with np.errstate(all="ignore"):
-            return method.run(fr, param, value)
+            return method.run(fr, method.physical(fr, param), value)
     except (RuntimeError, FloatingPointError, ValueError, ArithmeticError) as err:
         return Outcome(error=f"{type(err).__name__}: {err}")
 
@@ -218,7 +228,7 @@ def stability_table(fr: Friction, methods=METHODS) -> pd.DataFrame:
     rows = []
     for method in methods:
         for param in method.params:
-            ref = method.reference(fr, param)
+            ref = method.reference(fr, method.physical(fr, param))
             for value, finer in zip(method.values, method.refine):
                 start = time.process_time()
                 out, fine = _safe(method, fr, param, value), _safe(method, fr, param, finer)

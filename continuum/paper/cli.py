@@ -1,0 +1,45 @@
+"""``granstokes paper-figures`` and ``granstokes stability``."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from granstokes.validate import require
+
+
+def run_paper_figures(args) -> int:
+    from .figures import paper_figures
+
+    result = paper_figures(args.out)
+    names = sorted(k for k in result if k != "timing")
+    print(f"wrote the paper's figures into {args.out}: " + ", ".join(names))
+    return 0
+
+
+def run_stability(args) -> int:
+    from ..scales import Material
+    from .stability import write_stability
+
+    calibrated = None
+    if args.calibration is not None:
+        require(args.calibration.is_file(), "--calibration", "an existing metrics.json from granstokes compare",
+                str(args.calibration))
+        cal = json.loads(args.calibration.read_text())
+        calibrated = Material(mu_s=cal["mu_s"], mu_d=cal["mu_d"], I0=cal["I0"], I_convention=cal["I0_convention"])
+    result = write_stability(args.out, calibrated)
+    counts = result["table"].groupby(["method", "class"]).size().unstack(fill_value=0)
+    print(counts.to_string())
+    print(f"maps: {', '.join(p.name for p in result['maps'])}; well-posedness: {result['wellposedness'].name}")
+    return 0
+
+
+def register(sub) -> None:
+    """Add ``paper-figures`` and ``stability`` to the ``granstokes`` parser."""
+    f = sub.add_parser("paper-figures", help="regenerate the paper's figures 1-9 (PNG + CSV)")
+    f.add_argument("--out", type=Path, required=True, help="output folder")
+    f.set_defaults(func=run_paper_figures)
+
+    s = sub.add_parser("stability", help="stability maps of every method, and the mu(I) well-posedness along the layer")
+    s.add_argument("--out", type=Path, required=True, help="output folder")
+    s.add_argument("--calibration", type=Path, help="metrics.json of a DEM calibration (mu_s, mu_d, I0, I0_convention)")
+    s.set_defaults(func=run_stability)

@@ -1,0 +1,104 @@
+"""The run-folder format, defined once: written by dem/, read by compare/.
+
+Run folder (``granstokes dem run``)::
+
+    RUN/config.toml                     the config as given (presets: the preset text)
+    RUN/run.json                        metadata: status, units, conventions, contact law, sizing, plate, provenance
+    RUN/seed-S/prepare/                 prepare.in, log.lammps, prepared.restart, grains.csv (id, type, radius, mass)
+    RUN/seed-S/DRIVE/                   plate.csv, profiles.csv, atoms.dump, contacts.dump, log.lammps
+    RUN/seed-S/DRIVE/restart/           drive.<step>.restart (latest kept)
+    RUN/seed-S/DRIVE/segments/NNN/      raw LAMMPS output of each start/resume (removed once complete)
+
+Atom types: ``BED`` grains (the coarse-grained material), ``BASE`` (frozen rough base), ``PLATE``
+(one rigid body).  Dump columns: ``ATOM_COLUMNS`` (atoms.dump, sorted by id) and ``CONTACT_COLUMNS``
+(contacts.dump: every pair closer than r_1 + r_2; (dx, dy, dz) = x_1 - x_2, normal force on grain 1 =
+fn (dx, dy, dz)/dist, (ft_x, ft_y, ft_z) the tangential force on grain 1).
+"""
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Iterator
+
+import pandas as pd
+
+# --- atom types ----------------------------------------------------------------------------------
+BED, BASE, PLATE = 1, 2, 3
+N_TYPES = 3
+
+# --- file names ----------------------------------------------------------------------------------
+RUN_JSON, CONFIG_TOML = "run.json", "config.toml"
+PREPARE, PREPARED_RESTART, GRAINS_CSV, GRAINS_DUMP = "prepare", "prepared.restart", "grains.csv", "grains.dump"
+PLATE_CSV, PROFILES_CSV, ATOMS, CONTACTS, LOG = "plate.csv", "profiles.csv", "atoms.dump", "contacts.dump", "log.lammps"
+SEGMENTS, RESTART_DIR = "segments", "restart"
+
+# --- columns -------------------------------------------------------------------------------------
+PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y")
+ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "radius")
+CONTACT_COLUMNS = ("id1", "id2", "dist", "dx", "dy", "dz", "fn", "ft_x", "ft_y", "ft_z")
+GRAIN_COLUMNS = ("id", "type", "radius", "mass")
+
+#: profile bin height in d (LAMMPS in-run chunk averages, profiles.csv)
+PROFILE_BIN = 1.0
+
+
+def seed_dir(run: Path, seed: int) -> Path:
+    return Path(run) / f"seed-{seed}"
+
+
+def drive_dir(run: Path, seed: int, drive: str) -> Path:
+    return seed_dir(run, seed) / drive
+
+
+def prepare_dir(run: Path, seed: int) -> Path:
+    return seed_dir(run, seed) / PREPARE
+
+
+def stage_key(seed: int, drive: str | None = None) -> str:
+    """run.json's key of a stage: ``seed-S`` (preparation) or ``seed-S/DRIVE``."""
+    return f"seed-{seed}" if drive is None else f"seed-{seed}/{drive}"
+
+
+def plate_surface(plate_y, offset: float):
+    """Height of the plate's contact plane: the plate's centre-of-mass height minus ``offset``
+    (run.json ``plate.surface_offset``, set by the scene that built the plate)."""
+    return plate_y - offset
+
+
+def dump_snapshots(path: Path) -> Iterator[tuple[int, str]]:
+    """(step, text) of each snapshot of a LAMMPS text dump, in file order."""
+    if not Path(path).exists():
+        return
+    with Path(path).open() as fh:
+        block, step = [], None
+        for line in fh:
+            if line.startswith("ITEM: TIMESTEP"):
+                if block:
+                    yield step, "".join(block)
+                block = [line]
+                step = int(next(fh))
+                block.append(f"{step}\n")
+                continue
+            block.append(line)
+        if block:
+            yield step, "".join(block)
+
+
+def snapshot_table(text: str) -> pd.DataFrame:
+    """One dump snapshot's rows as a table named by its ``ITEM: ATOMS``/``ENTRIES`` header."""
+    header, body = text.split("ITEM: ", 4)[-1].split("\n", 1)
+    return pd.read_csv(io.StringIO(body), sep=r"\s+", names=header.split()[1:], index_col=False)
+
+
+def grains_table(folder: Path) -> pd.DataFrame:
+    """The per-grain table (``GRAIN_COLUMNS``) of a drive or prepare folder: grains.csv, else the
+    LAMMPS ``write_dump`` text grains.dump, here or in ../prepare/."""
+    folder = Path(folder)
+    for p in (folder / GRAINS_CSV, folder / GRAINS_DUMP, folder.parent / PREPARE / GRAINS_CSV,
+              folder.parent / PREPARE / GRAINS_DUMP):
+        if p.exists():
+            if p.suffix == ".csv":
+                return pd.read_csv(p)
+            return snapshot_table(next(t for _, t in dump_snapshots(p)))
+    raise FileNotFoundError(f"{folder}: no grains table ({GRAINS_CSV} or {GRAINS_DUMP} here or in ../{PREPARE}/): "
+                            "needed for the grain masses and radii")

@@ -1,0 +1,73 @@
+"""The ``granstokes`` command: the root parser over the three packages' subcommands.
+
+One error policy: bad input is one line on stderr naming the parameter and its valid range, exit
+status 2, raised before any computation or file is written (subcommands raise ``ValueError``)."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from . import __version__
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that reports errors on a single line."""
+
+    def error(self, message):
+        self.exit(2, f"granstokes: error: {message}\n")
+
+
+def run_demo(args) -> int:
+    from .demo import run_demo as demo
+
+    index = demo(args.out)
+    print(f"report: {index.resolve()}")
+    return 0
+
+
+def version_text() -> str:
+    from .provenance import git_hash
+
+    return f"granstokes {__version__} (git {git_hash() or 'unknown'})"
+
+
+class _Version(argparse.Action):
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, help="print the version and git hash, then exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(version_text())
+        parser.exit()
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from compare.cli import register as compare_register
+    from continuum.cli import register as continuum_register
+    from continuum.paper.cli import register as paper_register
+    from dem.cli import register as dem_register
+
+    parser = OneLineParser(prog="granstokes", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action=_Version)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
+    continuum_register(sub)
+    paper_register(sub)
+    dem_register(sub)
+    compare_register(sub)
+    d = sub.add_parser("demo", help="the quick continuum-vs-DEM comparison: paper figures, quick DEM presets, report")
+    d.add_argument("--out", type=Path, default=Path("demo-out"), help="output folder (default %(default)s)")
+    d.set_defaults(func=run_demo)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ValueError as err:
+        print(f"granstokes: error: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
