@@ -441,8 +441,12 @@ def _run(scene, fluidity, numerics, times, tau_w, u_w, y_kink):
 
 
 def solve_transient(scene: BedScene, fluidity: NonlocalFluidity, times, *, mu_w=None, u_w=None,
-                    numerics: TransientNumerics = TransientNumerics(), error_estimate: bool = True) -> TransientNGF:
-    """NGF transient from a bed at rest (u = 0, g = g_rest) under an imposed mu_w or speed u_w."""
+                    numerics: TransientNumerics = TransientNumerics(), error_estimate: bool = True,
+                    y_kink=None) -> TransientNGF:
+    """NGF transient from a bed at rest (u = 0, g = g_rest) under an imposed mu_w or speed u_w.
+
+    ``y_kink``: the depth given a mesh face (default: the steady yield depth of the drive; pass the
+    same value to compare two drives on the same mesh)."""
     require((mu_w is None) != (u_w is None), "mu_w/u_w", "exactly one of them", (mu_w, u_w))
     t = np.asarray(times, dtype=float).ravel()
     require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
@@ -451,7 +455,8 @@ def solve_transient(scene: BedScene, fluidity: NonlocalFluidity, times, *, mu_w=
     if u_w is not None:
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
     # the mesh gets a face at the steady yield depth (for an imposed speed, that of the steady NGF state)
-    y_kink = yield_depth(scene, tau_w if tau_w is not None else solve_steady(scene, fluidity, u_w=u_w, n=32).tau_w)
+    if y_kink is None:
+        y_kink = yield_depth(scene, tau_w if tau_w is not None else solve_steady(scene, fluidity, u_w=u_w, n=32).tau_w)
     pb, u, g, mu, mw, nfev = _run(scene, fluidity, numerics, t, tau_w, u_w, y_kink)
     u_err, mu_err = np.zeros(len(t)), np.zeros(len(t))
     if error_estimate:
