@@ -4,7 +4,7 @@ Two models, both with no parameter beyond the calibration (mu_s, mu_d, I0) and t
 p_w, phi, bed depth H and plate mass:
 
 * ``velocity form``: continuum.velocity on the DEM's scene (bed of depth H at rest, sigma_xy = 0,
-  no-slip base, plate with its mass, eps-regularised mu(I) with eps = EPS_FRACTION U/delta_s);
+  no-slip base, plate with its mass, eps-regularised mu(I), continuum.rules.YieldRule.for_layer);
 * ``paper``: the stress-diffusion model (continuum.solver, semi-infinite bed truncated at delta_s,
   initial state tau = mu_s p), scaled with continuum.scales.Scales.
 
@@ -26,9 +26,6 @@ from continuum.steady import steady_wall_speed
 from continuum.velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 U_FRACTION = 0.05
-#: regularisation of the velocity form's predictions, eps = EPS_FRACTION U/delta_s: the creep it adds
-#: below yield scales as eps^(2/3) (tests/continuum): 1e-3 of the layer's shear rate keeps it at ~1 %
-EPS_FRACTION = 1e-3
 
 
 def depth_at_fraction(depth: np.ndarray, u: np.ndarray, u_w: float, frac: float = U_FRACTION) -> float:
@@ -61,7 +58,7 @@ def predict(material: Material, p_w: float, depth: float, plate_mass: float, kin
         sc = Scales(material, p_w, value / p_w)
     else:
         sc = Scales.for_speed(material, p_w, value)
-    rule = YieldRule(eps=EPS_FRACTION * sc.U / sc.delta_s)
+    rule = YieldRule.for_layer(sc)
     scene = BedScene(material, p_w, depth, plate_mass=plate_mass)
     drive = {"mu_w": value / p_w} if kind == "stress" else {"u_w": value}
     vel = solve_velocity(scene, times, rule=rule, initial="rest", numerics=VELOCITY_NUMERICS,

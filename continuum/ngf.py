@@ -78,8 +78,11 @@ from scipy.optimize import brentq
 from scipy.sparse import lil_matrix
 
 from .mesh import Mesh
-from .rheology import convert_I, finite, require
+from granstokes.validate import finite, require
+
+from .rheology import convert_I
 from .scales import UNITS, Material
+from .solver import check_times
 from .velocity import BedScene
 
 BOUNDARIES = ("neumann", "dirichlet")
@@ -448,9 +451,7 @@ def solve_transient(scene: BedScene, fluidity: NonlocalFluidity, times, *, mu_w=
     ``y_kink``: the depth given a mesh face (default: the steady yield depth of the drive; pass the
     same value to compare two drives on the same mesh)."""
     require((mu_w is None) != (u_w is None), "mu_w/u_w", "exactly one of them", (mu_w, u_w))
-    t = np.asarray(times, dtype=float).ravel()
-    require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
-            "times", "a non-empty, strictly increasing list of finite numbers > 0", [float(v) for v in t])
+    t = check_times(times)
     tau_w = None if mu_w is None else _check_mu_w(scene, fluidity, mu_w) * scene.p_w
     if u_w is not None:
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)

@@ -9,29 +9,30 @@ DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rh
   (the layer is cut at the base if H < delta_s); for an imposed speed, mu_w is the root of u(0) = u_w.
   u_w_err = 0: exact up to rounding.
 * ``--model local --times``: the velocity form (continuum.velocity.solve_velocity) from a bed at rest,
-  regularised with eps = 1e-3 U/delta_s as compare/predict.py; u_w_err = |u_N - u_N/2|/3 (second order
+  regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/predict.py); u_w_err = |u_N - u_N/2|/3 (second order
   in space; the regularisation's own creep is not in it).
 * ``--model ngf``: continuum.ngf (steady: Chebyshev, u_w_err the change from n/2 points; transient:
   from rest, u_w_err Richardson from N/2 cells).  g is given at the nodes y (for the transient,
   ln g interpolated linearly from the cell centres).
 
-Bad input raises ValueError naming the parameter and its range (the root parser prints one line and
-exits 2); ``main`` does the same when this module is run on its own (python -m continuum.predict_cli).
+Bad input raises ValueError naming the parameter and its range (the root parser, granstokes.cli, prints
+one line and exits 2).
 """
 from __future__ import annotations
 
 import argparse
 import json
-import sys
 from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import brentq
 
 from .ngf import NonlocalFluidity, TransientNumerics, solve_steady, solve_transient
-from .rheology import finite, require
-from .rules import YieldRule
+from granstokes.validate import finite, require
+
+from .rules import EPS_FRACTION, YieldRule
 from .scales import UNITS, Material, Scales
+from .solver import check_times
 from .steady import steady_velocity
 from .velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
@@ -91,13 +92,6 @@ def _drive(args, mu_top: float, top_name: str = "mu_d") -> dict:
     return {"u_w": float(args.u_w)}
 
 
-def _times(args) -> np.ndarray:
-    t = np.asarray(args.times, dtype=float)
-    require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
-            "--times", "a non-empty, strictly increasing list of finite numbers > 0", list(map(float, t)))
-    return t
-
-
 def local_steady(scene: BedScene, *, mu_w=None, u_w=None, n_points: int = PROFILE_POINTS) -> dict:
     """Closed-form local steady state on the bed of depth H, DEM units: y, u, mu_w, u_w, delta_s."""
     m, fr = scene.material, scene.material.friction
@@ -121,7 +115,7 @@ def local_steady(scene: BedScene, *, mu_w=None, u_w=None, n_points: int = PROFIL
 def _local_transient(scene: BedScene, t, drive: dict):
     m = scene.material
     sc = Scales(m, scene.p_w, drive["mu_w"]) if "mu_w" in drive else Scales.for_speed(m, scene.p_w, drive["u_w"])
-    rule = YieldRule(eps=1e-3 * sc.U / sc.delta_s)
+    rule = YieldRule.for_layer(sc)
     out = []
     for numerics in (VELOCITY_NUMERICS, replace(VELOCITY_NUMERICS, n_cells=VELOCITY_NUMERICS.n_cells // 2)):
         vel = solve_velocity(scene, t, rule=rule, initial="rest", numerics=numerics, compare_steady=False, **drive)
@@ -169,10 +163,10 @@ def predict(args) -> dict:
                         "delta_s": st.delta_s, "y": st.y.tolist(), "u": st.u.tolist(), "g": st.g.tolist(),
                         "method": f"Chebyshev collocation, {st.n} intervals per piece; errors: change from n/2"})
         return out
-    t = _times(args)
+    t = check_times(args.times, "--times")
     if args.model == "local":
         y, u, mw, u_err, mu_err = _local_transient(scene, t, drive)
-        out["method"] = "velocity form (continuum.velocity), eps = 1e-3 U/delta_s; errors: Richardson from N/2"
+        out["method"] = f"velocity form (continuum.velocity), eps = {EPS_FRACTION:g} U/delta_s; errors: Richardson from N/2"
     else:
         tr = solve_transient(scene, fluidity, t, numerics=TransientNumerics(), **drive)
         y, u, mw, u_err, mu_err = tr.y, tr.u, tr.mu_w, tr.u_w_err, tr.mu_w_err
@@ -198,23 +192,3 @@ def run_predict(args) -> int:
         for row in zip(out["t"], out["u_w"], out["u_w_err"], out["mu_w"]):
             print(f"{row[0]:12.5g} {row[1]:14.8g} {row[2]:10.2g} {row[3]:12.8g}")
     return 0
-
-
-class _OneLineParser(argparse.ArgumentParser):
-    def error(self, message):
-        self.exit(2, f"granstokes: error: {message}\n")
-
-
-def main(argv=None) -> int:
-    parser = _OneLineParser(prog="granstokes")
-    register(parser.add_subparsers(dest="command", required=True, parser_class=_OneLineParser))
-    args = parser.parse_args(argv)
-    try:
-        return args.func(args)
-    except ValueError as err:
-        print(f"granstokes: error: {err}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

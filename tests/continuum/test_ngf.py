@@ -15,7 +15,8 @@ from scipy.integrate import quad
 
 from continuum.ngf import (NonlocalFluidity, TransientNumerics, solve_steady, solve_transient, steady_profile,
                            yield_depth)
-from continuum.predict_cli import main, register, run_predict
+from continuum.predict_cli import register, run_predict
+from granstokes.cli import main
 from continuum.scales import Material, Scales
 from continuum.steady import steady_velocity
 from continuum.velocity import BedScene
