@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from tqdm import tqdm
 
 from continuum.crossing import crossing_depth
 from continuum.scales import Material, Scales
@@ -20,15 +21,18 @@ from granstokes.validate import require
 from . import calibrate
 from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, snapshot_times
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
+from .models import LOCAL, PAPER, Prediction
 from .plate import STEADY_WINDOW_LATEST, power_law
-from .predict import Prediction, predict
 from .profiles import CGSettings
+from .scorecard import Scorecard, scene_checks, score
 
 #: smoothing of mu_w(t) before the paper's threshold is applied (delta_mu), in time units: single
 #: plate samples scatter by about their mean, the threshold is 1e-3 of the wall excess
 MU_W_SMOOTHING = 0.5
 #: continuum output times per drive (log-spaced from t_end/PREDICTION_SPAN to t_end, plus the snapshots)
 PREDICTION_TIMES, PREDICTION_SPAN = 60, 300
+#: calibration samples pushed through every steady prediction (bootstrap replicates of the fit)
+REPLICATES = 200
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,10 +75,13 @@ class Comparison:
     drives: tuple[DriveComparison, ...]
     pairs: pd.DataFrame
     calibration: calibrate.Calibration
+    calibration_source: str
+    replicates: pd.DataFrame     # joint samples mu_s, mu_d, I0 (DEM convention), phi
     material: Material
     phi_bulk: float
     mass_error: float
     checks: Checks
+    scorecard: Scorecard
     settings: CGSettings
 
 
@@ -146,20 +153,45 @@ def _predict(a: DriveAnalysis, material: Material) -> DriveComparison:
                                             "this drive: the plate would accelerate forever)", dm)
     t_end = float(a.series.t.iloc[-1])
     times = np.union1d(np.geomspace(t_end / PREDICTION_SPAN, t_end, PREDICTION_TIMES), snapshot_times(a))
-    preds = predict(material, s.p_w, s.depth, s.plate_mass, s.kind, s.value, times)
-    return DriveComparison(a, scales, tuple(preds), "", dm)
+    preds = tuple(model.predict(material, s.drive, times) for model in (LOCAL, PAPER))
+    return DriveComparison(a, scales, preds, "", dm)
 
 
-def build(run_dirs, settings: CGSettings = CGSettings()) -> Comparison:
+def fit_replicates(pairs: pd.DataFrame, phi: float, n: int = REPLICATES, seed: int = 0) -> pd.DataFrame:
+    """Joint samples of the in-drive fit: refits on pairs resampled with replacement (bootstrap);
+    phi is the bulk mean of each resample."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    while len(rows) < n:
+        sample = pairs.iloc[rng.integers(0, len(pairs), len(pairs))]
+        try:
+            c = calibrate.fit(sample)
+        except (ValueError, RuntimeError):  # too few usable points, or no convergence
+            continue
+        rows.append({"mu_s": c.mu_s, "mu_d": c.mu_d, "I0": c.I0_dem, "phi": float(sample.phi.mean())})
+    return pd.DataFrame(rows)
+
+
+def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True) -> Comparison:
     """Analyse every drive of ``run_dirs``, calibrate on their steady windows, predict each drive."""
     runs = tuple(Path(r) for r in run_dirs)
     resolved = [r.resolve() for r in runs]
     require(len(set(resolved)) == len(resolved), "RUN_DIR", "distinct run folders (one was given twice)",
             [str(r) for r in runs])
-    drives = [analyse_drive(spec, settings) for run in runs for spec in drive_specs(run)]
+    specs = [spec for run in runs for spec in drive_specs(run)]
+    drives = [analyse_drive(spec, settings) for spec in tqdm(specs, desc="coarse-graining", disable=not progress)]
     pairs = steady_pairs(drives)
     cal = calibrate.fit(pairs)
     phi = float(pairs.phi.mean())
     material = cal.material(phi=phi)
-    return Comparison(runs, tuple(_predict(a, material) for a in drives), pairs, cal, material, phi,
-                      mass_error(drives[0]), _checks(drives[0]), settings)
+    replicates = fit_replicates(pairs, phi)
+    compared = tuple(_predict(a, material) for a in tqdm(drives, desc="continuum predictions", disable=not progress))
+    models = [LOCAL, PAPER]
+    predictions = {(dc.label, p.model): p for dc in compared for p in dc.predictions}
+    delta_s = {dc.label: dc.predictions[0].steady.delta_s for dc in compared if dc.predictions}
+    t0 = {a.label: a.t_window for a in drives}
+    rows, edges = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
+                        delta_s, t0, progress)
+    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges)
+    return Comparison(runs, compared, pairs, cal, "in-drive fit (not a blind test)", replicates, material, phi,
+                      mass_error(drives[0]), _checks(drives[0]), card, settings)

@@ -73,12 +73,12 @@ def drive_metrics(dc: DriveComparison) -> dict:
     if not dc.predictions:
         return out
     vel, paper = dc.predictions
-    delta_s = vel.steady["delta_s"]
+    delta_s = vel.steady.delta_s
     layer = inside & (p.depth < min(delta_s, spec.depth - WALL_EXCLUSION))
     below = inside & (p.depth >= delta_s) & (p.u_x > 0)
     u_w = g.steady["u_w"]["value"]
     for name, key in (("u_w_inf", "u_w"), ("mu_w_inf", "mu_w")):
-        out[name].update({"velocity_form": vel.series[key].iloc[-1], "paper": paper.steady[key]})
+        out[name].update({"velocity_form": vel.series[key].iloc[-1], "paper": getattr(paper.steady, key)})
     out["delta_s"].update({"velocity_form": vel.series.delta_u.iloc[-1], "paper": paper.series.delta_u.iloc[-1],
                            "paper_delta_s": delta_s})
     out["t90"].update({"velocity_form": t90(vel.series.t, vel.series[response]),

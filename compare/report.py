@@ -39,7 +39,7 @@ def drive_figure(dc: DriveComparison, out: Path) -> Path:
         if len(spec.folders) > 1:
             ax[k].fill_between(s.t, s[f"{name}_lo"], s[f"{name}_hi"], color="C0", alpha=0.25, label="95 % band")
         for i, p in enumerate(dc.predictions):
-            ax[k].plot(p.series.t, p.series[name], label=p.model, **MODEL_STYLE[i])
+            ax[k].plot(p.series.t, p.series[name], label=p.label, **MODEL_STYLE[i])
         ax[k].set(xlabel="t [sqrt(d/g)]", ylabel={"u_w": "u_w [sqrt(g d)]", "mu_w": "mu_w = tau_w/p"}[name])
     if spec.kind == "stress":
         sc, tt = dc.scales, dc.predictions[0].series.t.to_numpy()
@@ -50,8 +50,8 @@ def drive_figure(dc: DriveComparison, out: Path) -> Path:
     ax[2].plot(g.delta.t, dc.delta_mu, "x", color="C0", alpha=0.4, ms=4,
                label="DEM delta_mu (paper's 1e-3 mu threshold: noise-bound)")
     for i, p in enumerate(dc.predictions):
-        ax[2].plot(p.series.t, p.series.delta_u, label=p.model, **MODEL_STYLE[i])
-    ax[2].axhline(dc.predictions[0].steady["delta_s"], color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
+        ax[2].plot(p.series.t, p.series.delta_u, label=p.label, **MODEL_STYLE[i])
+    ax[2].axhline(dc.predictions[0].steady.delta_s, color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
     tt = dc.predictions[0].series.t
     ax[2].plot(tt, SELF_SIMILAR_DELTA * dc.scales.dmu * np.sqrt(dc.scales.nu_g * tt), color="C3", lw=0.8, ls=":",
                label="eq. SolutionSS: 4.65 Dmu sqrt(nu_g t) (mu threshold)")
@@ -65,7 +65,7 @@ def drive_figure(dc: DriveComparison, out: Path) -> Path:
     ax[3].semilogx(p.u_x.clip(lower=1e-6), p.depth, color="C0", label="DEM steady window")
     for i, pr in enumerate(dc.predictions):
         last = pr.profiles[pr.profiles.t == pr.profiles.t.max()]
-        ax[3].semilogx(last.u.clip(lower=1e-6), last.depth, label=pr.model, **MODEL_STYLE[i])
+        ax[3].semilogx(last.u.clip(lower=1e-6), last.depth, label=pr.label, **MODEL_STYLE[i])
     ax[3].set(xlabel="u [sqrt(g d)] (log: creep)", ylabel="depth below the plate [d]", ylim=(spec.depth, 0))
     fig.suptitle(f"{g.label}: imposed {spec.kind} ({'tau_w' if spec.kind == 'stress' else 'u_w'} = {spec.value:.4g}), "
                  f"p_w = {spec.p_w:g}; DEM units")
@@ -91,9 +91,9 @@ def profiles_figure(dc: DriveComparison, material, out: Path) -> Path:
     axes[0].plot(last.u, last.depth, **MODEL_STYLE[0], label="velocity form")
     axes[1].axvline(material.phi, **MODEL_STYLE[0])
     axes[2].plot(spec.p_w + material.phi * material.rho_p * material.g * z, z, **MODEL_STYLE[0])
-    tau_w = vel.steady["mu_w"] * spec.p_w
+    tau_w = vel.steady.mu_w * spec.p_w
     axes[3].axvline(tau_w, **MODEL_STYLE[0])
-    mu = steady_mu(material.friction, vel.steady["mu_w"], z / vel.steady["delta_s"])
+    mu = steady_mu(material.friction, vel.steady.mu_w, z / vel.steady.delta_s)
     axes[4].plot(mu, z, **MODEL_STYLE[0])
     axes[5].plot(material.friction.I_of_mu(mu, material.I0), z, **MODEL_STYLE[0])
     axes[5].set_xscale("log")
@@ -195,7 +195,7 @@ def write_report(c: Comparison, out_dir) -> dict:
         g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False)
         g.delta.assign(delta_mu=dc.delta_mu).to_csv(out / f"delta_{stem}.csv", index=False)
         for i, p in enumerate(dc.predictions):
-            p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{i}.csv", index=False)
+            p.series.assign(model=p.label).to_csv(out / f"prediction_{stem}_{i}.csv", index=False)
         if dc.predictions:
             figs += [drive_figure(dc, out), profiles_figure(dc, c.material, out), transient_figure(dc, c.material, out)]
     ch = c.checks

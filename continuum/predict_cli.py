@@ -4,10 +4,8 @@ DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rh
     granstokes predict --model local|ngf --mu-s A --mu-d B --I0 C [--A L] --phi F --p-w P --depth H
                        (--mu-w M | --u-w U) (--steady | --times T1 T2 ...) [--plate-mass m] [--json]
 
-* ``--model local --steady``: the closed-form steady state (continuum.steady, the paper's variables,
-  scaled with continuum.scales.Scales) on the bed of depth H: u(y) = U [u~(y/delta_s) - u~(H/delta_s)]
-  (the layer is cut at the base if H < delta_s); for an imposed speed, mu_w is the root of u(0) = u_w.
-  u_w_err = 0: exact up to rounding.
+* ``--model local --steady``: the closed-form steady state of the scene (continuum.scene); u_w_err = 0:
+  exact up to rounding.
 * ``--model local --times``: the velocity form (continuum.velocity.solve_velocity) from a bed at rest,
   regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/predict.py); u_w_err = |u_N - u_N/2|/3 (second order
   in space; the regularisation's own creep is not in it).
@@ -25,19 +23,17 @@ import json
 from dataclasses import replace
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .ngf import NonlocalFluidity, TransientNumerics, solve_steady, solve_transient
 from granstokes.validate import finite, require
 
 from .rules import EPS_FRACTION, YieldRule
 from .scales import UNITS, Material, Scales
+from .scene import scene_steady
 from .solver import check_times
-from .steady import steady_velocity
 from .velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 MODELS = ("local", "ngf")
-PROFILE_POINTS = 201
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -92,26 +88,6 @@ def _drive(args, mu_top: float, top_name: str = "mu_d") -> dict:
     return {"u_w": float(args.u_w)}
 
 
-def local_steady(scene: BedScene, *, mu_w=None, u_w=None, n_points: int = PROFILE_POINTS) -> dict:
-    """Closed-form local steady state on the bed of depth H, DEM units: y, u, mu_w, u_w, delta_s."""
-    m, fr = scene.material, scene.material.friction
-
-    def profile(mw, y):
-        sc = Scales(m, scene.p_w, mw)
-        return sc.U * (steady_velocity(fr, mw, y / sc.delta_s) - steady_velocity(fr, mw, scene.depth / sc.delta_s))
-
-    if mu_w is None:
-        lo, hi = fr.mu_s * (1 + 1e-12), fr.mu_d - 1e-12 * fr.dmu
-        f = lambda mw: float(profile(mw, 0.0)) - u_w
-        require(f(hi) > 0, "--u-w", f"a speed reachable with mu_w < mu_d = {fr.mu_d:.6g}", u_w)
-        mu_w = brentq(f, lo, hi, xtol=1e-15, rtol=1e-15)
-    y = np.linspace(0.0, scene.depth, n_points)
-    sc = Scales(m, scene.p_w, mu_w)
-    y = np.unique(np.append(y, sc.delta_s if sc.delta_s < scene.depth else []))
-    u = profile(mu_w, y)
-    return {"y": y, "u": u, "mu_w": float(mu_w), "u_w": float(u[0]), "delta_s": float(sc.delta_s)}
-
-
 def _local_transient(scene: BedScene, t, drive: dict):
     m = scene.material
     sc = Scales(m, scene.p_w, drive["mu_w"]) if "mu_w" in drive else Scales.for_speed(m, scene.p_w, drive["u_w"])
@@ -153,9 +129,9 @@ def predict(args) -> dict:
         out["parameters"].update({"A": fluidity.A, "boundary": fluidity.boundary, "t0_hat": fluidity.t0_hat})
     if args.steady:
         if args.model == "local":
-            st = local_steady(scene, **drive)
-            out.update({"u_w": st["u_w"], "mu_w": st["mu_w"], "u_w_err": 0.0, "mu_w_err": 0.0,
-                        "delta_s": st["delta_s"], "y": st["y"].tolist(), "u": st["u"].tolist(),
+            st = scene_steady(scene, **drive)
+            out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": 0.0, "mu_w_err": 0.0,
+                        "delta_s": st.delta_s, "y": st.y.tolist(), "u": st.u.tolist(),
                         "method": "closed form (continuum.steady) scaled with continuum.scales"})
         else:
             st = solve_steady(scene, fluidity, **drive)

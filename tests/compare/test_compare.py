@@ -7,7 +7,7 @@ import pytest
 
 from compare.calibrate import fit, mu_law
 from compare.plate import power_law, steady_state
-from compare.predict import depth_at_fraction
+from compare.models import depth_at_fraction
 from granstokes.cli import main as granstokes_main
 
 
