@@ -24,7 +24,7 @@ from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
 from .models import LOCAL, PAPER, Prediction
 from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings
-from .scorecard import Scorecard, scene_checks, score
+from .scorecard import Z95, Scorecard, scene_checks, score
 
 #: smoothing of mu_w(t) before the paper's threshold is applied (delta_mu), in time units: single
 #: plate samples scatter by about their mean, the threshold is 1e-3 of the wall excess
@@ -88,13 +88,16 @@ class Comparison:
 def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.WALL_EXCLUSION,
                  spacing: float = calibrate.PAIR_SPACING) -> pd.DataFrame:
     """(mu, I_dem, phi) of every steady window, away from plate and base, one point per ``spacing``
-    in depth (the kernel correlates neighbouring grid points: the fit's intervals need independent ones)."""
+    in depth (the kernel correlates neighbouring grid points: the fit's intervals need independent ones),
+    with the standard errors of mu and phi from the window's band."""
     rows = []
     for a in drives:
         p = a.steady_profile
         inside = p[(p.depth > wall_exclusion) & (p.depth < a.spec.depth - wall_exclusion)]
         step = max(1, int(round(spacing / abs(np.diff(inside.y.to_numpy()[:2])[0]))))
-        rows.append(inside.iloc[::step][["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(drive=a.label))
+        pick = inside.iloc[::step]
+        rows.append(pick[["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(
+            drive=a.label, mu_err=(pick.mu_hi - pick.mu_lo) / (2 * Z95), phi_err=(pick.phi_hi - pick.phi_lo) / (2 * Z95)))
     return pd.concat(rows, ignore_index=True)
 
 
@@ -132,8 +135,7 @@ def early_exponents(a: DriveAnalysis) -> dict:
 
 
 def _checks(a: DriveAnalysis) -> Checks:
-    t_end = float(a.series.t.iloc[-1])
-    widths = width_check(a.spec.folders[0], STEADY_WINDOW_LATEST * t_end, t_end)
+    widths = width_check(a.spec.folders[0], STEADY_WINDOW_LATEST * a.t_end, a.t_end)
     cross = lammps_crosscheck(a.profiles[0])
     y = a.steady_profile.y
     bulk = cross[(cross.y > y.min() + CROSSCHECK_MARGIN) & (cross.y < y.max() - CROSSCHECK_MARGIN)]

@@ -98,7 +98,7 @@ def _mean_err(values, how: str) -> Measured:
 def steady_samples(a: DriveAnalysis, t0: float) -> tuple[list[pd.DataFrame], str]:
     """Independent steady-window profiles (every field, with depth, sorted by depth): one per seed, or
     BLOCKS consecutive blocks of the window of a single seed."""
-    t_end = float(a.series.t.iloc[-1])
+    t_end = a.t_end
     if len(a.profiles) >= 2:
         windows = [(p, t0, t_end) for p in a.profiles]
         how = f"spread over {len(a.profiles)} seeds"
