@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -30,9 +30,18 @@ def output_dir(path, name: str) -> Path:
     ancestor = path
     while not ancestor.exists():
         ancestor = ancestor.parent
-    require(ancestor.is_dir() and os.access(ancestor, os.W_OK | os.X_OK), name,
-            f"a folder that can be created (no write permission in {ancestor})", str(path))
+    require(ancestor.is_dir() and _can_write(ancestor), name,
+            f"a folder that can be created (cannot write in {ancestor})", str(path))
     return path
+
+
+def _can_write(folder: Path) -> bool:
+    """Whether a file can be created in ``folder`` (tried: permissions alone say yes to root in /proc)."""
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            return True
+    except OSError:
+        return False
 
 
 def output_file(path, name: str, suffix: str) -> Path:
