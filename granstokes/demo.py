@@ -53,6 +53,11 @@ def run_demo(out_dir, presets: tuple[str, ...] = ("quick", "smoke")) -> Path:
                         lambda: build(run_dirs))
     with staged(out / "compare") as work:
         write_report(comparison, work)
+    return write_index(comparison, out, presets, clock)
+
+
+def write_index(comparison, out: Path, presets, clock: dict) -> Path:
+    """The demo's front page: links to both reports, the scorecard, the conclusions, the main figure."""
     timing = ", ".join(f"{k} {v:.0f} s" for k, v in clock.items())
     main = next((dc for dc in comparison.drives if dc.predictions), comparison.drives[0])
     body = (f"<h1>granstokes demo</h1><ul><li><a href='compare/index.html'>continuum vs DEM "
