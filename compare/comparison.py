@@ -21,7 +21,8 @@ from granstokes.validate import require
 from . import calibrate
 from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, snapshot_times
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
-from .models import LOCAL, PAPER, Prediction
+from .models import LOCAL, PAPER, Prediction, ngf_model
+from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings
 from .scorecard import Z95, Scorecard, scene_checks, score
@@ -82,6 +83,7 @@ class Comparison:
     mass_error: float
     checks: Checks
     scorecard: Scorecard
+    fluidity: FluidityFit | None  # the NGF amplitude and the drive it was fitted on
     settings: CGSettings
 
 
@@ -144,7 +146,7 @@ def _checks(a: DriveAnalysis) -> Checks:
     return Checks(a.label, widths, cross, summary)
 
 
-def _predict(a: DriveAnalysis, material: Material) -> DriveComparison:
+def _predict(a: DriveAnalysis, material: Material, models) -> DriveComparison:
     s = a.spec
     dm = delta_mu(a, material.mu_s)
     try:
@@ -155,7 +157,7 @@ def _predict(a: DriveAnalysis, material: Material) -> DriveComparison:
                                             "this drive: the plate would accelerate forever)", dm)
     t_end = float(a.series.t.iloc[-1])
     times = np.union1d(np.geomspace(t_end / PREDICTION_SPAN, t_end, PREDICTION_TIMES), snapshot_times(a))
-    preds = tuple(model.predict(material, s.drive, times) for model in (LOCAL, PAPER))
+    preds = tuple(model.predict(material, s.drive, times) for model in models)
     return DriveComparison(a, scales, preds, "", dm)
 
 
@@ -187,13 +189,33 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True) 
     phi = float(pairs.phi.mean())
     material = cal.material(phi=phi)
     replicates = fit_replicates(pairs, phi)
-    compared = tuple(_predict(a, material) for a in tqdm(drives, desc="continuum predictions", disable=not progress))
-    models = [LOCAL, PAPER]
+    fluidity = _fit_fluidity(drives, material)
+    models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if fluidity else [])
+    if fluidity:
+        replicates = replicates.assign(A=_amplitude_samples(fluidity, len(replicates)))
+    compared = tuple(_predict(a, material, models)
+                     for a in tqdm(drives, desc="continuum predictions", disable=not progress))
     predictions = {(dc.label, p.model): p for dc in compared for p in dc.predictions}
     delta_s = {dc.label: dc.predictions[0].steady.delta_s for dc in compared if dc.predictions}
     t0 = {a.label: a.t_window for a in drives}
     rows, edges = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
-                        delta_s, t0, progress)
+                        delta_s, t0, {"ngf": fluidity.drive} if fluidity else {}, progress)
     card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges)
     return Comparison(runs, compared, pairs, cal, "in-drive fit (not a blind test)", replicates, material, phi,
-                      mass_error(drives[0]), _checks(drives[0]), card, settings)
+                      mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings)
+
+
+def _fit_fluidity(drives: list[DriveAnalysis], material: Material) -> FluidityFit | None:
+    """A of the NGF model, fitted on the creep of the first imposed-stress drive that local mu(I) can
+    sustain (compare.nonlocal_fit); None when there is none."""
+    for a in drives:
+        if a.spec.kind == "stress" and a.spec.value / a.spec.p_w < material.mu_d:
+            return fit_amplitude(a, material)
+    return None
+
+
+def _amplitude_samples(fit: FluidityFit, n: int, seed: int = 1) -> np.ndarray:
+    """Samples of A for the propagation: normal with the fit's standard error (independent of the
+    material's replicates: A is fitted given the central calibration), kept inside the search range."""
+    err = fit.err if np.isfinite(fit.err) else 0.0
+    return np.clip(np.random.default_rng(seed).normal(fit.A, err, n), *A_RANGE)

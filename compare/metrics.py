@@ -92,7 +92,7 @@ def _clean(v):
 
 
 SCORECARD_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted",
-                  "band", "numerical_err", "sigma", "verdict")
+                  "band", "numerical_err", "sigma", "verdict", "blind")
 
 
 def metrics(c: Comparison) -> dict:
@@ -105,6 +105,9 @@ def metrics(c: Comparison) -> dict:
         "calibration": {**cal.as_dict(), "source": c.calibration_source},
         "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
         "phi_bulk": c.phi_bulk, "mass_error": c.mass_error,
+        "ngf": None if c.fluidity is None else {"A": c.fluidity.A, "A_err": c.fluidity.err, "ci95": c.fluidity.ci95,
+                                                "fitted_on": c.fluidity.drive, "how": c.fluidity.how,
+                                                "points": c.fluidity.points, "at_search_bound": c.fluidity.at_bound},
         "drives": {dc.label: drive_metrics(dc) for dc in c.drives},
         "definitions": {k: {"unit": u, "definition": d} for k, (u, d) in DEFINITIONS.items()},
         "units": UNITS["dem_units"], "I_convention": UNITS["inertial_number"],

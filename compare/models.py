@@ -150,13 +150,21 @@ def _ngf_transient(fluidity: ngf.NonlocalFluidity, material: Material, drive: Dr
 
 @dataclass(frozen=True)
 class SceneModel:
-    """A registered model: ``steady(material, drive)`` and ``transient(material, drive, times)``."""
+    """A registered model: ``steady(material, drive)`` and ``transient(material, drive, times)``;
+    ``parameter``: the name of its own fitted parameter (beyond the material), and ``factory`` builds
+    the model at another value of it (uncertainty propagation)."""
 
     key: str
     label: str
     steady: Callable
     transient: Callable
     parameters: dict = field(default_factory=dict)
+    parameter: str | None = None
+    factory: Callable | None = None
+
+    def at(self, values) -> "SceneModel":
+        """This model with its own parameter taken from ``values`` (a mapping), if it has one."""
+        return self.factory(float(values[self.parameter])) if self.parameter else self
 
     def predict(self, material: Material, drive: Drive, times) -> Prediction:
         times = np.asarray(times, dtype=float)
@@ -173,4 +181,4 @@ def ngf_model(A: float) -> SceneModel:
     fl = ngf.NonlocalFluidity(A=A)
     return SceneModel("ngf", f"nonlocal fluidity (NGF), A = {A:.3g}",
                       lambda m, d: _ngf_steady(fl, m, d), lambda m, d, t: _ngf_transient(fl, m, d, t),
-                      {"A": A, "boundary": fl.boundary, "t0_hat": fl.t0_hat})
+                      {"A": A, "boundary": fl.boundary, "t0_hat": fl.t0_hat}, "A", ngf_model)

@@ -235,8 +235,8 @@ def scorecard_html(c: Comparison) -> str:
     for r in c.scorecard.rows.itertuples():
         verdict = f"<b style='color:{'#2a7' if r.verdict == 'consistent' else '#c33'}'>{r.verdict}</b>"
         rows.append([html.escape(r.drive), f"{html.escape(r.observable)} [{html.escape(r.unit)}]",
-                     fmt(r.dem, r.dem_err), html.escape(r.model_label), fmt(r.predicted),
-                     fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}", verdict])
+                     fmt(r.dem, r.dem_err), html.escape(r.model_label) + ("" if r.blind else " (fitted here)"),
+                     fmt(r.predicted), fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}", verdict])
     return _table(["drive", "observable [unit]", "DEM ± error", "model", "predicted", "95 % band", "sigma",
                    "verdict"], rows)
 
@@ -263,6 +263,15 @@ def conclusions(c: Comparison) -> list[str]:
                               for r in bad.itertuples() if r.dem)
             text += f"; it fails on {worst}"
         out.append(text + ".")
+    fl = c.fluidity
+    if fl is not None:
+        lo, hi = fl.ci95
+        text = (f"The nonlocal amplitude A = {fmt(fl.A, fl.err)} (95 % interval [{lo:.3g}, {hi:.3g}], {fl.how}) was fitted "
+                f"on the shape of the steady creep profile of {html.escape(fl.drive)} ({fl.points} points, one per d); its "
+                "rows for that drive are not blind, every other NGF row is.")
+        if fl.at_bound:
+            text += " The fit ran into its search range: that profile does not determine A, and the NGF rows test little."
+        out.append(text)
     creep = rows[(rows.observable == "creep_length") & (rows.model == "local")]
     if len(creep):
         out.append(f"Below the layer the DEM creeps with an e-folding length of "

@@ -16,7 +16,7 @@ t90 the running mean's half-width (a resolution, not a statistical error); for t
 the block or seed error of compare.plate.steady_state.  Model: the band is the 2.5-97.5 % range over
 the calibration's replicates (joint samples of mu_s, mu_d, I0, phi) for the steady observables; for
 t90 (a transient solve per sample is too costly) the linearised propagation J C J^T of the
-replicates' covariance C, J by central differences, band +-1.96 sd; the numerical error of t90 is its change
+replicates' covariance C, J by one-sided differences, band +-1.96 sd; the numerical error of t90 is its change
 when every other output time is dropped (interpolation), of the steady values the solver's estimate.  sigma = (dem - predicted) / sqrt(dem_err^2
 + band_sd^2 + numerical^2), band_sd = band width / (2 x 1.96); verdict "consistent" when |sigma| <= 2.
 """
@@ -170,20 +170,25 @@ def _material(base: Material, row) -> Material:
 
 
 def _linearised_t90(model: SceneModel, material: Material, drive: Drive, times, a: DriveAnalysis,
-                    cov: np.ndarray) -> float:
-    """Standard deviation of t90 from J C J^T (central differences in the four parameters)."""
+                    replicates: pd.DataFrame) -> float:
+    """Standard deviation of t90 from J C J^T, C the replicates' covariance of the material's parameters
+    and the model's own, J by one-sided differences (a transient solve each)."""
     t = a.series.t.to_numpy()
-    base = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi}
+    names = [*PARAMETERS, *([model.parameter] if model.parameter else [])]
+    base = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
+            **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
+
+    def value(params):
+        series, _ = model.at(params).transient(_material(material, params), drive, times)
+        return t90(t, np.interp(t, series.t, series[a.response]))
+
+    central = value(base)
     jac = []
-    for name in PARAMETERS:
+    for name in names:
         h = FD_STEP * abs(base[name])
-        vals = []
-        for sign in (1, -1):
-            m = _material(material, {**base, name: base[name] + sign * h})
-            series, _ = model.transient(m, drive, times)
-            vals.append(t90(t, np.interp(t, series.t, series[a.response])))
-        jac.append((vals[0] - vals[1]) / (2 * h))
+        jac.append((value({**base, name: base[name] + h}) - central) / h)
     jac = np.array(jac)
+    cov = np.atleast_2d(np.cov(replicates[names].to_numpy(), rowvar=False))
     return float(np.sqrt(max(jac @ cov @ jac, 0.0)))
 
 
@@ -211,12 +216,13 @@ def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
 
 
 def score(drives, models: list[SceneModel], predictions: dict, material: Material, replicates: pd.DataFrame,
-          delta_s: dict, t0: dict, progress: bool = True) -> tuple[pd.DataFrame, float]:
+          delta_s: dict, t0: dict, fitted_on: dict | None = None, progress: bool = True) -> tuple[pd.DataFrame, float]:
     """Scorecard rows and the band edges' stability (largest relative change from half to all replicates).
     ``predictions[(label, key)]``: the central Prediction of each drive and model; ``delta_s[label]``,
-    ``t0[label]``: the calibrated layer depth and steady-window start of each drive."""
+    ``t0[label]``: the calibrated layer depth and steady-window start of each drive; ``fitted_on[key]``:
+    the drive a model's own parameter was fitted on (its rows there are not blind)."""
+    fitted_on = fitted_on or {}
     rows, edges = [], []
-    cov = np.cov(replicates[list(PARAMETERS)].to_numpy(), rowvar=False)
     half = len(replicates) // 2
     for a in drives:
         dem = dem_observables(a, t0[a.label], delta_s[a.label])
@@ -229,12 +235,12 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
             for _, r in tqdm(replicates.iterrows(), total=len(replicates), disable=not progress, leave=False,
                              desc=f"uncertainty {a.label} {model.key}"):
                 try:
-                    samples.append(model_observables(model.steady(_material(material, r), a.spec.drive), None, a,
-                                                     delta_s[a.label]))
+                    samples.append(model_observables(model.at(r).steady(_material(material, r), a.spec.drive), None,
+                                                     a, delta_s[a.label]))
                 except ValueError:  # a replicate that cannot sustain the drive (e.g. mu_d below mu_w)
                     continue
             times = pred.series.t.to_numpy()
-            t90_sd = _linearised_t90(model, material, a.spec.drive, times, a, cov)
+            t90_sd = _linearised_t90(model, material, a.spec.drive, times, a, replicates)
             for obs, measured in dem.items():
                 value = central.get(obs)
                 if value is None or not np.isfinite(value) or not np.isfinite(measured.value):
@@ -257,5 +263,6 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                              "dem": measured.value, "dem_err": measured.err, "dem_how": measured.how,
                              "model": model.key, "model_label": model.label, "predicted": value,
                              "band": [float(lo), float(hi)], "numerical_err": numerical, "sigma": float(sigma),
-                             "verdict": "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees"})
+                             "verdict": "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees",
+                             "blind": fitted_on.get(model.key) != a.label})
     return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan

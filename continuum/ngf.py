@@ -113,8 +113,7 @@ def i0_dem(material: Material) -> float:
 
 def mu_max(material: Material, fluidity: NonlocalFluidity) -> float:
     """mu(I_max) of the Jop law: above it g_loc is held constant (transient overshoot only)."""
-    i0 = i0_dem(material)
-    return material.mu_s + (material.mu_d - material.mu_s) * fluidity.i_max / (fluidity.i_max + i0)
+    return float(material.friction.mu_of_I(fluidity.i_max, i0_dem(material)))
 
 
 def local_fluidity(material: Material, fluidity: NonlocalFluidity, mu, p):
@@ -123,7 +122,7 @@ def local_fluidity(material: Material, fluidity: NonlocalFluidity, mu, p):
     p = np.asarray(p, dtype=float)
     top = mu_max(material, fluidity)
     m = np.clip(mu, material.mu_s, top)
-    i_loc = i0_dem(material) * (m - material.mu_s) / (material.mu_d - m)
+    i_loc = material.friction.I_of_mu(m, i0_dem(material))
     return np.sqrt(p / material.rho_p) / material.d * i_loc / np.maximum(m, 1e-300)
 
 
