@@ -198,9 +198,9 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True) 
     predictions = {(dc.label, p.model): p for dc in compared for p in dc.predictions}
     delta_s = {dc.label: dc.predictions[0].steady.delta_s for dc in compared if dc.predictions}
     t0 = {a.label: a.t_window for a in drives}
-    rows, edges = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
+    rows, edges, bands = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
                         delta_s, t0, {"ngf": fluidity.drive} if fluidity else {}, progress)
-    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges)
+    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges, bands)
     return Comparison(runs, compared, pairs, cal, "in-drive fit (not a blind test)", replicates, material, phi,
                       mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings)
 

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from continuum import ngf
 from continuum.scales import UNITS
 from continuum.steady import steady_mu
 from granstokes.page import page
@@ -56,7 +57,7 @@ def _running(s: pd.Series, n: int) -> pd.Series:
 
 # --- figures -----------------------------------------------------------------------------------------
 
-def drive_figure(dc: DriveComparison, out: Path) -> Path:
+def drive_figure(dc: DriveComparison, bands: dict, out: Path) -> Path:
     """The free response against time, delta_u(t), and the steady velocity profile (linear and log)."""
     g, spec, resp = dc.dem, dc.dem.spec, dc.dem.response
     fig = Figure(figsize=(12, 8.5), layout="constrained")
@@ -70,6 +71,9 @@ def drive_figure(dc: DriveComparison, out: Path) -> Path:
                            label=f"DEM, 95 % band over {len(spec.folders)} seeds")
     for p in dc.predictions:
         ax[0].plot(p.series.t, p.series[resp], label=p.label, **MODEL_STYLE[p.model])
+        if (dc.label, p.model) in bands:
+            b = bands[(dc.label, p.model)]
+            ax[0].fill_between(b.t, b.lo, b.hi, color=MODEL_STYLE[p.model]["color"], alpha=0.15, lw=0)
     lo, hi = np.nanpercentile(smooth, [1, 99])
     top = max(hi, *(np.nanpercentile(p.series[resp], 99) for p in dc.predictions)) if dc.predictions else hi
     pad = 0.1 * (top - min(lo, 0))
@@ -157,6 +161,31 @@ def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
     axes[0].legend(fontsize=7, title="solid DEM, dashed local mu(I)", title_fontsize=7)
     fig.suptitle(f"{g.label}: transient profiles at snapshot times [sqrt(d/g)]; DEM units, I in the DEM convention")
     path = out / f"transient_{slug(g.label)}.png"
+    fig.savefig(path, dpi=100)
+    return path
+
+
+def fluidity_figure(dc: DriveComparison, material, out: Path) -> Path:
+    """The steady fluidity g = |du/dy|/mu against depth: the DEM's (coarse-grained), NGF's, and the local
+    g_loc(mu, p) of the same stress (zero below delta_s)."""
+    g, spec = dc.dem, dc.dem.spec
+    p = g.steady_profile
+    fig = Figure(figsize=(6.5, 5), layout="constrained")
+    ax = fig.subplots()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dem_g = p.gamma_dot_dem / p.mu
+    ax.semilogx(dem_g.where(dem_g > 0), p.depth, color="C0", lw=1.8, label="DEM: |du/dy|/mu (coarse-grained)")
+    for pr in dc.predictions:
+        if pr.steady.g is not None:
+            ax.semilogx(pr.steady.g, pr.steady.y, label=pr.label, **MODEL_STYLE[pr.model])
+    z = np.linspace(0, spec.depth, 400)
+    pz = spec.p_w + material.phi * material.rho_p * material.g * z
+    local = ngf.local_fluidity(material, ngf.NonlocalFluidity(A=0.0), dc.predictions[0].steady.mu_w * spec.p_w / pz, pz)
+    ax.semilogx(np.where(local > 0, local, np.nan), z, label="local g_loc (rigid below delta_s)", **MODEL_STYLE["local"])
+    ax.set(xlabel="fluidity g = |du/dy|/mu [sqrt(g/d)]", ylabel=DEPTH_LABEL, ylim=(spec.depth, 0),
+           title=f"{g.label}: steady fluidity")
+    ax.legend(fontsize=7)
+    path = out / f"fluidity_{slug(g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
 
@@ -287,12 +316,16 @@ HOW_TO_READ = {
     "scorecard": "Each bar is one scorecard row: how many combined standard errors the DEM lies from the prediction. "
                  "Inside the grey band the prediction is consistent with the DEM.",
     "drive": "Top left: the free response (u_w under an imposed stress, mu_w under an imposed speed), the DEM as a running "
-             "mean with its band over seeds, each model as a line. Top right: the layer thickness delta_u on log axes "
+             "mean with its band over seeds, each model as a line with its 95 % band from the calibration's uncertainty "
+             "(linearised). Top right: the layer thickness delta_u on log axes "
              "(sqrt(t) growth is a slope of 1/2). Bottom: the steady velocity profile, linear and log; on the log panel a "
              "straight DEM tail below delta_s is creep, which local mu(I) cannot have.",
     "profiles": "Steady-window depth profiles of the DEM (band: seeds or frames) with the local model's steady state: "
                 "velocity, solid fraction, pressure, shear stress, friction and inertial number.",
     "transient": "Depth profiles at a few snapshot times, DEM solid and the local model dashed in the same colour.",
+    "fluidity": "The steady fluidity g = |du/dy|/mu on a log scale: the DEM's from its coarse-grained profile, the NGF "
+                "model's, and the local law's g_loc, which vanishes below delta_s. A straight DEM line below the layer "
+                "is the exponential decay NGF predicts with length A d/sqrt(|mu - mu_s|).",
     "calibration": "The steady (mu, I) and (phi, I) pairs, one per d of depth away from the walls, with their bands, and "
                    "the fitted law over the range of the data.",
     "cost_noise": "What each grain-step buys: the relative standard error of each drive's steady response against the "
@@ -318,8 +351,9 @@ def write_report(c: Comparison, out_dir) -> dict:
         for p in dc.predictions:
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{p.model}.csv", index=False)
         if dc.predictions:
-            figs += [("drive", drive_figure(dc, out)), ("profiles", profiles_figure(dc, c.material, out)),
-                     ("transient", transient_figure(dc, c.material, out))]
+            figs += [("drive", drive_figure(dc, c.scorecard.bands, out)), ("profiles", profiles_figure(dc, c.material, out)),
+                     ("transient", transient_figure(dc, c.material, out)),
+                     ("fluidity", fluidity_figure(dc, c.material, out))]
     ch = c.checks
     ch.width.to_csv(out / "width_check.csv", index=False)
     ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False)
