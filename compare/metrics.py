@@ -8,8 +8,10 @@ from scipy import stats
 from continuum.scales import UNITS
 
 from .calibrate import WALL_EXCLUSION
+from .analysis import TRANSITS_BEFORE_COMPARISON
 from .comparison import Comparison, DriveComparison, early_exponents
-from .plate import STEADY_CHANGE, STEADY_WINDOW, STEADY_WINDOW_LATEST
+from .plate import (BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_CHANGE, STEADY_WINDOW, STEADY_WINDOW_LATEST,
+                    block_estimate)
 
 DEFINITIONS = {
     "steady": f"running mean over {STEADY_WINDOW:.0%} of the record within max(3 stderr, "
@@ -26,6 +28,17 @@ DEFINITIONS = {
     "alpha": "exponents of u_w ~ t^alpha and delta_u ~ t^alpha by least squares on log-log from the first output to "
              "half the final value; alpha_fits gives the 95 % interval and the number of points (few points: "
              "the DEM layer is established within a few frames, and the exponent is then undetermined)",
+    "errors": f"every DEM value's *_stderr is one standard error; *_method says how: the spread over the seeds "
+              f"(>= {MIN_SEEDS_SPREAD} seeds), else blocks of >= {BLOCK_TAUS:g} integrated autocorrelation times "
+              "within each run (Sokal's window), combined over the seeds",
+    "mu_w": "friction of a window = <tau_w>/<p> (ratio of means; plate.csv samples average every step of their "
+            "interval)",
+    "slip": f"1 - <u_x of the bed grains touching a plate grain>/<plate u_x> over the final {1 - SLIP_FROM:.0%} of "
+            "the drive (grain-weighted over every step)",
+    "tau_bulk": "coarse-grained tau = -sigma_xy (contact + kinetic) averaged over the bulk in each frame of the "
+                "steady window, against the plate's <tau_w> over the same window",
+    "elastic_start": f"transit_time = depth/c_s of the shear wave through the deposited bed (run.json); "
+                     f"the early exponents (alpha) are fitted from {TRANSITS_BEFORE_COMPARISON:g} transits on",
     "units": UNITS["dem_units"],
     "inertial_number": UNITS["inertial_number"],
 }
@@ -52,18 +65,30 @@ def drive_metrics(dc: DriveComparison) -> dict:
     p = g.steady_profile
     inside = (p.depth > WALL_EXCLUSION) & (p.depth < spec.depth - WALL_EXCLUSION)
     tau_plate = g.steady["mu_w"]["value"] * spec.p_w if spec.kind == "speed" else spec.value
-    steady_delta = g.delta.delta_u[g.delta.t >= STEADY_WINDOW_LATEST * g.delta.t.max()]
+    steady_delta = g.delta.delta_u[g.delta.t >= STEADY_WINDOW_LATEST * g.delta.t.max()].dropna()
+    delta_est = block_estimate({"d": steady_delta.to_numpy()}) if len(steady_delta) > 1 else {}
     response = g.response
     expo = early_exponents(g)
     out = {
         "kind": spec.kind, "imposed": spec.value, "p_w": spec.p_w, "seeds": len(spec.folders),
         "grains_x_steps": spec.cost,
         "pressure_slope": slope.slope, "pressure_slope_stderr": slope.stderr,
-        "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_stderr": g.steady["u_w"]["stderr"]},
-        "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_stderr": g.steady["mu_w"]["stderr"]},
-        "delta_s": {"dem": float(steady_delta.mean()),
-                    "dem_stderr": float(steady_delta.std(ddof=1) / np.sqrt(len(steady_delta)))
-                    if len(steady_delta) > 1 else np.nan},
+        "pressure_slope_method": "least squares over the depths of the whole run's mean profile (neighbouring "
+                                 "depths are correlated by the kernel: indicative)",
+        "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_stderr": g.steady["u_w"]["stderr"],
+                    "dem_method": g.steady["u_w"]["method"]},
+        "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_stderr": g.steady["mu_w"]["stderr"],
+                     "dem_method": g.steady["mu_w"]["method"]},
+        "delta_s": {"dem": delta_est.get("value", np.nan), "dem_stderr": delta_est.get("stderr", np.nan),
+                    "dem_method": delta_est.get("method", "") + " (seed-averaged frames)"},
+        "slip": g.slip["value"], "slip_err": g.slip["stderr"], "slip_method": g.slip["method"],
+        "slip_per_seed": g.slip["per_seed"],
+        "tau_bulk": {"cg": g.bulk_tau["cg"]["value"], "cg_stderr": g.bulk_tau["cg"]["stderr"],
+                     "plate": g.bulk_tau["plate"]["value"], "plate_stderr": g.bulk_tau["plate"]["stderr"],
+                     "difference": g.bulk_tau["difference"], "difference_stderr": g.bulk_tau["difference_stderr"],
+                     "agree": g.bulk_tau["agree"], "window": g.bulk_tau["window"], "frames": g.bulk_tau["frames"],
+                     "method": g.bulk_tau["cg"]["method"]},
+        "elastic_start": {"transit_time": spec.transit_time, "compared_from": spec.compared_from},
         "t90": {"dem": t90(g.series.t, g.series[response])},
         "alpha_u": expo.get("alpha_u", {}).get("alpha", np.nan),
         "alpha_delta": expo.get("alpha_delta", {}).get("alpha", np.nan),

@@ -60,6 +60,9 @@ def drive_figure(dc: DriveComparison, out: Path) -> Path:
         ref = g.delta.delta_u[g.delta.t > 0].iloc[0] * np.sqrt(t / t.iloc[0])
         ax[2].plot(t, ref, color="0.5", lw=0.8, ls="-.", label="~ sqrt(t)")
     ax[2].set(xscale="log", yscale="log", xlabel="t [sqrt(d/g)]", ylabel="delta_u [d] (u = 5 % of u_w)")
+    for axis in ax[:3]:  # the elastic start: the load is carried down by a shear wave, not compared
+        axis.axvline(spec.transit_time, color="0.3", lw=0.8, ls="--", label="shear-wave transit over the bed")
+        axis.axvspan(0, spec.compared_from, color="0.85", alpha=0.5, lw=0, label="elastic start (not compared)")
     ax[2].legend(fontsize=7)
     p = g.steady_profile
     ax[3].semilogx(p.u_x.clip(lower=1e-6), p.depth, color="C0", label="DEM steady window")
