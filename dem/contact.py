@@ -88,10 +88,11 @@ class Contact:
     def dt_max(self) -> float:
         return self.t_c / DT_FRACTION
 
-    def pair_coeff(self) -> str:
-        """The contact law in LAMMPS ``pair_coeff`` / ``fix wall/gran`` syntax."""
+    def pair_coeff(self, mu_p: float | None = None) -> str:
+        """The contact law in LAMMPS ``pair_coeff`` / ``fix wall/gran`` syntax (friction ``mu_p`` if given)."""
+        mu = self.mu_p if mu_p is None else mu_p
         return (f"{self.model} {self.k_n:.10g} {self.restitution:.10g} "
-                f"tangential linear_history {self.k_t:.10g} 0.5 {self.mu_p:.10g} damping coeff_restitution")
+                f"tangential linear_history {self.k_t:.10g} 0.5 {mu:.10g} damping coeff_restitution")
 
     def as_dict(self) -> dict:
         return {

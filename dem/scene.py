@@ -27,10 +27,12 @@ from .sizing import DrivePlan, Plan
 #: grain placement: insertion column filled to this fraction of the largest grain's volume
 INSERT_FRACTION = {2: 0.30, 3: 0.20}
 SKIN = 0.3  # neighbor skin in d
-PLATE_DIAMETER = 0.5  # d: the plate's glued grains (small: only the grains nested between them touch the plate)
+PLATE_DIAMETER = 1.0  # d: the plate's glued grains, bed-like (measured slip: bench/RESULTS.md)
 #: the largest grain that fits through a gap of the plate is this fraction of the smallest bed grain:
 #: the bed grains nest as deep as they can without one passing through (measured slip: bench/RESULTS.md)
 PLATE_GAP_FRACTION = 0.9
+#: Coulomb friction of the bed-plate contacts (a rough, gripping plate; bed-bed contacts keep mu_p)
+PLATE_FRICTION = 1.0
 #: bed grains are binned up to this height above the plate's initial position (nothing is lost above it)
 BIN_HEADROOM = 8.0
 
@@ -137,10 +139,17 @@ group plate type {PLATE}
 def _pair(plan: Plan) -> str:
     c = plan.config.contact
     return f"""
-# --- contact law: {c.model}, Coulomb friction mu_p = {c.mu_p:g}, restitution e = {c.restitution:g} ---
-pair_style granular
-pair_coeff * * {c.pair_coeff()}
+# --- contact law: {c.model}, Coulomb friction mu_p = {c.mu_p:g} (bed-plate {PLATE_FRICTION:g}), restitution e = {c.restitution:g} ---
+{_pair_coeffs(plan)}
 """
+
+
+def _pair_coeffs(plan: Plan) -> str:
+    """One contact law for every pair; bed-plate contacts with the plate's friction PLATE_FRICTION."""
+    c = plan.config.contact
+    return f"""pair_style granular
+pair_coeff * * {c.pair_coeff()}
+pair_coeff {BED} {PLATE} {c.pair_coeff(PLATE_FRICTION)}"""
 
 
 def _settle(plan: Plan) -> str:
@@ -255,8 +264,7 @@ def _read_state(plan: Plan, restart: str) -> str:
 #     recomputes its cutoffs (contact history comes back with the restart) ---
 processors {_procs(plan.dimension)}
 read_restart {restart}
-pair_style granular
-pair_coeff * * {plan.config.contact.pair_coeff()}
+{_pair_coeffs(plan)}
 """
 
 
@@ -409,9 +417,10 @@ def plate_geometry(plan: Plan) -> dict:
     mass = n * grain_mass(PLATE_DIAMETER, plan.dimension)
     nest = nesting_depth(plan)
     return {"grains": n, "layout": [nx, nz], "spacing": [ax, az] if plan.dimension == 3 else [ax],
-            "grain_diameter": PLATE_DIAMETER, "gap_fraction": PLATE_GAP_FRACTION,
+            "grain_diameter": PLATE_DIAMETER, "gap_fraction": PLATE_GAP_FRACTION, "friction": PLATE_FRICTION,
             "nesting_depth": nest, "mass": mass, "mass_per_area": mass / plan.area, "area": plan.area,
             "surface_offset": nest - 0.5,
             "design": "one rigid body of unit grains spaced so that the largest grain fitting through a gap is "
                       f"{PLATE_GAP_FRACTION:g} of the smallest bed grain (2D row, 3D square lattice); unit bed "
-                      "grains nest nesting_depth below the plate grains' centres"}
+                      "grains nest nesting_depth below the plate grains' centres; bed-plate contacts have Coulomb friction "
+                      "`friction`"}
