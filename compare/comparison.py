@@ -121,14 +121,17 @@ def delta_mu(a: DriveAnalysis, mu_s: float) -> np.ndarray:
 
 
 def early_exponents(a: DriveAnalysis) -> dict:
-    """alpha of u_w ~ t^alpha (imposed stress) and delta_u ~ t^alpha over the early window:
-    from the first output to the time u_w (delta_u) reaches half its steady value."""
+    """alpha of u_w ~ t^alpha (imposed stress) and delta_u ~ t^alpha over the early window: from the
+    first output after the elastic start (spec.compared_from) to the time u_w (delta_u) reaches half its
+    steady value."""
     out = {}
     t, u = a.series.t.to_numpy(), a.series.u_w.to_numpy()
+    start = np.nan_to_num(a.spec.compared_from)
     if a.spec.kind == "stress":
         half = t[np.argmax(u >= 0.5 * a.steady["u_w"]["value"])]
-        out["alpha_u"] = power_law(t, u, t[1], half)
+        out["alpha_u"] = power_law(t, u, max(t[1], start), half)
     d = a.delta.dropna()
+    d = d[d.t >= start]
     if len(d) >= 4:
         final = d.delta_u.iloc[-len(d) // 4:].mean()
         half = d.t.iloc[np.argmax(d.delta_u.to_numpy() >= 0.5 * final)]

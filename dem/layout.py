@@ -33,7 +33,7 @@ PLATE_CSV, PROFILES_CSV, ATOMS, CONTACTS, LOG = "plate.csv", "profiles.csv", "at
 SEGMENTS, RESTART_DIR = "segments", "restart"
 
 # --- columns -------------------------------------------------------------------------------------
-PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y")
+PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y", "u_c", "n_c")
 ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "radius")
 CONTACT_COLUMNS = ("id1", "id2", "dist", "dx", "dy", "dz", "fn", "ft_x", "ft_y", "ft_z")
 GRAIN_COLUMNS = ("id", "type", "radius", "mass")
