@@ -1,4 +1,4 @@
-"""``granstokes compare RUN_DIR... --out REPORT_DIR [--json]``."""
+"""``granstokes compare RUN_DIR... --out REPORT_DIR [--calibration DIR/calibration.json] [--json]``."""
 from __future__ import annotations
 
 import json
@@ -15,7 +15,7 @@ def run_compare(args) -> int:
     from .comparison import build
     from .report import write_report
 
-    m = write_report(build(args.runs), args.out)
+    m = write_report(build(args.runs, calibration=args.calibration), args.out)
     if args.json:
         print(json.dumps(m, default=float))
     else:
@@ -24,8 +24,11 @@ def run_compare(args) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("compare", help="coarse-grain DEM runs, calibrate mu(I), predict and write the report")
+    p = sub.add_parser("compare", help="coarse-grain DEM runs, predict them from mu(I) (independent or fitted), write the report")
     p.add_argument("runs", type=Path, nargs="+", metavar="RUN_DIR", help="run folders of granstokes dem run")
     p.add_argument("--out", type=Path, required=True, help="report folder (index.html, CSV, metrics.json)")
+    p.add_argument("--calibration", type=Path, help="calibration.json of granstokes dem calibrate (same grains): "
+                                                    "mu(I) and phi from it, the drives a blind test; without it "
+                                                    "mu(I) is fitted on the drives (a fit, not a prediction)")
     p.add_argument("--json", action="store_true", help="also print metrics.json to stdout")
     p.set_defaults(func=run_compare)

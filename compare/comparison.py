@@ -1,11 +1,15 @@
 """The whole comparison, built once before anything is rendered: every drive's DEM analysis, the mu(I)
 calibration, the continuum predictions from it, and the checks of the coarse-graining.
 
-``build(run_dirs, settings)`` -> ``Comparison`` (frozen).  compare.metrics and compare.report only
+``build(run_dirs, settings, calibration)`` -> ``Comparison`` (frozen).  With ``calibration`` (a
+calibration.json of ``granstokes dem calibrate``) mu(I) and phi come from that independent plane-shear
+measurement and the drives are a blind test; without it mu(I) is fitted on the drives' own steady
+windows (``Comparison.calibration.kind`` says which: a fit, not a prediction).  compare.metrics and compare.report only
 render it.  DEM units throughout; I in the DEM convention.
 """
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,6 +19,7 @@ import pandas as pd
 from continuum.crossing import crossing_depth
 from continuum.scales import Material, Scales
 from continuum.steady import DELTA_THRESHOLD
+from dem.layout import RUN_JSON
 from granstokes.validate import require
 
 from . import calibrate
@@ -70,12 +75,18 @@ class Comparison:
     runs: tuple[Path, ...]
     drives: tuple[DriveComparison, ...]
     pairs: pd.DataFrame
-    calibration: calibrate.Calibration
+    calibration: calibrate.Calibration  # its ``kind``: independent plane shear or the in-drive fit
     material: Material
     phi_bulk: float
     mass_error: float
     checks: Checks
     settings: CGSettings
+    law_test: dict  # the drives' steady pairs against the law (law_test); a test only when ``blind``
+
+    @property
+    def blind(self) -> bool:
+        """True when mu(I) and phi come from an independent calibration (a prediction, not a fit)."""
+        return self.calibration.is_prediction
 
 
 def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.WALL_EXCLUSION,
@@ -87,8 +98,38 @@ def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.
         p = a.steady_profile
         inside = p[(p.depth > wall_exclusion) & (p.depth < a.spec.depth - wall_exclusion)]
         step = max(1, int(round(spacing / abs(np.diff(inside.y.to_numpy()[:2])[0]))))
-        rows.append(inside.iloc[::step][["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(drive=a.label))
+        cols = ["depth", "mu", "I_dem", "phi", "p", "tau", "mu_lo", "mu_hi", "I_dem_lo", "I_dem_hi"]
+        rows.append(inside.iloc[::step][cols].assign(drive=a.label))
     return pd.concat(rows, ignore_index=True)
+
+
+#: z beyond which a drive's steady (mu, I) pair disagrees with the independent law
+LAW_TEST_Z = 2.0
+
+
+def law_test(pairs: pd.DataFrame, cal: calibrate.Calibration) -> dict:
+    """The drives' steady (mu, I) pairs (I > I_MIN) against the calibration's law: residual mu - mu(I)
+    and z = residual / sqrt(s_pair^2 + s_law^2), s_pair from the pair's 95 % seed band, s_law the
+    bootstrap spread of the law at that I; with a one-sentence verdict."""
+    sel = pairs[(pairs.I_dem > calibrate.I_MIN) & np.isfinite(pairs.mu)]
+    I = sel.I_dem.to_numpy()
+    law = calibrate.mu_law(I, cal.mu_s, cal.mu_d, cal.I0_dem)
+    reps = np.array([calibrate.mu_law(I, a, b, c) for a, b, c in
+                     zip(cal.replicates["mu_s"], cal.replicates["mu_d"], cal.replicates["I0_dem"])])
+    s_law = reps.std(axis=0, ddof=1) if len(reps) > 1 else np.zeros_like(I)
+    s_pair = np.nan_to_num((sel.mu_hi - sel.mu_lo).to_numpy() / (2 * 1.96))
+    resid = sel.mu.to_numpy() - law
+    z = resid / np.sqrt(s_pair**2 + s_law**2 + 1e-300)
+    out = {"n_pairs": int(len(I)), "mean_residual": float(resid.mean()), "rms_residual": float(np.sqrt(np.mean(resid**2))),
+           "fraction_beyond": float(np.mean(np.abs(z) > LAW_TEST_Z)), "z_threshold": LAW_TEST_Z,
+           "I_range": [float(I.min()), float(I.max())]}
+    side = "above" if out["mean_residual"] > 0 else "below"
+    out["verdict"] = (f"{out['n_pairs']} steady (mu, I) pairs of the drives (I in [{I.min():.2g}, {I.max():.2g}]) lie on "
+                      f"average {abs(out['mean_residual']):.3f} {side} the {cal.kind} law (rms {out['rms_residual']:.3f}); "
+                      f"{out['fraction_beyond']:.0%} differ by more than {LAW_TEST_Z:g} combined standard errors"
+                      + (" -- a disagreement beyond errors" if out["fraction_beyond"] > 0.05 * 2 else
+                         " -- consistent within errors"))
+    return out
 
 
 def delta_mu(a: DriveAnalysis, mu_s: float) -> np.ndarray:
@@ -150,16 +191,32 @@ def _predict(a: DriveAnalysis, material: Material) -> DriveComparison:
     return DriveComparison(a, scales, tuple(preds), "", dm)
 
 
-def build(run_dirs, settings: CGSettings = CGSettings()) -> Comparison:
-    """Analyse every drive of ``run_dirs``, calibrate on their steady windows, predict each drive."""
+def check_grains(cal: calibrate.Calibration, runs) -> None:
+    """Refuse a calibration of other grains than the runs' (one-line ValueError naming the difference)."""
+    for run in runs:
+        grains = json.loads((Path(run) / RUN_JSON).read_text())["config"]["grains"]
+        diff = {k: (cal.grains.get(k), v) for k, v in grains.items() if cal.grains.get(k) != v}
+        require(not diff, f"--calibration {cal.source}", f"a calibration of the grains of {run}",
+                "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
+
+
+def build(run_dirs, settings: CGSettings = CGSettings(), calibration: str | Path | None = None) -> Comparison:
+    """Analyse every drive of ``run_dirs``; take mu(I) and phi from ``calibration`` (calibration.json,
+    refused if its grains differ from the runs') or else fit them on the steady windows; predict each drive."""
     runs = tuple(Path(r) for r in run_dirs)
     resolved = [r.resolve() for r in runs]
     require(len(set(resolved)) == len(resolved), "RUN_DIR", "distinct run folders (one was given twice)",
             [str(r) for r in runs])
+    independent = None
+    if calibration is not None:
+        independent = calibrate.load(calibration)
+        check_grains(independent, runs)
     drives = [analyse_drive(spec, settings) for run in runs for spec in drive_specs(run)]
     pairs = steady_pairs(drives)
-    cal = calibrate.fit(pairs)
     phi = float(pairs.phi.mean())
-    material = cal.material(phi=phi)
+    # the continuum's constant phi: the drives' own bulk value (fit), or the calibration's phi(I -> 0) =
+    # phi_max (prediction: the bed below the flowing layer is at rest)
+    cal = calibrate.fit(pairs) if independent is None else independent
+    material = cal.material(phi=None if cal.is_prediction else phi)
     return Comparison(runs, tuple(_predict(a, material) for a in drives), pairs, cal, material, phi,
-                      mass_error(drives[0]), _checks(drives[0]), settings)
+                      mass_error(drives[0]), _checks(drives[0]), settings, law_test(pairs, cal))

@@ -118,7 +118,7 @@ def metrics(c: Comparison) -> dict:
         "tau_uniformity": main.get("tau_uniformity"),
         "mass_error": c.mass_error,
         "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
-        "calibration": cal.as_dict(),
+        "calibration": cal.as_dict(), "blind": c.blind, "calibration_test": c.law_test,
         "u_w_inf": main["u_w_inf"], "delta_s": main.get("delta_s"),
         "alpha_delta": main.get("alpha_delta"), "alpha_u": main.get("alpha_u"),
         "alpha_fits": main.get("alpha_fits"),

@@ -14,7 +14,7 @@ from continuum.steady import steady_mu
 from granstokes.page import page
 
 from .analysis import snapshot_times
-from .calibrate import mu_law
+from .calibrate import LINEAR_I_MAX, PUBLISHED, mu_law
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
 
@@ -137,25 +137,83 @@ def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
     return path
 
 
+def _law_band(cal, I, q=(2.5, 97.5)):
+    reps = np.array([mu_law(I, a, b, c) for a, b, c in
+                     zip(cal.replicates["mu_s"], cal.replicates["mu_d"], cal.replicates["I0_dem"])])
+    return np.percentile(reps, q, axis=0)
+
+
 def calibration_figure(c: Comparison, out: Path) -> Path:
+    """mu(I) and phi(I): the law with its 95 % bootstrap band; blind comparison: the plane-shear points
+    it was measured on and the drives' steady pairs over it as a test (seed bands as error bars);
+    published values beside it.  In-drive fit: the pairs and the fit through them."""
     cal, pairs = c.calibration, c.pairs
-    fig = Figure(figsize=(11, 4.2), layout="constrained")
+    fig = Figure(figsize=(12, 4.6), layout="constrained")
     a, b = fig.subplots(1, 2)
-    for label, g in pairs.groupby("drive"):
-        a.scatter(g.I_dem, g.mu, s=8, label=label)
-        b.scatter(g.I_dem, g.phi, s=8, label=label)
-    I = np.geomspace(max(pairs.I_dem[pairs.I_dem > 0].min(), 1e-4), pairs.I_dem.max() * 1.5, 200)
+    lo_I = min(pairs.I_dem[pairs.I_dem > 0].min(), cal.points.I.min() if len(cal.points) else 1.0)
+    I = np.geomspace(max(lo_I, 1e-4), max(pairs.I_dem.max(), cal.points.I.max() if len(cal.points) else 0) * 1.5, 200)
+    what = "independent law (plane shear)" if c.blind else "fit on the drives (not a prediction)"
     a.plot(I, mu_law(I, cal.mu_s, cal.mu_d, cal.I0_dem), "k-",
-           label=f"mu_s = {cal.mu_s:.3f}, mu_d = {cal.mu_d:.3f}, I0_dem = {cal.I0_dem:.3f}")
-    a.axvline(cal.I_min, color="0.6", ls=":", label="I_min (creep excluded)")
-    a.set(xscale="log", xlabel="I_dem = |du/dy| d/sqrt(p/rho_p)", ylabel="mu = tau/p", title="mu(I), steady windows")
-    b.plot(I, cal.phi_max - cal.phi_slope * I, "k-", label=f"phi = {cal.phi_max:.3f} - {cal.phi_slope:.3f} I")
+           label=f"{what}: mu_s {cal.mu_s:.3f}, mu_d {cal.mu_d:.3f}, I0_dem {cal.I0_dem:.3f}")
+    a.fill_between(I, *_law_band(cal, I), color="0.6", alpha=0.35, label="95 % bootstrap band")
+    lin = I[I <= LINEAR_I_MAX]
+    a.plot(lin, cal.mu_1 + cal.b * lin, color="0.3", ls="--", lw=0.9, label=f"linear: {cal.mu_1:.3f} + {cal.b:.2f} I")
+    if c.blind:
+        pts = cal.points
+        a.errorbar(pts.I, pts.mu, xerr=pts.get("I_err"), yerr=pts.get("mu_err"), fmt="ks", ms=4, mfc="w",
+                   label="plane-shear points (per seed)")
+        b.errorbar(pts.I, pts.phi, xerr=pts.get("I_err"), yerr=pts.get("phi_err"), fmt="ks", ms=4, mfc="w",
+                   label="plane-shear points")
+    for k, (label, g) in enumerate(pairs.groupby("drive")):
+        xerr = np.abs(np.vstack([g.I_dem - g.I_dem_lo, g.I_dem_hi - g.I_dem])) if c.blind else None
+        yerr = np.abs(np.vstack([g.mu - g.mu_lo, g.mu_hi - g.mu])) if c.blind else None
+        a.errorbar(g.I_dem, g.mu, xerr=xerr, yerr=yerr, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6,
+                   label=f"{label} steady pairs" + (" (test)" if c.blind else ""))
+        b.scatter(g.I_dem, g.phi, s=8, color=f"C{k}", label=label)
+    for k, pub in enumerate(x for x in PUBLISHED if x["dimension"] == c.drives[0].dem.spec.dimension):
+        if "mu_1" in pub:
+            a.plot(lin, pub["mu_1"] + pub["b"] * lin, color=f"C{k + 5}", ls=":", lw=1.2,
+                   label=f"{pub['source'].split(',')[0]}: {pub['mu_1']:g} + {pub['b']:g} I")
+        else:
+            a.plot(I, mu_law(I, pub["mu_s"], pub["mu_d"], pub["I0"]), color=f"C{k + 5}", ls=":", lw=1.2,
+                   label=f"{pub['source'].split(',')[0]} (Jop form)")
+        if "phi_max" in pub:
+            b.plot(lin, pub["phi_max"] - pub["a"] * lin, color=f"C{k + 5}", ls=":", lw=1.2,
+                   label=f"{pub['source'].split(',')[0]}")
+    if cal.I_min is not None:
+        a.axvline(cal.I_min, color="0.6", ls=":", label="I_min (creep excluded from the fit)")
+    a.set(xscale="log", xlabel="I_dem = |du/dy| d/sqrt(p/rho_p)", ylabel="mu = tau/p",
+          title="mu(I): " + ("the drives as a blind test of the plane-shear law" if c.blind else "fit on the drives"))
+    b.plot(lin, cal.phi_max - cal.phi_slope * lin, "k-", label=f"phi = {cal.phi_max:.3f} - {cal.phi_slope:.3f} I")
     b.set(xscale="log", xlabel="I_dem", ylabel="phi", title="phi(I)")
-    a.legend(fontsize=7)
-    b.legend(fontsize=7)
+    a.legend(fontsize=6)
+    b.legend(fontsize=6)
     path = out / "calibration.png"
     fig.savefig(path, dpi=110)
     return path
+
+
+def calibration_section(c: Comparison) -> str:
+    """The report's calibration section: source, kind, values with intervals, published values, the test."""
+    cal = c.calibration
+    ci = cal.ci95
+    rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{getattr(cal, k):.4g}</td><td>[{ci[k][0]:.4g}, {ci[k][1]:.4g}]"
+                   "</td></tr>" for k in ("mu_s", "mu_d", "I0_dem", "mu_1", "b", "phi_max", "phi_slope"))
+    pubs = "".join(f"<li>{html.escape(p['source'])}: {html.escape(p['system'])}; "
+                   + html.escape(", ".join(f"{k} = {p[k]:g}" for k in ("mu_s", "mu_d", "I0", "mu_1", "b", "phi_max", "a")
+                                           if k in p)) + f" (verified: {html.escape(p['verified'])})</li>"
+                   for p in PUBLISHED)
+    head = ("<p><b>Blind comparison</b>: mu(I) and phi come from an independent plane-shear calibration of the "
+            f"same grains, <code>{html.escape(cal.source)}</code>; the drives' steady pairs are a test of it, "
+            "not a fit.</p>" if c.blind else
+            "<p><b>In-drive fit</b>: mu(I) is fitted on the drives' own steady windows, so the steady predictions "
+            "are close to a restatement of the fit; pass <code>--calibration DIR/calibration.json</code> "
+            "(<code>granstokes dem calibrate</code>) for a blind test.</p>")
+    return ("<h2>Calibration</h2>" + head + "<table><tr><th>parameter (I_dem)</th><th>value</th><th>95 % interval "
+            "(bootstrap)</th></tr>" + rows + "</table>"
+            f"<p>Test of the law by the drives: {html.escape(c.law_test['verdict'])}.</p>"
+            "<p>Published values (plane shear or rheometry; differences: friction mu_p, restitution and "
+            "polydispersity differ from ours, mu_p = 0.5 here):</p><ul>" + pubs + "</ul>")
 
 
 def cost_figure(m: dict, out: Path) -> Path:
@@ -212,10 +270,11 @@ def write_report(c: Comparison, out_dir) -> dict:
         f"<p>Runs: {html.escape(', '.join(m['runs']))}. Everything in DEM units ({html.escape(UNITS['dem_units'])}); "
         f"inertial number: {html.escape(UNITS['inertial_number'])}.</p>",
         "<h2>How to read it</h2><p>Each drive figure puts the DEM (blue, band over seeds) against two continuum "
-        "predictions made from the DEM's own calibration only: the velocity form on the DEM's scene (orange: "
+        "predictions made from the calibration only (see Calibration: an independent plane-shear law, or a fit on the drives themselves): the velocity form on the DEM's scene (orange: "
         "bed at rest, finite depth, plate mass) and the paper's stress-diffusion model (green dashed). Agreement "
         "of the steady values tests the local mu(I) law; the early slopes test the sqrt(t) growth; the "
         "log-scale velocity profile shows the creep below delta_s that local mu(I) cannot have.</p>",
+        calibration_section(c),
         "<h2>Metrics</h2><table>" + rows + "</table>",
         "<h2>Definitions</h2><ul>" + "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>"
                                               for k, v in DEFINITIONS.items()) + "</ul>",

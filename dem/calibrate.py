@@ -8,7 +8,9 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
 * ``points`` inertial numbers log-spaced in [I_min, I_max]; I in the DEM convention,
   I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy| (d = rho_p = 1);
 * each point and seed: an independent cell (insertion with that seed), sheared ``strain_start``
-  (discarded), then at least ``strain`` more, sampled every ``sample`` of strain;
+  (discarded), then at least ``strain`` more, sampled every ``sample`` of strain; above
+  STRAIN_REFERENCE_I the measured strain grows as I (constant cost per point) up to ``strain_max``:
+  those points cost little and the fast end of the law (mu_d, I0) needs their precision;
 * errors: blocks of BLOCK_TAU integrated autocorrelation times of mu (at least MIN_BLOCKS blocks),
   and independent seeds (compare.calibrate bootstraps over both);
 * checks of every point and seed (all must pass for it to enter the fit): measured strain >= strain,
@@ -54,6 +56,7 @@ HOMOGENEITY_TOL = 0.1
 #: the measured window is lengthened by this fraction so that the box-measured strain (L_y moves
 #: under the pressure control) still reaches ``strain``
 STRAIN_MARGIN = 0.03
+STRAIN_REFERENCE_I = 0.05
 #: default concurrent points: two single-rank LAMMPS processes on the 2-core machine (README)
 DEFAULT_JOBS = 2
 
@@ -85,6 +88,7 @@ class CalibrationPlan:
         return {"p": self.config.p_w, "dt": self.dt, "n_grains": self.n_grains, "width": cal.width,
                 "dimension": self.config.grains.dimension, "seeds": list(cal.seeds),
                 "strain_start": cal.strain_start, "strain": cal.strain, "sample_strain": cal.sample,
+                "strain_max": cal.strain_max,
                 "points": [{"I": p.I, "rate": p.rate, "start_steps": p.start_steps, "measure_steps": p.measure_steps,
                             "sample_steps": p.sample} for p in self.points],
                 "total_steps": sum(self.steps(k) for k in range(len(self.points))) * len(cal.seeds),
@@ -99,12 +103,14 @@ def plan_calibration(cfg: Config) -> CalibrationPlan:
     lz = cal.width if dim == 3 else 1.0
     n = round(PACKING[dim] * cal.width**2 * lz / mean_grain_volume(cfg))
     points = []
+    strain_max = cal.strain if cal.strain_max is None else cal.strain_max
     for I in np.geomspace(cal.I_min, cal.I_max, cal.points):
+        strain = min(strain_max, max(cal.strain, cal.strain * I / STRAIN_REFERENCE_I))
         rate = float(I) * math.sqrt(cfg.p_w)  # d = rho_p = 1
         per_strain = 1.0 / (rate * dt)
         sample = max(1, round(cal.sample * per_strain))
         profile = max(1, round(cal.profile / cal.sample)) * sample
-        measure = math.ceil(cal.strain * (1 + STRAIN_MARGIN) * per_strain / profile) * profile
+        measure = math.ceil(strain * (1 + STRAIN_MARGIN) * per_strain / profile) * profile
         points.append(ShearPoint(float(I), rate, dt, math.ceil(cal.strain_start * per_strain), measure, sample, profile))
     return CalibrationPlan(cfg, dt, n, tuple(points))
 

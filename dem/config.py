@@ -17,7 +17,7 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
     output = {plate = 0.02, thermo = 0.1, atoms = 1.0, contacts = 5.0, profiles = 0.5, restart = 2.0}
     prepare = {ke_per_grain = 1e-5}
     # mu(I) calibration by plane shear of the same grains at p = p_w (``granstokes dem calibrate``)
-    calibration = {I_min = 1e-3, I_max = 0.5, points = 8, seeds = [1, 2], width = 12.0, strain = 5.0}
+    calibration = {I_min = 1e-3, I_max = 0.5, points = 8, seeds = [1, 2], width = 10.0, strain = 5.0}
 
 Every key is optional except the drives; unknown keys are errors.
 """
@@ -174,8 +174,9 @@ class Calibration:
     width: float = 12.0
     strain_start: float = 1.0
     strain: float = 5.0
+    strain_max: float | None = None
     sample: float = 0.02
-    profile: float = 0.5
+    profile: float = 0.25
 
     def __post_init__(self):
         _positive("calibration.I_min", self.I_min)
@@ -189,6 +190,9 @@ class Calibration:
         _positive("calibration.width", self.width, MIN_WIDTH, strict=False)
         _positive("calibration.strain_start", self.strain_start, strict=False)
         _positive("calibration.strain", self.strain, MIN_CALIBRATION_STRAIN, strict=False)
+        if self.strain_max is not None:
+            require(finite(self.strain_max) and self.strain_max >= self.strain, "calibration.strain_max",
+                    f">= strain = {self.strain:g}", self.strain_max)
         _positive("calibration.sample", self.sample)
         require(finite(self.profile) and self.sample <= self.profile <= self.strain, "calibration.profile",
                 f"in [sample = {self.sample:g}, strain = {self.strain:g}]", self.profile)
