@@ -31,7 +31,7 @@ from .scene import SKIN
 #: insertion packing fraction (random insertion with the overlap check), then a squeeze along y to
 #: PRE_PACKING (below frictional jamming) before the slow compression to p
 INSERT_PACKING = {2: 0.30, 3: 0.20}
-PRE_PACKING = {2: 0.70, 3: 0.50}
+PRE_PACKING = {2: 0.70, 3: 0.55}
 #: squeeze to PRE_PACKING over this time (sqrt(d/g) units with p ~ 10-40: a dissipating gas)
 SQUEEZE_TIME = 5.0
 #: slow compression rate (1/time) from PRE_PACKING until P_yy >= p, checked every COMPRESS_CHECK
