@@ -170,7 +170,7 @@ def calibration_figure(c: Comparison, out: Path) -> Path:
         a.errorbar(g.I_dem, g.mu, xerr=xerr, yerr=yerr, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6,
                    label=f"{label} steady pairs" + (" (test)" if c.blind else ""))
         b.scatter(g.I_dem, g.phi, s=8, color=f"C{k}", label=label)
-    for k, pub in enumerate(x for x in PUBLISHED if x["dimension"] == c.drives[0].dem.spec.dimension):
+    for k, pub in enumerate(x for x in PUBLISHED if x["dimension"] == c.drives[0].dem.spec.folders[0].dimension):
         if "mu_1" in pub:
             a.plot(lin, pub["mu_1"] + pub["b"] * lin, color=f"C{k + 5}", ls=":", lw=1.2,
                    label=f"{pub['source'].split(',')[0]}: {pub['mu_1']:g} + {pub['b']:g} I")
