@@ -8,13 +8,14 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from continuum.calibration import LINEAR_I_MAX, mu_law
 from continuum.scales import UNITS
 from continuum.closed_forms import SELF_SIMILAR_DELTA, self_similar_wall_speed
 from continuum.steady import steady_mu
 from granstokes.page import page
 
 from .analysis import snapshot_times
-from .calibrate import LINEAR_I_MAX, PUBLISHED, mu_law
+from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
 

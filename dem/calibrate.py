@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from compare import calibrate as fitting
+from continuum import calibration as fitting
 from granstokes.provenance import provenance
 from granstokes.validate import require
 

@@ -5,7 +5,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from compare.calibrate import IN_DRIVE, PLANE_SHEAR, fit, fit_blocks, load, mu_law
+from compare.calibrate import fit, load
+from continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
 from compare.comparison import check_grains
 from compare.plate import power_law, steady_state
 from compare.predict import depth_at_fraction
@@ -126,6 +127,26 @@ def test_compare_report_on_a_smoke_run(tmp_path, capsys):
     page = (tmp_path / "report" / "index.html").read_text()
     assert "continuum vs DEM" in page and page.count("<img") >= 5
     assert json.loads((tmp_path / "report" / "metrics.json").read_text())["mu_s"] == m["mu_s"]
+    assert not m["blind"] and "fit" in m["calibration"]["kind"] and "In-drive fit" in page
+    # blind: mu(I) and phi from a calibration.json of the same grains (here a synthetic one)
+    truth = (0.28, 0.62, 0.3)
+    cal = fit_blocks(_synthetic_blocks(truth), "synthetic", n_boot=50)
+    grains = json.loads((run / "run.json").read_text())["config"]["grains"]
+    (tmp_path / "cal").mkdir()
+    (tmp_path / "cal" / "calibration.json").write_text(json.dumps({**cal.contract(), "grains": grains}))
+    capsys.readouterr()
+    assert granstokes_main(["compare", str(run), "--calibration", str(tmp_path / "cal" / "calibration.json"),
+                            "--out", str(tmp_path / "blind"), "--json"]) == 0
+    b = json.loads(capsys.readouterr().out)
+    assert b["blind"] and b["mu_s"] == pytest.approx(cal.mu_s) and b["I0"] == pytest.approx(cal.I0_dem)
+    assert b["calibration"]["source"].endswith("calibration.json") and b["calibration_test"]["n_pairs"] >= 3
+    assert "Blind comparison" in (tmp_path / "blind" / "index.html").read_text()
+    (tmp_path / "cal" / "calibration.json").write_text(json.dumps({**cal.contract(),
+                                                                    "grains": {**grains, "mu_p": 0.3}}))
+    assert granstokes_main(["compare", str(run), "--calibration", str(tmp_path / "cal" / "calibration.json"),
+                            "--out", str(tmp_path / "refused")]) == 2
+    assert "mu_p calibrated 0.3 vs run 0.5" in capsys.readouterr().err
+    assert not (tmp_path / "refused").exists()
 
 
 def test_compare_refuses_a_folder_that_is_not_a_run(tmp_path, capsys):
