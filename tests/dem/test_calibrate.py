@@ -94,3 +94,41 @@ def test_smoke_mu_rises_and_phi_falls_with_I(smoke):
     assert p.phi.iloc[0] - p.phi.iloc[-1] > 5 * np.hypot(p.phi_err.iloc[-1], p.phi_err.iloc[0])
     assert 0.22 < p.mu.iloc[0] < 0.36 and 0.77 < p.phi.iloc[0] < 0.84
     assert np.allclose(p.I, np.geomspace(0.02, 0.3, 4), rtol=0.05)  # the imposed I, measured from the box
+
+
+@pytest.mark.slow
+def test_killed_calibration_resumes_without_redoing_finished_points(tmp_path):
+    """SIGKILL the whole calibration (runner and LAMMPS) once a point is complete; --resume keeps that
+    point (same wall time), reruns the others and fits."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    text = config.preset_text("smoke").replace("I_min = 0.02", "I_min = 0.1").replace("points = 4", "points = 3")
+    path = tmp_path / "fast.toml"
+    path.write_text(text)
+    out = tmp_path / "cal"
+    args = [sys.executable, "-m", "granstokes.cli", "dem", "calibrate", str(path), "--out", str(out), "--jobs", "1",
+            "--quiet"]
+    proc = subprocess.Popen(args, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    state_path, done = out / layout.CALIBRATION_STATE, {}
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None and not done:
+        if state_path.exists():
+            try:
+                points = json.loads(state_path.read_text())["points"]
+            except json.JSONDecodeError:
+                continue
+            done = {k: v["wall_time"] for k, v in points.items() if v["status"] == "complete"}
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert done and not (out / layout.CALIBRATION_JSON).exists()
+    assert granstokes_main(["dem", "calibrate", str(path), "--out", str(out), "--resume", "--quiet"]) == 0
+    state = json.loads(state_path.read_text())
+    assert state["status"] == "complete" and len(state["resumes"]) == 1
+    for key, wall in done.items():
+        assert state["points"][key]["wall_time"] == wall
+    assert len(pd.read_csv(out / layout.POINTS_CSV)) == 3 and (out / layout.CALIBRATION_JSON).exists()
