@@ -19,7 +19,7 @@ import pandas as pd
 from dem import layout
 
 from .plate import PlateRecord, steady_state, steady_window_start
-from .predict import depth_at_fraction
+from .models import Drive, depth_at_fraction
 from .profiles import CGSettings, DepthProfiles, ensemble
 from .reader import DriveFolder
 
@@ -39,6 +39,11 @@ class DriveSpec:
     surface_offset: float        # plate centre of mass above its contact plane
     steps: int                   # drive steps (per seed)
     folders: tuple[DriveFolder, ...]
+
+    @property
+    def drive(self) -> Drive:
+        """What the continuum models need of this drive (compare.models)."""
+        return Drive(self.kind, self.value, self.p_w, self.depth, self.plate_mass)
 
     @property
     def label(self) -> str:
@@ -79,6 +84,8 @@ class DriveAnalysis:
     profiles: tuple[DepthProfiles, ...]
     series: pd.DataFrame         # t, u_w, mu_w (+ _lo, _hi)
     steady: dict                 # u_w, mu_w: steady_state dicts; t_steady of the free response
+    t_window: float              # start of the steady window (compare.plate.steady_window_start)
+    t_end: float                 # its end: the record's, or the last whole frame of a truncated dump
     steady_profile: pd.DataFrame  # window average over the steady window, with depth
     mean_profile: pd.DataFrame   # the whole run: hydrostatics need no steady state
     instant: pd.DataFrame        # seed-averaged profiles of every snapshot, with depth
@@ -140,7 +147,8 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
     grid = settings.grid_for(next(first.frames([0])))
     profiles = tuple(DepthProfiles(f, settings, grid).run() for f in spec.folders)
     surface = lambda t: layout.plate_surface(np.interp(t, plates[0].t, plates[0].y), spec.surface_offset)  # noqa: E731
-    t_end = float(series.t.iloc[-1])
+    # the record ends with the plate's, or earlier where a truncated dump lost its last frames
+    t_end = min(float(series.t.iloc[-1]), *(float(p.results.t[-1]) for p in profiles))
     t0 = steady_window_start(steady["t_steady"], t_end)
     win = ensemble(list(profiles), t0, t_end)
     steady_profile = _with_depth(win, float(np.mean(surface([t0, t_end]))) - win.y)
@@ -156,7 +164,7 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
         if t > 0 and u_w > DELTA_MIN_SPEED * u_scale:
             rows.append((t, depth_at_fraction(g.depth.to_numpy(), g.u_x.to_numpy(), u_w)))
     delta = pd.DataFrame(rows, columns=["t", "delta_u"])
-    return DriveAnalysis(spec, plates, profiles, series, steady, steady_profile, mean_profile, inst, delta)
+    return DriveAnalysis(spec, plates, profiles, series, steady, t0, t_end, steady_profile, mean_profile, inst, delta)
 
 
 #: delta_u(t) is measured only once the plate moves at 1 % of its steady speed (before, u/u_w is noise)

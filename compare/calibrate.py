@@ -42,21 +42,33 @@ PUBLISHED = (
 def fit(pairs: pd.DataFrame, wall_exclusion: float = WALL_EXCLUSION, I_min: float = I_MIN,
         n_boot: int = N_BOOTSTRAP) -> Calibration:
     """The in-drive fit on a table with columns I_dem, mu, phi (steady windows away from the walls,
-    chosen by the caller, who states ``wall_exclusion``); creep below ``I_min`` excluded."""
-    sel = pairs[(pairs.I_dem > I_min) & np.isfinite(pairs.mu) & np.isfinite(pairs.I_dem)]
+    chosen by the caller, who states ``wall_exclusion``); creep below ``I_min`` excluded from the fit.
+    Bootstrap: the pairs resampled with replacement; ``replicates["phi_bulk"]`` is each resample's mean phi."""
+    def usable(t):
+        return t[(t.I_dem > I_min) & np.isfinite(t.mu) & np.isfinite(t.I_dem)]
+
+    sel = usable(pairs)
     require(len(sel) >= 6, "calibration points", ">= 6 steady (mu, I) pairs with I > I_min", len(sel))
     I, mu, phi = sel.I_dem.to_numpy(), sel.mu.to_numpy(), sel.phi.to_numpy()
     best = fit_laws(I, mu, phi, None)
     rng = np.random.default_rng(BOOTSTRAP_SEED)
-    reps = []
-    for _ in range(n_boot):
-        k = rng.integers(0, len(I), len(I))
-        if (I[k] <= LINEAR_I_MAX).sum() >= 2:
-            reps.append(fit_laws(I[k], mu[k], phi[k], None, p0=best[:3]))
+    reps, phi_bulk = [], []
+    while len(reps) < n_boot:
+        sample = pairs.iloc[rng.integers(0, len(pairs), len(pairs))]
+        s = usable(sample)
+        if len(s) < 6 or (s.I_dem <= LINEAR_I_MAX).sum() < 2:
+            continue
+        try:
+            reps.append(fit_laws(s.I_dem.to_numpy(), s.mu.to_numpy(), s.phi.to_numpy(), None, p0=best[:3]))
+        except RuntimeError:  # no convergence on this resample
+            continue
+        phi_bulk.append(float(sample.phi.mean()))
     points = pd.DataFrame({"I": I, "mu": mu, "phi": phi, "drive": sel.get("drive", pd.Series([""] * len(I))).to_numpy()})
     rms = np.sqrt(np.mean((mu_law(I, *best[:3]) - mu) ** 2))
-    return from_replicates(best, reps, points, IN_DRIVE, "fit on the steady windows of the runs compared", rms,
-                        wall_exclusion=wall_exclusion, I_min=I_min)
+    cal = from_replicates(best, reps, points, IN_DRIVE, "fit on the steady windows of the runs compared", rms,
+                          wall_exclusion=wall_exclusion, I_min=I_min)
+    cal.replicates["phi_bulk"] = np.asarray(phi_bulk)
+    return cal
 
 
 def load(path: str | Path) -> Calibration:

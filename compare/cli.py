@@ -5,17 +5,25 @@ import json
 from pathlib import Path
 
 from dem.layout import RUN_JSON
-from granstokes.validate import require
+from granstokes.staging import staged
+from granstokes.validate import output_dir, require
 
 
 def run_compare(args) -> int:
     for run in args.runs:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
-    from .comparison import build
+    output_dir(args.out, "--out")
+    from .calibrate import load
+    from .comparison import build, check_grains
+
+    if args.calibration is not None:  # bad calibrations fail before any coarse-graining
+        check_grains(load(args.calibration), args.runs)
     from .report import write_report
 
-    m = write_report(build(args.runs, calibration=args.calibration), args.out)
+    comparison = build(args.runs, calibration=args.calibration)
+    with staged(args.out) as work:
+        m = write_report(comparison, work)
     if args.json:
         print(json.dumps(m, default=float))
     else:

@@ -1,11 +1,11 @@
 """The whole comparison, built once before anything is rendered: every drive's DEM analysis, the mu(I)
 calibration, the continuum predictions from it, and the checks of the coarse-graining.
 
-``build(run_dirs, settings, calibration)`` -> ``Comparison`` (frozen).  With ``calibration`` (a
+``build(run_dirs, settings, calibration=...)`` -> ``Comparison`` (frozen).  With ``calibration`` (a
 calibration.json of ``granstokes dem calibrate``) mu(I) and phi come from that independent plane-shear
 measurement and the drives are a blind test; without it mu(I) is fitted on the drives' own steady
-windows (``Comparison.calibration.kind`` says which: a fit, not a prediction).  compare.metrics and compare.report only
-render it.  DEM units throughout; I in the DEM convention.
+windows (``Comparison.calibration.kind`` and ``calibration_source`` say which: a fit, not a prediction).
+compare.metrics and compare.report only render it.  DEM units throughout; I in the DEM convention.
 """
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from tqdm import tqdm
 
 from continuum.calibration import Calibration, mu_law
 from continuum.crossing import crossing_depth
@@ -26,15 +27,19 @@ from granstokes.validate import require
 from . import calibrate
 from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, snapshot_times
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
+from .models import LOCAL, PAPER, Prediction, ngf_model
+from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
-from .predict import Prediction, predict
 from .profiles import CGSettings
+from .scorecard import Z95, Scorecard, scene_checks, score
 
 #: smoothing of mu_w(t) before the paper's threshold is applied (delta_mu), in time units: single
 #: plate samples scatter by about their mean, the threshold is 1e-3 of the wall excess
 MU_W_SMOOTHING = 0.5
 #: continuum output times per drive (log-spaced from t_end/PREDICTION_SPAN to t_end, plus the snapshots)
 PREDICTION_TIMES, PREDICTION_SPAN = 60, 300
+#: calibration samples pushed through every steady prediction (bootstrap replicates of the fit)
+REPLICATES = 200
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,11 +81,15 @@ class Comparison:
     runs: tuple[Path, ...]
     drives: tuple[DriveComparison, ...]
     pairs: pd.DataFrame
-    calibration: Calibration  # its ``kind``: independent plane shear or the in-drive fit
+    calibration: Calibration     # its ``kind``: independent plane shear or the in-drive fit
+    calibration_source: str
+    replicates: pd.DataFrame     # joint samples mu_s, mu_d, I0 (DEM convention), phi
     material: Material
     phi_bulk: float
     mass_error: float
     checks: Checks
+    scorecard: Scorecard
+    fluidity: FluidityFit | None  # the NGF amplitude and the drive it was fitted on
     settings: CGSettings
     law_test: dict  # the drives' steady pairs against the law (law_test); a test only when ``blind``
 
@@ -93,14 +102,17 @@ class Comparison:
 def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.WALL_EXCLUSION,
                  spacing: float = calibrate.PAIR_SPACING) -> pd.DataFrame:
     """(mu, I_dem, phi) of every steady window, away from plate and base, one point per ``spacing``
-    in depth (the kernel correlates neighbouring grid points: the fit's intervals need independent ones)."""
+    in depth (the kernel correlates neighbouring grid points: the fit's intervals need independent ones),
+    with the standard errors of mu and phi from the window's band."""
     rows = []
     for a in drives:
         p = a.steady_profile
         inside = p[(p.depth > wall_exclusion) & (p.depth < a.spec.depth - wall_exclusion)]
         step = max(1, int(round(spacing / abs(np.diff(inside.y.to_numpy()[:2])[0]))))
-        cols = ["depth", "mu", "I_dem", "phi", "p", "tau", "mu_lo", "mu_hi", "I_dem_lo", "I_dem_hi"]
-        rows.append(inside.iloc[::step][cols].assign(drive=a.label))
+        pick = inside.iloc[::step]
+        rows.append(pick[["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(
+            drive=a.label, mu_err=(pick.mu_hi - pick.mu_lo) / (2 * Z95), phi_err=(pick.phi_hi - pick.phi_lo) / (2 * Z95),
+            I_err=(pick.I_dem_hi - pick.I_dem_lo) / (2 * Z95)))
     return pd.concat(rows, ignore_index=True)
 
 
@@ -111,7 +123,7 @@ LAW_TEST_Z, LAW_TEST_CHANCE = 2.0, 0.0455
 
 def law_test(pairs: pd.DataFrame, cal: Calibration) -> dict:
     """The drives' steady (mu, I) pairs (I > I_MIN) against the calibration's law: residual mu - mu(I)
-    and z = residual / sqrt(s_pair^2 + s_law^2), s_pair from the pair's 95 % seed band, s_law the
+    and z = residual / sqrt(s_pair^2 + s_law^2), s_pair its standard error (the steady window's band), s_law the
     bootstrap spread of the law at that I; with a one-sentence verdict."""
     sel = pairs[(pairs.I_dem > calibrate.I_MIN) & np.isfinite(pairs.mu)]
     I = sel.I_dem.to_numpy()
@@ -119,7 +131,7 @@ def law_test(pairs: pd.DataFrame, cal: Calibration) -> dict:
     reps = np.array([mu_law(I, a, b, c) for a, b, c in
                      zip(cal.replicates["mu_s"], cal.replicates["mu_d"], cal.replicates["I0_dem"])])
     s_law = reps.std(axis=0, ddof=1) if len(reps) > 1 else np.zeros_like(I)
-    s_pair = np.nan_to_num((sel.mu_hi - sel.mu_lo).to_numpy() / (2 * 1.96))
+    s_pair = np.nan_to_num(sel.mu_err.to_numpy())
     resid = sel.mu.to_numpy() - law
     z = resid / np.sqrt(s_pair**2 + s_law**2 + 1e-300)
     out = {"n_pairs": int(len(I)), "mean_residual": float(resid.mean()), "rms_residual": float(np.sqrt(np.mean(resid**2))),
@@ -168,8 +180,7 @@ def early_exponents(a: DriveAnalysis) -> dict:
 
 
 def _checks(a: DriveAnalysis) -> Checks:
-    t_end = float(a.series.t.iloc[-1])
-    widths = width_check(a.spec.folders[0], STEADY_WINDOW_LATEST * t_end, t_end)
+    widths = width_check(a.spec.folders[0], STEADY_WINDOW_LATEST * a.t_end, a.t_end)
     cross = lammps_crosscheck(a.profiles[0])
     y = a.steady_profile.y
     bulk = cross[(cross.y > y.min() + CROSSCHECK_MARGIN) & (cross.y < y.max() - CROSSCHECK_MARGIN)]
@@ -178,7 +189,7 @@ def _checks(a: DriveAnalysis) -> Checks:
     return Checks(a.label, widths, cross, summary)
 
 
-def _predict(a: DriveAnalysis, material: Material) -> DriveComparison:
+def _predict(a: DriveAnalysis, material: Material, models) -> DriveComparison:
     s = a.spec
     dm = delta_mu(a, material.mu_s)
     try:
@@ -189,8 +200,16 @@ def _predict(a: DriveAnalysis, material: Material) -> DriveComparison:
                                             "this drive: the plate would accelerate forever)", dm)
     t_end = float(a.series.t.iloc[-1])
     times = np.union1d(np.geomspace(t_end / PREDICTION_SPAN, t_end, PREDICTION_TIMES), snapshot_times(a))
-    preds = predict(material, s.p_w, s.depth, s.plate_mass, s.kind, s.value, times)
-    return DriveComparison(a, scales, tuple(preds), "", dm)
+    preds = tuple(model.predict(material, s.drive, times) for model in models)
+    return DriveComparison(a, scales, preds, "", dm)
+
+
+def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.DataFrame:
+    """The first ``n`` joint bootstrap samples (mu_s, mu_d, I0 in the DEM convention, phi) of a
+    calibration whose law is valid (mu_d > mu_s); ``phi`` the matching samples of the continuum's phi."""
+    r = pd.DataFrame({"mu_s": cal.replicates["mu_s"], "mu_d": cal.replicates["mu_d"], "I0": cal.replicates["I0_dem"],
+                      "phi": phi})
+    return r[(r.mu_d > r.mu_s) & (r.I0 > 0)].head(n).reset_index(drop=True)
 
 
 def check_grains(cal: Calibration, runs) -> None:
@@ -202,7 +221,8 @@ def check_grains(cal: Calibration, runs) -> None:
                 "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
 
 
-def build(run_dirs, settings: CGSettings = CGSettings(), calibration: str | Path | None = None) -> Comparison:
+def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
+          calibration: str | Path | None = None) -> Comparison:
     """Analyse every drive of ``run_dirs``; take mu(I) and phi from ``calibration`` (calibration.json,
     refused if its grains differ from the runs') or else fit them on the steady windows; predict each drive."""
     runs = tuple(Path(r) for r in run_dirs)
@@ -213,12 +233,48 @@ def build(run_dirs, settings: CGSettings = CGSettings(), calibration: str | Path
     if calibration is not None:
         independent = calibrate.load(calibration)
         check_grains(independent, runs)
-    drives = [analyse_drive(spec, settings) for run in runs for spec in drive_specs(run)]
+    specs = [spec for run in runs for spec in drive_specs(run)]
+    drives = [analyse_drive(spec, settings) for spec in tqdm(specs, desc="coarse-graining", disable=not progress)]
     pairs = steady_pairs(drives)
     phi = float(pairs.phi.mean())
-    # the continuum's constant phi: the drives' own bulk value (fit), or the calibration's phi(I -> 0) =
-    # phi_max (prediction: the bed below the flowing layer is at rest)
-    cal = calibrate.fit(pairs) if independent is None else independent
-    material = cal.material(phi=None if cal.is_prediction else phi)
-    return Comparison(runs, tuple(_predict(a, material) for a in drives), pairs, cal, material, phi,
-                      mass_error(drives[0]), _checks(drives[0]), settings, law_test(pairs, cal))
+    if independent is None:
+        cal = calibrate.fit(pairs, n_boot=REPLICATES)
+        source = "in-drive fit (not a blind test)"
+        material = cal.material(phi=phi)
+        replicates = replicates_of(cal, cal.replicates["phi_bulk"])
+    else:
+        # the continuum's constant phi is the calibration's phi(I -> 0) = phi_max: the bed below the layer is at rest
+        cal = independent
+        source = f"blind: independent plane-shear calibration {cal.source}"
+        material = cal.material()
+        replicates = replicates_of(cal, cal.replicates["phi_max"])
+    fluidity = _fit_fluidity(drives, material)
+    models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if fluidity else [])
+    if fluidity:
+        replicates = replicates.assign(A=_amplitude_samples(fluidity, len(replicates)))
+    compared = tuple(_predict(a, material, models)
+                     for a in tqdm(drives, desc="continuum predictions", disable=not progress))
+    predictions = {(dc.label, p.model): p for dc in compared for p in dc.predictions}
+    delta_s = {dc.label: dc.predictions[0].steady.delta_s for dc in compared if dc.predictions}
+    t0 = {a.label: a.t_window for a in drives}
+    rows, edges = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
+                        delta_s, t0, {"ngf": fluidity.drive} if fluidity else {}, progress)
+    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges)
+    return Comparison(runs, compared, pairs, cal, source, replicates, material, phi,
+                      mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings, law_test(pairs, cal))
+
+
+def _fit_fluidity(drives: list[DriveAnalysis], material: Material) -> FluidityFit | None:
+    """A of the NGF model, fitted on the creep of the first imposed-stress drive that local mu(I) can
+    sustain (compare.nonlocal_fit); None when there is none."""
+    for a in drives:
+        if a.spec.kind == "stress" and a.spec.value / a.spec.p_w < material.mu_d:
+            return fit_amplitude(a, material)
+    return None
+
+
+def _amplitude_samples(fit: FluidityFit, n: int, seed: int = 1) -> np.ndarray:
+    """Samples of A for the propagation: normal with the fit's standard error (independent of the
+    material's replicates: A is fitted given the central calibration), kept inside the search range."""
+    err = fit.err if np.isfinite(fit.err) else 0.0
+    return np.clip(np.random.default_rng(seed).normal(fit.A, err, n), *A_RANGE)

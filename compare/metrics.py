@@ -1,95 +1,80 @@
-"""The comparison's numbers (metrics.json), defined once.  DEM units; I0 in the named convention."""
+"""metrics.json: the comparison's numbers, each defined once (DEFINITIONS, with its unit), rendered
+from a compare.comparison.Comparison.  DEM units; I0 in the named convention."""
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 from scipy import stats
 
 from continuum.scales import UNITS
+from granstokes.provenance import provenance
 
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
-from .plate import STEADY_CHANGE, STEADY_WINDOW, STEADY_WINDOW_LATEST
+from .plate import STEADY_CHANGE, STEADY_WINDOW
+from .scorecard import BLOCKS, OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length
 
+#: name -> (unit, definition)
 DEFINITIONS = {
-    "steady": f"running mean over {STEADY_WINDOW:.0%} of the record within max(3 stderr, "
-              f"{STEADY_CHANGE:.0%} of the total change) of the final-quarter mean",
-    "delta_u": "depth below the plate where the coarse-grained u falls to 5 % of u_w (DEM and continuum alike): "
-               "the layer thickness used in the metrics.  delta_mu, the paper's definition ((mu - mu_s) at 1e-3 of "
-               "the wall excess, calibrated mu_s), is reported beside it but is bound by single-frame noise in mu",
-    "t90": "time for the running mean (5 % of the record) of u_w (imposed stress) or mu_w (imposed speed) "
-           "to cover 90 % of its change; the continuum series are treated alike",
-    "wall_exclusion": f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base",
-    "pressure_slope": "dp/d(depth) in rho_p g over the bulk, from the whole run's mean profile (the y momentum "
-                      "balance needs no steady state; a long average beats the force-chain noise)",
-    "creep": "u/u_w of the DEM's steady profile at the continuum's delta_s, and the e-folding length of u below it",
-    "alpha": "exponents of u_w ~ t^alpha and delta_u ~ t^alpha by least squares on log-log from the first output to "
-             "half the final value; alpha_fits gives the 95 % interval and the number of points (few points: "
-             "the DEM layer is established within a few frames, and the exponent is then undetermined)",
-    "units": UNITS["dem_units"],
-    "inertial_number": UNITS["inertial_number"],
+    "steady": ("-", f"the record is steady from the time its running mean over {STEADY_WINDOW:.0%} of the record "
+                    f"stays within max(3 stderr, {STEADY_CHANGE:.0%} of the total change) of the final-quarter mean "
+                    "and the final quarter's trend moves it by less than that band"),
+    "u_w_inf": (OBSERVABLES["u_w_inf"][0], "steady plate speed: mean over the final quarter of the record"),
+    "mu_w_inf": (OBSERVABLES["mu_w_inf"][0], "steady plate friction: final-quarter mean of tau_w/p"),
+    "delta_u": ("d", "depth below the plate's contact plane where the steady-window coarse-grained u falls to 5 % "
+                     "of u_w (DEM and continuum alike). delta_mu, the paper's definition ((mu - mu_s) at 1e-3 of the "
+                     "wall excess, calibrated mu_s), is in delta_*.csv but is bound by single-frame noise in mu"),
+    "t90": ("sqrt(d/g)", f"time for the running mean ({T90_WINDOW:.0%} of the record) of the free response (u_w under "
+                         "an imposed stress, mu_w under an imposed speed) to cover 90 % of its change; the continuum "
+                         "series are interpolated onto the DEM's output times and treated alike"),
+    "creep_length": ("d", "e-folding length of u below the calibrated delta_s, from a least-squares fit of ln u "
+                          f"down to {WALL_EXCLUSION:g} d above the base; local mu(I) is rigid there (0)"),
+    "sigma": ("1", "(DEM - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical_err^2), band_sd = band width / 3.92; "
+                   f"'consistent' when |sigma| <= {SIGMA_CONSISTENT:g}"),
+    "band": ("unit of the row", "95 % band of the prediction from the calibration's uncertainty (compare.scorecard)"),
+    "dem_err": ("unit of the row", f"standard error of the DEM value: spread over seeds (>= 2 seeds), else over "
+                                   f"{BLOCKS} blocks of the steady window, or the estimator's resolution; dem_how says"),
+    "pressure_slope": ("rho_p g", "dp/d(depth) over the bulk, from the whole run's mean profile"),
+    "creep_at_delta_s": ("1", "u/u_w of the DEM's steady profile at the calibrated delta_s"),
+    "phi_bulk": ("1", f"mean solid fraction of the steady windows, {WALL_EXCLUSION:g} d away from plate and base "
+                      "(area fraction in 2D)"),
+    "mass_error": ("1", "relative error of the integral of the coarse-grained phi against the grains' volume per area"),
+    "alpha": ("1", "exponents of u_w ~ t^alpha and delta_u ~ t^alpha by least squares on log-log from the first "
+                   "output to half the final value, with their 95 % interval and number of points"),
+    "wall_exclusion": ("d", f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base"),
+    "units": ("-", UNITS["dem_units"]),
+    "inertial_number": ("-", UNITS["inertial_number"]),
 }
 
 
-def t90(t, y) -> float:
-    """First time the running mean (5 % of the record) has covered 90 % of the change from the
-    first to the final-tenth value (the running mean keeps DEM noise from triggering it)."""
-    y = pd.Series(np.asarray(y, dtype=float)).interpolate(limit_direction="both")
-    t = np.asarray(t, dtype=float)
-    smooth = y.rolling(max(1, len(y) // 20), center=True, min_periods=1).mean().to_numpy()
-    start, final = smooth[0], np.mean(smooth[-max(1, len(smooth) // 10):])
-    reached = np.abs(smooth - start) >= 0.9 * abs(final - start)
-    return float(t[np.argmax(reached)]) if reached.any() else np.nan
-
-
 def drive_metrics(dc: DriveComparison) -> dict:
-    """One drive's numbers: the DEM's own (always) and the comparison with the continuum (when the
-    calibrated mu(I) admits a prediction; otherwise ``prediction`` says why not)."""
+    """One drive's own numbers (each with its error where it has one) and the central predictions."""
     g, spec = dc.dem, dc.dem.spec
-    whole = g.mean_profile
-    bulk = (whole.depth > WALL_EXCLUSION) & (whole.depth < spec.depth - WALL_EXCLUSION)
-    slope = stats.linregress(whole.depth[bulk], whole.p[bulk])
-    p = g.steady_profile
-    inside = (p.depth > WALL_EXCLUSION) & (p.depth < spec.depth - WALL_EXCLUSION)
-    tau_plate = g.steady["mu_w"]["value"] * spec.p_w if spec.kind == "speed" else spec.value
-    steady_delta = g.delta.delta_u[g.delta.t >= STEADY_WINDOW_LATEST * g.delta.t.max()]
-    response = g.response
+    whole = g.mean_profile[bulk(g.mean_profile, spec.depth)]
+    slope = stats.linregress(whole.depth, whole.p)
     expo = early_exponents(g)
     out = {
-        "kind": spec.kind, "imposed": spec.value, "p_w": spec.p_w, "seeds": len(spec.folders),
-        "grains_x_steps": spec.cost,
-        "pressure_slope": slope.slope, "pressure_slope_stderr": slope.stderr,
-        "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_stderr": g.steady["u_w"]["stderr"]},
-        "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_stderr": g.steady["mu_w"]["stderr"]},
-        "delta_s": {"dem": float(steady_delta.mean()),
-                    "dem_stderr": float(steady_delta.std(ddof=1) / np.sqrt(len(steady_delta)))
-                    if len(steady_delta) > 1 else np.nan},
-        "t90": {"dem": t90(g.series.t, g.series[response])},
-        "alpha_u": expo.get("alpha_u", {}).get("alpha", np.nan),
-        "alpha_delta": expo.get("alpha_delta", {}).get("alpha", np.nan),
-        "alpha_fits": {k: {"ci95": v["ci95"], "n": v["n"]} for k, v in expo.items()},
-        "prediction": dc.note or "velocity form and paper's model from the calibration",
+        "kind": spec.kind, "imposed": spec.value, "imposed_unit": "tau_w [rho_p g d]" if spec.kind == "stress"
+        else "u_w [sqrt(g d)]", "p_w": spec.p_w, "depth": spec.depth, "seeds": len(spec.folders),
+        "grains_x_steps": spec.cost, "t_steady": g.steady["t_steady"], "t_window": g.t_window,
+        "pressure_slope": slope.slope, "pressure_slope_err": slope.stderr,
+        "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_err": g.steady["u_w"]["stderr"],
+                    "dem_how": g.steady["u_w"]["stderr_over"]},
+        "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_err": g.steady["mu_w"]["stderr"],
+                     "dem_how": g.steady["mu_w"]["stderr_over"]},
+        "alpha": {k: {"value": v["alpha"], "ci95": v["ci95"], "n": v["n"]} for k, v in expo.items()},
+        "frames": len(g.profiles[0].results.steps),
+        "dropped_frames": sum(f.atoms.dropped + f.contacts.dropped for f in spec.folders),
+        "prediction": dc.note or "predicted from the calibration",
     }
-    if not dc.predictions:
-        return out
-    vel, paper = dc.predictions
-    delta_s = vel.steady["delta_s"]
-    layer = inside & (p.depth < min(delta_s, spec.depth - WALL_EXCLUSION))
-    below = inside & (p.depth >= delta_s) & (p.u_x > 0)
-    u_w = g.steady["u_w"]["value"]
-    for name, key in (("u_w_inf", "u_w"), ("mu_w_inf", "mu_w")):
-        out[name].update({"velocity_form": vel.series[key].iloc[-1], "paper": paper.steady[key]})
-    out["delta_s"].update({"velocity_form": vel.series.delta_u.iloc[-1], "paper": paper.series.delta_u.iloc[-1],
-                           "paper_delta_s": delta_s})
-    out["t90"].update({"velocity_form": t90(vel.series.t, vel.series[response]),
-                       "paper": t90(paper.series.t, paper.series[response])})
-    out["t90"]["ratio_dem_to_velocity_form"] = out["t90"]["dem"] / out["t90"]["velocity_form"]
-    out["rel_error_response"] = float(vel.series[response].iloc[-1] / g.steady[response]["value"] - 1)
-    out["tau_uniformity"] = float(np.nanmax(np.abs(p.tau[layer] - tau_plate)) / tau_plate) if layer.any() else np.nan
-    out["creep_at_delta_s"] = (float(np.interp(delta_s, p.depth[::-1], p.u_x[::-1]) / u_w)
-                               if delta_s < spec.depth else np.nan)
-    out["creep_length"] = (float(-1 / stats.linregress(p.depth[below], np.log(p.u_x[below])).slope)
-                           if below.sum() >= 3 else np.nan)
+    for p in dc.predictions:
+        out[f"steady_{p.model}"] = {"u_w": p.steady.u_w, "mu_w": p.steady.mu_w, "delta_s": p.steady.delta_s,
+                                    "delta_u": p.steady.delta_u}
+    if dc.predictions:
+        delta_s = dc.predictions[0].steady.delta_s
+        p = g.steady_profile
+        out["creep_at_delta_s"] = (float(np.interp(delta_s, p.depth[::-1], p.u_x[::-1]) / g.steady["u_w"]["value"])
+                                   if delta_s < spec.depth else np.nan)
+        out["creep_length_window_mean"] = creep_length(p.depth, p.u_x, delta_s, spec.depth)
     return out
 
 
@@ -97,31 +82,36 @@ def _clean(v):
     """JSON-ready: numpy scalars to float, non-finite numbers to None (valid JSON, pandas-readable)."""
     if isinstance(v, dict):
         return {k: _clean(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
+    if isinstance(v, (list, tuple, np.ndarray)):
         return [_clean(x) for x in v]
-    if isinstance(v, (float, np.floating, int, np.integer)) and not isinstance(v, bool):
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (float, np.floating, int)) and not isinstance(v, bool):
         return float(v) if np.isfinite(v) else None
     return v
 
 
+SCORECARD_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted",
+                  "band", "numerical_err", "sigma", "verdict", "blind")
+
+
 def metrics(c: Comparison) -> dict:
-    """metrics.json: the issue's keys at the top level (taken from the first imposed-stress drive
-    where a key is per drive) and every drive's numbers under ``drives``."""
+    """metrics.json: scorecard, scene checks, calibration, per-drive numbers, definitions, provenance."""
     cal = c.calibration
-    per = {dc.label: drive_metrics(dc) for dc in c.drives}
-    predicted = [dc for dc in c.drives if dc.predictions]
-    main = next((per[dc.label] for dc in predicted if dc.dem.spec.kind == "stress"),
-                per[(predicted or list(c.drives))[0].label])
     return _clean({
-        "phi_bulk": c.phi_bulk,
-        "pressure_slope": main.get("pressure_slope"),
-        "tau_uniformity": main.get("tau_uniformity"),
-        "mass_error": c.mass_error,
+        "scorecard": [{k: r[k] for k in SCORECARD_KEYS} for r in c.scorecard.rows.to_dict("records")],
+        "scene_checks": c.scorecard.scene.to_dict("records"),
+        "uncertainty": {"replicates": c.scorecard.replicates, "band_edge_stability": c.scorecard.edge_stability},
+        "calibration": {**cal.as_dict(), "source": c.calibration_source},
+        "blind": c.blind, "calibration_test": c.law_test,
         "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
-        "calibration": cal.as_dict(), "blind": c.blind, "calibration_test": c.law_test,
-        "u_w_inf": main["u_w_inf"], "delta_s": main.get("delta_s"),
-        "alpha_delta": main.get("alpha_delta"), "alpha_u": main.get("alpha_u"),
-        "alpha_fits": main.get("alpha_fits"),
-        "drives": per, "definitions": DEFINITIONS, "runs": [str(r) for r in c.runs],
-        "frames_analysed": int(sum(len(dc.dem.profiles[0].results.steps) for dc in c.drives)),
+        "phi_bulk": c.phi_bulk, "mass_error": c.mass_error,
+        "ngf": None if c.fluidity is None else {"A": c.fluidity.A, "A_err": c.fluidity.err, "ci95": c.fluidity.ci95,
+                                                "fitted_on": c.fluidity.drive, "how": c.fluidity.how,
+                                                "points": c.fluidity.points, "at_search_bound": c.fluidity.at_bound},
+        "drives": {dc.label: drive_metrics(dc) for dc in c.drives},
+        "definitions": {k: {"unit": u, "definition": d} for k, (u, d) in DEFINITIONS.items()},
+        "units": UNITS["dem_units"], "I_convention": UNITS["inertial_number"],
+        "runs": [str(r) for r in c.runs],
+        "provenance": provenance(runs=[str(r) for r in c.runs], calibration=c.calibration_source),
     })

@@ -44,6 +44,7 @@ class DumpIndex:
     rows: np.ndarray
     box: np.ndarray  # (n, 3, 2)
     columns: tuple
+    dropped: int = 0  # trailing snapshots cut off (a truncated or partly written dump)
 
     def __len__(self) -> int:
         return len(self.steps)
@@ -107,14 +108,16 @@ def index_dump(path) -> DumpIndex:
             columns = columns or cols
             steps.append(step), start.append(a), end.append(b), rows.append(n), boxes.append(box)
             last_ok = step
-    if len(steps) < len(offsets) - 1 or (len(offsets) == 1 and size):
+    dropped = max(len(offsets) - 1 - len(steps), 1 if (len(offsets) == 1 and size) else 0)
+    if dropped:
         where = f"last whole snapshot at step {last_ok}" if last_ok is not None else "no whole snapshot"
         warnings.warn(f"{path}: truncated or partly written dump, read up to the last whole snapshot "
-                      f"({where}); {len(offsets) - 1 - len(steps)} trailing snapshot(s) dropped", stacklevel=2)
+                      f"({where}); {dropped} trailing snapshot(s) dropped", stacklevel=2)
     if not steps:
         raise ValueError(f"{path}: no whole snapshot in the dump")
     return DumpIndex(path, np.array(steps, dtype=np.int64), np.array(start, dtype=np.int64),
-                     np.array(end, dtype=np.int64), np.array(rows, dtype=np.int64), np.array(boxes), columns)
+                     np.array(end, dtype=np.int64), np.array(rows, dtype=np.int64), np.array(boxes), columns,
+                     dropped)
 
 
 @dataclass(frozen=True)

@@ -1,16 +1,19 @@
-"""The continuum-vs-DEM report: figures (PNG), tables (CSV), metrics.json and index.html."""
+"""The continuum-vs-DEM report: renders a compare.comparison.Comparison (nothing is computed here but
+the figures' drawing): metrics.json, CSV tables, PNG figures and index.html, which opens with the
+scorecard and the conclusions."""
 from __future__ import annotations
 
 import html
 import json
+import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from matplotlib.figure import Figure
 
 from continuum.calibration import LINEAR_I_MAX, mu_law
 from continuum.scales import UNITS
-from continuum.closed_forms import SELF_SIMILAR_DELTA, self_similar_wall_speed
 from continuum.steady import steady_mu
 from granstokes.page import page
 
@@ -18,123 +21,144 @@ from .analysis import snapshot_times
 from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
+from .scorecard import SIGMA_CONSISTENT, T90_WINDOW
 
-MODEL_STYLE = {0: dict(color="C1", ls="-"), 1: dict(color="C2", ls="--")}
+MODEL_STYLE = {"local": dict(color="C1", ls="-"), "paper": dict(color="C2", ls="--"), "ngf": dict(color="C3", ls="-.")}
+FIELD_LABELS = {"u_x": "u [sqrt(g d)]", "phi": "phi", "p": "p = sigma_yy [rho_p g d]", "tau": "tau [rho_p g d]",
+                "mu": "mu = tau/p", "I_dem": "I_dem = |du/dy| d/sqrt(p/rho_p)"}
+T_LABEL, DEPTH_LABEL = "t [sqrt(d/g)]", "depth below the plate [d]"
+RESPONSE_LABEL = {"u_w": "u_w [sqrt(g d)]", "mu_w": "mu_w = <tau_w>/<p>"}
 
 
 def slug(label: str) -> str:
-    return "".join(c if c.isalnum() else "_" for c in label)
+    return "".join(c if c.isalnum() else "_" for c in label).strip("_")
 
+
+def fmt(value, err=None) -> str:
+    """A number to the digits its error supports (the error to 2 significant digits); 4 significant
+    digits without an error; an en dash when there is no number."""
+    if value is None or not np.isfinite(value):
+        return "–"
+    if err is None or not np.isfinite(err) or err <= 0:
+        return f"{value:.4g}"
+    digits = max(0, 1 - int(math.floor(math.log10(err))))
+    return f"{value:.{digits}f} ± {err:.{digits}f}"
+
+
+def fmt_band(band, err_like) -> str:
+    lo, hi = band
+    digits = max(0, 1 - int(math.floor(math.log10(err_like)))) if err_like and np.isfinite(err_like) and err_like > 0 else 3
+    return f"[{lo:.{digits}f}, {hi:.{digits}f}]"
+
+
+def _running(s: pd.Series, n: int) -> pd.Series:
+    return s.rolling(max(1, n), center=True, min_periods=1).mean()
+
+
+# --- figures -----------------------------------------------------------------------------------------
 
 def drive_figure(dc: DriveComparison, out: Path) -> Path:
-    """u_w(t), mu_w(t), delta_u(t) DEM (band over seeds) against both continuum models, and the
-    steady velocity profile (log scale: creep below delta_s)."""
-    g, spec = dc.dem, dc.dem.spec
+    """The free response against time, delta_u(t), and the steady velocity profile (linear and log)."""
+    g, spec, resp = dc.dem, dc.dem.spec, dc.dem.response
     fig = Figure(figsize=(12, 8.5), layout="constrained")
     ax = fig.subplots(2, 2).ravel()
     s = g.series
-    for k, name in enumerate(("u_w", "mu_w")):
-        ax[k].plot(s.t, s[name], color="C0", lw=0.5, alpha=0.5, label=f"DEM ({len(spec.folders)} seed(s))")
-        smooth = s[name].rolling(max(1, len(s) // 50), center=True, min_periods=1).mean()
-        ax[k].plot(s.t, smooth, color="C0", lw=1.8, label="DEM, running mean (2 % of the record)")
-        if len(spec.folders) > 1:
-            ax[k].fill_between(s.t, s[f"{name}_lo"], s[f"{name}_hi"], color="C0", alpha=0.25, label="95 % band")
-        for i, p in enumerate(dc.predictions):
-            ax[k].plot(p.series.t, p.series[name], label=p.model, **MODEL_STYLE[i])
-        ax[k].set(xlabel="t [sqrt(d/g)]", ylabel={"u_w": "u_w [sqrt(g d)]", "mu_w": "mu_w = tau_w/p"}[name])
-    if spec.kind == "stress":
-        sc, tt = dc.scales, dc.predictions[0].series.t.to_numpy()
-        ss = [sc.u(self_similar_wall_speed(sc.material.friction, sc.mu_w, sc.t_tilde(t))) for t in tt]
-        ax[0].plot(tt, ss, color="C3", lw=0.8, ls=":", label="eq. SolutionSS (erfc), calibrated scales")
+    n = int(T90_WINDOW * len(s))
+    smooth = _running(s[resp], n)
+    ax[0].plot(s.t, smooth, color="C0", lw=1.8, label=f"DEM, running mean ({T90_WINDOW:.0%} of the record)")
+    if len(spec.folders) > 1:
+        ax[0].fill_between(s.t, _running(s[f"{resp}_lo"], n), _running(s[f"{resp}_hi"], n), color="C0", alpha=0.25,
+                           label=f"DEM, 95 % band over {len(spec.folders)} seeds")
+    for p in dc.predictions:
+        ax[0].plot(p.series.t, p.series[resp], label=p.label, **MODEL_STYLE[p.model])
+    lo, hi = np.nanpercentile(smooth, [1, 99])
+    top = max(hi, *(np.nanpercentile(p.series[resp], 99) for p in dc.predictions)) if dc.predictions else hi
+    pad = 0.1 * (top - min(lo, 0))
+    ax[0].set(xlabel=T_LABEL, ylabel=RESPONSE_LABEL[resp], ylim=(min(lo, 0) - pad, top + pad),
+              title=f"free response: {RESPONSE_LABEL[resp]}")
+    ax[0].ticklabel_format(useOffset=False)
     ax[0].legend(fontsize=7)
-    ax[2].plot(g.delta.t, g.delta.delta_u, "o", color="C0", label="DEM delta_u (coarse-grained u)")
-    ax[2].plot(g.delta.t, dc.delta_mu, "x", color="C0", alpha=0.4, ms=4,
-               label="DEM delta_mu (paper's 1e-3 mu threshold: noise-bound)")
-    for i, p in enumerate(dc.predictions):
-        ax[2].plot(p.series.t, p.series.delta_u, label=p.model, **MODEL_STYLE[i])
-    ax[2].axhline(dc.predictions[0].steady["delta_s"], color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
-    tt = dc.predictions[0].series.t
-    ax[2].plot(tt, SELF_SIMILAR_DELTA * dc.scales.dmu * np.sqrt(dc.scales.nu_g * tt), color="C3", lw=0.8, ls=":",
-               label="eq. SolutionSS: 4.65 Dmu sqrt(nu_g t) (mu threshold)")
-    t = g.delta.t[g.delta.t > 0]
-    if len(t):
-        ref = g.delta.delta_u[g.delta.t > 0].iloc[0] * np.sqrt(t / t.iloc[0])
-        ax[2].plot(t, ref, color="0.5", lw=0.8, ls="-.", label="~ sqrt(t)")
-    ax[2].set(xscale="log", yscale="log", xlabel="t [sqrt(d/g)]", ylabel="delta_u [d] (u = 5 % of u_w)")
-    ax[2].legend(fontsize=7)
+    ax[1].plot(g.delta.t, g.delta.delta_u, "o", ms=3, color="C0", label="DEM delta_u (coarse-grained u)")
+    for p in dc.predictions:
+        ax[1].plot(p.series.t, p.series.delta_u, label=p.label, **MODEL_STYLE[p.model])
+    if dc.predictions:
+        ax[1].axhline(dc.predictions[0].steady.delta_s, color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
+    ax[1].set(xscale="log", yscale="log", xlabel=T_LABEL, ylabel="delta_u [d] (u = 5 % of u_w)",
+              title="layer thickness")
+    ax[1].legend(fontsize=7)
     p = g.steady_profile
-    ax[3].semilogx(p.u_x.clip(lower=1e-6), p.depth, color="C0", label="DEM steady window")
-    for i, pr in enumerate(dc.predictions):
-        last = pr.profiles[pr.profiles.t == pr.profiles.t.max()]
-        ax[3].semilogx(last.u.clip(lower=1e-6), last.depth, label=pr.model, **MODEL_STYLE[i])
-    ax[3].set(xlabel="u [sqrt(g d)] (log: creep)", ylabel="depth below the plate [d]", ylim=(spec.depth, 0))
-    fig.suptitle(f"{g.label}: imposed {spec.kind} ({'tau_w' if spec.kind == 'stress' else 'u_w'} = {spec.value:.4g}), "
-                 f"p_w = {spec.p_w:g}; DEM units")
+    for a_, scale in ((ax[2], "linear"), (ax[3], "log")):
+        a_.plot(p.u_x.clip(lower=1e-6) if scale == "log" else p.u_x, p.depth, color="C0", lw=1.8,
+                label="DEM steady window")
+        a_.fill_betweenx(p.depth, p.u_x_lo.clip(lower=1e-6), p.u_x_hi.clip(lower=1e-6), color="C0", alpha=0.25)
+        for pr in dc.predictions:
+            u = pr.steady.u.clip(1e-6) if scale == "log" else pr.steady.u
+            a_.plot(u, pr.steady.y, label=pr.label, **MODEL_STYLE[pr.model])
+        a_.set(xscale=scale, xlabel="u [sqrt(g d)]" + (" (log: creep)" if scale == "log" else ""),
+               ylabel=DEPTH_LABEL, ylim=(spec.depth, 0), title=f"steady velocity ({scale})")
+        if scale == "log":
+            a_.set_xlim(1e-4 * max(p.u_x.max(), 1e-6), 2 * max(p.u_x.max(), 1e-6))
+    ax[2].legend(fontsize=7)
+    imposed = f"tau_w = {spec.value:.4g} rho_p g d" if spec.kind == "stress" else f"u_w = {spec.value:.4g} sqrt(g d)"
+    fig.suptitle(f"{g.label}: imposed {spec.kind} ({imposed}), p_w = {spec.p_w:g} rho_p g d; DEM units")
     path = out / f"drive_{slug(g.label)}.png"
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     return path
 
 
 def profiles_figure(dc: DriveComparison, material, out: Path) -> Path:
-    """Steady-window profiles u, phi, p, tau, mu, I (bands over seeds or frames) with the continuum's."""
+    """Steady-window profiles (bands over seeds or frames) with the local model's steady state."""
     g, spec = dc.dem, dc.dem.spec
     p = g.steady_profile
     fig = Figure(figsize=(15, 4.2), layout="constrained")
     axes = fig.subplots(1, 6, sharey=True)
-    fields = ("u_x", "phi", "p", "tau", "mu", "I_dem")
-    vel = dc.predictions[0]
-    last = vel.profiles[vel.profiles.t == vel.profiles.t.max()]
-    for ax, f in zip(axes, fields):
+    for ax, f in zip(axes, FIELD_LABELS):
         ax.plot(p[f], p.depth, color="C0", label="DEM")
         ax.fill_betweenx(p.depth, p[f"{f}_lo"], p[f"{f}_hi"], color="C0", alpha=0.25)
-        ax.set_xlabel(f if f != "I_dem" else "I_dem = |du/dy| d/sqrt(p/rho_p)")
+        ax.set_xlabel(FIELD_LABELS[f])
+    local = dc.predictions[0].steady
     z = np.linspace(0, spec.depth, 200)
-    axes[0].plot(last.u, last.depth, **MODEL_STYLE[0], label="velocity form")
-    axes[1].axvline(material.phi, **MODEL_STYLE[0])
-    axes[2].plot(spec.p_w + material.phi * material.rho_p * material.g * z, z, **MODEL_STYLE[0])
-    tau_w = vel.steady["mu_w"] * spec.p_w
-    axes[3].axvline(tau_w, **MODEL_STYLE[0])
-    mu = steady_mu(material.friction, vel.steady["mu_w"], z / vel.steady["delta_s"])
-    axes[4].plot(mu, z, **MODEL_STYLE[0])
-    axes[5].plot(material.friction.I_of_mu(mu, material.I0), z, **MODEL_STYLE[0])
+    style = MODEL_STYLE["local"]
+    axes[0].plot(local.u, local.y, **style, label="local mu(I), steady")
+    axes[1].axvline(material.phi, **style)
+    axes[2].plot(spec.p_w + material.phi * material.rho_p * material.g * z, z, **style)
+    axes[3].axvline(local.mu_w * spec.p_w, **style)
+    mu = steady_mu(material.friction, local.mu_w, z / local.delta_s)
+    axes[4].plot(mu, z, **style)
+    axes[5].plot(material.friction.I_of_mu(mu, material.I0), z, **style)
+    axes[4].set_xlim(0, 1)
     axes[5].set_xscale("log")
-    axes[0].set(ylabel="depth below the plate [d]", ylim=(spec.depth, 0))
+    axes[0].set(ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
     axes[0].legend(fontsize=7)
-    fig.suptitle(f"{g.label}: steady profiles (kernel width and bands: see metadata); continuum from the calibration")
+    fig.suptitle(f"{g.label}: steady-window profiles (Lucy kernel, width in metrics.json); DEM units")
     path = out / f"profiles_{slug(g.label)}.png"
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     return path
 
 
 def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
-    """u, phi, p, tau, mu, I against depth at a few snapshot times: DEM (instantaneous, seed-averaged)
-    solid, the velocity-form prediction at the same times dashed (its phi is the calibrated constant,
-    p hydrostatic, I from the calibrated law)."""
+    """u, mu and I against depth at a few snapshot times: DEM (seed-averaged) solid, local model dashed."""
     g, spec = dc.dem, dc.dem.spec
     vel = dc.predictions[0].profiles
-    fig = Figure(figsize=(16, 4.5), layout="constrained")
-    axes = fig.subplots(1, 6, sharey=True)
-    fields = ("u_x", "phi", "p", "tau", "mu", "I_dem")
+    fig = Figure(figsize=(12, 4.5), layout="constrained")
+    axes = fig.subplots(1, 3, sharey=True)
     for k, t in enumerate(snapshot_times(g)):
         dem = g.instant[np.isclose(g.instant.t, t)]
-        depth = dem.depth
         cont = vel[np.isclose(vel.t, t)]
-        p = spec.p_w + material.phi * material.rho_p * material.g * cont.depth
-        model = {"u_x": cont.u, "phi": np.full(len(cont), material.phi), "p": p, "tau": cont.mu * p,
-                 "mu": cont.mu, "I_dem": material.friction.I_of_mu(cont.mu.clip(upper=material.mu_d - 1e-9),
-                                                                   material.I0)}
-        for ax, f in zip(axes, fields):
-            ax.plot(dem[f], depth, color=f"C{k}", label=f"t = {t:.3g}")
+        model = {"u_x": cont.u, "mu": cont.mu,
+                 "I_dem": material.friction.I_of_mu(cont.mu.clip(upper=material.mu_d - 1e-9), material.I0)}
+        for ax, f in zip(axes, model):
+            ax.plot(dem[f], dem.depth, color=f"C{k}", label=f"t = {t:.3g}")
             ax.plot(model[f], cont.depth, color=f"C{k}", ls="--")
-    for ax, f in zip(axes, fields):
-        ax.set_xlabel(f)
-    axes[4].set_xlim(0, 1)
-    axes[5].set(xscale="log", xlim=(1e-5, 2))
-    axes[0].set(ylabel="depth below the plate [d]", ylim=(spec.depth, 0))
-    axes[0].legend(fontsize=7, title="solid DEM, dashed velocity form", title_fontsize=7)
-    fig.suptitle(f"{g.label}: transient profiles (DEM units; I in the DEM convention)")
+    for ax, f in zip(axes, ("u_x", "mu", "I_dem")):
+        ax.set_xlabel(FIELD_LABELS[f])
+    axes[1].set_xlim(0, 1)
+    axes[2].set(xscale="log", xlim=(1e-5, 2))
+    axes[0].set(ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
+    axes[0].legend(fontsize=7, title="solid DEM, dashed local mu(I)", title_fontsize=7)
+    fig.suptitle(f"{g.label}: transient profiles at snapshot times [sqrt(d/g)]; DEM units, I in the DEM convention")
     path = out / f"transient_{slug(g.label)}.png"
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     return path
 
 
@@ -166,11 +190,9 @@ def calibration_figure(c: Comparison, out: Path) -> Path:
         b.errorbar(pts.I, pts.phi, xerr=pts.get("I_err"), yerr=pts.get("phi_err"), fmt="ks", ms=4, mfc="w",
                    label="plane-shear points")
     for k, (label, g) in enumerate(pairs.groupby("drive")):
-        xerr = np.abs(np.vstack([g.I_dem - g.I_dem_lo, g.I_dem_hi - g.I_dem])) if c.blind else None
-        yerr = np.abs(np.vstack([g.mu - g.mu_lo, g.mu_hi - g.mu])) if c.blind else None
-        a.errorbar(g.I_dem, g.mu, xerr=xerr, yerr=yerr, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6,
+        a.errorbar(g.I_dem, g.mu, xerr=g.I_err, yerr=g.mu_err, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6,
                    label=f"{label} steady pairs" + (" (test)" if c.blind else ""))
-        b.scatter(g.I_dem, g.phi, s=8, color=f"C{k}", label=label)
+        b.errorbar(g.I_dem, g.phi, yerr=g.phi_err, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6, label=label)
     for k, pub in enumerate(x for x in PUBLISHED if x["dimension"] == c.drives[0].dem.spec.folders[0].dimension):
         if "mu_1" in pub:
             a.plot(lin, pub["mu_1"] + pub["b"] * lin, color=f"C{k + 5}", ls=":", lw=1.2,
@@ -183,14 +205,14 @@ def calibration_figure(c: Comparison, out: Path) -> Path:
                    label=f"{pub['source'].split(',')[0]}")
     if cal.I_min is not None:
         a.axvline(cal.I_min, color="0.6", ls=":", label="I_min (creep excluded from the fit)")
-    a.set(xscale="log", xlabel="I_dem = |du/dy| d/sqrt(p/rho_p)", ylabel="mu = tau/p",
+    a.set(xscale="log", xlabel=FIELD_LABELS["I_dem"], ylabel="mu = tau/p",
           title="mu(I): " + ("the drives as a blind test of the plane-shear law" if c.blind else "fit on the drives"))
     b.plot(lin, cal.phi_max - cal.phi_slope * lin, "k-", label=f"phi = {cal.phi_max:.3f} - {cal.phi_slope:.3f} I")
-    b.set(xscale="log", xlabel="I_dem", ylabel="phi", title="phi(I)")
+    b.set(xscale="log", xlabel=FIELD_LABELS["I_dem"], ylabel="phi", title="phi(I)")
     a.legend(fontsize=6)
     b.legend(fontsize=6)
     path = out / "calibration.png"
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     return path
 
 
@@ -198,8 +220,9 @@ def calibration_section(c: Comparison) -> str:
     """The report's calibration section: source, kind, values with intervals, published values, the test."""
     cal = c.calibration
     ci = cal.ci95
-    rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{getattr(cal, k):.4g}</td><td>[{ci[k][0]:.4g}, {ci[k][1]:.4g}]"
-                   "</td></tr>" for k in ("mu_s", "mu_d", "I0_dem", "mu_1", "b", "phi_max", "phi_slope"))
+    names = (("mu_s", "mu_s"), ("mu_d", "mu_d"), ("I0 (DEM convention)", "I0_dem"), ("mu_1 in mu = mu_1 + b I", "mu_1"),
+             ("b", "b"), ("phi_max", "phi_max"), ("a in phi = phi_max - a I", "phi_slope"))
+    rows = [[name, fmt(getattr(cal, attr)), f"[{ci[attr][0]:.3g}, {ci[attr][1]:.3g}]"] for name, attr in names]
     pubs = "".join(f"<li>{html.escape(p['source'])}: {html.escape(p['system'])}; "
                    + html.escape(", ".join(f"{k} = {p[k]:g}" for k in ("mu_s", "mu_d", "I0", "mu_1", "b", "phi_max", "a")
                                            if k in p)) + f" (verified: {html.escape(p['verified'])})</li>"
@@ -210,34 +233,129 @@ def calibration_section(c: Comparison) -> str:
             "<p><b>In-drive fit</b>: mu(I) is fitted on the drives' own steady windows, so the steady predictions "
             "are close to a restatement of the fit; pass <code>--calibration DIR/calibration.json</code> "
             "(<code>granstokes dem calibrate</code>) for a blind test.</p>")
-    return ("<h2>Calibration</h2>" + head + "<table><tr><th>parameter (I_dem)</th><th>value</th><th>95 % interval "
-            "(bootstrap)</th></tr>" + rows + "</table>"
+    return ("<h2>Calibration</h2>" + head + _table(["parameter", "value", "95 % interval (bootstrap)"], rows)
+            + f"<p>{len(cal.points)} points, rms residual of the Jop law {cal.rms_mu:.3f}.</p>"
             f"<p>Test of the law by the drives: {html.escape(c.law_test['verdict'])}.</p>"
             "<p>Published values (plane shear or rheometry; differences: friction mu_p, restitution and "
             "polydispersity differ from ours, mu_p = 0.5 here):</p><ul>" + pubs + "</ul>")
 
 
-def cost_figure(m: dict, out: Path) -> Path:
-    """DEM cost against noise: relative standard error of u_w_inf and delta_s per drive against
-    grains x steps (x seeds): what each extra grain-step buys."""
-    fig = Figure(figsize=(6.5, 4.2), layout="constrained")
+def sigma_figure(c: Comparison, out: Path) -> Path:
+    """One bar per scorecard row: sigma = (DEM - predicted)/combined error, the +-2 band shaded."""
+    rows = c.scorecard.rows
+    fig = Figure(figsize=(8, 0.35 * len(rows) + 1.5), layout="constrained")
     ax = fig.subplots()
-    for label, d in m["drives"].items():
-        cost = d["grains_x_steps"]
-        ax.loglog(cost, d["u_w_inf"]["dem_stderr"] / abs(d["u_w_inf"]["dem"]), "o", label=f"u_w_inf {label}")
-        if d["delta_s"]["dem_stderr"] is not None and np.isfinite(d["delta_s"]["dem_stderr"]):
-            ax.loglog(cost, d["delta_s"]["dem_stderr"] / d["delta_s"]["dem"], "s", label=f"delta_s {label}")
-    ax.set(xlabel="grains x steps (x seeds)", ylabel="relative standard error", title="DEM cost vs noise")
+    y = np.arange(len(rows))
+    colors = [MODEL_STYLE[m]["color"] for m in rows.model]
+    ax.barh(y, rows.sigma.clip(-20, 20), color=colors)
+    ax.axvspan(-SIGMA_CONSISTENT, SIGMA_CONSISTENT, color="0.85", zorder=0, label=f"|sigma| <= {SIGMA_CONSISTENT:g}")
+    ax.set_yticks(y, [f"{'/'.join(r.drive.split('/')[-2:])}: {r.observable} ({r.model})" for r in rows.itertuples()],
+                  fontsize=7)
+    ax.invert_yaxis()
+    ax.set(xlabel="sigma = (DEM - predicted) / combined standard error (clipped at +-20)",
+           title="scorecard: how far each prediction is from the DEM")
     ax.legend(fontsize=7)
-    path = out / "cost_noise.png"
-    fig.savefig(path, dpi=110)
+    path = out / "scorecard.png"
+    fig.savefig(path, dpi=100)
     return path
 
 
-def _fmt(v):
-    if isinstance(v, dict):
-        return ", ".join(f"{k}: {_fmt(x)}" for k, x in v.items())
-    return f"{v:.4g}" if isinstance(v, (float, np.floating)) else html.escape(str(v))
+def cost_figure(c: Comparison, out: Path) -> Path:
+    """Relative standard error of the steady response against the DEM's work (grains x steps x seeds)."""
+    fig = Figure(figsize=(6.5, 4.2), layout="constrained")
+    ax = fig.subplots()
+    for dc in c.drives:
+        g = dc.dem
+        st = g.steady[g.response]
+        if np.isfinite(st["stderr"]) and st["value"]:
+            ax.plot(g.spec.cost, st["stderr"] / abs(st["value"]), "o",
+                    label=f"{g.label.split('/')[-2]}/{g.label.split('/')[-1]} ({st['stderr_over']})")
+    ax.set(xscale="log", yscale="log", xlabel="grains x steps (x seeds)",
+           ylabel="relative standard error of the steady response", title="DEM cost vs noise")
+    ax.legend(fontsize=7)
+    path = out / "cost_noise.png"
+    fig.savefig(path, dpi=100)
+    return path
+
+
+# --- the page ------------------------------------------------------------------------------------------
+
+def _table(header, rows) -> str:
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def scorecard_html(c: Comparison) -> str:
+    rows = []
+    for r in c.scorecard.rows.itertuples():
+        verdict = f"<b style='color:{'#2a7' if r.verdict == 'consistent' else '#c33'}'>{r.verdict}</b>"
+        rows.append([html.escape(r.drive), f"{html.escape(r.observable)} [{html.escape(r.unit)}]",
+                     fmt(r.dem, r.dem_err), html.escape(r.model_label) + ("" if r.blind else " (fitted here)"),
+                     fmt(r.predicted), fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}", verdict])
+    return _table(["drive", "observable [unit]", "DEM ± error", "model", "predicted", "95 % band", "sigma",
+                   "verdict"], rows)
+
+
+def scene_html(c: Comparison) -> str:
+    rows = [[html.escape(r.drive), html.escape(r.check), fmt(r.value, r.err), f"{r.target:g}",
+             f"{r.sigma:+.1f}", html.escape(r.verdict), html.escape(r.how)] for r in c.scorecard.scene.itertuples()]
+    return _table(["drive", "check", "value ± error", "target", "sigma", "verdict", "error from"], rows)
+
+
+def conclusions(c: Comparison) -> list[str]:
+    """Sentences written from the scorecard's numbers."""
+    rows, out = c.scorecard.rows, []
+    if "blind" not in c.calibration_source:
+        out.append(f"The calibration is an {html.escape(c.calibration_source)}: the predictions share data with what "
+                   "they are compared with, so agreement here is weaker evidence than a blind test.")
+    for model, g in rows.groupby("model", sort=False):
+        ok = g[g.verdict == "consistent"]
+        bad = g[g.verdict != "consistent"]
+        text = f"<b>{html.escape(g.model_label.iloc[0])}</b>: {len(ok)} of {len(g)} predictions within 2 sigma"
+        if len(bad):
+            worst = ", ".join(f"{html.escape(r.observable)} of {html.escape(r.drive.split('/')[-1])} "
+                              f"({(r.predicted / r.dem - 1) * 100:+.0f} %, {r.sigma:+.1f} sigma)"
+                              for r in bad.itertuples() if r.dem)
+            text += f"; it fails on {worst}"
+        out.append(text + ".")
+    fl = c.fluidity
+    if fl is not None:
+        lo, hi = fl.ci95
+        text = (f"The nonlocal amplitude A = {fmt(fl.A, fl.err)} (95 % interval [{lo:.3g}, {hi:.3g}], {fl.how}) was fitted "
+                f"on the shape of the steady creep profile of {html.escape(fl.drive)} ({fl.points} points, one per d); its "
+                "rows for that drive are not blind, every other NGF row is.")
+        if fl.at_bound:
+            text += " The fit ran into its search range: that profile does not determine A, and the NGF rows test little."
+        out.append(text)
+    creep = rows[(rows.observable == "creep_length") & (rows.model == "local")]
+    if len(creep):
+        out.append(f"Below the layer the DEM creeps with an e-folding length of "
+                   f"{fmt(creep.dem.mean(), creep.dem_err.mean())} d, which local mu(I) cannot have (it is rigid there).")
+    off = c.scorecard.scene[c.scorecard.scene.verdict != "within error"] if len(c.scorecard.scene) else []
+    for r in getattr(off, "itertuples", lambda: [])():
+        out.append(f"Scene check off: {html.escape(r.check)} = {fmt(r.value, r.err)} for {html.escape(r.drive)} "
+                   f"(target {r.target:g}); differences in that drive may be the scene's, not the rheology's.")
+    return out
+
+
+HOW_TO_READ = {
+    "scorecard": "Each bar is one scorecard row: how many combined standard errors the DEM lies from the prediction. "
+                 "Inside the grey band the prediction is consistent with the DEM.",
+    "drive": "Top left: the free response (u_w under an imposed stress, mu_w under an imposed speed), the DEM as a running "
+             "mean with its band over seeds, each model as a line. Top right: the layer thickness delta_u on log axes "
+             "(sqrt(t) growth is a slope of 1/2). Bottom: the steady velocity profile, linear and log; on the log panel a "
+             "straight DEM tail below delta_s is creep, which local mu(I) cannot have.",
+    "profiles": "Steady-window depth profiles of the DEM (band: seeds or frames) with the local model's steady state: "
+                "velocity, solid fraction, pressure, shear stress, friction and inertial number.",
+    "transient": "Depth profiles at a few snapshot times, DEM solid and the local model dashed in the same colour.",
+    "calibration": "The mu(I) law with its 95 % bootstrap band and the linear form, the published values beside it "
+                   "(dotted). Blind comparison: the plane-shear points it was measured on (squares) and the drives' "
+                   "steady (mu, I) pairs, one per d of depth away from the walls, with their errors, as a test of the "
+                   "law; in-drive fit: the pairs and the fit through them.",
+    "cost_noise": "What each grain-step buys: the relative standard error of each drive's steady response against the "
+                  "DEM's work.",
+}
 
 
 def write_report(c: Comparison, out_dir) -> dict:
@@ -245,48 +363,62 @@ def write_report(c: Comparison, out_dir) -> dict:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     m = metrics(c)
-    (out / "metrics.json").write_text(json.dumps(m, indent=2, default=float))
+    (out / "metrics.json").write_text(json.dumps(m, indent=2))
     c.pairs.to_csv(out / "calibration_pairs.csv", index=False)
-    figs = [calibration_figure(c, out), cost_figure(m, out)]
+    c.scorecard.rows.to_csv(out / "scorecard.csv", index=False)
+    figs = [("scorecard", sigma_figure(c, out))] if len(c.scorecard.rows) else []
+    figs += [("calibration", calibration_figure(c, out)), ("cost_noise", cost_figure(c, out))]
     for dc in c.drives:
         g, stem = dc.dem, slug(dc.label)
         g.series.to_csv(out / f"series_{stem}.csv", index=False)
         g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False)
         g.delta.assign(delta_mu=dc.delta_mu).to_csv(out / f"delta_{stem}.csv", index=False)
-        for i, p in enumerate(dc.predictions):
-            p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{i}.csv", index=False)
+        for p in dc.predictions:
+            p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{p.model}.csv", index=False)
         if dc.predictions:
-            figs += [drive_figure(dc, out), profiles_figure(dc, c.material, out), transient_figure(dc, c.material, out)]
+            figs += [("drive", drive_figure(dc, out)), ("profiles", profiles_figure(dc, c.material, out)),
+                     ("transient", transient_figure(dc, c.material, out))]
     ch = c.checks
     ch.width.to_csv(out / "width_check.csv", index=False)
     ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False)
-    cross_rows = "".join(f"<tr><th>{q}</th><td>{v:.1%}</td></tr>" for q, v in ch.crosscheck_bulk.items())
-    rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{_fmt(v)}</td></tr>" for k, v in m.items()
-                   if k not in ("drives", "definitions", "calibration", "runs"))
-    drive_rows = "".join(f"<h3>{html.escape(k)}</h3><table>" + "".join(
-        f"<tr><th>{html.escape(a)}</th><td>{_fmt(b)}</td></tr>" for a, b in d.items()) + "</table>"
-        for k, d in m["drives"].items())
+    drive_rows = [[html.escape(label), d["kind"], fmt(d["imposed"]), html.escape(d["imposed_unit"]), str(d["seeds"]),
+                   fmt(d["u_w_inf"]["dem"], d["u_w_inf"]["dem_err"]), fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]),
+                   fmt(d["t_steady"]), str(d["frames"]), str(d["dropped_frames"])]
+                  for label, d in m["drives"].items()]
+    cross_rows = [[html.escape(q), f"{v:.1%}"] for q, v in ch.crosscheck_bulk.items()]
+    plateau = ch.plateau
+    plateau_rows = [[html.escape(f)] + [f"{v:.0%}" for v in plateau.loc[f]] for f in plateau.index]
+    figures = "".join(f"<h3>{html.escape(path.stem)}</h3><p class='how'>{html.escape(HOW_TO_READ[kind])}</p>"
+                      f"<p><img src='{path.name}' alt='{html.escape(kind)} figure: {html.escape(path.stem)}'></p>"
+                      for kind, path in figs)
+    prov = m["provenance"]
     body = [
         "<h1>granstokes: continuum vs DEM</h1>",
-        f"<p>Runs: {html.escape(', '.join(m['runs']))}. Everything in DEM units ({html.escape(UNITS['dem_units'])}); "
-        f"inertial number: {html.escape(UNITS['inertial_number'])}.</p>",
-        "<h2>How to read it</h2><p>Each drive figure puts the DEM (blue, band over seeds) against two continuum "
-        "predictions made from the calibration only (see Calibration: an independent plane-shear law, or a fit on the drives themselves): the velocity form on the DEM's scene (orange: "
-        "bed at rest, finite depth, plate mass) and the paper's stress-diffusion model (green dashed). Agreement "
-        "of the steady values tests the local mu(I) law; the early slopes test the sqrt(t) growth; the "
-        "log-scale velocity profile shows the creep below delta_s that local mu(I) cannot have.</p>",
+        f"<p>Runs: {html.escape(', '.join(m['runs']))}. Calibration: {html.escape(c.calibration_source)}. "
+        f"DEM units: {html.escape(UNITS['dem_units'])}. Inertial number: {html.escape(UNITS['inertial_number'])}.</p>",
+        "<h2>Scorecard</h2>", scorecard_html(c),
+        f"<p>Bands: {c.scorecard.replicates} calibration replicates per steady prediction (band edges change by at most "
+        f"{c.scorecard.edge_stability:.0%} of the band width from half to all replicates); t90 by linearised "
+        "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; 2.</p>",
+        "<h2>Conclusions</h2><ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>",
+        "<h2>The scene's own checks</h2>", scene_html(c),
+        "<h2>Figures</h2>", figures,
         calibration_section(c),
-        "<h2>Metrics</h2><table>" + rows + "</table>",
-        "<h2>Definitions</h2><ul>" + "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>"
-                                              for k, v in DEFINITIONS.items()) + "</ul>",
-        "<h2>Figures</h2>" + "".join(f"<p><img src='{f.name}' alt='{f.stem}'></p>" for f in figs),
-        "<h2>Per drive</h2>" + drive_rows,
-        f"<h2>Checks of the coarse-graining ({html.escape(ch.drive)})</h2>"
-        "<p>Width check (fraction of heights where a field plateaus, |f_w - f_2w| within 5 %, going from width "
-        "w to the next; last 30 % of the run; width_check.csv):</p>" + ch.plateau.to_html(float_format="{:.0%}".format)
-        + "<p>Against LAMMPS's own 1 d chunk averages (profiles.csv; mean |CG - LAMMPS| / mean |LAMMPS| in the bulk; "
-        "lammps_crosscheck.csv). They differ because LAMMPS bins grain centres (no kernel), puts the virial at grain "
-        "centres (no stress line) and has no wall term:</p><table>" + cross_rows + "</table>",
+        "<h2>Drives</h2>", _table(["drive", "kind", "imposed", "unit", "seeds", "u_w_inf [sqrt(g d)]", "mu_w_inf",
+                                   "t_steady [sqrt(d/g)]", "frames", "dropped frames"], drive_rows),
+        "<h2>Definitions</h2>", _table(["name", "unit", "definition"],
+                                       [[html.escape(k), html.escape(u), html.escape(d)]
+                                        for k, (u, d) in DEFINITIONS.items()]),
+        f"<h2>Checks of the coarse-graining ({html.escape(ch.drive)})</h2>",
+        "<p>Width check: fraction of heights where a field plateaus (relative change within 5 %) going from the next "
+        "smaller kernel width to this one, over the last 30 % of the run (width_check.csv):</p>",
+        _table(["field"] + [f"w = {w:g} d" for w in plateau.columns], plateau_rows),
+        "<p>Against LAMMPS's own 1 d chunk averages (profiles.csv): mean |CG - LAMMPS| / mean |LAMMPS| in the bulk "
+        "(lammps_crosscheck.csv). They differ because LAMMPS bins grain centres (no kernel), puts the virial at grain "
+        "centres (no stress line) and has no wall term; p_mop and tau_mop are method-of-planes values.</p>",
+        _table(["quantity", "relative difference"], cross_rows),
+        "<h2>Provenance</h2>", _table(["item", "value"], [[html.escape(k), html.escape(str(v))]
+                                                         for k, v in prov.items() if k != "inputs"]),
     ]
     (out / "index.html").write_text(page("granstokes compare", "".join(body)))
     return m

@@ -7,7 +7,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .rheology import Friction, finite, require
+from granstokes.validate import finite, output_dir, output_file, require
+
+from .rheology import Friction
 from .scales import UNITS
 from .solver import Numerics, Solution, check_times, solve_speed, solve_stress
 
@@ -27,7 +29,9 @@ def run_continuum(args) -> int:
     times = check_times(args.times)
     numerics = Numerics(n_cells=args.n_cells, rtol=args.rtol, method=args.method)
     if args.plot is not None:
-        require(args.plot.suffix.lower() == ".png", "--plot", "a file name ending in .png", str(args.plot))
+        output_file(args.plot, "--plot", ".png")
+    if args.save is not None:
+        output_dir(args.save, "--save")
     solve = solve_stress if imposed == "stress" else solve_speed
     sol = solve(fr, value, times, numerics)
     if args.json:

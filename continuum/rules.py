@@ -50,6 +50,11 @@ def well_posed_range(fr: Friction, I0: float):
     return lo, hi
 
 
+#: regularisation of the DEM-scene predictions, eps = EPS_FRACTION U/delta_s: the creep it adds below
+#: yield scales as eps^(2/3) (tests/continuum/test_velocity_form.py); 1e-3 of the layer's shear rate
+EPS_FRACTION = 1e-3
+
+
 @dataclass(frozen=True)
 class YieldRule:
     """``kind`` "regularised" (eps in 1/time, the material's units) or "barker-gray"."""
@@ -60,6 +65,11 @@ class YieldRule:
     def __post_init__(self):
         require(self.kind in ("regularised", "barker-gray"), "rule", "'regularised' or 'barker-gray'", self.kind)
         require(finite(self.eps) and self.eps > 0, "eps", "a finite number > 0 (a shear rate)", self.eps)
+
+    @classmethod
+    def for_layer(cls, scales) -> "YieldRule":
+        """The regularised rule of the DEM-scene predictions: eps = EPS_FRACTION U/delta_s."""
+        return cls(eps=EPS_FRACTION * scales.U / scales.delta_s)
 
 
 class ShearLaw:

@@ -38,10 +38,11 @@ class Numerics:
         return Mesh.graded(self.n_cells, self.stretch)
 
 
-def check_times(times) -> np.ndarray:
+def check_times(times, name: str = "times") -> np.ndarray:
+    """Output times: a non-empty, strictly increasing list of finite numbers > 0 (``name`` in the error)."""
     t = np.asarray(times, dtype=float).ravel()
     require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
-            "times", "a non-empty, strictly increasing list of finite numbers > 0", [float(v) for v in np.atleast_1d(times)])
+            name, "a non-empty, strictly increasing list of finite numbers > 0", [float(v) for v in np.atleast_1d(times)])
     return t
 
 

@@ -11,8 +11,8 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
   (discarded), then at least ``strain`` more, sampled every ``sample`` of strain; above
   STRAIN_REFERENCE_I the measured strain grows as I (constant cost per point) up to ``strain_max``:
   those points cost little and the fast end of the law (mu_d, I0) needs their precision;
-* errors: blocks of BLOCK_TAU integrated autocorrelation times of mu (at least MIN_BLOCKS blocks),
-  and independent seeds (compare.calibrate bootstraps over both);
+* errors: blocks of BLOCK_TAU integrated autocorrelation times (the longer of mu's and phi's; at least
+  MIN_BLOCKS blocks), and independent seeds (continuum.calibration bootstraps over both);
 * checks of every point and seed (all must pass for it to enter the fit): measured strain >= strain,
   no drift (first and second halves of the blocks agree within DRIFT_Z standard errors in mu and phi),
   <P_yy> = p within PRESSURE_Z standard errors, velocity profile linear (largest deviation from the
@@ -92,7 +92,8 @@ class CalibrationPlan:
                 "points": [{"I": p.I, "rate": p.rate, "start_steps": p.start_steps, "measure_steps": p.measure_steps,
                             "sample_steps": p.sample} for p in self.points],
                 "total_steps": sum(self.steps(k) for k in range(len(self.points))) * len(cal.seeds),
-                "block": f"{BLOCK_TAU:g} integrated autocorrelation times of mu, at least {MIN_BLOCKS} blocks",
+                "block": f"{BLOCK_TAU:g} integrated autocorrelation times (the longer of mu's and phi's), at least "
+                         f"{MIN_BLOCKS} blocks",
                 "checks": f"strain >= {cal.strain:g}; drift of mu and phi between halves < {DRIFT_Z:g} s.e.; "
                           f"|<P_yy> - p| < {PRESSURE_Z:g} s.e.; velocity profile within {HOMOGENEITY_TOL:g} of linear",
                 "I_convention": "dem: I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy|"}
@@ -149,8 +150,8 @@ def _profile_deviation(folder: Path, rate: float, ly: float) -> float:
 def analyse(folder: Path, cfg: Config, point: ShearPoint, seed: int) -> tuple[dict, pd.DataFrame, dict]:
     """(points.csv row, block means, checks) of one point and seed."""
     s = _samples(folder)
-    mu_samples = s.tau / s.p
-    tau_int = integrated_time(mu_samples.to_numpy())
+    # the slowest of the measured quantities sets the block length (phi relaxes more slowly than mu)
+    tau_int = max(integrated_time((s.tau / s.p).to_numpy()), integrated_time(s.phi.to_numpy()))
     length = max(1, min(math.ceil(BLOCK_TAU * tau_int), len(s) // MIN_BLOCKS))
     nb = len(s) // length
     blocks = (s.iloc[:nb * length].groupby(np.arange(nb * length) // length)[["tau", "p", "phi", "rate"]].mean()
@@ -198,9 +199,14 @@ class _Calibrator:
 
     def task(self, k: int, seed: int) -> None:
         key = f"I-{k}/seed-{seed}"
-        if self.state["points"].get(key, {}).get("status") == "complete":
-            return
         d = layout.point_dir(self.out, k, seed)
+        old = self.state["points"].get(key, {})
+        if old.get("status") == "complete":  # re-analysed from its stored series: the fit uses the current analysis
+            row, blocks, checks = analyse(d, self.plan.config, self.plan.points[k], seed)
+            blocks.assign(point=k).to_csv(d / "blocks.csv", index=False)
+            with self.lock:
+                self.state["points"][key] = {**old, "row": row, "checks": checks}
+            return
         if d.exists():
             shutil.rmtree(d)
         d.mkdir(parents=True)
@@ -277,9 +283,11 @@ class CalibrateResult:
 
 
 def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS, np: int = 1,
-              resume: bool = False, launcher: str | None = None, progress: bool = True) -> CalibrateResult:
-    """Run (or with ``resume`` continue) the calibration of ``cfg`` into ``out``; everything is
-    validated before the folder is touched (ValueError / LammpsNotFound, nothing written)."""
+              resume: bool = False, launcher: str | None = None, progress: bool = True,
+              announce=None) -> CalibrateResult:
+    """Run (or with ``resume`` continue: unfinished points rerun, finished ones re-analysed, then the
+    fit) the calibration of ``cfg`` into ``out``; everything is validated before the folder is touched
+    (ValueError / LammpsNotFound, nothing written); ``announce(line)`` then receives a summary."""
     require(isinstance(jobs, int) and not isinstance(jobs, bool) and jobs >= 1, "--jobs", "an integer >= 1", jobs)
     require(isinstance(np, int) and not isinstance(np, bool) and np >= 1, "--np", "an integer >= 1", np)
     require(launcher is None or "{np}" in launcher, "--launcher", "a command template containing {np}", launcher)
@@ -303,6 +311,11 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
                  "points": {}, "started": _now()}
         out.mkdir(parents=True, exist_ok=True)
         (out / layout.CONFIG_TOML).write_text(text)
+    if announce is not None:
+        c = cfg.calibration
+        announce(f"dem calibrate: '{cfg.name}' grains, {len(plan.points)} inertial numbers in [{c.I_min:g}, "
+                 f"{c.I_max:g}] x {len(c.seeds)} seed(s), {plan.n_grains} grains at p = {cfg.p_w:g}, "
+                 f"{plan.as_dict()['total_steps']:.3g} steps -> {out}")
     state["status"], state["message"] = "running", ""
     runner = _Calibrator(plan, out, state, _Lammps(np, launcher, progress))
     runner.save()

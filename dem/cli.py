@@ -33,19 +33,15 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_calibrate(args) -> int:
-    from .calibrate import DEFAULT_JOBS, calibrate, plan_calibration
+    from .calibrate import DEFAULT_JOBS, calibrate
 
     try:
         if (args.config is None) == (args.preset is None):
             raise ValueError("give exactly one of CONFIG.toml or --preset")
         cfg, text = config_mod.load(args.config) if args.config else config_mod.preset(args.preset)
-        p = plan_calibration(cfg)
-        c = cfg.calibration
-        print(f"dem calibrate: '{cfg.name}' grains, {len(p.points)} inertial numbers in [{c.I_min:g}, {c.I_max:g}] x "
-              f"{len(c.seeds)} seed(s), {p.n_grains} grains at p = {cfg.p_w:g}, {p.as_dict()['total_steps']:.3g} steps "
-              f"-> {args.out}", file=sys.stderr)
         result = calibrate(cfg, text, args.out, jobs=DEFAULT_JOBS if args.jobs is None else args.jobs, np=args.np,
-                           resume=args.resume, launcher=args.launcher, progress=not args.quiet)
+                           resume=args.resume, launcher=args.launcher, progress=not args.quiet,
+                           announce=lambda line: print(line, file=sys.stderr))
     except (ValueError, OSError, LammpsNotFound) as exc:
         print(f"granstokes dem calibrate: error: {exc}", file=sys.stderr)
         return 2

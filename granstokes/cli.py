@@ -45,12 +45,14 @@ def build_parser() -> argparse.ArgumentParser:
     from compare.cli import register as compare_register
     from continuum.cli import register as continuum_register
     from continuum.paper.cli import register as paper_register
+    from continuum.predict_cli import register as predict_register
     from dem.cli import register as dem_register
 
     parser = OneLineParser(prog="granstokes", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     continuum_register(sub)
+    predict_register(sub)
     paper_register(sub)
     dem_register(sub)
     compare_register(sub)

@@ -1,17 +1,18 @@
 """``granstokes demo`` (``make demo``): the continuum report, the quick DEM preset (imposed stress and
 imposed speed) and the smoke preset (a second, smaller scene for the cost-vs-noise chart), the quick
-preset's independent mu(I) calibration by plane shear (``granstokes dem calibrate``, same grains), the
-blind comparison report over both scenes (``compare --calibration``), and one index page linking them.
-Metrics at the top level come from the quick preset's imposed-stress drive."""
+preset's independent mu(I) calibration by plane shear (``granstokes dem calibrate``, the same grains), the
+blind comparison report over both scenes (``compare --calibration``), and one index page linking them.  Metrics at the top level come from the
+quick preset's imposed-stress drive."""
 from __future__ import annotations
 
 import html
 import json
+import sys
 import time
 from pathlib import Path
 
 from compare.comparison import build
-from compare.report import slug, write_report
+from compare.report import conclusions, scorecard_html, slug, write_report
 from continuum.paper.report import write_continuum_report
 from dem import config as dem_config
 from dem import layout
@@ -19,6 +20,8 @@ from dem.calibrate import calibrate as dem_calibrate
 from dem.runner import run as dem_run
 
 from .page import page
+from .staging import staged
+from .validate import output_dir
 
 
 def _dem(preset: str, run_dir: Path) -> Path:
@@ -47,30 +50,41 @@ def _calibration(preset: str, folder: Path) -> Path:
     return folder / layout.CALIBRATION_JSON
 
 
+def _stage(name: str, clock: dict, action):
+    print(f"demo: {name} ...", file=sys.stderr, flush=True)
+    start = time.perf_counter()
+    result = action()
+    clock[name] = time.perf_counter() - start
+    print(f"demo: {name} done in {clock[name]:.0f} s", file=sys.stderr, flush=True)
+    return result
+
+
 def run_demo(out_dir, presets: tuple[str, ...] = ("quick", "smoke"), calibrated: str = "quick") -> Path:
-    out = Path(out_dir)
+    out = output_dir(out_dir, "--out")
     out.mkdir(parents=True, exist_ok=True)
     clock = {}
-    start = time.perf_counter()
-    write_continuum_report(out / "continuum")
-    clock["continuum"] = time.perf_counter() - start
-    start = time.perf_counter()
-    run_dirs = [_dem(preset, out / f"dem-{preset}") for preset in presets]
-    clock["dem"] = time.perf_counter() - start
-    start = time.perf_counter()
-    calibration = _calibration(calibrated, out / f"calibration-{calibrated}")
-    clock["calibration"] = time.perf_counter() - start
-    start = time.perf_counter()
-    m = write_report(build(run_dirs, calibration=calibration), out / "compare")
-    clock["compare"] = time.perf_counter() - start
-    keys = ("phi_bulk", "pressure_slope", "mu_s", "mu_d", "I0", "alpha_u", "alpha_delta")
-    rows = "".join(f"<tr><th>{k}</th><td>{m[k]:.4g}</td></tr>" for k in keys if m.get(k) is not None)
+    _stage("continuum report (the paper's figures)", clock, lambda: write_continuum_report(out / "continuum"))
+    run_dirs = [_stage(f"DEM preset {p}", clock, lambda p=p: _dem(p, out / f"dem-{p}")) for p in presets]
+    calibration = _stage(f"mu(I) calibration of the {calibrated} grains by plane shear", clock,
+                         lambda: _calibration(calibrated, out / f"calibration-{calibrated}"))
+    comparison = _stage("blind comparison (coarse-graining, predictions from the calibration, uncertainty)", clock,
+                        lambda: build(run_dirs, calibration=calibration))
+    with staged(out / "compare") as work:
+        write_report(comparison, work)
+    return write_index(comparison, out, presets, clock)
+
+
+def write_index(comparison, out: Path, presets, clock: dict) -> Path:
+    """The demo's front page: links to both reports, the scorecard, the conclusions, the main figure."""
     timing = ", ".join(f"{k} {v:.0f} s" for k, v in clock.items())
-    body = (f"<h1>granstokes demo</h1><ul><li><a href='compare/index.html'>continuum vs DEM ({html.escape(', '.join(presets))} presets), "
-            f"blind: mu(I) from the plane-shear calibration of the {html.escape(calibrated)} grains</a></li>"
+    main = next((dc for dc in comparison.drives if dc.predictions), comparison.drives[0])
+    body = (f"<h1>granstokes demo</h1><ul><li><a href='compare/index.html'>continuum vs DEM "
+            f"({html.escape(', '.join(presets))} presets): the full report</a></li>"
             f"<li><a href='continuum/index.html'>continuum: the paper's figures regenerated</a></li></ul>"
-            f"<table>{rows}</table><p>Wall time: {html.escape(timing)}.</p>"
-            f"<p><img src='compare/drive_{slug(str(run_dirs[0]) + '/stress')}.png' alt='quick preset, imposed stress'></p>")
+            f"<h2>Scorecard</h2>{scorecard_html(comparison)}<h2>Conclusions</h2><ul>"
+            + "".join(f"<li>{c}</li>" for c in conclusions(comparison)) + "</ul>"
+            f"<p>Wall time: {html.escape(timing)}.</p>"
+            f"<p><img src='compare/drive_{slug(main.label)}.png' alt='drive figure of {html.escape(main.label)}'></p>")
     index = out / "index.html"
     index.write_text(page("granstokes demo", body))
     return index

@@ -8,3 +8,13 @@ from continuum.rheology import Friction
 def paper_friction():
     """The paper's glass beads: mu_s = tan 21 deg, mu_d = tan 33 deg."""
     return Friction(np.tan(np.radians(21.0)), np.tan(np.radians(33.0)))
+
+
+@pytest.fixture(scope="session")
+def smoke_run(tmp_path_factory):
+    """One smoke DEM run (granstokes dem run --preset smoke) shared by the slow compare tests."""
+    from granstokes.cli import main
+
+    run = tmp_path_factory.mktemp("smoke") / "run"
+    assert main(["dem", "run", "--preset", "smoke", "--out", str(run), "--quiet"]) == 0
+    return run

@@ -1,16 +1,20 @@
 """``granstokes paper-figures`` and ``granstokes stability``."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from granstokes.validate import require
+from granstokes.staging import staged
+from granstokes.validate import output_dir, read_json
+
+#: what --calibration must hold (I0 in the DEM convention)
+CALIBRATION_KEYS = ("mu_s", "mu_d", "I0")
 
 
 def run_paper_figures(args) -> int:
     from .figures import paper_figures
 
-    result = paper_figures(args.out)
+    with staged(output_dir(args.out, "--out")) as work:
+        result = paper_figures(work)
     names = sorted(k for k in result if k != "timing")
     print(f"wrote the paper's figures into {args.out}: " + ", ".join(names))
     return 0
@@ -20,13 +24,15 @@ def run_stability(args) -> int:
     from ..scales import Material
     from .stability import write_stability
 
+    output_dir(args.out, "--out")
     calibrated = None
     if args.calibration is not None:
-        require(args.calibration.is_file(), "--calibration", "an existing metrics.json from granstokes compare",
-                str(args.calibration))
-        cal = json.loads(args.calibration.read_text())
-        calibrated = Material(mu_s=cal["mu_s"], mu_d=cal["mu_d"], I0=cal["I0"], I_convention=cal["I0_convention"])
-    result = write_stability(args.out, calibrated)
+        cal = read_json(args.calibration, "--calibration", CALIBRATION_KEYS,
+                        "a calibration.json (granstokes dem calibrate) or metrics.json (granstokes compare)")
+        convention = cal.get("I_convention", cal.get("I0_convention"))
+        calibrated = Material(mu_s=cal["mu_s"], mu_d=cal["mu_d"], I0=cal["I0"], I_convention=convention)
+    with staged(args.out) as work:
+        result = write_stability(work, calibrated)
     counts = result["table"].groupby(["method", "class"]).size().unstack(fill_value=0)
     print(counts.to_string())
     print(f"maps: {', '.join(p.name for p in result['maps'])}; well-posedness: {result['wellposedness'].name}")

@@ -1,0 +1,184 @@
+"""The continuum models a DEM drive is predicted with, registered by key, in DEM units.
+
+Each model takes the material (mu_s, mu_d, I0, phi: from a calibration, never from the drive it
+predicts) and the drive's own scene (p_w, bed depth H, plate mass, what is imposed):
+
+* ``local``: local mu(I) on the DEM's scene: the velocity form (continuum.velocity: bed at rest,
+  no-slip base, plate with its mass, eps-regularised, continuum.rules.YieldRule.for_layer) for the
+  transient, the exact steady state of the same scene (continuum.scene) for the steady values;
+* ``paper``: the paper's stress-diffusion model (continuum.solver: semi-infinite bed, initial state
+  tau = mu_s p), scaled with continuum.scales.Scales; its steady state is the exact one of the
+  semi-infinite bed;
+* ``ngf``: nonlocal granular fluidity (continuum.ngf) with amplitude A, Neumann walls, t0 = one
+  local inertial time; transient from a bed at rest, steady state by Chebyshev collocation.
+
+``Prediction``: the time series (t, u_w, mu_w, delta_u), the profiles (t, depth, u, mu) and the
+steady state (u_w, mu_w, delta_s, and the steady depth profile y, u) of one model for one drive.
+The layer thickness compared with the DEM is delta_u, the depth where u falls to U_FRACTION of u_w
+(the paper's threshold on mu - mu_s is far below the DEM's noise); both sides use it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import pandas as pd
+
+from continuum import ngf
+from continuum.crossing import crossing_depth
+from continuum.rules import YieldRule
+from continuum.scales import Material, Scales
+from continuum.scene import scene_steady
+from continuum.solver import solve_speed, solve_stress
+from continuum.steady import steady_velocity
+from continuum.velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
+
+U_FRACTION = 0.05
+
+
+def depth_at_fraction(depth: np.ndarray, u: np.ndarray, u_w: float, frac: float = U_FRACTION) -> float:
+    """delta_u: the first depth (from the plate) where u falls below frac u_w (continuum.crossing,
+    linear); nan if never or if u_w is not a positive number."""
+    if not (np.isfinite(u_w) and u_w > 0):
+        return np.nan
+    return crossing_depth(depth, np.asarray(u) / u_w, frac)
+
+
+@dataclass(frozen=True)
+class Drive:
+    """What a model needs of a DEM drive: the scene and what is imposed (value = tau_w or u_w)."""
+
+    kind: str
+    value: float
+    p_w: float
+    depth: float
+    plate_mass: float
+
+    def scene(self, material: Material) -> BedScene:
+        return BedScene(material, self.p_w, self.depth, plate_mass=self.plate_mass)
+
+    @property
+    def load(self) -> dict:
+        return {"mu_w": self.value / self.p_w} if self.kind == "stress" else {"u_w": self.value}
+
+    def scales(self, material: Material) -> Scales:
+        return (Scales(material, self.p_w, self.value / self.p_w) if self.kind == "stress"
+                else Scales.for_speed(material, self.p_w, self.value))
+
+
+@dataclass(frozen=True, eq=False)
+class Steady:
+    """A model's steady state of a drive: depth profile and the plate's values."""
+
+    y: np.ndarray
+    u: np.ndarray
+    u_w: float
+    mu_w: float
+    delta_s: float
+
+    @property
+    def delta_u(self) -> float:
+        return depth_at_fraction(self.y, self.u, self.u_w)
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    model: str                # registry key
+    label: str
+    series: pd.DataFrame      # t, u_w, mu_w, delta_u
+    profiles: pd.DataFrame    # t, depth, u, mu
+    steady: Steady
+
+
+def _series(t, depth, u, mu_w) -> pd.DataFrame:
+    d = [depth_at_fraction(depth, ui, ui[0]) for ui in u]
+    return pd.DataFrame({"t": t, "u_w": u[:, 0], "mu_w": mu_w, "delta_u": d})
+
+
+def _profiles(times, y, u, mu) -> pd.DataFrame:
+    return pd.DataFrame({"t": np.repeat(times, len(y)), "depth": np.tile(y, len(times)), "u": u.ravel(),
+                         "mu": np.asarray(mu).ravel()})
+
+
+# --- local mu(I) on the DEM's scene ------------------------------------------------------------------
+
+def _local_steady(material: Material, drive: Drive) -> Steady:
+    st = scene_steady(drive.scene(material), **drive.load)
+    return Steady(st.y, st.u, st.u_w, st.mu_w, st.delta_s)
+
+
+def _local_transient(material: Material, drive: Drive, times) -> tuple[pd.DataFrame, pd.DataFrame]:
+    vel = solve_velocity(drive.scene(material), times, rule=YieldRule.for_layer(drive.scales(material)),
+                         initial="rest", numerics=VELOCITY_NUMERICS, compare_steady=False, **drive.load)
+    mu_w = vel.series.set_index("t")["mu_w"].reindex(times, method="nearest").to_numpy()
+    mu = np.array([np.interp(vel.y, vel.y_face, m) for m in vel.mu])
+    return _series(times, vel.y, vel.u, mu_w), _profiles(times, vel.y, vel.u, mu)
+
+
+# --- the paper's stress-diffusion model --------------------------------------------------------------
+
+def _paper_steady(material: Material, drive: Drive) -> Steady:
+    sc, fr = drive.scales(material), material.friction
+    y = np.linspace(0.0, sc.delta_s, 201)
+    u = sc.U * steady_velocity(fr, sc.mu_w, y / sc.delta_s)
+    return Steady(y, u, float(u[0]), sc.mu_w, sc.delta_s)
+
+
+def _paper_transient(material: Material, drive: Drive, times) -> tuple[pd.DataFrame, pd.DataFrame]:
+    sc, fr = drive.scales(material), material.friction
+    t_tilde = sc.t_tilde(times)
+    sol = (solve_stress(fr, sc.mu_w, t_tilde) if drive.kind == "stress"
+           else solve_speed(fr, sc.u_tilde(drive.value), t_tilde))
+    y, u = sc.y(sol.mesh.y), sc.u(sol.velocity)
+    return _series(times, y, u, sol.mu_w), _profiles(times, y, u, sol.mu)
+
+
+# --- nonlocal granular fluidity --------------------------------------------------------------------
+
+def _ngf_steady(fluidity: ngf.NonlocalFluidity, material: Material, drive: Drive) -> Steady:
+    st = ngf.solve_steady(drive.scene(material), fluidity, **drive.load)
+    return Steady(st.y, st.u, st.u_w, st.mu_w, st.delta_s)
+
+
+def _ngf_transient(fluidity: ngf.NonlocalFluidity, material: Material, drive: Drive,
+                   times) -> tuple[pd.DataFrame, pd.DataFrame]:
+    tr = ngf.solve_transient(drive.scene(material), fluidity, times, error_estimate=False, **drive.load)
+    mu = np.array([np.interp(tr.y, tr.y_cell, m) for m in tr.mu])
+    return _series(times, tr.y, tr.u, tr.mu_w), _profiles(times, tr.y, tr.u, mu)
+
+
+@dataclass(frozen=True)
+class SceneModel:
+    """A registered model: ``steady(material, drive)`` and ``transient(material, drive, times)``;
+    ``parameter``: the name of its own fitted parameter (beyond the material), and ``factory`` builds
+    the model at another value of it (uncertainty propagation)."""
+
+    key: str
+    label: str
+    steady: Callable
+    transient: Callable
+    parameters: dict = field(default_factory=dict)
+    parameter: str | None = None
+    factory: Callable | None = None
+
+    def at(self, values) -> "SceneModel":
+        """This model with its own parameter taken from ``values`` (a mapping), if it has one."""
+        return self.factory(float(values[self.parameter])) if self.parameter else self
+
+    def predict(self, material: Material, drive: Drive, times) -> Prediction:
+        times = np.asarray(times, dtype=float)
+        series, profiles = self.transient(material, drive, times)
+        return Prediction(self.key, self.label, series, profiles, self.steady(material, drive))
+
+
+LOCAL = SceneModel("local", "local mu(I), velocity form on the DEM scene", _local_steady, _local_transient)
+PAPER = SceneModel("paper", "paper's model (stress diffusion, tau = mu_s p at t = 0)", _paper_steady, _paper_transient)
+
+
+def ngf_model(A: float) -> SceneModel:
+    """NGF with amplitude A (the model's one parameter; calibrated on one drive's creep profile)."""
+    fl = ngf.NonlocalFluidity(A=A)
+    return SceneModel("ngf", f"nonlocal fluidity (NGF), A = {A:.3g}",
+                      lambda m, d: _ngf_steady(fl, m, d), lambda m, d, t: _ngf_transient(fl, m, d, t),
+                      {"A": A, "boundary": fl.boundary, "t0_hat": fl.t0_hat}, "A", ngf_model)

@@ -1,0 +1,268 @@
+"""The verdict: one row per drive x observable x model, DEM value with its error against the model's
+prediction with a 95 % band propagated from the calibration's uncertainty.
+
+Observables (DEM units; estimators applied alike to the DEM and to every model):
+
+* ``u_w_inf`` (imposed stress) or ``mu_w_inf`` (imposed speed): the steady value of the free response;
+* ``delta_u``: steady layer thickness, the depth where the steady-window u falls to 5 % of u_w;
+* ``t90``: time for the running mean of the free response to cover 90 % of its change (the model's
+  series is interpolated onto the DEM's output times first, so that both are smoothed alike);
+* ``creep_length``: e-folding length of u below the calibrated delta_s (least squares of ln u over
+  depth, from delta_s to WALL_EXCLUSION above the base); local mu(I) is rigid there: 0.
+
+Errors.  DEM: spread over seeds (standard error of the mean) when a drive has >= 2 seeds; with one
+seed, for the profile observables the spread over BLOCKS consecutive blocks of the steady window, for
+t90 the running mean's half-width (a resolution, not a statistical error); for the steady response
+the block or seed error of compare.plate.steady_state.  Model: the band is the 2.5-97.5 % range over
+the calibration's replicates (joint samples of mu_s, mu_d, I0, phi) for the steady observables; for
+t90 (a transient solve per sample is too costly) the linearised propagation J C J^T of the
+replicates' covariance C, J by one-sided differences, band +-1.96 sd; the numerical error of t90 is its change
+when every other output time is dropped (interpolation), of the steady values the solver's estimate.  sigma = (dem - predicted) / sqrt(dem_err^2
++ band_sd^2 + numerical^2), band_sd = band width / (2 x 1.96); verdict "consistent" when |sigma| <= 2.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+from tqdm import tqdm
+
+from continuum.crossing import crossing_depth
+from continuum.scales import Material
+
+from .analysis import DriveAnalysis
+from .calibrate import WALL_EXCLUSION
+from .models import Drive, Prediction, SceneModel, Steady, depth_at_fraction
+
+OBSERVABLES = {
+    "u_w_inf": ("sqrt(g d)", "steady plate speed"),
+    "mu_w_inf": ("1", "steady plate friction <tau_w>/<p>"),
+    "delta_u": ("d", "steady layer thickness (u = 5 % of u_w)"),
+    "t90": ("sqrt(d/g)", "time to 90 % of the change of the free response"),
+    "creep_length": ("d", "e-folding length of u below delta_s"),
+}
+BLOCKS = 4
+SIGMA_CONSISTENT = 2.0
+Z95 = stats.norm.ppf(0.975)
+#: t90: the running mean over this fraction of the record reaches this fraction of the change
+T90_WINDOW, T90_LEVEL = 0.05, 0.9
+#: relative step of the central differences of the linearised t90 propagation
+FD_STEP = 1e-3
+PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
+
+
+def t90(t, y) -> float:
+    """First time the running mean (T90_WINDOW of the record) has covered 90 % of the change from the
+    first to the final-tenth value, interpolated linearly between output times (continuum.crossing);
+    the running mean keeps DEM noise from triggering it."""
+    y = pd.Series(np.asarray(y, dtype=float)).interpolate(limit_direction="both")
+    t = np.asarray(t, dtype=float)
+    smooth = y.rolling(max(1, int(T90_WINDOW * len(y))), center=True, min_periods=1).mean().to_numpy()
+    start, final = smooth[0], np.mean(smooth[-max(1, len(smooth) // 10):])
+    if final == start:
+        return np.nan
+    remaining = 1 - (smooth - start) / (final - start)  # 1 at the start, 0 at the final value
+    return crossing_depth(t, remaining, 1 - T90_LEVEL)
+
+
+def creep_length(depth, u, delta_s: float, bed_depth: float) -> float:
+    """e-folding length of u below delta_s (least squares of ln u); 0 when u vanishes there (rigid),
+    nan when fewer than 3 points lie in [delta_s, bed_depth - WALL_EXCLUSION]."""
+    depth, u = np.asarray(depth, dtype=float), np.asarray(u, dtype=float)
+    zone = (depth >= delta_s) & (depth <= bed_depth - WALL_EXCLUSION)
+    if zone.sum() < 3:
+        return np.nan
+    moving = zone & (u > 0)
+    if moving.sum() < 3:
+        return 0.0
+    slope = stats.linregress(depth[moving], np.log(u[moving])).slope
+    return float(-1 / slope) if slope < 0 else np.nan
+
+
+@dataclass(frozen=True)
+class Measured:
+    value: float
+    err: float
+    how: str
+
+
+def _mean_err(values, how: str) -> Measured:
+    v = np.asarray([x for x in values if np.isfinite(x)], dtype=float)
+    if len(v) < 2:
+        return Measured(float(v.mean()) if len(v) else np.nan, np.nan, how)
+    return Measured(float(v.mean()), float(v.std(ddof=1) / np.sqrt(len(v))), how)
+
+
+def steady_samples(a: DriveAnalysis, t0: float) -> tuple[list[pd.DataFrame], str]:
+    """Independent steady-window profiles (every field, with depth, sorted by depth): one per seed, or
+    BLOCKS consecutive blocks of the window of a single seed."""
+    t_end = a.t_end
+    if len(a.profiles) >= 2:
+        windows = [(p, t0, t_end) for p in a.profiles]
+        how = f"spread over {len(a.profiles)} seeds"
+    else:
+        edges = np.linspace(t0, t_end, BLOCKS + 1)
+        windows = [(a.profiles[0], lo, hi) for lo, hi in zip(edges[:-1], edges[1:])]
+        how = f"spread over {BLOCKS} blocks of the steady window (1 seed)"
+    out = []
+    for prof, lo, hi in windows:
+        w = prof.window(lo, hi)
+        w.insert(1, "depth", float(np.mean(a.surface([lo, hi]))) - w.y)
+        out.append(w[w.depth >= 0].sort_values("depth"))
+    return out, how
+
+
+def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
+    """Rows of a depth profile away from plate and base (WALL_EXCLUSION)."""
+    return (table.depth > WALL_EXCLUSION) & (table.depth < bed_depth - WALL_EXCLUSION)
+
+
+def scene_checks(a: DriveAnalysis, phi: float) -> list[dict]:
+    """The scene's own quality figures, each with its error and target: the bulk coarse-grained shear
+    stress against the plate's <tau_w>, the pressure slope against phi rho_p g, the mass balance."""
+    samples, how = steady_samples(a, a.t_window)
+    tau_plate = a.spec.value if a.spec.kind == "stress" else a.steady["mu_w"]["value"] * a.spec.p_w
+    ratio = _mean_err([s.tau[bulk(s, a.spec.depth)].mean() / tau_plate for s in samples], how)
+    whole = a.mean_profile[bulk(a.mean_profile, a.spec.depth)]
+    fit = stats.linregress(whole.depth, whole.p)
+    return [
+        {"drive": a.label, "check": "bulk CG tau / plate <tau_w>", "unit": "1", "value": ratio.value,
+         "err": ratio.err, "how": ratio.how, "target": 1.0},
+        {"drive": a.label, "check": "pressure slope / (phi rho_p g)", "unit": "1", "value": fit.slope / phi,
+         "err": fit.stderr / phi, "how": "least squares over the bulk of the whole run's mean profile (depths "
+         "correlated: a lower bound)", "target": 1.0},
+    ]
+def dem_observables(a: DriveAnalysis, t0: float, delta_s: float) -> dict[str, Measured]:
+    """The DEM's value and error of every observable of drive ``a`` (steady window from t0)."""
+    resp = a.response
+    st = a.steady[resp]
+    out = {f"{resp}_inf": Measured(st["value"], st["stderr"], st["stderr_over"])}
+    samples, how = steady_samples(a, t0)
+    out["delta_u"] = _mean_err([depth_at_fraction(s.depth.to_numpy(), s.u_x.to_numpy(), s.u_x.iloc[0])
+                                for s in samples], how)
+    out["creep_length"] = _mean_err([creep_length(s.depth, s.u_x, delta_s, a.spec.depth) for s in samples], how)
+    if len(a.plates) >= 2:
+        out["t90"] = _mean_err([t90(p.t, getattr(p, resp)) for p in a.plates], f"spread over {len(a.plates)} seeds")
+    else:
+        t = a.series.t.to_numpy()
+        out["t90"] = Measured(t90(t, a.series[resp]), 0.5 * T90_WINDOW * (t[-1] - t[0]),
+                              "half-width of the running mean (1 seed: a resolution)")
+    return out
+
+
+def model_observables(pred_steady: Steady, series: pd.DataFrame | None, a: DriveAnalysis,
+                      delta_s: float) -> dict[str, float]:
+    """The same estimators on a model's steady state and (if given) its series on the DEM's times."""
+    resp = a.response
+    out = {f"{resp}_inf": getattr(pred_steady, resp), "delta_u": pred_steady.delta_u,
+           "creep_length": creep_length(pred_steady.y, pred_steady.u, delta_s, a.spec.depth)}
+    if series is not None:
+        t = a.series.t.to_numpy()
+        out["t90"] = t90(t, np.interp(t, series.t, series[resp]))
+    return out
+
+
+def _material(base: Material, row) -> Material:
+    return replace(base, mu_s=float(row["mu_s"]), mu_d=float(row["mu_d"]), I0=float(row["I0"]),
+                   I_convention="dem", phi=float(row["phi"]))
+
+
+def _linearised_t90(model: SceneModel, material: Material, drive: Drive, times, a: DriveAnalysis,
+                    replicates: pd.DataFrame) -> float:
+    """Standard deviation of t90 from J C J^T, C the replicates' covariance of the material's parameters
+    and the model's own, J by one-sided differences (a transient solve each)."""
+    t = a.series.t.to_numpy()
+    names = [*PARAMETERS, *([model.parameter] if model.parameter else [])]
+    base = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
+            **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
+
+    def value(params):
+        series, _ = model.at(params).transient(_material(material, params), drive, times)
+        return t90(t, np.interp(t, series.t, series[a.response]))
+
+    central = value(base)
+    jac = []
+    for name in names:
+        h = FD_STEP * abs(base[name])
+        jac.append((value({**base, name: base[name] + h}) - central) / h)
+    jac = np.array(jac)
+    cov = np.atleast_2d(np.cov(replicates[names].to_numpy(), rowvar=False))
+    return float(np.sqrt(max(jac @ cov @ jac, 0.0)))
+
+
+@dataclass(frozen=True, eq=False)
+class Scorecard:
+    rows: pd.DataFrame      # drive, observable, unit, dem, dem_err, dem_how, model, predicted, band, sigma, verdict
+    scene: pd.DataFrame     # drive, check, unit, value, err, how, target, sigma, verdict
+    replicates: int         # calibration samples pushed through each steady prediction
+    edge_stability: float   # largest relative change of a band edge from half to all replicates
+
+    @classmethod
+    def of(cls, rows: pd.DataFrame, scene: list[dict], replicates: int, edge_stability: float) -> "Scorecard":
+        sc = pd.DataFrame(scene)
+        if len(sc):
+            sc["sigma"] = (sc.value - sc.target) / sc.err
+            sc["verdict"] = np.where(sc.sigma.abs() <= SIGMA_CONSISTENT, "within error", "off")
+        return cls(rows, sc, replicates, edge_stability)
+
+
+def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
+    """Interpolation error of a model's t90: the change when every other output time is dropped."""
+    t = a.series.t.to_numpy()
+    coarse = series.iloc[::2]
+    return abs(t90(t, np.interp(t, series.t, series[a.response])) - t90(t, np.interp(t, coarse.t, coarse[a.response])))
+
+
+def score(drives, models: list[SceneModel], predictions: dict, material: Material, replicates: pd.DataFrame,
+          delta_s: dict, t0: dict, fitted_on: dict | None = None, progress: bool = True) -> tuple[pd.DataFrame, float]:
+    """Scorecard rows and the band edges' stability (largest relative change from half to all replicates).
+    ``predictions[(label, key)]``: the central Prediction of each drive and model; ``delta_s[label]``,
+    ``t0[label]``: the calibrated layer depth and steady-window start of each drive; ``fitted_on[key]``:
+    the drive a model's own parameter was fitted on (its rows there are not blind)."""
+    fitted_on = fitted_on or {}
+    rows, edges = [], []
+    half = len(replicates) // 2
+    for a in drives:
+        dem = dem_observables(a, t0[a.label], delta_s[a.label])
+        for model in models:
+            pred: Prediction | None = predictions.get((a.label, model.key))
+            if pred is None:
+                continue
+            central = model_observables(pred.steady, pred.series, a, delta_s[a.label])
+            samples = []
+            for _, r in tqdm(replicates.iterrows(), total=len(replicates), disable=not progress, leave=False,
+                             desc=f"uncertainty {a.label} {model.key}"):
+                try:
+                    samples.append(model_observables(model.at(r).steady(_material(material, r), a.spec.drive), None,
+                                                     a, delta_s[a.label]))
+                except ValueError:  # a replicate that cannot sustain the drive (e.g. mu_d below mu_w)
+                    continue
+            times = pred.series.t.to_numpy()
+            t90_sd = _linearised_t90(model, material, a.spec.drive, times, a, replicates)
+            for obs, measured in dem.items():
+                value = central.get(obs)
+                if value is None or not np.isfinite(value) or not np.isfinite(measured.value):
+                    continue
+                if obs == "t90":
+                    lo, hi, numerical = value - Z95 * t90_sd, value + Z95 * t90_sd, _t90_numerical(pred.series, a)
+                else:
+                    s = np.array([x[obs] for x in samples], dtype=float)
+                    s = s[np.isfinite(s)]
+                    lo, hi = np.percentile(s, [2.5, 97.5])
+                    lo, hi = min(lo, value), max(hi, value)
+                    numerical = 0.0
+                    if half >= 2 and abs(hi - lo) > 0:
+                        lo2, hi2 = np.percentile(s[:half], [2.5, 97.5])
+                        edges.append(max(abs(lo2 - lo), abs(hi2 - hi)) / abs(hi - lo))
+                band_sd = (hi - lo) / (2 * Z95)
+                combined = np.sqrt(np.nan_to_num(measured.err) ** 2 + band_sd**2 + numerical**2)
+                sigma = (measured.value - value) / combined if combined > 0 else np.inf
+                rows.append({"drive": a.label, "observable": obs, "unit": OBSERVABLES[obs][0],
+                             "dem": measured.value, "dem_err": measured.err, "dem_how": measured.how,
+                             "model": model.key, "model_label": model.label, "predicted": value,
+                             "band": [float(lo), float(hi)], "numerical_err": numerical, "sigma": float(sigma),
+                             "verdict": "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees",
+                             "blind": fitted_on.get(model.key) != a.label})
+    return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan

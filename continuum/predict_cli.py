@@ -1,0 +1,170 @@
+"""``granstokes predict``: the local mu(I) or the nonlocal fluidity (NGF) prediction of a DEM scene, in
+DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rho_p)).
+
+    granstokes predict --model local|ngf --mu-s A --mu-d B --I0 C [--A L] --phi F --p-w P --depth H
+                       (--mu-w M | --u-w U) (--steady | --times T1 T2 ...) [--plate-mass m] [--json]
+
+* ``--model local --steady``: the closed-form steady state of the scene (continuum.scene); u_w_err = 0:
+  exact up to rounding.
+* ``--model local --times``: the velocity form (continuum.velocity.solve_velocity) from a bed at rest,
+  regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/predict.py); u_w_err = |u_N - u_N/2|/3 (second order
+  in space; the regularisation's own creep is not in it).
+* ``--model ngf``: continuum.ngf (steady: Chebyshev, u_w_err the change from n/2 points; transient:
+  from rest, u_w_err Richardson from N/2 cells).  g is given at the nodes y (for the transient,
+  ln g interpolated linearly from the cell centres).
+
+Bad input raises ValueError naming the parameter and its range (the root parser, granstokes.cli, prints
+one line and exits 2).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import replace
+
+import numpy as np
+
+from .ngf import NonlocalFluidity, TransientNumerics, solve_steady, solve_transient
+from granstokes.validate import finite, require
+
+from .rules import EPS_FRACTION, YieldRule
+from .scales import UNITS, Material, Scales
+from .scene import scene_steady
+from .solver import check_times
+from .velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
+
+MODELS = ("local", "ngf")
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "predict", help="local mu(I) or nonlocal-fluidity prediction of a DEM scene (DEM units)",
+        description="Predict the DEM scene (plate on a bed of depth H, no-slip base) in DEM units "
+                    "d = rho_p = g = 1; I0 in the DEM convention I = |du/dy| d/sqrt(p/rho_p) "
+                    "(= 2 x the paper's I0).")
+    p.add_argument("--model", required=True, choices=MODELS, help="local mu(I) or ngf (nonlocal granular fluidity)")
+    p.add_argument("--mu-s", type=float, required=True, help="static friction mu_s > 0")
+    p.add_argument("--mu-d", type=float, required=True, help="dynamic friction mu_d > mu_s")
+    p.add_argument("--I0", type=float, required=True, help="I0 > 0 of the Jop law, DEM convention (I = |du/dy| d/sqrt(p/rho_p))")
+    p.add_argument("--A", type=float, help="nonlocal amplitude A >= 0 (ngf only; the length is A d)")
+    p.add_argument("--phi", type=float, required=True, help="solid fraction in (0, 1)")
+    p.add_argument("--p-w", type=float, required=True, help="plate pressure p_w > 0 (rho_p g d)")
+    p.add_argument("--depth", type=float, required=True, help="bed depth H > 0 (d)")
+    drive = p.add_mutually_exclusive_group(required=True)
+    drive.add_argument("--mu-w", type=float, help="imposed plate friction tau_w/p_w, mu_s < mu_w < mu_d")
+    drive.add_argument("--u-w", type=float, help="imposed plate speed u_w > 0 (sqrt(g d))")
+    when = p.add_mutually_exclusive_group(required=True)
+    when.add_argument("--steady", action="store_true", help="the steady state")
+    when.add_argument("--times", type=float, nargs="+", help="output times > 0, increasing (sqrt(d/g)), from a bed at rest")
+    p.add_argument("--plate-mass", type=float, default=0.0, help="plate mass per unit area >= 0 (rho_p d), default 0")
+    p.add_argument("--boundary", default="neumann", help="ngf fluidity boundary condition: neumann (dg/dy = 0, default) or dirichlet (g = g_loc)")
+    p.add_argument("--t0-hat", type=float, default=1.0, help="ngf transient relaxation time in local inertial times d sqrt(rho_p/p), default 1")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run_predict)
+    return p
+
+
+def _scene(args) -> BedScene:
+    require(args.model in MODELS, "--model", f"one of {MODELS}", args.model)
+    for name in ("mu_s", "mu_d", "I0", "phi", "p_w", "depth", "plate_mass"):
+        require(finite(getattr(args, name)), f"--{name.replace('_', '-')}", "a finite number", getattr(args, name))
+    require(args.mu_s > 0, "--mu-s", "a finite number > 0", args.mu_s)
+    require(args.mu_d > args.mu_s, "--mu-d", f"a finite number > mu_s = {args.mu_s}", args.mu_d)
+    require(args.I0 > 0, "--I0", "a finite number > 0 (DEM convention)", args.I0)
+    require(0 < args.phi < 1, "--phi", "in the open interval (0, 1)", args.phi)
+    require(args.p_w > 0, "--p-w", "a finite number > 0", args.p_w)
+    require(args.depth > 0, "--depth", "a finite number > 0", args.depth)
+    require(args.plate_mass >= 0, "--plate-mass", "a finite number >= 0", args.plate_mass)
+    m = Material(mu_s=args.mu_s, mu_d=args.mu_d, I0=args.I0, I_convention="dem", phi=args.phi)
+    return BedScene(m, args.p_w, args.depth, plate_mass=args.plate_mass)
+
+
+def _drive(args, mu_top: float, top_name: str = "mu_d") -> dict:
+    if args.mu_w is not None:
+        require(finite(args.mu_w) and args.mu_s < args.mu_w < mu_top, "--mu-w",
+                f"in the open interval (mu_s, {top_name}) = ({args.mu_s:.6g}, {mu_top:.6g})", args.mu_w)
+        return {"mu_w": float(args.mu_w)}
+    require(finite(args.u_w) and args.u_w > 0, "--u-w", "a finite number > 0", args.u_w)
+    return {"u_w": float(args.u_w)}
+
+
+def _local_transient(scene: BedScene, t, drive: dict):
+    m = scene.material
+    sc = Scales(m, scene.p_w, drive["mu_w"]) if "mu_w" in drive else Scales.for_speed(m, scene.p_w, drive["u_w"])
+    rule = YieldRule.for_layer(sc)
+    out = []
+    for numerics in (VELOCITY_NUMERICS, replace(VELOCITY_NUMERICS, n_cells=VELOCITY_NUMERICS.n_cells // 2)):
+        vel = solve_velocity(scene, t, rule=rule, initial="rest", numerics=numerics, compare_steady=False, **drive)
+        mu_w = np.full(len(t), drive["mu_w"]) if "mu_w" in drive else -vel.s[:, 0] / scene.p_w
+        out.append((vel, mu_w))
+    (fine, mw), (coarse, mw_c) = out
+    return fine.y, fine.u, mw, np.abs(fine.u[:, 0] - coarse.u[:, 0]) / 3, np.abs(mw - mw_c) / 3
+
+
+def _g_at_nodes(y, y_cell, g):
+    return np.exp(np.interp(y, y_cell, np.log(np.maximum(g, 1e-300))))
+
+
+def predict(args) -> dict:
+    """The prediction as a JSON-ready dict (lists and floats)."""
+    scene = _scene(args)
+    m = scene.material
+    if args.model == "local":
+        require(args.A is None, "--A", "given only with --model ngf", args.A)
+        fluidity = None
+        drive = _drive(args, m.mu_d)
+    else:
+        require(args.A is not None, "--A", "a finite number >= 0, required with --model ngf", args.A)
+        require(finite(args.A) and args.A >= 0, "--A", "a finite number >= 0", args.A)
+        require(args.boundary in ("neumann", "dirichlet"), "--boundary", "'neumann' or 'dirichlet'", args.boundary)
+        require(finite(args.t0_hat) and args.t0_hat > 0, "--t0-hat", "a finite number > 0", args.t0_hat)
+        fluidity = NonlocalFluidity(A=args.A, boundary=args.boundary, t0_hat=args.t0_hat)
+        from .ngf import mu_max
+        drive = _drive(args, mu_max(m, fluidity), "mu(I_max = 10), just below mu_d")
+    out = {"model": args.model, "imposed": "stress" if "mu_w" in drive else "speed", "units": UNITS["dem_units"],
+           "I_convention": "dem: I = |du/dy| d/sqrt(p/rho_p)",
+           "parameters": {"mu_s": m.mu_s, "mu_d": m.mu_d, "I0": m.I0, "phi": m.phi, "p_w": scene.p_w,
+                          "depth": scene.depth, "plate_mass": scene.plate_mass, **drive}}
+    if fluidity is not None:
+        out["parameters"].update({"A": fluidity.A, "boundary": fluidity.boundary, "t0_hat": fluidity.t0_hat})
+    if args.steady:
+        if args.model == "local":
+            st = scene_steady(scene, **drive)
+            out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": 0.0, "mu_w_err": 0.0,
+                        "delta_s": st.delta_s, "y": st.y.tolist(), "u": st.u.tolist(),
+                        "method": "closed form (continuum.steady) scaled with continuum.scales"})
+        else:
+            st = solve_steady(scene, fluidity, **drive)
+            out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": st.u_w_err, "mu_w_err": st.mu_w_err,
+                        "delta_s": st.delta_s, "y": st.y.tolist(), "u": st.u.tolist(), "g": st.g.tolist(),
+                        "method": f"Chebyshev collocation, {st.n} intervals per piece; errors: change from n/2"})
+        return out
+    t = check_times(args.times, "--times")
+    if args.model == "local":
+        y, u, mw, u_err, mu_err = _local_transient(scene, t, drive)
+        out["method"] = f"velocity form (continuum.velocity), eps = {EPS_FRACTION:g} U/delta_s; errors: Richardson from N/2"
+    else:
+        tr = solve_transient(scene, fluidity, t, numerics=TransientNumerics(), **drive)
+        y, u, mw, u_err, mu_err = tr.y, tr.u, tr.mu_w, tr.u_w_err, tr.mu_w_err
+        out["g"] = [_g_at_nodes(y, tr.y_cell, gk).tolist() for gk in tr.g]
+        out["method"] = "finite volumes (u, ln g), scipy Radau; errors: Richardson from N/2"
+    out.update({"t": t.tolist(), "u_w": u[:, 0].tolist(), "mu_w": np.asarray(mw).tolist(),
+                "u_w_err": np.asarray(u_err).tolist(), "mu_w_err": np.asarray(mu_err).tolist(),
+                "y": np.asarray(y).tolist(), "u": np.asarray(u).tolist()})
+    return out
+
+
+def run_predict(args) -> int:
+    out = predict(args)
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"{out['model']} model, imposed {out['imposed']} ({out['units']}; I0 {out['I_convention']})")
+    if args.steady:
+        print(f"steady: u_w = {out['u_w']:.8g} (+- {out['u_w_err']:.2g}), mu_w = {out['mu_w']:.8g} "
+              f"(+- {out['mu_w_err']:.2g}), delta_s = {out['delta_s']:.6g}")
+    else:
+        print(f"{'t':>12} {'u_w':>14} {'u_w_err':>10} {'mu_w':>12}")
+        for row in zip(out["t"], out["u_w"], out["u_w_err"], out["mu_w"]):
+            print(f"{row[0]:12.5g} {row[1]:14.8g} {row[2]:10.2g} {row[3]:12.8g}")
+    return 0

@@ -1,0 +1,95 @@
+"""Bad input across every subcommand: one line on stderr naming the parameter, exit status 2, no
+traceback, and nothing left behind (the working folder is unchanged)."""
+import json
+
+import pytest
+
+from granstokes.cli import main
+
+BEADS = ["--mu-s", "0.3839", "--mu-d", "0.6494"]
+SCENE = ["--mu-s", "0.28", "--mu-d", "0.58", "--I0", "0.3", "--phi", "0.8", "--p-w", "20", "--depth", "30"]
+
+
+def _files(root):
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*"))
+
+
+def _case(tmp_path, monkeypatch, capsys, argv, name):
+    (tmp_path / "a_file.txt").write_text("not a folder")
+    (tmp_path / "not_json.toml").write_text("mu_s = 0.3\n")
+    (tmp_path / "lacks_keys.json").write_text(json.dumps({"mu_s": 0.3}))
+    (tmp_path / "not_a_run").mkdir()
+    monkeypatch.chdir(tmp_path)
+    before = _files(tmp_path)
+    try:
+        code = main(argv)
+    except SystemExit as stop:  # argparse usage errors
+        code = stop.code
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert name in err, err
+    assert _files(tmp_path) == before
+
+
+CASES = [
+    # continuum
+    (["continuum", *BEADS, "--u-w", "-1", "--times", "1"], "u_w"),
+    (["continuum", *BEADS, "--u-w", "nan", "--times", "1"], "u_w"),
+    (["continuum", *BEADS, "--mu-w", "0.2", "--times", "1"], "mu_w"),
+    (["continuum", *BEADS, "--mu-w", "0.7", "--times", "1"], "mu_w"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0", "--times", "1"], "mu_w_tilde"),
+    (["continuum", *BEADS, "--mu-w-tilde", "1.5", "--times", "1"], "mu_w_tilde"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1", "0.5"], "times"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "-1"], "times"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "inf"], "times"),
+    (["continuum", "--mu-s", "0.5", "--mu-d", "0.4", "--mu-w-tilde", "0.5", "--times", "1"], "mu_d"),
+    (["continuum", "--mu-s", "-0.5", "--mu-d", "0.4", "--mu-w-tilde", "0.5", "--times", "1"], "mu_s"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1", "--n-cells", "3"], "n_cells"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1", "--rtol", "2"], "rtol"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1", "--method", "euler"], "method"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1", "--plot", "p.jpg"], "--plot"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1", "--plot", "a_file.txt/p.png"], "--plot"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1", "--save", "a_file.txt"], "--save"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1", "--save", "/proc/granstokes"], "--save"),
+    (["continuum", *BEADS, "--times", "1"], "--mu-w"),
+    (["continuum", *BEADS, "--mu-w-tilde", "0.5"], "--times"),
+    # predict
+    (["predict", "--model", "ngf", *SCENE, "--mu-w", "0.43", "--steady"], "--A"),
+    (["predict", "--model", "local", "--A", "0.5", *SCENE, "--mu-w", "0.43", "--steady"], "--A"),
+    (["predict", "--model", "local", *SCENE, "--mu-w", "0.6", "--steady"], "--mu-w"),
+    (["predict", "--model", "local", *SCENE, "--u-w", "0", "--steady"], "--u-w"),
+    (["predict", "--model", "local", *SCENE, "--mu-w", "0.43", "--times", "2", "1"], "--times"),
+    (["predict", "--model", "local", *SCENE, "--mu-w", "0.43", "--steady", "--plate-mass", "-1"], "--plate-mass"),
+    (["predict", "--model", "nonlocal", *SCENE, "--mu-w", "0.43", "--steady"], "--model"),
+    # paper-figures, stability
+    (["paper-figures", "--out", "a_file.txt"], "--out"),
+    (["paper-figures", "--out", "/proc/granstokes-figures"], "--out"),
+    (["stability", "--out", "a_file.txt"], "--out"),
+    (["stability", "--out", "maps", "--calibration", "not_json.toml"], "--calibration"),
+    (["stability", "--out", "maps", "--calibration", "lacks_keys.json"], "--calibration"),
+    (["stability", "--out", "maps", "--calibration", "missing.json"], "--calibration"),
+    # dem run
+    (["dem", "run", "--preset", "huge", "--out", "r"], "preset"),
+    (["dem", "run", "--out", "r"], "CONFIG.toml"),
+    (["dem", "run", "not_json.toml", "--out", "r"], "drive"),
+    (["dem", "run", "--preset", "smoke", "--out", "r", "--np", "0"], "np"),
+    (["dem", "run", "--preset", "smoke", "--out", "r", "--resume"], "--resume"),
+    (["dem", "run", "--preset", "smoke", "--out", "r", "--launcher", "srun"], "launcher"),
+    # compare
+    (["compare", "not_a_run", "--out", "report"], "RUN_DIR"),
+    (["compare", "missing_run", "--out", "report"], "RUN_DIR"),
+    # demo
+    (["demo", "--out", "a_file.txt"], "--out"),
+]
+
+
+@pytest.mark.parametrize("argv, name", CASES, ids=[" ".join(a)[:60] for a, _ in CASES])
+def test_bad_input(argv, name, tmp_path, monkeypatch, capsys):
+    _case(tmp_path, monkeypatch, capsys, argv, name)
+
+
+def test_at_least_forty_cases_over_every_subcommand():
+    commands = {argv[0] for argv, _ in CASES}
+    assert len(CASES) >= 40 and commands >= {"continuum", "predict", "paper-figures", "stability", "dem", "compare",
+                                             "demo"}
