@@ -3,7 +3,10 @@
 ``analyse_drive(spec, settings)`` -> ``DriveAnalysis`` (frozen): the plate record (u_w, mu_w), the
 coarse-grained profiles (compare.profiles) in the depth below the plate's contact plane
 (dem.layout.plate_surface), the steady window (compare.plate.steady_state on the free response),
-delta_u(t) from the instantaneous velocity profiles (continuum.crossing).  Nothing here depends on a
+delta_u(t) from the instantaneous velocity profiles (continuum.crossing), the slip of the grains
+touching the plate, and the bulk shear-stress check (the coarse-grained tau of the steady window against
+the plate's <tau_w> over the same window).  Every steady value carries an error (compare.plate: spread
+over >= 3 seeds, else blocks longer than the autocorrelation time).  Nothing here depends on a
 calibration: compare.comparison adds that.
 """
 from __future__ import annotations
@@ -18,9 +21,11 @@ import pandas as pd
 
 from dem import layout
 
-from .plate import PlateRecord, steady_state, steady_window_start
+from .calibrate import WALL_EXCLUSION
 from .models import Drive, depth_at_fraction
-from .profiles import CGSettings, DepthProfiles, ensemble
+from .plate import (STEADY_LAST, PlateRecord, block_estimate, pooled, slip, steady_state, steady_window_start,
+                    tail, window_values)
+from .profiles import CGSettings, DepthProfiles, derive, ensemble
 from .reader import DriveFolder
 
 
@@ -38,12 +43,18 @@ class DriveSpec:
     plate_mass: float            # per unit plate area
     surface_offset: float        # plate centre of mass above its contact plane
     steps: int                   # drive steps (per seed)
+    transit_time: float          # shear-wave transit time over the bed depth (the elastic start)
     folders: tuple[DriveFolder, ...]
 
     @property
     def drive(self) -> Drive:
         """What the continuum models need of this drive (compare.models)."""
         return Drive(self.kind, self.value, self.p_w, self.depth, self.plate_mass)
+
+    @property
+    def compared_from(self) -> float:
+        """Transients are compared from this time on (TRANSITS_BEFORE_COMPARISON wave transits)."""
+        return TRANSITS_BEFORE_COMPARISON * self.transit_time
 
     @property
     def label(self) -> str:
@@ -70,7 +81,8 @@ def drive_specs(run_dir: Path) -> list[DriveSpec]:
         value = d["tau_w"] if d["kind"] == "stress" else d["u_w"]
         specs.append(DriveSpec(run_dir, d["name"], d["kind"], float(value), float(meta["config"]["p_w"]),
                                float(meta["sizing"]["depth"]), float(plate["mass_per_area"]),
-                               float(plate["surface_offset"]), int(d["steps"]), folders))
+                               float(plate["surface_offset"]), int(d["steps"]),
+                               float(meta["sizing"].get("elastic_start", {}).get("transit_time", np.nan)), folders))
     return specs
 
 
@@ -83,9 +95,11 @@ class DriveAnalysis:
     plates: tuple[PlateRecord, ...]
     profiles: tuple[DepthProfiles, ...]
     series: pd.DataFrame         # t, u_w, mu_w (+ _lo, _hi)
-    steady: dict                 # u_w, mu_w: steady_state dicts; t_steady of the free response
+    steady: dict                 # u_w, mu_w: steady_state dicts with pooled errors; t_steady of the free response
     t_window: float              # start of the steady window (compare.plate.steady_window_start)
     t_end: float                 # its end: the record's, or the last whole frame of a truncated dump
+    slip: dict                   # pooled slip of the grains touching the plate (compare.plate.slip)
+    bulk_tau: dict               # coarse-grained bulk tau of the steady window vs the plate's <tau_w>
     steady_profile: pd.DataFrame  # window average over the steady window, with depth
     mean_profile: pd.DataFrame   # the whole run: hydrostatics need no steady state
     instant: pd.DataFrame        # seed-averaged profiles of every snapshot, with depth
@@ -106,6 +120,11 @@ class DriveAnalysis:
         return layout.plate_surface(np.interp(t, p.t, p.y), self.spec.surface_offset)
 
 
+#: transients are compared with the rigid continuum from this many shear-wave transits over the bed
+#: on: before, the load is still carried down by an elastic wave that the continuum does not have
+TRANSITS_BEFORE_COMPARISON = 3.0
+
+
 def _ensemble_series(plates: tuple[PlateRecord, ...]) -> pd.DataFrame:
     t = plates[0].t
     cols = {}
@@ -114,22 +133,50 @@ def _ensemble_series(plates: tuple[PlateRecord, ...]) -> pd.DataFrame:
         with np.errstate(invalid="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # mu_w is nan while the plate is out of contact
             mean = np.nanmean(values, axis=0)
+            if name == "mu_w":  # ratio of the seed-mean stresses
+                tau, p_ = ([np.interp(t, p.t, getattr(p, k)) for p in plates] for k in ("tau_w", "p"))
+                mean = np.where(np.mean(p_, axis=0) > 0, np.mean(tau, axis=0) / np.mean(p_, axis=0), np.nan)
         half = 1.96 * np.nanstd(values, axis=0, ddof=1) / np.sqrt(len(plates)) if len(plates) > 1 else np.nan * mean
         cols.update({name: mean, f"{name}_lo": mean - half, f"{name}_hi": mean + half})
     return pd.DataFrame({"t": t, **cols})
 
 
 def _steady(series: pd.DataFrame, plates, response: str) -> dict:
+    """t_steady of the free response; u_w and mu_w (= <tau_w>/<p>) over the last quarter, pooled over
+    the seeds with their errors (``stderr``, ``method``)."""
     t = series.t.to_numpy()
     steady = {"t_steady": steady_state(t, series[response].to_numpy())["t_steady"]}
+    t_last = t[0] + STEADY_LAST * (t[-1] - t[0])
+    per = [window_values(p, t_last) for p in plates]
     for name in ("u_w", "mu_w"):
-        steady[name] = steady_state(t, series[name].to_numpy())
-        steady[name]["stderr_over"] = "blocks of the final quarter"
-        if len(plates) > 1:  # an ensemble: the error of the mean is the spread over seeds
-            finals = [steady_state(p.t, getattr(p, name))["value"] for p in plates]
-            steady[name]["stderr"] = float(np.std(finals, ddof=1) / np.sqrt(len(finals)))
-            steady[name]["stderr_over"] = "seeds"
+        steady[name] = {**steady_state(t, series[name].to_numpy()), **pooled([w[name] for w in per])}
+        steady[name]["window"] = [float(t_last), float(t[-1])]
     return steady
+
+
+def bulk_tau(plates, profiles, surface, depth: float, t0: float, t1: float) -> dict:
+    """The coarse-grained shear stress tau = -sigma_xy (contact + kinetic) averaged over the bulk
+    (WALL_EXCLUSION from plate and base) in each frame of [t0, t1] with contacts, against the plate's
+    <tau_w> over the same window; both with block errors pooled over the seeds.  ``agree``: the
+    difference is within 2 standard errors of the difference (95 %)."""
+    cg, plate, frames = [], [], 0
+    for rec, prof in zip(plates, profiles):
+        r = prof.results
+        sel = (r.t >= t0 - 1e-9) & (r.t <= t1 + 1e-9) & r.has_contacts
+        add = {k: v[sel] for k, v in r.additive.items()}
+        tau = derive(add, r.y, prof.drive.dimension, prof.drive.d, prof.drive.rho_p)["tau"]
+        d = surface(r.t[sel])[:, None] - r.y[None, :]
+        inside = (d > WALL_EXCLUSION) & (d < depth - WALL_EXCLUSION)
+        per_frame = np.nanmean(np.where(inside, tau, np.nan), axis=1)
+        frames += len(per_frame)
+        cg.append(block_estimate({"tau": per_frame}))
+        plate.append(block_estimate({"tau": tail(rec, t0)["tau_w"]}))
+    a, b = pooled(cg), pooled(plate)
+    diff, err = a["value"] - b["value"], float(np.hypot(a["stderr"], b["stderr"]))
+    return {"cg": a, "plate": b, "difference": diff, "difference_stderr": err, "agree": bool(abs(diff) <= 2 * err),
+            "window": [t0, t1], "frames": frames,
+            "definition": "bulk = depths within (wall exclusion, depth - wall exclusion); agree = |cg - plate| <= "
+                          "2 stderr of the difference"}
 
 
 def _with_depth(table: pd.DataFrame, depth_of_y) -> pd.DataFrame:
@@ -164,7 +211,10 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
         if t > 0 and u_w > DELTA_MIN_SPEED * u_scale:
             rows.append((t, depth_at_fraction(g.depth.to_numpy(), g.u_x.to_numpy(), u_w)))
     delta = pd.DataFrame(rows, columns=["t", "delta_u"])
-    return DriveAnalysis(spec, plates, profiles, series, steady, t0, t_end, steady_profile, mean_profile, inst, delta)
+    slips = pooled([slip(p) for p in plates])
+    check = bulk_tau(plates, profiles, surface, spec.depth, t0, t_end)
+    return DriveAnalysis(spec, plates, profiles, series, steady, t0, t_end, slips, check, steady_profile,
+                         mean_profile, inst, delta)
 
 
 #: delta_u(t) is measured only once the plate moves at 1 % of its steady speed (before, u/u_w is noise)

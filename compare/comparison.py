@@ -164,14 +164,17 @@ def delta_mu(a: DriveAnalysis, mu_s: float) -> np.ndarray:
 
 
 def early_exponents(a: DriveAnalysis) -> dict:
-    """alpha of u_w ~ t^alpha (imposed stress) and delta_u ~ t^alpha over the early window:
-    from the first output to the time u_w (delta_u) reaches half its steady value."""
+    """alpha of u_w ~ t^alpha (imposed stress) and delta_u ~ t^alpha over the early window: from the
+    first output after the elastic start (spec.compared_from) to the time u_w (delta_u) reaches half its
+    steady value."""
     out = {}
     t, u = a.series.t.to_numpy(), a.series.u_w.to_numpy()
+    start = np.nan_to_num(a.spec.compared_from)
     if a.spec.kind == "stress":
         half = t[np.argmax(u >= 0.5 * a.steady["u_w"]["value"])]
-        out["alpha_u"] = power_law(t, u, t[1], half)
+        out["alpha_u"] = power_law(t, u, max(t[1], start), half)
     d = a.delta.dropna()
+    d = d[d.t >= start]
     if len(d) >= 4:
         final = d.delta_u.iloc[-len(d) // 4:].mean()
         half = d.t.iloc[np.argmax(d.delta_u.to_numpy() >= 0.5 * final)]
@@ -257,9 +260,9 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
     predictions = {(dc.label, p.model): p for dc in compared for p in dc.predictions}
     delta_s = {dc.label: dc.predictions[0].steady.delta_s for dc in compared if dc.predictions}
     t0 = {a.label: a.t_window for a in drives}
-    rows, edges = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
+    rows, edges, bands = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
                         delta_s, t0, {"ngf": fluidity.drive} if fluidity else {}, progress)
-    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges)
+    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges, bands)
     return Comparison(runs, compared, pairs, cal, source, replicates, material, phi,
                       mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings, law_test(pairs, cal))
 

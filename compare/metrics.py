@@ -8,9 +8,10 @@ from scipy import stats
 from continuum.scales import UNITS
 from granstokes.provenance import provenance
 
+from .analysis import TRANSITS_BEFORE_COMPARISON
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
-from .plate import STEADY_CHANGE, STEADY_WINDOW
+from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_CHANGE, STEADY_WINDOW
 from .scorecard import BLOCKS, OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length
 
 #: name -> (unit, definition)
@@ -33,6 +34,18 @@ DEFINITIONS = {
     "band": ("unit of the row", "95 % band of the prediction from the calibration's uncertainty (compare.scorecard)"),
     "dem_err": ("unit of the row", f"standard error of the DEM value: spread over seeds (>= 2 seeds), else over "
                                    f"{BLOCKS} blocks of the steady window, or the estimator's resolution; dem_how says"),
+    "errors": ("-", f"the steady plate values' errors: the spread over the seeds (>= {MIN_SEEDS_SPREAD} seeds), else "
+                    f"blocks of >= {BLOCK_TAUS:g} integrated autocorrelation times within each run (Sokal's window), "
+                    "combined over the seeds; every *_err says how (*_how, *_method)"),
+    "mu_w": ("1", "friction of a window = <tau_w>/<p> (ratio of means; plate.csv samples average every step of "
+                  "their interval)"),
+    "slip": ("1", f"1 - <u_x of the bed grains touching a plate grain>/<plate u_x> over the final {1 - SLIP_FROM:.0%} "
+                  "of the drive (grain-weighted over every step)"),
+    "tau_bulk": ("rho_p g d", "coarse-grained tau = -sigma_xy (contact + kinetic) averaged over the bulk in each frame "
+                              "of the steady window, against the plate's <tau_w> over the same window"),
+    "elastic_start": ("sqrt(d/g)", f"transit_time = depth/c_s of the shear wave through the deposited bed (run.json); "
+                                   f"transients (the early exponents alpha) are compared from "
+                                   f"{TRANSITS_BEFORE_COMPARISON:g} transits on"),
     "pressure_slope": ("rho_p g", "dp/d(depth) over the bulk, from the whole run's mean profile"),
     "creep_at_delta_s": ("1", "u/u_w of the DEM's steady profile at the calibrated delta_s"),
     "phi_bulk": ("1", f"mean solid fraction of the steady windows, {WALL_EXCLUSION:g} d away from plate and base "
@@ -58,9 +71,17 @@ def drive_metrics(dc: DriveComparison) -> dict:
         "grains_x_steps": spec.cost, "t_steady": g.steady["t_steady"], "t_window": g.t_window,
         "pressure_slope": slope.slope, "pressure_slope_err": slope.stderr,
         "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_err": g.steady["u_w"]["stderr"],
-                    "dem_how": g.steady["u_w"]["stderr_over"]},
+                    "dem_how": g.steady["u_w"]["method"]},
         "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_err": g.steady["mu_w"]["stderr"],
-                     "dem_how": g.steady["mu_w"]["stderr_over"]},
+                     "dem_how": g.steady["mu_w"]["method"]},
+        "slip": g.slip["value"], "slip_err": g.slip["stderr"], "slip_how": g.slip["method"],
+        "slip_per_seed": g.slip["per_seed"],
+        "tau_bulk": {"cg": g.bulk_tau["cg"]["value"], "cg_err": g.bulk_tau["cg"]["stderr"],
+                     "plate": g.bulk_tau["plate"]["value"], "plate_err": g.bulk_tau["plate"]["stderr"],
+                     "difference": g.bulk_tau["difference"], "difference_err": g.bulk_tau["difference_stderr"],
+                     "agree": g.bulk_tau["agree"], "window": g.bulk_tau["window"], "frames": g.bulk_tau["frames"],
+                     "how": g.bulk_tau["cg"]["method"]},
+        "elastic_start": {"transit_time": spec.transit_time, "compared_from": spec.compared_from},
         "alpha": {k: {"value": v["alpha"], "ci95": v["ci95"], "n": v["n"]} for k, v in expo.items()},
         "frames": len(g.profiles[0].results.steps),
         "dropped_frames": sum(f.atoms.dropped + f.contacts.dropped for f in spec.folders),

@@ -2,7 +2,14 @@
 
 u_w(t) = plate x-velocity; tau_w(t) = -f_x (x force of the bed on the plate per area, sign flipped so
 that it is > 0 when it resists a plate moving in +x); mu_w(t) = tau_w/p, p = f_y (the normal load the
-bed carries, ~p_w).  DEM units (d, rho_p, g).
+bed carries, ~p_w); every sample of plate.csv is an average over every step of its output interval.
+DEM units (d, rho_p, g).
+
+Errors.  A window's value is a function of the window means of one or more series (the friction is
+the ratio of means <tau_w>/<p>, never the mean of the ratios, which is biased when p fluctuates).  Its
+standard error comes from blocks longer than the series' integrated autocorrelation time
+(``block_estimate``); over independent beds (``pooled``) it is the spread of the per-bed values when
+there are at least MIN_SEEDS_SPREAD of them, else the per-bed block errors combined.
 """
 from __future__ import annotations
 
@@ -21,12 +28,26 @@ STEADY_WINDOW, STEADY_CHANGE = 0.05, 0.05
 #: the steady window starts at t_steady, but no later than this fraction of the record (and there
 #: when no steady state was detected): the profiles always average the final 30 % at least
 STEADY_WINDOW_LATEST = 0.7
+#: the steady value is the mean from this fraction of the record on (its last quarter)
+STEADY_LAST = 0.75
 
 
 def steady_window_start(t_steady: float, t_end: float) -> float:
     """Start of the window whose profiles stand for the steady state."""
     latest = STEADY_WINDOW_LATEST * t_end
     return min(t_steady, latest) if np.isfinite(t_steady) else latest
+
+
+#: blocks span at least BLOCK_TAUS integrated autocorrelation times: the neighbouring blocks' correlation
+#: then biases the error low by ~1/BLOCK_TAUS in variance (AR(1): -5 % in the error, tested); when the
+#: series holds fewer than MIN_BLOCKS such blocks, MIN_BLOCKS shorter ones are used and the method says so
+BLOCK_TAUS, MIN_BLOCKS = 10.0, 4
+#: Sokal's automatic window for the integrated autocorrelation time: sum lags up to M >= SOKAL_C tau
+SOKAL_C = 5.0
+#: with this many beds or more, the error of a drive's value is their spread (fewer: pooled blocks)
+MIN_SEEDS_SPREAD = 3
+#: the slip of the bed grains touching the plate is measured over the second half of each drive
+SLIP_FROM = 0.5
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,11 +57,14 @@ class PlateRecord:
     tau_w: np.ndarray
     p: np.ndarray
     y: np.ndarray      # height of the plate's centre of mass
+    u_c: np.ndarray    # mean x velocity of the bed grains touching a plate grain
+    n_c: np.ndarray    # mean number of them
 
     @classmethod
     def read(cls, drive_dir: Path) -> "PlateRecord":
         df = pd.read_csv(Path(drive_dir) / PLATE_CSV)
-        return cls(df.t.to_numpy(), df.u_x.to_numpy(), -df.f_x.to_numpy(), df.f_y.to_numpy(), df.y.to_numpy())
+        return cls(df.t.to_numpy(), df.u_x.to_numpy(), -df.f_x.to_numpy(), df.f_y.to_numpy(), df.y.to_numpy(),
+                   df.u_c.to_numpy(), df.n_c.to_numpy())
 
     @property
     def mu_w(self) -> np.ndarray:
@@ -48,25 +72,99 @@ class PlateRecord:
             return np.where(self.p > 0, self.tau_w / self.p, np.nan)
 
 
+def autocorrelation_time(y: np.ndarray) -> float:
+    """Integrated autocorrelation time in samples, tau = 1/2 + sum_k rho(k), summed up to Sokal's window
+    (the first M >= SOKAL_C tau(M)); 1/2 for white noise."""
+    y = np.asarray(y, dtype=float) - np.mean(y)
+    n = len(y)
+    if n < 2 or not np.any(y):
+        return 0.5
+    f = np.fft.rfft(y, 2 * n)
+    acf = np.fft.irfft(f * np.conj(f))[:n]
+    rho = acf / acf[0]
+    tau = 0.5 + np.cumsum(rho[1:])
+    window = np.nonzero(np.arange(1, n) >= SOKAL_C * tau)[0]
+    return float(max(0.5, tau[window[0]] if len(window) else tau[-1]))
+
+
+def block_estimate(series: dict, f=None) -> dict:
+    """``f`` (default: the identity of the single series) of the series' means, with its standard error
+    from blocks of at least BLOCK_TAUS autocorrelation times (the longest of the series'): the spread of
+    f over the blocks' means / sqrt(blocks).  Series: equal-length arrays sampled at equal steps."""
+    f = f or (lambda m: next(iter(m.values())))
+    arrays = {k: np.asarray(v, dtype=float) for k, v in series.items()}
+    n = len(next(iter(arrays.values())))
+    tau = max(autocorrelation_time(a) for a in arrays.values())
+    length = max(1, int(np.ceil(BLOCK_TAUS * tau)))
+    blocks = max(MIN_BLOCKS, n // length) if n >= MIN_BLOCKS else n
+    parts = {k: np.array_split(a, blocks) for k, a in arrays.items()}
+    values = [f({k: p[b].mean() for k, p in parts.items()}) for b in range(blocks)]
+    value = f({k: a.mean() for k, a in arrays.items()})
+    stderr = float(np.std(values, ddof=1) / np.sqrt(blocks)) if blocks > 1 else np.nan
+    enough = n // length >= MIN_BLOCKS
+    method = (f"{blocks} blocks of {n / blocks / tau:.3g} autocorrelation times ({tau:.3g} samples) within the run"
+              + ("" if enough else f" (too short for {MIN_BLOCKS} blocks of {BLOCK_TAUS:g}: error underestimated)"))
+    return {"value": float(value), "stderr": stderr, "tau_samples": tau, "blocks": int(blocks),
+            "enough_blocks": bool(enough), "method": method}
+
+
+def pooled(estimates: list[dict]) -> dict:
+    """One drive's value over its beds: the mean of the per-bed values; its error the spread over
+    the beds (>= MIN_SEEDS_SPREAD) or the per-bed block errors combined."""
+    values = np.array([e["value"] for e in estimates])
+    n = len(values)
+    if n >= MIN_SEEDS_SPREAD:
+        stderr, method = float(np.std(values, ddof=1) / np.sqrt(n)), f"spread over {n} seeds (std/sqrt(n))"
+    else:
+        stderr = float(np.sqrt(np.sum([e["stderr"] ** 2 for e in estimates])) / n)
+        method = estimates[0]["method"] + ("" if n == 1 else f", combined over {n} seeds")
+    return {"value": float(values.mean()), "stderr": stderr, "method": method, "per_seed": values.tolist()}
+
+
+def friction(tau: np.ndarray, p: np.ndarray) -> float:
+    """The friction of a window: the ratio of means <tau>/<p> (the mean of tau/p is biased)."""
+    return float(np.mean(tau) / np.mean(p))
+
+
+def tail(record: PlateRecord, t0: float) -> dict:
+    """The record's series from t0 on (finite samples)."""
+    sel = (record.t >= t0) & np.isfinite(record.tau_w) & np.isfinite(record.p)
+    return {k: getattr(record, k)[sel] for k in ("t", "u_w", "tau_w", "p", "u_c", "n_c")}
+
+
+def window_values(record: PlateRecord, t0: float) -> dict:
+    """u_w and mu_w = <tau_w>/<p> over t >= t0, with block errors."""
+    s = tail(record, t0)
+    return {"u_w": block_estimate({"u_w": s["u_w"]}),
+            "mu_w": block_estimate({"tau": s["tau_w"], "p": s["p"]}, lambda m: m["tau"] / m["p"]),
+            "tau_w": block_estimate({"tau": s["tau_w"]})}
+
+
+def slip(record: PlateRecord) -> dict:
+    """1 - <u_x of the bed grains touching a plate grain>/<plate u_x> over the second half of the
+    drive (grain-weighted over every step), with its block error."""
+    s = tail(record, record.t[0] + SLIP_FROM * (record.t[-1] - record.t[0]))
+    return block_estimate({"sum": s["u_c"] * s["n_c"], "n": s["n_c"], "u": s["u_w"]},
+                          lambda m: 1 - m["sum"] / m["n"] / m["u"])
+
+
 def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
-    """Final value (mean over the last quarter), its standard error (block means, 5 blocks) and the
+    """Final value (mean over the last quarter), its standard error (``block_estimate``) and the
     time from which the running mean stays in the band (STEADY_WINDOW, STEADY_CHANGE); t_steady is
     nan when the record has not settled: the last quarter's linear trend still moves it by more
     than the band (``drift``: that slope)."""
     ok = np.isfinite(y)
     t, y = t[ok], y[ok]
-    last = y[t >= t[0] + 0.75 * (t[-1] - t[0])]
-    blocks = np.array_split(last, 5)
-    value = float(last.mean())
-    stderr = float(np.std([b.mean() for b in blocks], ddof=1) / np.sqrt(len(blocks)))
+    last = y[t >= t[0] + STEADY_LAST * (t[-1] - t[0])]
+    value, stderr = float(last.mean()), block_estimate({"y": last})["stderr"]
     n = max(1, int(STEADY_WINDOW * len(y)))
     running = pd.Series(y).rolling(n, center=True, min_periods=1).mean().to_numpy()
     band = max(3 * stderr, STEADY_CHANGE * abs(value - y[0]))
     outside = np.nonzero(np.abs(running - value) > band)[0]
     t_steady = float(t[outside[-1] + 1]) if len(outside) and outside[-1] + 1 < len(t) else float(t[0])
-    tail = t >= t[0] + 0.75 * (t[-1] - t[0])
-    slope = stats.linregress(t[tail], y[tail]).slope
-    drift = abs(slope) * (t[-1] - t[tail][0]) > band  # still moving by more than the band: not steady
+    last_t = t >= t[0] + STEADY_LAST * (t[-1] - t[0])
+    slope = stats.linregress(t[last_t], y[last_t]).slope
+    drift = abs(slope) * (t[-1] - t[last_t][0]) > band  # still moving by more than the band: not steady
     return {"value": value, "stderr": stderr, "t_steady": np.nan if drift else t_steady, "band": band,
             "drift": float(slope)}
 

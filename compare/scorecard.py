@@ -119,26 +119,37 @@ def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
     return (table.depth > WALL_EXCLUSION) & (table.depth < bed_depth - WALL_EXCLUSION)
 
 
+#: the plate grips when at most this fraction of its speed is lost to slip (issue: a plate that grips)
+SLIP_MAX = 0.05
+
+
 def scene_checks(a: DriveAnalysis, phi: float) -> list[dict]:
-    """The scene's own quality figures, each with its error and target: the bulk coarse-grained shear
-    stress against the plate's <tau_w>, the pressure slope against phi rho_p g, the mass balance."""
-    samples, how = steady_samples(a, a.t_window)
-    tau_plate = a.spec.value if a.spec.kind == "stress" else a.steady["mu_w"]["value"] * a.spec.p_w
-    ratio = _mean_err([s.tau[bulk(s, a.spec.depth)].mean() / tau_plate for s in samples], how)
+    """The scene's own quality figures, each with its error, target and verdict: the slip of the grains
+    touching the plate, the bulk coarse-grained shear stress against the plate's <tau_w>
+    (compare.analysis.bulk_tau), the pressure slope against phi rho_p g."""
     whole = a.mean_profile[bulk(a.mean_profile, a.spec.depth)]
     fit = stats.linregress(whole.depth, whole.p)
+    bt, sl = a.bulk_tau, a.slip
+    pressure = fit.slope / phi
     return [
-        {"drive": a.label, "check": "bulk CG tau / plate <tau_w>", "unit": "1", "value": ratio.value,
-         "err": ratio.err, "how": ratio.how, "target": 1.0},
-        {"drive": a.label, "check": "pressure slope / (phi rho_p g)", "unit": "1", "value": fit.slope / phi,
+        {"drive": a.label, "check": "slip at the plate", "unit": "1", "value": sl["value"], "err": sl["stderr"],
+         "how": sl["method"], "target": f"<= {SLIP_MAX:.0%}",
+         "verdict": "grips" if sl["value"] <= SLIP_MAX else "slips"},
+        {"drive": a.label, "check": "bulk CG tau - plate <tau_w>", "unit": "rho_p g d", "value": bt["difference"],
+         "err": bt["difference_stderr"], "how": bt["cg"]["method"], "target": "0",
+         "verdict": "within error" if bt["agree"] else "off"},
+        {"drive": a.label, "check": "pressure slope / (phi rho_p g)", "unit": "1", "value": pressure,
          "err": fit.stderr / phi, "how": "least squares over the bulk of the whole run's mean profile (depths "
-         "correlated: a lower bound)", "target": 1.0},
+         "correlated: a lower bound)", "target": "1",
+         "verdict": "within error" if abs(pressure - 1) <= SIGMA_CONSISTENT * fit.stderr / phi else "off"},
     ]
+
+
 def dem_observables(a: DriveAnalysis, t0: float, delta_s: float) -> dict[str, Measured]:
     """The DEM's value and error of every observable of drive ``a`` (steady window from t0)."""
     resp = a.response
     st = a.steady[resp]
-    out = {f"{resp}_inf": Measured(st["value"], st["stderr"], st["stderr_over"])}
+    out = {f"{resp}_inf": Measured(st["value"], st["stderr"], st["method"])}
     samples, how = steady_samples(a, t0)
     out["delta_u"] = _mean_err([depth_at_fraction(s.depth.to_numpy(), s.u_x.to_numpy(), s.u_x.iloc[0])
                                 for s in samples], how)
@@ -169,43 +180,46 @@ def _material(base: Material, row) -> Material:
                    I_convention="dem", phi=float(row["phi"]))
 
 
-def _linearised_t90(model: SceneModel, material: Material, drive: Drive, times, a: DriveAnalysis,
-                    replicates: pd.DataFrame) -> float:
-    """Standard deviation of t90 from J C J^T, C the replicates' covariance of the material's parameters
-    and the model's own, J by one-sided differences (a transient solve each)."""
+def _linearised(model: SceneModel, material: Material, drive: Drive, times, a: DriveAnalysis,
+                replicates: pd.DataFrame) -> tuple[float, pd.DataFrame]:
+    """Linearised propagation J C J^T, C the replicates' covariance of the material's parameters and the
+    model's own, J by one-sided differences (a transient solve each): the standard deviation of t90 and
+    the 95 % band of the free response on the DEM's output times (t, lo, hi)."""
     t = a.series.t.to_numpy()
     names = [*PARAMETERS, *([model.parameter] if model.parameter else [])]
     base = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
             **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
 
-    def value(params):
+    def response(params):
         series, _ = model.at(params).transient(_material(material, params), drive, times)
-        return t90(t, np.interp(t, series.t, series[a.response]))
+        return np.interp(t, series.t, series[a.response])
 
-    central = value(base)
-    jac = []
+    central = response(base)
+    jac_series, jac_t90 = [], []
     for name in names:
         h = FD_STEP * abs(base[name])
-        jac.append((value({**base, name: base[name] + h}) - central) / h)
-    jac = np.array(jac)
+        shifted = response({**base, name: base[name] + h})
+        jac_series.append((shifted - central) / h)
+        jac_t90.append((t90(t, shifted) - t90(t, central)) / h)
     cov = np.atleast_2d(np.cov(replicates[names].to_numpy(), rowvar=False))
-    return float(np.sqrt(max(jac @ cov @ jac, 0.0)))
+    js, jt = np.array(jac_series), np.array(jac_t90)
+    sd = np.sqrt(np.maximum(np.einsum("it,ij,jt->t", js, cov, js), 0.0))
+    band = pd.DataFrame({"t": t, "lo": central - Z95 * sd, "hi": central + Z95 * sd})
+    return float(np.sqrt(max(jt @ cov @ jt, 0.0))), band
 
 
 @dataclass(frozen=True, eq=False)
 class Scorecard:
     rows: pd.DataFrame      # drive, observable, unit, dem, dem_err, dem_how, model, predicted, band, sigma, verdict
-    scene: pd.DataFrame     # drive, check, unit, value, err, how, target, sigma, verdict
+    scene: pd.DataFrame     # drive, check, unit, value, err, how, target, verdict
     replicates: int         # calibration samples pushed through each steady prediction
     edge_stability: float   # largest relative change of a band edge from half to all replicates
+    bands: dict             # (drive, model) -> DataFrame t, lo, hi: 95 % band of the free response
 
     @classmethod
-    def of(cls, rows: pd.DataFrame, scene: list[dict], replicates: int, edge_stability: float) -> "Scorecard":
-        sc = pd.DataFrame(scene)
-        if len(sc):
-            sc["sigma"] = (sc.value - sc.target) / sc.err
-            sc["verdict"] = np.where(sc.sigma.abs() <= SIGMA_CONSISTENT, "within error", "off")
-        return cls(rows, sc, replicates, edge_stability)
+    def of(cls, rows: pd.DataFrame, scene: list[dict], replicates: int, edge_stability: float,
+           bands: dict) -> "Scorecard":
+        return cls(rows, pd.DataFrame(scene), replicates, edge_stability, bands)
 
 
 def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
@@ -216,13 +230,14 @@ def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
 
 
 def score(drives, models: list[SceneModel], predictions: dict, material: Material, replicates: pd.DataFrame,
-          delta_s: dict, t0: dict, fitted_on: dict | None = None, progress: bool = True) -> tuple[pd.DataFrame, float]:
-    """Scorecard rows and the band edges' stability (largest relative change from half to all replicates).
+          delta_s: dict, t0: dict, fitted_on: dict | None = None, progress: bool = True):
+    """Scorecard rows, the band edges' stability (largest relative change from half to all replicates)
+    and the free responses' 95 % bands per (drive, model) (linearised).
     ``predictions[(label, key)]``: the central Prediction of each drive and model; ``delta_s[label]``,
     ``t0[label]``: the calibrated layer depth and steady-window start of each drive; ``fitted_on[key]``:
     the drive a model's own parameter was fitted on (its rows there are not blind)."""
     fitted_on = fitted_on or {}
-    rows, edges = [], []
+    rows, edges, bands = [], [], {}
     half = len(replicates) // 2
     for a in drives:
         dem = dem_observables(a, t0[a.label], delta_s[a.label])
@@ -240,7 +255,7 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                 except ValueError:  # a replicate that cannot sustain the drive (e.g. mu_d below mu_w)
                     continue
             times = pred.series.t.to_numpy()
-            t90_sd = _linearised_t90(model, material, a.spec.drive, times, a, replicates)
+            t90_sd, bands[(a.label, model.key)] = _linearised(model, material, a.spec.drive, times, a, replicates)
             for obs, measured in dem.items():
                 value = central.get(obs)
                 if value is None or not np.isfinite(value) or not np.isfinite(measured.value):
@@ -265,4 +280,4 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                              "band": [float(lo), float(hi)], "numerical_err": numerical, "sigma": float(sigma),
                              "verdict": "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees",
                              "blind": fitted_on.get(model.key) != a.label})
-    return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan
+    return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands

@@ -7,7 +7,7 @@ DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rh
 * ``--model local --steady``: the closed-form steady state of the scene (continuum.scene); u_w_err = 0:
   exact up to rounding.
 * ``--model local --times``: the velocity form (continuum.velocity.solve_velocity) from a bed at rest,
-  regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/predict.py); u_w_err = |u_N - u_N/2|/3 (second order
+  regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/models.py); u_w_err = |u_N - u_N/2|/3 (second order
   in space; the regularisation's own creep is not in it).
 * ``--model ngf``: continuum.ngf (steady: Chebyshev, u_w_err the change from n/2 points; transient:
   from rest, u_w_err Richardson from N/2 cells).  g is given at the nodes y (for the transient,

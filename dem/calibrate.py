@@ -44,7 +44,7 @@ from granstokes.validate import require
 
 from . import lammps_env, layout
 from .config import Config, parse
-from .runner import Interrupted, RunError, _Lammps, _stop, _write_json
+from .runner import Interrupted, RunError, _Lammps, _write_json
 from .shear import SQUEEZE_TIME, ShearPoint, mean_grain_volume, shear_script
 from .sizing import PACKING
 
@@ -243,8 +243,7 @@ class _Calibrator:
         except BaseException:
             for f in futures:
                 f.cancel()
-            for proc in list(self.lmp.live):
-                _stop(proc)
+            self.lmp.stop_all()
             raise
         finally:
             pool.shutdown(wait=True, cancel_futures=True)

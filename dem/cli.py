@@ -1,6 +1,6 @@
 """``granstokes dem run``: run a DEM scene from a TOML config or a preset.
 
-    granstokes dem run CONFIG.toml --out DIR [--np 2] [--resume] [--launcher 'srun -n {np}']
+    granstokes dem run CONFIG.toml --out DIR [--jobs 2] [--np 1] [--resume] [--launcher 'srun -n {np}']
     granstokes dem run --preset smoke|quick|paper --out DIR
     granstokes dem calibrate (CONFIG.toml | --preset NAME) --out DIR [--jobs N] [--np N] [--resume]
 """
@@ -10,7 +10,7 @@ import sys
 
 from . import config as config_mod
 from .lammps_env import LammpsNotFound
-from .runner import run
+from .runner import DEFAULT_JOBS, DEFAULT_NP, run
 from .sizing import plan
 
 
@@ -23,7 +23,7 @@ def _cmd_run(args) -> int:
         for reason in plan(cfg).reasons:
             print(f"  {reason}", file=sys.stderr)
         result = run(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
-                     progress=not args.quiet)
+                     progress=not args.quiet, jobs=args.jobs)
     except (ValueError, OSError, LammpsNotFound) as exc:
         print(f"granstokes dem run: error: {exc}", file=sys.stderr)
         return 2
@@ -59,7 +59,9 @@ def register(subparsers) -> None:
     r.add_argument("config", nargs="?", help="TOML config file (see dem/config.py)")
     r.add_argument("--preset", help=f"one of {list(config_mod.PRESETS)}")
     r.add_argument("--out", required=True, help="run folder (must be new or empty unless --resume)")
-    r.add_argument("--np", type=int, default=2, help="MPI ranks (default 2)")
+    r.add_argument("--np", type=int, default=DEFAULT_NP, help=f"MPI ranks per LAMMPS process (default {DEFAULT_NP})")
+    r.add_argument("--jobs", type=int, default=DEFAULT_JOBS,
+                   help=f"seeds' beds run side by side as separate LAMMPS processes (default {DEFAULT_JOBS})")
     r.add_argument("--resume", action="store_true", help="continue an interrupted run in --out")
     r.add_argument("--launcher", help="launcher template with {np}, e.g. 'srun -n {np}' (default: the "
                                       "mpich wheel's mpirun)")

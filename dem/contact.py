@@ -11,6 +11,9 @@ DEM units (d = rho_p = g = 1).  Grain diameters are uniform by number in [1 - w,
   damping ratio zeta = -ln e / sqrt(pi^2 + ln^2 e); t_c = pi / (omega_0 sqrt(1 - zeta^2)),
   omega_0 = sqrt(k/m_eff), m_eff = m_min/2 for the two lightest grains (shortest contact).
 * The time step bound is t_c/20; the default time step is that bound.
+* Shear waves: the deposited bed is an elastic solid; a shear load crosses it at about the speed of
+  transverse waves on a chain of mean grains coupled by the tangential spring, c_s = d sqrt(k_t/m)
+  (an upper estimate: disorder and sliding contacts soften the packing).
 """
 from __future__ import annotations
 
@@ -77,13 +80,19 @@ class Contact:
         return math.pi / (omega0 * math.sqrt(1.0 - self.zeta**2))
 
     @property
+    def shear_wave_speed(self) -> float:
+        """c_s = d sqrt(k_t/m), m the mass of a mean grain (d = 1)."""
+        return math.sqrt(self.k_t / grain_mass(1.0, self.dimension))
+
+    @property
     def dt_max(self) -> float:
         return self.t_c / DT_FRACTION
 
-    def pair_coeff(self) -> str:
-        """The contact law in LAMMPS ``pair_coeff`` / ``fix wall/gran`` syntax."""
+    def pair_coeff(self, mu_p: float | None = None) -> str:
+        """The contact law in LAMMPS ``pair_coeff`` / ``fix wall/gran`` syntax (friction ``mu_p`` if given)."""
+        mu = self.mu_p if mu_p is None else mu_p
         return (f"{self.model} {self.k_n:.10g} {self.restitution:.10g} "
-                f"tangential linear_history {self.k_t:.10g} 0.5 {self.mu_p:.10g} damping coeff_restitution")
+                f"tangential linear_history {self.k_t:.10g} 0.5 {mu:.10g} damping coeff_restitution")
 
     def as_dict(self) -> dict:
         return {

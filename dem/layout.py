@@ -43,7 +43,7 @@ CALIBRATION_JSON, POINTS_CSV, CALIBRATION_STATE = "calibration.json", "points.cs
 SHEAR_SERIES_CSV, SHEAR_PROFILE_TXT, SHEAR_IN = "series.csv", "profile.txt", "in.lammps"
 
 # --- columns -------------------------------------------------------------------------------------
-PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y")
+PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y", "u_c", "n_c")
 ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "radius")
 CONTACT_COLUMNS = ("id1", "id2", "dist", "dx", "dy", "dz", "fn", "ft_x", "ft_y", "ft_z")
 GRAIN_COLUMNS = ("id", "type", "radius", "mass")

@@ -4,8 +4,10 @@ Segment k (its script kept as in.lammps, then in.resume<k>.lammps) starts at ste
 S_(k+1): whatever it wrote after that restart is dropped (it was redone by segment k+1), and every
 step appears once.  Files (all under the drive folder):
 
-* ``plate.csv``: step, t, x (unwrapped), y, u_x, u_y, f_x, f_y (force of the bed on the plate per
-  plate area), mu_w = -f_x/f_y (empty while the plate is out of contact, f_y <= 0);
+* ``plate.csv``: step, t, x (unwrapped), y (at the output step), u_x, u_y, f_x, f_y (force of the bed
+  on the plate per plate area), u_c, n_c (x velocity and number of the bed grains touching a plate
+  grain), all averaged over every step of the output interval (row 0: the prepared state),
+  mu_w = -f_x/f_y (empty while the plate is out of contact, f_y <= 0);
 * ``atoms.dump``: LAMMPS text dump (id type x y z vx vy vz radius), sorted by id;
 * ``contacts.dump``: LAMMPS local dump, one line per contact (r < r_1 + r_2, plate and base
   contacts included): id1 id2 dist dx dy dz fn ft_x ft_y ft_z, (dx, dy, dz) = x_1 - x_2 (branch

@@ -1,8 +1,10 @@
 """Run a DEM scene: prepare one bed per seed, then every drive from it, as LAMMPS subprocesses.
 
 The run folder's layout is dem.layout's.
-LAMMPS runs under the mpich wheel's ``mpirun -np N`` (or a ``launcher`` template such as
-``srun -n {np}``), its screen output feeding a tqdm bar.  A failed, killed or interrupted run leaves
+Each seed's bed (preparation, then its drives) is an independent chain of LAMMPS processes; ``jobs``
+chains run side by side (threads, each waiting on its own subprocess), each process on ``np`` ranks
+under the mpich wheel's ``mpirun -np N`` (or a ``launcher`` template such as ``srun -n {np}``), its
+screen output feeding a tqdm bar.  Defaults (DEFAULT_JOBS, DEFAULT_NP) are measured in bench/RESULTS.md.  A failed, killed or interrupted run leaves
 run.json saying what happened and the outputs assembled up to that point; ``resume=True`` continues
 every unfinished drive from its last restart file.
 """
@@ -19,6 +21,7 @@ import signal
 import subprocess
 import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,10 +29,15 @@ from tqdm import tqdm
 
 from continuum.scales import UNITS
 from granstokes.provenance import provenance
+from granstokes.validate import require
 
 from . import lammps_env, layout, outputs, scene
 from .config import Config, parse
 from .sizing import DrivePlan, Plan, plan
+
+#: 2D beds of a few hundred to a few thousand grains: one rank per bed and two beds side by side beat
+#: two ranks per bed on 2 cores (bench/RESULTS.md, bench/dem_concurrency.py)
+DEFAULT_NP, DEFAULT_JOBS = 1, 2
 
 _THERMO = re.compile(r"^\s*(\d+)\s+(\S+)")
 _NONFINITE = re.compile(r"(?<![A-Za-z_])-?(nan|inf)\b", re.IGNORECASE)
@@ -40,8 +48,10 @@ CONVENTIONS = {
                            "I_dem = 2 I_paper); the material's I0 is given in material.I_convention",
     "axes": "x flow (periodic), y vertical up (gravity -y), z periodic in 3D; depth below the plate = y_plate - y",
     "grains": "diameters uniform by number in [1-w, 1+w] d; 2D disks have mass rho_p pi r^2 (per unit thickness)",
-    "plate": "rigid body of touching unit grains, no rotation, no gravity; loaded by p_w A (fix addforce); "
-             "f_x, f_y = force of the bed on the plate per area, mu_w = -f_x/f_y",
+    "plate": "rigid body of spaced grains (run.json plate: layout, spacing, friction), no rotation, no gravity; "
+             "loaded by p_w A (fix addforce); f_x, f_y = force of the bed on the plate per area averaged over "
+             "every step of the output interval, mu_w = -f_x/f_y; u_c, n_c: x velocity and number of the bed "
+             "grains touching a plate grain",
     "stress": "profiles: contact (virial) stress from compute stress/atom ... pair, kinetic part excluded; "
               "p = -trace/D, tau = -s_xy; values averaged over each profile interval",
     "restart": "granular pair styles do not restart bit-exactly: a resumed run continues statistically, "
@@ -106,7 +116,17 @@ class _Lammps:
 
     def __init__(self, np_: int, launcher: str | None, progress: bool):
         self.np, self.launcher, self.progress = np_, launcher, progress
-        self.live: set[subprocess.Popen] = set()  # running subprocesses (stopped by a caller running several)
+        self.live: set[subprocess.Popen] = set()
+        self.stopping = False
+        self._lock = threading.Lock()
+
+    def stop_all(self) -> None:
+        """Terminate every running LAMMPS process (an interrupt of the whole run)."""
+        with self._lock:
+            self.stopping = True
+            live = list(self.live)
+        for proc in live:
+            _stop(proc)
 
     def prefix(self) -> list[str]:
         """The launcher: the template, the mpich wheel's mpirun, or nothing for one rank."""
@@ -117,14 +137,16 @@ class _Lammps:
     def command(self, script: str) -> list[str]:
         return [*self.prefix(), str(lammps_env.lmp_binary()), "-in", script, "-log", "log.lammps", "-nocite"]
 
-    def run(self, script: str, cwd: Path, plan_: Plan, total: int, start: int, desc: str,
-            position: int | None = None) -> dict:
+    def run(self, script: str, cwd: Path, plan_: Plan, total: int, start: int, desc: str, position: int = 0) -> dict:
         bar = tqdm(total=total, initial=start, desc=desc, unit="step", disable=not self.progress,
-                   dynamic_ncols=True, leave=position is None, position=position)
+                   dynamic_ncols=True, leave=True, position=position)
         t0, step, error, nonfinite, phases, in_thermo = time.monotonic(), start, None, False, [], False
-        proc = subprocess.Popen(self.command(script), cwd=cwd, env=lammps_env.child_env(),
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
-        self.live.add(proc)
+        with self._lock:
+            if self.stopping:
+                raise Interrupted("the run is being interrupted")
+            proc = subprocess.Popen(self.command(script), cwd=cwd, env=lammps_env.child_env(),
+                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+            self.live.add(proc)
         try:
             for line in proc.stdout:
                 if line.startswith("ERROR"):
@@ -153,7 +175,10 @@ class _Lammps:
             raise
         finally:
             bar.close()
-            self.live.discard(proc)
+            with self._lock:
+                self.live.discard(proc)
+        if self.stopping:
+            raise Interrupted("interrupted while LAMMPS ran")
         wall = time.monotonic() - t0
         info = {"returncode": returncode, "last_step": step, "wall_time": wall, "phases": phases}
         if returncode != 0 or error or nonfinite:
@@ -201,11 +226,14 @@ def _restarts(drive_dir: Path) -> list[tuple[int, Path]]:
 class Runner:
     """Holds the state of one run folder; ``execute`` runs whatever is not complete yet."""
 
-    def __init__(self, cfg: Config, text: str, out: Path, np_: int, launcher: str | None, progress: bool):
+    def __init__(self, cfg: Config, text: str, out: Path, np_: int, launcher: str | None, progress: bool,
+                 jobs: int = 1):
         self.plan = plan(cfg)
         self.cfg, self.text, self.out = cfg, text, Path(out)
         self.lmp = _Lammps(np_, launcher, progress)
+        self.jobs = jobs
         self.meta_path = self.out / layout.RUN_JSON
+        self._lock = threading.Lock()  # run.json and its dict are shared by the seeds' threads
 
     # --- metadata --------------------------------------------------------------------------------
     def new_metadata(self) -> dict:
@@ -220,7 +248,7 @@ class Runner:
             "plate": scene.plate_geometry(p),
             "seeds": list(self.cfg.seeds),
             "provenance": {
-                **provenance(), **lammps_env.lammps_info(), "np": self.lmp.np,
+                **provenance(), **lammps_env.lammps_info(), "np": self.lmp.np, "jobs": self.jobs,
                 "launcher": shlex.join(self.lmp.prefix()) or "(none: one rank)",
                 "lmp": str(lammps_env.lmp_binary()),
             },
@@ -228,7 +256,14 @@ class Runner:
         }
 
     def save(self, meta: dict) -> None:
-        _write_json(self.meta_path, meta)
+        with self._lock:
+            _write_json(self.meta_path, meta)
+
+    def record(self, meta: dict, key: str, st: StageResult) -> None:
+        """Store a stage's state in run.json (thread-safe)."""
+        with self._lock:
+            meta["stages"][key] = dataclasses.asdict(st)
+            _write_json(self.meta_path, meta)
 
     # --- stages ----------------------------------------------------------------------------------
     def prepare(self, seed: int, meta: dict) -> Path:
@@ -241,12 +276,11 @@ class Runner:
         d.mkdir(parents=True)
         (d / "prepare.in").write_text(scene.prepare_script(self.plan, seed))
         st = StageResult("running", path=str(d.relative_to(self.out)))
-        meta["stages"][key] = dataclasses.asdict(st)
-        self.save(meta)
+        self.record(meta, key, st)
         c = self.plan.config.prepare
         total = scene.free_fall_steps(self.plan) + round((c.settle_max + c.relax_max) / self.plan.dt)
         info = self._stage(meta, key, st, lambda: self.lmp.run("prepare.in", d, self.plan, total, 0,
-                                                               f"{key} prepare"))
+                                                               f"{key} prepare", self.position(seed)))
         relaxed = [ph for ph in info["phases"] if ph.startswith("relaxed")]
         values = dict(kv.split("=") for kv in relaxed[-1].split()[1:]) if relaxed else {}
         ke = float(values.get("ke_grain", "nan"))
@@ -257,8 +291,7 @@ class Runner:
         st.status = "complete"
         st.message = ("relaxed below the kinetic-energy threshold" if ke < c.ke_per_grain else
                       f"relax_max reached with kinetic energy per grain {ke:.3g} > threshold {c.ke_per_grain:g}")
-        meta["stages"][key] = dataclasses.asdict(st)
-        self.save(meta)
+        self.record(meta, key, st)
         return restart
 
     def drive(self, seed: int, dp: DrivePlan, prepared: Path, meta: dict) -> None:
@@ -286,21 +319,19 @@ class Runner:
         segments, starts = [*segments, seg], [*starts, start]
         st = StageResult("running", path=str(d.relative_to(self.out)),
                          info={"segments": len(segments), "resumed_from_step": start})
-        meta["stages"][key] = dataclasses.asdict(st)
-        self.save(meta)
+        self.record(meta, key, st)
         try:
-            self._stage(meta, key, st, lambda: self.lmp.run("in.lammps", seg, self.plan, dp.steps, start, key))
+            self._stage(meta, key, st, lambda: self.lmp.run("in.lammps", seg, self.plan, dp.steps, start, key,
+                                                                 self.position(seed)))
         finally:
             st.info.update(outputs.merge_drive(d, segments, starts, self.plan.intervals["profiles"],
                                                 self.plan.dt, self.plan.dimension))
-            meta["stages"][key] = dataclasses.asdict(st)
-            self.save(meta)
+            self.record(meta, key, st)
         st.status, st.message = "complete", f"{dp.steps} steps ({dp.duration:.4g} time units)"
         for _, p in _restarts(d)[:-1]:
             p.unlink()
         shutil.rmtree(segdir)
-        meta["stages"][key] = dataclasses.asdict(st)
-        self.save(meta)
+        self.record(meta, key, st)
 
     def _stage(self, meta: dict, key: str, st: StageResult, action):
         t0 = time.monotonic()
@@ -314,22 +345,45 @@ class Runner:
             raise Interrupted(st.message) from None
         finally:
             st.wall_time += time.monotonic() - t0
-            meta["stages"][key] = dataclasses.asdict(st)
-            self.save(meta)
+            self.record(meta, key, st)
         return info
+
+    def position(self, seed: int) -> int:
+        """Progress-bar line of a seed's bed: one line per concurrent job."""
+        return self.cfg.seeds.index(seed) % self.jobs
+
+    def bed(self, seed: int, meta: dict) -> None:
+        """One seed: prepare its bed, then run every drive from it."""
+        prepared = self.prepare(seed, meta)
+        for dp in self.plan.drives:
+            self.drive(seed, dp, prepared, meta)
+
+    def _beds(self, meta: dict) -> None:
+        """Every seed's bed, ``jobs`` at a time; the first failure or an interrupt stops them all."""
+        if self.jobs == 1:
+            for seed in self.cfg.seeds:
+                self.bed(seed, meta)
+            return
+        with ThreadPoolExecutor(self.jobs) as pool:
+            futures = [pool.submit(self.bed, seed, meta) for seed in self.cfg.seeds]
+            try:
+                for f in futures:
+                    f.result()
+            except BaseException:
+                self.lmp.stop_all()
+                for f in futures:
+                    f.cancel()
+                raise
 
     def execute(self, meta: dict) -> RunResult:
         t0 = time.monotonic()
         status, message = "complete", ""
         try:
-            for seed in self.cfg.seeds:
-                prepared = self.prepare(seed, meta)
-                for dp in self.plan.drives:
-                    self.drive(seed, dp, prepared, meta)
+            self._beds(meta)
         except RunError as exc:
             status, message = "failed", str(exc)
-        except Interrupted as exc:
-            status, message = "interrupted", str(exc)
+        except (Interrupted, KeyboardInterrupt) as exc:
+            status, message = "interrupted", str(exc) or "interrupted by SIGINT"
         meta["status"], meta["message"] = status, message
         meta["timings"]["finished"] = _now()
         meta["timings"]["wall_time_this_invocation"] = time.monotonic() - t0
@@ -341,20 +395,21 @@ def _now() -> str:
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
 
 
-def run(cfg: Config, text: str, out: str | Path, np: int = 2, resume: bool = False, launcher: str | None = None,
-        progress: bool = True) -> RunResult:
-    """Run (or with ``resume`` continue) the scene ``cfg`` (TOML ``text``) in folder ``out``.
+def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
+        launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> RunResult:
+    """Run (or with ``resume`` continue) the scene ``cfg`` (TOML ``text``) in folder ``out``, the seeds'
+    beds ``jobs`` at a time (at most one per seed), each LAMMPS process on ``np`` ranks.
 
     Everything is validated before the folder is touched: a bad config, a missing LAMMPS/MPICH
     wheel, a folder that already holds another run, or a resume whose config differs raise
     ValueError / LammpsNotFound and write nothing.
     """
-    if not (isinstance(np, int) and np >= 1):
-        raise ValueError(f"np must be an integer >= 1, got {np!r}")
+    require(isinstance(np, int) and np >= 1, "np", "an integer >= 1 (MPI ranks per LAMMPS process)", np)
+    require(isinstance(jobs, int) and jobs >= 1, "jobs", "an integer >= 1 (beds run side by side)", jobs)
     if launcher is not None and "{np}" not in launcher:
         raise ValueError(f"launcher must be a command template containing {{np}}, got {launcher!r}")
     out = Path(out)
-    runner = Runner(cfg, text, out, np, launcher, progress)  # sizing: raises on loads outside mu(I)
+    runner = Runner(cfg, text, out, np, launcher, progress, min(jobs, len(cfg.seeds)))  # sizing: raises on loads outside mu(I)
     lammps_env.lmp_binary(), lammps_env.mpirun()
     meta_path = out / layout.RUN_JSON
     if resume:

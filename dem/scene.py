@@ -3,8 +3,10 @@
 Geometry (DEM units): gravity along -y, periodic in x (and z in 3D), shrink-wrapped in y with a
 minimum extent (``boundary p m p``) so that no kicked grain is lost.  Atom types: 1 bed grains,
 2 base grains (frozen, ``fix freeze``), 3 plate grains (one rigid body, ``fix rigid single``, no
-rotation).  The plate is loaded by ``fix addforce`` (p_w A downwards; no gravity on the plate, so
-p_w is exactly the applied normal stress) and driven either by a constant x force tau_w A
+rotation, so the sphere inertia that fix rigid assigns its grains never enters).  The plate grains are
+spaced (``plate_pitch``) so that the bed grains nest between them: the plate grips the bed.  2D grains
+are integrated as disks (``fix nve/sphere disc``: I = m r^2/2; spheres I = 2 m r^2/5).  The plate is
+loaded by ``fix addforce`` (p_w A downwards; no gravity on the plate, so p_w is exactly the applied normal stress) and driven either by a constant x force tau_w A
 (imposed stress) or at a held x velocity u_w (imposed speed: rigid-body x force switched off).
 
 * ``prepare_script``: random insertion of polydisperse grains in a loose column, settle under
@@ -25,7 +27,12 @@ from .sizing import DrivePlan, Plan
 #: grain placement: insertion column filled to this fraction of the largest grain's volume
 INSERT_FRACTION = {2: 0.30, 3: 0.20}
 SKIN = 0.3  # neighbor skin in d
-PLATE_DIAMETER = 1.0  # d: the plate's glued grains
+PLATE_DIAMETER = 1.0  # d: the plate's glued grains, bed-like (measured slip: bench/RESULTS.md)
+#: the largest grain that fits through a gap of the plate is this fraction of the smallest bed grain:
+#: the bed grains nest as deep as they can without one passing through (measured slip: bench/RESULTS.md)
+PLATE_GAP_FRACTION = 0.9
+#: Coulomb friction of the bed-plate contacts (a rough, gripping plate; bed-bed contacts keep mu_p)
+PLATE_FRICTION = 1.0
 #: bed grains are binned up to this height above the plate's initial position (nothing is lost above it)
 BIN_HEADROOM = 8.0
 
@@ -132,10 +139,17 @@ group plate type {PLATE}
 def _pair(plan: Plan) -> str:
     c = plan.config.contact
     return f"""
-# --- contact law: {c.model}, Coulomb friction mu_p = {c.mu_p:g}, restitution e = {c.restitution:g} ---
-pair_style granular
-pair_coeff * * {c.pair_coeff()}
+# --- contact law: {c.model}, Coulomb friction mu_p = {c.mu_p:g} (bed-plate {PLATE_FRICTION:g}), restitution e = {c.restitution:g} ---
+{_pair_coeffs(plan)}
 """
+
+
+def _pair_coeffs(plan: Plan) -> str:
+    """One contact law for every pair; bed-plate contacts with the plate's friction PLATE_FRICTION."""
+    c = plan.config.contact
+    return f"""pair_style granular
+pair_coeff * * {c.pair_coeff()}
+pair_coeff {BED} {PLATE} {c.pair_coeff(PLATE_FRICTION)}"""
 
 
 def _settle(plan: Plan) -> str:
@@ -147,9 +161,14 @@ compute ke_bed bed ke
 variable ke_grain equal c_ke_bed/count(bed)/{grain_mass(1.0, plan.dimension):.10g}
 fix floor all wall/gran granular {c.pair_coeff()} yplane 0.0 NULL
 fix gravity bed gravity 1.0 vector 0 -1 0
-fix integrate bed nve/sphere
+{integrator("bed", plan.dimension)}
 {_enforce(plan.dimension)}
 """
+
+
+def integrator(group: str, dim: int) -> str:
+    """Translation and rotation of free grains: disks in 2D (``disc``: I = m r^2/2), spheres in 3D."""
+    return f"fix integrate {group} nve/sphere" + (" disc" if dim == 2 else "")
 
 
 def _freeze_base(plan: Plan) -> str:
@@ -167,7 +186,7 @@ velocity base set 0.0 0.0 0.0 units box
 unfix floor
 unfix integrate
 unfix gravity
-fix integrate bed nve/sphere
+{integrator("bed", plan.dimension)}
 fix freeze base freeze
 fix gravity bed gravity 1.0 vector 0 -1 0
 {_enforce(plan.dimension, after_rigid=True)}
@@ -181,7 +200,7 @@ def _place_plate(plan: Plan) -> str:
         f"create_atoms {PLATE} single {(i + 0.5) * ax:.10g} ${{y_plate}} {0.0 if dim == 2 else (k + 0.5) * az:.10g} units box"
         for k in range(nz) for i in range(nx))
     return f"""
-# --- plate: {nx * nz} unit grains glued into one rigid body just above the highest grain ---
+# --- plate: {nx * nz} unit grains {ax:.4g} d apart (a {'row' if dim == 2 else 'square lattice'}) glued into one rigid body just above the highest grain ---
 variable top_atom atom y+radius
 compute top bed reduce max v_top_atom
 thermo_style custom step v_t c_ke_bed atoms c_top
@@ -245,8 +264,7 @@ def _read_state(plan: Plan, restart: str) -> str:
 #     recomputes its cutoffs (contact history comes back with the restart) ---
 processors {_procs(plan.dimension)}
 read_restart {restart}
-pair_style granular
-pair_coeff * * {plan.config.contact.pair_coeff()}
+{_pair_coeffs(plan)}
 """
 
 
@@ -265,7 +283,7 @@ def _drive_forces(plan: Plan, drive: DrivePlan, fresh: bool) -> tuple[str, str, 
 # --- integration: bed grains free, base frozen, plate rigid without rotation ---
 variable t equal step*{plan.dt:.10g}
 compute ke_bed bed ke
-fix integrate bed nve/sphere
+{integrator("bed", plan.dimension)}
 fix freeze base freeze
 fix gravity bed gravity 1.0 vector 0 -1 0
 {set_speed}
@@ -278,11 +296,16 @@ fix load plate addforce {fx / n_plate:.10g} {-plan.config.p_w * area / n_plate:.
 
 def _plate_output(plan: Plan, fx: float) -> str:
     area, every = plan.area, plan.intervals["plate"]
-    fmt = ",".join(f"$({v})" for v in ("step", "v_t:%.8g", "v_px:%.10g", "v_py:%.10g", "v_pux:%.8g", "v_puy:%.8g",
-                                        "v_pfx:%.8g", "v_pfy:%.8g"))
+    fmt = ",".join(f"$({v})" for v in ("step", "v_t:%.8g", "v_px:%.10g", "v_py:%.10g", *(
+        f"v_out_{k}:%.8g" for k in ("ux", "uy", "fx", "fy", "uc", "nc"))))
+    averaged = "\n".join(f"variable out_{k} equal (step>0)*f_plate_mean[{i + 1}]+(step==0)*v_{v}"
+                          for i, (k, v) in enumerate((("ux", "pux"), ("uy", "puy"), ("fx", "pfx"), ("fy", "pfy"),
+                                                      ("sc", "ucsum"), ("nc", "ncon"))))
     return f"""
-# --- plate time series: unwrapped x, velocity, force of the bed on the plate per area (sum of the
-#     plate grains' forces, normal and tangential, minus the applied load) ---
+# --- plate time series: unwrapped x and y at the output step; velocity and force of the bed on the
+#     plate per area (sum of the plate grains' forces minus the applied load) averaged over every
+#     step of the output interval (fix ave/time); u_c, n_c: x velocity (sum over the interval / count)
+#     and mean number of the bed grains touching a plate grain (slip).  Row 0: the prepared state ---
 variable px equal f_plate[1][1]+f_plate[1][13]*lx
 variable py equal f_plate[1][2]
 variable pux equal f_plate[1][4]
@@ -290,6 +313,15 @@ variable puy equal f_plate[1][5]
 compute plate_forces plate reduce sum fx fy
 variable pfx equal (c_plate_forces[1]-{fx:.10g})/{area:.10g}
 variable pfy equal (c_plate_forces[2]+{plan.config.p_w * area:.10g})/{area:.10g}
+compute touching bed contact/atom plate
+variable touch atom c_touching>0
+variable touch_vx atom v_touch*vx
+compute touch_sums bed reduce sum v_touch_vx v_touch
+variable ucsum equal c_touch_sums[1]
+variable ncon equal c_touch_sums[2]
+fix plate_mean all ave/time 1 {every} {every} v_pux v_puy v_pfx v_pfy v_ucsum v_ncon
+{averaged}
+variable out_uc equal v_out_sc/(v_out_nc+(v_out_nc==0))
 fix plate_out all print {every} "{fmt}" file {PLATE_CSV} screen no title "{",".join(PLATE_COLUMNS)}"
 """
 
@@ -345,11 +377,20 @@ run {drive.steps} upto
     return _lines(*blocks)
 
 
+def plate_pitch(dim: int, d_min: float) -> float:
+    """Largest spacing of the plate grains at which no bed grain of diameter ``d_min`` passes between
+    them, times PLATE_GAP_FRACTION: 2D row, the gap between neighbours; 3D square lattice, the hole at
+    the centre of a square (diagonal s sqrt 2 minus one plate grain)."""
+    opening = PLATE_DIAMETER + PLATE_GAP_FRACTION * d_min
+    return opening if dim == 2 else opening / math.sqrt(2)
+
+
 def plate_layout(plan: Plan) -> tuple[int, int, float, float]:
-    """Plate grains per direction (x, z) and their spacing: touching unit grains across the box."""
-    nx = max(1, round(plan.config.box.width))
+    """Plate grains per direction (x, z) and their spacings (<= plate_pitch, fitting the periodic box)."""
+    pitch = plate_pitch(plan.dimension, 1.0 - plan.config.grains.polydispersity)
+    nx = math.ceil(plan.config.box.width / pitch)
     zw = plan.config.width_z or 1.0
-    nz = 1 if plan.dimension == 2 else max(1, round(zw))
+    nz = 1 if plan.dimension == 2 else math.ceil(zw / pitch)
     return nx, nz, plan.config.box.width / nx, zw / nz
 
 
@@ -358,10 +399,28 @@ def plate_grains(plan: Plan) -> int:
     return nx * nz
 
 
+def nesting_depth(plan: Plan) -> float:
+    """How far below the plate grains' centres a unit bed grain resting in a gap of the plate sits:
+    it touches the two (2D) or four (3D) plate grains around the gap at centre distance (D_p + 1)/2."""
+    _, _, ax, az = plate_layout(plan)
+    half = ax / 2 if plan.dimension == 2 else math.hypot(ax, az) / 2
+    return math.sqrt(max(0.0, ((PLATE_DIAMETER + 1) / 2) ** 2 - half ** 2))
+
+
 def plate_geometry(plan: Plan) -> dict:
-    """The plate as run.json records it: grains, mass (per area), area, and ``surface_offset``, the
-    height of its centre of mass above its contact plane (dem.layout.plate_surface)."""
+    """The plate as run.json records it: grains, spacing, mass (per area), area, and ``surface_offset``,
+    the height of its centre of mass above its contact plane (dem.layout.plate_surface).  The contact
+    plane is where a flat wall would hold the first bed layer at the height this plate holds it: half
+    a grain above the centre of a unit grain nested in a gap."""
+    nx, nz, ax, az = plate_layout(plan)
     n = plate_grains(plan)
     mass = n * grain_mass(PLATE_DIAMETER, plan.dimension)
-    return {"grains": n, "mass": mass, "mass_per_area": mass / plan.area, "area": plan.area,
-            "surface_offset": PLATE_DIAMETER / 2}
+    nest = nesting_depth(plan)
+    return {"grains": n, "layout": [nx, nz], "spacing": [ax, az] if plan.dimension == 3 else [ax],
+            "grain_diameter": PLATE_DIAMETER, "gap_fraction": PLATE_GAP_FRACTION, "friction": PLATE_FRICTION,
+            "nesting_depth": nest, "mass": mass, "mass_per_area": mass / plan.area, "area": plan.area,
+            "surface_offset": nest - 0.5,
+            "design": "one rigid body of unit grains spaced so that the largest grain fitting through a gap is "
+                      f"{PLATE_GAP_FRACTION:g} of the smallest bed grain (2D row, 3D square lattice); unit bed "
+                      "grains nest nesting_depth below the plate grains' centres; bed-plate contacts have Coulomb friction "
+                      "`friction`"}

@@ -66,8 +66,18 @@ class Plan:
         """Plate area (2D: its length) in d^(D-1)."""
         return self.config.box.width * (self.config.width_z or 1.0)
 
+    @property
+    def transit_time(self) -> float:
+        """Shear-wave transit time over the bed depth (dem.contact: c_s = d sqrt(k_t/m))."""
+        return self.depth / self.config.contact.shear_wave_speed
+
     def as_dict(self) -> dict:
         return {"depth": self.depth, "n_grains_target": self.n_grains, "width": self.config.box.width,
+                "elastic_start": {"shear_wave_speed": self.config.contact.shear_wave_speed,
+                                  "transit_time": self.transit_time,
+                                  "derivation": "depth / c_s, c_s = d sqrt(k_t/m) with m a mean grain's mass: the "
+                                                "time the shear load takes to reach the base through the elastic "
+                                                "deposited bed"},
                 "width_z": self.config.width_z, "plate_area": self.area, "dt": self.dt,
                 "intervals_steps": self.intervals, "drives": [d.as_dict() for d in self.drives],
                 "reasons": list(self.reasons)}

@@ -30,7 +30,7 @@ def _dem(preset: str, run_dir: Path) -> Path:
     status = json.loads(meta.read_text()).get("status") if meta.exists() else None
     if status != "complete":
         cfg, text = dem_config.preset(preset)
-        result = dem_run(cfg, text, run_dir, np=2, resume=status is not None)
+        result = dem_run(cfg, text, run_dir, resume=status is not None)
         if result.status != "complete":
             raise RuntimeError(f"DEM preset {preset} did not complete: {result.status} {result.message} "
                                f"(see {meta}); rerun make demo to resume it")

@@ -1,18 +1,16 @@
 """Coarse-grained profiles of a smoke DEM run against the run's own boundary conditions.
 
-The smoke preset (543 disks, p_w = 10, imposed tau_w = 4.9, 10 time units, t_s = 2) is run with atoms and
-contacts dumped every 0.05 (about 170 frames instead of 11): the plate rests on 2-4 grains at any
-instant, so its force fluctuates by ~70 % (f_y: mean 9.9, std 6.8) and stress averages need ~100
-frames for a few-% error.  Window [5, 10] (t > 2.5 t_s).  Tolerances:
+The smoke preset (543 disks, p_w = 10, imposed plate speed u_w = 1, 10 time units) is run with atoms and
+contacts dumped every 0.05 (about 200 frames): a snapshot's stress fluctuates by tens of % (the plate
+rests on a few grains at any instant; plate.csv averages every step, the dumps do not), so stress
+averages need ~100 frames for a few-% error.  Window [5, 10] (t > 2.5 t_s).  Tolerances:
 * dp/dy = phi rho_p g within 10 % (hydrostatic in the mean: the y momentum is not accelerating);
 * sigma_yy extrapolated to the plate's contact plane (y_plate - 1/2) = p_w within 10 %, and the
   deposited wall force int b_y dy = -f_y of plate.csv at the same steps within 3 % (pair/local's
   single() forces are not bit-identical to those of the run);
 * tau = -sigma_xy over the flowing layer (u_x >= 5 % of the plate speed, at least 2 d below the plate)
-  = the plate's tau from plate.csv within 15 %: the run is steady-ish, not steady: the bed's x momentum
-  still grows by ~0.6 rho_p sqrt(g d^3) per unit time per area at t > 5 (creep deepening), so that
-  tau(y) = tau_plate - d/dt int_y^top rho u dy sits ~10 % below tau_plate at the bottom of the layer;
-  with that term added the x momentum balance closes within 6 % (tested).
+  = the plate's tau from plate.csv within 15 %; with the bed's x momentum change added,
+  tau(y) = tau_plate - d/dt int_y^top rho u dy, the x momentum balance closes within 6 % (tested).
 """
 import re
 import time
@@ -26,6 +24,7 @@ from compare.profiles import CGSettings, DepthProfiles
 from compare.reader import find_drives
 from granstokes.cli import main as granstokes_main
 from dem import config
+from dem.layout import plate_surface
 
 pytestmark = pytest.mark.slow
 T0, T1 = 5.0, 10.0
@@ -47,7 +46,7 @@ def layer(drive, prof):
     w = prof.window(T0, T1)
     plate = drive.plate()
     late = plate[(plate["t"] >= T0) & (plate["t"] <= T1)]
-    surface = late["y"].mean() - 0.5  # contact plane under the plate grains (radius 1/2)
+    surface = plate_surface(late["y"].mean(), drive.meta["plate"]["surface_offset"])  # the plate's contact plane
     return w, late, surface
 
 
@@ -80,8 +79,8 @@ def test_shear_stress_is_uniform_and_equal_to_the_plate_shear_stress(smoke):
 
 def test_x_momentum_balance_closes_with_the_beds_acceleration(smoke):
     """tau(y) = tau_plate - d/dt int_y^top j_x dy' (the x momentum balance d_t j_x = d_y tau + b_x
-    integrated from y to above the plate, mean vertical convection neglected): the ~10 % deficit of tau
-    below tau_plate is the bed's acceleration, and kinetic + contact + wall terms add up."""
+    integrated from y to above the plate, mean vertical convection neglected): kinetic + contact + wall
+    terms and the bed's momentum change add up."""
     drive, prof, _ = smoke
     w, late, surface = layer(drive, prof)
     r = prof.results
@@ -91,7 +90,6 @@ def test_x_momentum_balance_closes_with_the_beds_acceleration(smoke):
     rate = np.polyfit(r.t[sel], above[sel], 1)[0]
     bulk = (w["y"] > 3.0) & (w["y"] < surface - 2.0)
     closed = (w["tau"] + rate)[bulk]
-    assert rate[bulk].max() > 0.05 * -late["f_x"].mean()  # the bed is still accelerating
     assert closed.mean() == pytest.approx(-late["f_x"].mean(), rel=0.06)
 
 

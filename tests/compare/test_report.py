@@ -74,7 +74,9 @@ def test_scorecard_contract(report):
         assert lo <= row["predicted"] <= hi and row["dem_err"] > 0
         assert row["verdict"] == ("consistent" if abs(row["sigma"]) <= 2 else "disagrees")
     observables = {(r["observable"], r["model"]) for r in m["scorecard"]}
-    assert {("u_w_inf", "local"), ("delta_u", "local"), ("t90", "local"), ("u_w_inf", "paper")} <= observables
+    response = "u_w_inf" if next(iter(m["drives"].values()))["kind"] == "stress" else "mu_w_inf"
+    assert {(response, "local"), ("delta_u", "local"), ("t90", "local"), (response, "paper")} <= observables
+    assert {"slip", "slip_err", "tau_bulk", "elastic_start"} <= set(next(iter(m["drives"].values())))
 
 
 def test_every_page_the_demo_writes_is_whole(report):

@@ -51,9 +51,9 @@ def test_paper_preset_has_three_stresses_and_matching_speeds():
     (with_line(SMOKE, "grains", "restitution = 1.5"), "grains.restitution must be"),
     (with_line(SMOKE, "grains", "dimension = 4").replace("dimension = 2\n", ""), "grains.dimension must be 2 or 3"),
     (with_line(SMOKE, "grains", "colour = 'red'"), "[grains] keys must be among"),
-    (SMOKE.replace("mu_w_tilde = 0.3", "mu_w = 0.9"), "mu_w must be in the open interval"),
-    (SMOKE.replace('kind = "stress"', 'kind = "shear"'), "drive[stress].kind must be"),
-    (SMOKE.replace("mu_w_tilde = 0.3", "u_w = 1.0"), "drive[stress] load must be exactly one of"),
+    (SMOKE.replace('kind = "speed"\nu_w = 1.0', 'kind = "stress"\nmu_w = 0.9'), "mu_w must be in the open interval"),
+    (SMOKE.replace('kind = "speed"', 'kind = "shear"'), "drive[speed].kind must be"),
+    (SMOKE.replace('kind = "speed"', 'kind = "stress"'), "drive[speed] load must be exactly one of"),
 ])
 def test_bad_configs_fail_fast_naming_the_parameter(text, message, tmp_path):
     with pytest.raises(ValueError) as err:

@@ -1,0 +1,60 @@
+"""Seeds side by side: the demo's DEM wall time (quick + smoke presets) run one bed at a time on 2 MPI
+ranks (the old default, ``--jobs 1 --np 2``) against independent beds run concurrently as separate
+LAMMPS processes (``--jobs 2 --np 1``, the new default), and the quick preset alone under
+``--jobs 1 --np 1`` (is one rank per bed already faster than two?).
+
+    .venv/bin/python bench/dem_concurrency.py [--out DIR]
+
+All configurations run in this one process, one after another (interleaved ``REPEATS`` times, best
+kept: the machine is shared); wall time is the whole ``dem.runner.run`` call (prepare + drives +
+output merging).  Prints a Markdown block for bench/RESULTS.md and writes bench/dem_concurrency.json.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+from dem import config
+from dem.runner import run
+
+HERE = Path(__file__).resolve().parent
+REPEATS = 1  # each configuration costs ~2 min of both cores: one interleaved pass
+DEMO = ("quick", "smoke")
+CONFIGS = {"jobs 1, np 2 (before)": (1, 2), "jobs 2, np 1 (after)": (2, 1), "jobs 1, np 1": (1, 1)}
+
+
+def demo_dem(root: Path, jobs: int, np_: int) -> float:
+    """Wall time of the demo's DEM presets run with ``jobs`` beds at a time on ``np_`` ranks each."""
+    t0 = time.monotonic()
+    for name in DEMO:
+        cfg, text = config.preset(name)
+        result = run(cfg, text, root / name, np=np_, jobs=jobs, progress=False)
+        assert result.ok, result.message
+    return time.monotonic() - t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", type=Path, default=HERE / "dem_concurrency.json")
+    args = ap.parse_args()
+    best = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for r in range(REPEATS):
+            for label, (jobs, np_) in CONFIGS.items():
+                wall = demo_dem(Path(tmp) / f"{r}-{jobs}-{np_}", jobs, np_)
+                best[label] = min(best.get(label, wall), wall)
+                print(f"{label}: {wall:.1f} s", flush=True)
+    before, after = best["jobs 1, np 2 (before)"], best["jobs 2, np 1 (after)"]
+    out = {"walls": best, "speedup": before / after, "presets": DEMO, "repeats": REPEATS}
+    args.out.write_text(json.dumps(out, indent=2))
+    print("\n| configuration | demo DEM wall time (quick + smoke) |\n|---|---|")
+    for label, wall in best.items():
+        print(f"| {label} | {wall:.0f} s |")
+    print(f"\nspeed-up of jobs 2 / np 1 over jobs 1 / np 2: {before / after:.2f}x")
+
+
+if __name__ == "__main__":
+    main()
