@@ -263,7 +263,8 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
     points.to_csv(out / layout.POINTS_CSV, index=False)
     wall = sum(e.get("wall_time", 0.0) for e in state["points"].values())
     doc = {**cal.contract(), "grains": plan.config.as_dict()["grains"],
-           "provenance": {**state["provenance"], "seeds": list(plan.seeds)},
+           "provenance": {**state["provenance"], "seeds": list(plan.seeds),
+                          "analysed_and_fitted_by": provenance()["git"]},
            "p": plan.config.p_w, "rms_mu": cal.rms_mu,
            "points": cal.points.assign(n_seeds=[len(plan.seeds)] * len(cal.points)).to_dict("list"),
            "excluded": excluded, "protocol": plan.as_dict(),
