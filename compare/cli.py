@@ -1,4 +1,4 @@
-"""``granstokes compare RUN_DIR... --out REPORT_DIR [--json]``."""
+"""``granstokes compare RUN_DIR... --out REPORT_DIR [--calibration DIR/calibration.json] [--json]``."""
 from __future__ import annotations
 
 import json
@@ -14,10 +14,14 @@ def run_compare(args) -> int:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
     output_dir(args.out, "--out")
-    from .comparison import build
+    from .calibrate import load
+    from .comparison import build, check_grains
+
+    if args.calibration is not None:  # bad calibrations fail before any coarse-graining
+        check_grains(load(args.calibration), args.runs)
     from .report import write_report
 
-    comparison = build(args.runs)
+    comparison = build(args.runs, calibration=args.calibration)
     with staged(args.out) as work:
         m = write_report(comparison, work)
     if args.json:
@@ -28,8 +32,11 @@ def run_compare(args) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("compare", help="coarse-grain DEM runs, calibrate mu(I), predict and write the report")
+    p = sub.add_parser("compare", help="coarse-grain DEM runs, predict them from mu(I) (independent or fitted), write the report")
     p.add_argument("runs", type=Path, nargs="+", metavar="RUN_DIR", help="run folders of granstokes dem run")
     p.add_argument("--out", type=Path, required=True, help="report folder (index.html, CSV, metrics.json)")
+    p.add_argument("--calibration", type=Path, help="calibration.json of granstokes dem calibrate (same grains): "
+                                                    "mu(I) and phi from it, the drives a blind test; without it "
+                                                    "mu(I) is fitted on the drives (a fit, not a prediction)")
     p.add_argument("--json", action="store_true", help="also print metrics.json to stdout")
     p.set_defaults(func=run_compare)

@@ -1,11 +1,15 @@
 """The whole comparison, built once before anything is rendered: every drive's DEM analysis, the mu(I)
 calibration, the continuum predictions from it, and the checks of the coarse-graining.
 
-``build(run_dirs, settings)`` -> ``Comparison`` (frozen).  compare.metrics and compare.report only
-render it.  DEM units throughout; I in the DEM convention.
+``build(run_dirs, settings, calibration=...)`` -> ``Comparison`` (frozen).  With ``calibration`` (a
+calibration.json of ``granstokes dem calibrate``) mu(I) and phi come from that independent plane-shear
+measurement and the drives are a blind test; without it mu(I) is fitted on the drives' own steady
+windows (``Comparison.calibration.kind`` and ``calibration_source`` say which: a fit, not a prediction).
+compare.metrics and compare.report only render it.  DEM units throughout; I in the DEM convention.
 """
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -13,9 +17,11 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from continuum.calibration import Calibration, mu_law
 from continuum.crossing import crossing_depth
 from continuum.scales import Material, Scales
 from continuum.steady import DELTA_THRESHOLD
+from dem.layout import RUN_JSON
 from granstokes.validate import require
 
 from . import calibrate
@@ -75,7 +81,7 @@ class Comparison:
     runs: tuple[Path, ...]
     drives: tuple[DriveComparison, ...]
     pairs: pd.DataFrame
-    calibration: calibrate.Calibration
+    calibration: Calibration     # its ``kind``: independent plane shear or the in-drive fit
     calibration_source: str
     replicates: pd.DataFrame     # joint samples mu_s, mu_d, I0 (DEM convention), phi
     material: Material
@@ -85,6 +91,12 @@ class Comparison:
     scorecard: Scorecard
     fluidity: FluidityFit | None  # the NGF amplitude and the drive it was fitted on
     settings: CGSettings
+    law_test: dict  # the drives' steady pairs against the law (law_test); a test only when ``blind``
+
+    @property
+    def blind(self) -> bool:
+        """True when mu(I) and phi come from an independent calibration (a prediction, not a fit)."""
+        return self.calibration.is_prediction
 
 
 def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.WALL_EXCLUSION,
@@ -99,8 +111,39 @@ def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.
         step = max(1, int(round(spacing / abs(np.diff(inside.y.to_numpy()[:2])[0]))))
         pick = inside.iloc[::step]
         rows.append(pick[["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(
-            drive=a.label, mu_err=(pick.mu_hi - pick.mu_lo) / (2 * Z95), phi_err=(pick.phi_hi - pick.phi_lo) / (2 * Z95)))
+            drive=a.label, mu_err=(pick.mu_hi - pick.mu_lo) / (2 * Z95), phi_err=(pick.phi_hi - pick.phi_lo) / (2 * Z95),
+            I_err=(pick.I_dem_hi - pick.I_dem_lo) / (2 * Z95)))
     return pd.concat(rows, ignore_index=True)
+
+
+#: z beyond which a drive's steady (mu, I) pair disagrees with the law, and the fraction of pairs beyond
+#: it that chance gives (two-sided normal): the verdict is "beyond errors" above twice that fraction
+LAW_TEST_Z, LAW_TEST_CHANCE = 2.0, 0.0455
+
+
+def law_test(pairs: pd.DataFrame, cal: Calibration) -> dict:
+    """The drives' steady (mu, I) pairs (I > I_MIN) against the calibration's law: residual mu - mu(I)
+    and z = residual / sqrt(s_pair^2 + s_law^2), s_pair its standard error (the steady window's band), s_law the
+    bootstrap spread of the law at that I; with a one-sentence verdict."""
+    sel = pairs[(pairs.I_dem > calibrate.I_MIN) & np.isfinite(pairs.mu)]
+    I = sel.I_dem.to_numpy()
+    law = mu_law(I, cal.mu_s, cal.mu_d, cal.I0_dem)
+    reps = np.array([mu_law(I, a, b, c) for a, b, c in
+                     zip(cal.replicates["mu_s"], cal.replicates["mu_d"], cal.replicates["I0_dem"])])
+    s_law = reps.std(axis=0, ddof=1) if len(reps) > 1 else np.zeros_like(I)
+    s_pair = np.nan_to_num(sel.mu_err.to_numpy())
+    resid = sel.mu.to_numpy() - law
+    z = resid / np.sqrt(s_pair**2 + s_law**2 + 1e-300)
+    out = {"n_pairs": int(len(I)), "mean_residual": float(resid.mean()), "rms_residual": float(np.sqrt(np.mean(resid**2))),
+           "fraction_beyond": float(np.mean(np.abs(z) > LAW_TEST_Z)), "z_threshold": LAW_TEST_Z,
+           "I_range": [float(I.min()), float(I.max())]}
+    side = "above" if out["mean_residual"] > 0 else "below"
+    out["verdict"] = (f"{out['n_pairs']} steady (mu, I) pairs of the drives (I in [{I.min():.2g}, {I.max():.2g}]) lie on "
+                      f"average {abs(out['mean_residual']):.3f} {side} the {cal.kind} law (rms {out['rms_residual']:.3f}); "
+                      f"{out['fraction_beyond']:.0%} differ by more than {LAW_TEST_Z:g} combined standard errors"
+                      + (" -- a disagreement beyond errors" if out["fraction_beyond"] > 2 * LAW_TEST_CHANCE else
+                         " -- consistent within errors"))
+    return out
 
 
 def delta_mu(a: DriveAnalysis, mu_s: float) -> np.ndarray:
@@ -164,34 +207,50 @@ def _predict(a: DriveAnalysis, material: Material, models) -> DriveComparison:
     return DriveComparison(a, scales, preds, "", dm)
 
 
-def fit_replicates(pairs: pd.DataFrame, phi: float, n: int = REPLICATES, seed: int = 0) -> pd.DataFrame:
-    """Joint samples of the in-drive fit: refits on pairs resampled with replacement (bootstrap);
-    phi is the bulk mean of each resample."""
-    rng = np.random.default_rng(seed)
-    rows = []
-    while len(rows) < n:
-        sample = pairs.iloc[rng.integers(0, len(pairs), len(pairs))]
-        try:
-            c = calibrate.fit(sample)
-        except (ValueError, RuntimeError):  # too few usable points, or no convergence
-            continue
-        rows.append({"mu_s": c.mu_s, "mu_d": c.mu_d, "I0": c.I0_dem, "phi": float(sample.phi.mean())})
-    return pd.DataFrame(rows)
+def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.DataFrame:
+    """The first ``n`` joint bootstrap samples (mu_s, mu_d, I0 in the DEM convention, phi) of a
+    calibration whose law is valid (mu_d > mu_s); ``phi`` the matching samples of the continuum's phi."""
+    r = pd.DataFrame({"mu_s": cal.replicates["mu_s"], "mu_d": cal.replicates["mu_d"], "I0": cal.replicates["I0_dem"],
+                      "phi": phi})
+    return r[(r.mu_d > r.mu_s) & (r.I0 > 0)].head(n).reset_index(drop=True)
 
 
-def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True) -> Comparison:
-    """Analyse every drive of ``run_dirs``, calibrate on their steady windows, predict each drive."""
+def check_grains(cal: Calibration, runs) -> None:
+    """Refuse a calibration of other grains than the runs' (one-line ValueError naming the difference)."""
+    for run in runs:
+        grains = json.loads((Path(run) / RUN_JSON).read_text())["config"]["grains"]
+        diff = {k: (cal.grains.get(k), v) for k, v in grains.items() if cal.grains.get(k) != v}
+        require(not diff, f"--calibration {cal.source}", f"a calibration of the grains of {run}",
+                "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
+
+
+def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
+          calibration: str | Path | None = None) -> Comparison:
+    """Analyse every drive of ``run_dirs``; take mu(I) and phi from ``calibration`` (calibration.json,
+    refused if its grains differ from the runs') or else fit them on the steady windows; predict each drive."""
     runs = tuple(Path(r) for r in run_dirs)
     resolved = [r.resolve() for r in runs]
     require(len(set(resolved)) == len(resolved), "RUN_DIR", "distinct run folders (one was given twice)",
             [str(r) for r in runs])
+    independent = None
+    if calibration is not None:
+        independent = calibrate.load(calibration)
+        check_grains(independent, runs)
     specs = [spec for run in runs for spec in drive_specs(run)]
     drives = [analyse_drive(spec, settings) for spec in tqdm(specs, desc="coarse-graining", disable=not progress)]
     pairs = steady_pairs(drives)
-    cal = calibrate.fit(pairs)
     phi = float(pairs.phi.mean())
-    material = cal.material(phi=phi)
-    replicates = fit_replicates(pairs, phi)
+    if independent is None:
+        cal = calibrate.fit(pairs, n_boot=REPLICATES)
+        source = "in-drive fit (not a blind test)"
+        material = cal.material(phi=phi)
+        replicates = replicates_of(cal, cal.replicates["phi_bulk"])
+    else:
+        # the continuum's constant phi is the calibration's phi(I -> 0) = phi_max: the bed below the layer is at rest
+        cal = independent
+        source = f"blind: independent plane-shear calibration {cal.source}"
+        material = cal.material()
+        replicates = replicates_of(cal, cal.replicates["phi_max"])
     fluidity = _fit_fluidity(drives, material)
     models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if fluidity else [])
     if fluidity:
@@ -204,8 +263,8 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True) 
     rows, edges, bands = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
                         delta_s, t0, {"ngf": fluidity.drive} if fluidity else {}, progress)
     card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges, bands)
-    return Comparison(runs, compared, pairs, cal, "in-drive fit (not a blind test)", replicates, material, phi,
-                      mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings)
+    return Comparison(runs, compared, pairs, cal, source, replicates, material, phi,
+                      mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings, law_test(pairs, cal))
 
 
 def _fit_fluidity(drives: list[DriveAnalysis], material: Material) -> FluidityFit | None:

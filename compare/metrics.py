@@ -124,6 +124,7 @@ def metrics(c: Comparison) -> dict:
         "scene_checks": c.scorecard.scene.to_dict("records"),
         "uncertainty": {"replicates": c.scorecard.replicates, "band_edge_stability": c.scorecard.edge_stability},
         "calibration": {**cal.as_dict(), "source": c.calibration_source},
+        "blind": c.blind, "calibration_test": c.law_test,
         "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
         "phi_bulk": c.phi_bulk, "mass_error": c.mass_error,
         "ngf": None if c.fluidity is None else {"A": c.fluidity.A, "A_err": c.fluidity.err, "ci95": c.fluidity.ci95,

@@ -12,13 +12,14 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from continuum.calibration import LINEAR_I_MAX, mu_law
 from continuum import ngf
 from continuum.scales import UNITS
 from continuum.steady import steady_mu
 from granstokes.page import page
 
 from .analysis import snapshot_times
-from .calibrate import mu_law
+from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
 from .scorecard import SIGMA_CONSISTENT, T90_WINDOW
@@ -168,6 +169,12 @@ def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
     return path
 
 
+def _law_band(cal, I, q=(2.5, 97.5)):
+    reps = np.array([mu_law(I, a, b, c) for a, b, c in
+                     zip(cal.replicates["mu_s"], cal.replicates["mu_d"], cal.replicates["I0_dem"])])
+    return np.percentile(reps, q, axis=0)
+
+
 def fluidity_figure(dc: DriveComparison, material, out: Path) -> Path:
     """The steady fluidity g = |du/dy|/mu against depth: the DEM's (coarse-grained), NGF's, and the local
     g_loc(mu, p) of the same stress (zero below delta_s)."""
@@ -194,26 +201,75 @@ def fluidity_figure(dc: DriveComparison, material, out: Path) -> Path:
 
 
 def calibration_figure(c: Comparison, out: Path) -> Path:
-    """The (mu, I) and (phi, I) pairs of the steady windows with their bands, and the law over their range."""
+    """mu(I) and phi(I): the law with its 95 % bootstrap band; blind comparison: the plane-shear points
+    it was measured on and the drives' steady pairs over it as a test (seed bands as error bars);
+    published values beside it.  In-drive fit: the pairs and the fit through them."""
     cal, pairs = c.calibration, c.pairs
-    fig = Figure(figsize=(11, 4.2), layout="constrained")
+    fig = Figure(figsize=(12, 4.6), layout="constrained")
     a, b = fig.subplots(1, 2)
-    for label, g in pairs.groupby("drive"):
-        a.errorbar(g.I_dem, g.mu, yerr=g.mu_err, fmt="o", ms=3, lw=0.8, label=label)
-        b.errorbar(g.I_dem, g.phi, yerr=g.phi_err, fmt="o", ms=3, lw=0.8, label=label)
-    used = pairs[pairs.I_dem > cal.I_min]
-    I = np.geomspace(used.I_dem.min(), used.I_dem.max(), 200)
+    lo_I = min(pairs.I_dem[pairs.I_dem > 0].min(), cal.points.I.min() if len(cal.points) else 1.0)
+    I = np.geomspace(max(lo_I, 1e-4), max(pairs.I_dem.max(), cal.points.I.max() if len(cal.points) else 0) * 1.5, 200)
+    what = "independent law (plane shear)" if c.blind else "fit on the drives (not a prediction)"
     a.plot(I, mu_law(I, cal.mu_s, cal.mu_d, cal.I0_dem), "k-",
-           label=f"fit: mu_s = {cal.mu_s:.3f}, mu_d = {cal.mu_d:.3f}, I0_dem = {cal.I0_dem:.3f}")
-    a.axvline(cal.I_min, color="0.6", ls=":", label="I_min (creep excluded)")
-    a.set(xscale="log", xlabel=FIELD_LABELS["I_dem"], ylabel="mu = tau/p", title=f"mu(I): {c.calibration_source}")
-    b.plot(I, cal.phi_max - cal.phi_slope * I, "k-", label=f"phi = {cal.phi_max:.3f} - {cal.phi_slope:.3f} I")
+           label=f"{what}: mu_s {cal.mu_s:.3f}, mu_d {cal.mu_d:.3f}, I0_dem {cal.I0_dem:.3f}")
+    a.fill_between(I, *_law_band(cal, I), color="0.6", alpha=0.35, label="95 % bootstrap band")
+    lin = I[I <= LINEAR_I_MAX]
+    a.plot(lin, cal.mu_1 + cal.b * lin, color="0.3", ls="--", lw=0.9, label=f"linear: {cal.mu_1:.3f} + {cal.b:.2f} I")
+    if c.blind:
+        pts = cal.points
+        a.errorbar(pts.I, pts.mu, xerr=pts.get("I_err"), yerr=pts.get("mu_err"), fmt="ks", ms=4, mfc="w",
+                   label="plane-shear points (per seed)")
+        b.errorbar(pts.I, pts.phi, xerr=pts.get("I_err"), yerr=pts.get("phi_err"), fmt="ks", ms=4, mfc="w",
+                   label="plane-shear points")
+    for k, (label, g) in enumerate(pairs.groupby("drive")):
+        a.errorbar(g.I_dem, g.mu, xerr=g.I_err, yerr=g.mu_err, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6,
+                   label=f"{label} steady pairs" + (" (test)" if c.blind else ""))
+        b.errorbar(g.I_dem, g.phi, yerr=g.phi_err, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6, label=label)
+    for k, pub in enumerate(x for x in PUBLISHED if x["dimension"] == c.drives[0].dem.spec.folders[0].dimension):
+        if "mu_1" in pub:
+            a.plot(lin, pub["mu_1"] + pub["b"] * lin, color=f"C{k + 5}", ls=":", lw=1.2,
+                   label=f"{pub['source'].split(',')[0]}: {pub['mu_1']:g} + {pub['b']:g} I")
+        else:
+            a.plot(I, mu_law(I, pub["mu_s"], pub["mu_d"], pub["I0"]), color=f"C{k + 5}", ls=":", lw=1.2,
+                   label=f"{pub['source'].split(',')[0]} (Jop form)")
+        if "phi_max" in pub:
+            b.plot(lin, pub["phi_max"] - pub["a"] * lin, color=f"C{k + 5}", ls=":", lw=1.2,
+                   label=f"{pub['source'].split(',')[0]}")
+    if cal.I_min is not None:
+        a.axvline(cal.I_min, color="0.6", ls=":", label="I_min (creep excluded from the fit)")
+    a.set(xscale="log", xlabel=FIELD_LABELS["I_dem"], ylabel="mu = tau/p",
+          title="mu(I): " + ("the drives as a blind test of the plane-shear law" if c.blind else "fit on the drives"))
+    b.plot(lin, cal.phi_max - cal.phi_slope * lin, "k-", label=f"phi = {cal.phi_max:.3f} - {cal.phi_slope:.3f} I")
     b.set(xscale="log", xlabel=FIELD_LABELS["I_dem"], ylabel="phi", title="phi(I)")
-    a.legend(fontsize=7)
-    b.legend(fontsize=7)
+    a.legend(fontsize=6)
+    b.legend(fontsize=6)
     path = out / "calibration.png"
     fig.savefig(path, dpi=100)
     return path
+
+
+def calibration_section(c: Comparison) -> str:
+    """The report's calibration section: source, kind, values with intervals, published values, the test."""
+    cal = c.calibration
+    ci = cal.ci95
+    names = (("mu_s", "mu_s"), ("mu_d", "mu_d"), ("I0 (DEM convention)", "I0_dem"), ("mu_1 in mu = mu_1 + b I", "mu_1"),
+             ("b", "b"), ("phi_max", "phi_max"), ("a in phi = phi_max - a I", "phi_slope"))
+    rows = [[name, fmt(getattr(cal, attr)), f"[{ci[attr][0]:.3g}, {ci[attr][1]:.3g}]"] for name, attr in names]
+    pubs = "".join(f"<li>{html.escape(p['source'])}: {html.escape(p['system'])}; "
+                   + html.escape(", ".join(f"{k} = {p[k]:g}" for k in ("mu_s", "mu_d", "I0", "mu_1", "b", "phi_max", "a")
+                                           if k in p)) + f" (verified: {html.escape(p['verified'])})</li>"
+                   for p in PUBLISHED)
+    head = ("<p><b>Blind comparison</b>: mu(I) and phi come from an independent plane-shear calibration of the "
+            f"same grains, <code>{html.escape(cal.source)}</code>; the drives' steady pairs are a test of it, "
+            "not a fit.</p>" if c.blind else
+            "<p><b>In-drive fit</b>: mu(I) is fitted on the drives' own steady windows, so the steady predictions "
+            "are close to a restatement of the fit; pass <code>--calibration DIR/calibration.json</code> "
+            "(<code>granstokes dem calibrate</code>) for a blind test.</p>")
+    return ("<h2>Calibration</h2>" + head + _table(["parameter", "value", "95 % interval (bootstrap)"], rows)
+            + f"<p>{len(cal.points)} points, rms residual of the Jop law {cal.rms_mu:.3f}.</p>"
+            f"<p>Test of the law by the drives: {html.escape(c.law_test['verdict'])}.</p>"
+            "<p>Published values (plane shear or rheometry; differences: friction mu_p, restitution and "
+            "polydispersity differ from ours, mu_p = 0.5 here):</p><ul>" + pubs + "</ul>")
 
 
 def sigma_figure(c: Comparison, out: Path) -> Path:
@@ -334,8 +390,10 @@ HOW_TO_READ = {
     "fluidity": "The steady fluidity g = |du/dy|/mu on a log scale: the DEM's from its coarse-grained profile, the NGF "
                 "model's, and the local law's g_loc, which vanishes below delta_s. A straight DEM line below the layer "
                 "is the exponential decay NGF predicts with length A d/sqrt(|mu - mu_s|).",
-    "calibration": "The steady (mu, I) and (phi, I) pairs, one per d of depth away from the walls, with their bands, and "
-                   "the fitted law over the range of the data.",
+    "calibration": "The mu(I) law with its 95 % bootstrap band and the linear form, the published values beside it "
+                   "(dotted). Blind comparison: the plane-shear points it was measured on (squares) and the drives' "
+                   "steady (mu, I) pairs, one per d of depth away from the walls, with their errors, as a test of the "
+                   "law; in-drive fit: the pairs and the fit through them.",
     "cost_noise": "What each grain-step buys: the relative standard error of each drive's steady response against the "
                   "DEM's work.",
 }
@@ -365,10 +423,6 @@ def write_report(c: Comparison, out_dir) -> dict:
     ch = c.checks
     ch.width.to_csv(out / "width_check.csv", index=False)
     ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False)
-    cal = c.calibration
-    cal_rows = [[name, fmt(getattr(cal, attr)), f"[{cal.ci95[attr][0]:.3g}, {cal.ci95[attr][1]:.3g}]"]
-                for name, attr in (("mu_s", "mu_s"), ("mu_d", "mu_d"), ("I0 (DEM convention)", "I0_dem"),
-                                   ("phi_max", "phi_max"), ("a in phi = phi_max - a I", "phi_slope"))]
     drive_rows = [[html.escape(label), d["kind"], fmt(d["imposed"]), html.escape(d["imposed_unit"]), str(d["seeds"]),
                    fmt(d["u_w_inf"]["dem"], d["u_w_inf"]["dem_err"]), fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]),
                    fmt(d["t_steady"]), str(d["frames"]), str(d["dropped_frames"])]
@@ -391,8 +445,7 @@ def write_report(c: Comparison, out_dir) -> dict:
         "<h2>Conclusions</h2><ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>",
         "<h2>The scene's own checks</h2>", scene_html(c),
         "<h2>Figures</h2>", figures,
-        "<h2>Calibration</h2>", _table(["parameter", "value", "95 % interval"], cal_rows),
-        f"<p>{cal.n_points} (mu, I) pairs with I_dem &gt; {cal.I_min:g}, rms residual {cal.rms_mu:.3f}.</p>",
+        calibration_section(c),
         "<h2>Drives</h2>", _table(["drive", "kind", "imposed", "unit", "seeds", "u_w_inf [sqrt(g d)]", "mu_w_inf",
                                    "t_steady [sqrt(d/g)]", "frames", "dropped frames"], drive_rows),
         "<h2>Definitions</h2>", _table(["name", "unit", "definition"],

@@ -2,6 +2,7 @@
 
     granstokes dem run CONFIG.toml --out DIR [--jobs 2] [--np 1] [--resume] [--launcher 'srun -n {np}']
     granstokes dem run --preset smoke|quick|paper --out DIR
+    granstokes dem calibrate (CONFIG.toml | --preset NAME) --out DIR [--jobs N] [--np N] [--resume]
 """
 from __future__ import annotations
 
@@ -31,6 +32,24 @@ def _cmd_run(args) -> int:
     return {"complete": 0, "interrupted": 130}.get(result.status, 1)
 
 
+def _cmd_calibrate(args) -> int:
+    from .calibrate import DEFAULT_JOBS, calibrate
+
+    try:
+        if (args.config is None) == (args.preset is None):
+            raise ValueError("give exactly one of CONFIG.toml or --preset")
+        cfg, text = config_mod.load(args.config) if args.config else config_mod.preset(args.preset)
+        result = calibrate(cfg, text, args.out, jobs=DEFAULT_JOBS if args.jobs is None else args.jobs, np=args.np,
+                           resume=args.resume, launcher=args.launcher, progress=not args.quiet,
+                           announce=lambda line: print(line, file=sys.stderr))
+    except (ValueError, OSError, LammpsNotFound) as exc:
+        print(f"granstokes dem calibrate: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"dem calibrate: {result.status}" + (f": {result.message}" if result.message else "")
+          + f" (see {result.out})", file=sys.stderr)
+    return {"complete": 0, "interrupted": 130}.get(result.status, 1)
+
+
 def register(subparsers) -> None:
     """Add the ``dem`` subcommand to the ``granstokes`` parser."""
     dem = subparsers.add_parser("dem", help="LAMMPS DEM scenes (plate over a granular bed)")
@@ -48,3 +67,16 @@ def register(subparsers) -> None:
                                       "mpich wheel's mpirun)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
+    c = sub.add_parser("calibrate", help="mu(I) of a config's grains by plane shear at controlled pressure",
+                       description="Calibrate mu(I) and phi(I) by homogeneous (Lees-Edwards) plane shear of the "
+                                   "config's grains at p = p_w; writes calibration.json and points.csv in --out.")
+    c.add_argument("config", nargs="?", help="TOML config file with a [calibration] table (see dem/config.py)")
+    c.add_argument("--preset", help=f"one of {list(config_mod.PRESETS)}")
+    c.add_argument("--out", required=True, help="calibration folder (must be new or empty unless --resume)")
+    c.add_argument("--jobs", type=int, help="points run concurrently (default 2: two single-rank processes "
+                                            "on 2 cores)")
+    c.add_argument("--np", type=int, default=1, help="MPI ranks per point (default 1: cells of ~100 grains)")
+    c.add_argument("--resume", action="store_true", help="continue an interrupted calibration in --out")
+    c.add_argument("--launcher", help="launcher template with {np} (default: the mpich wheel's mpirun)")
+    c.add_argument("--quiet", action="store_true", help="no progress bars")
+    c.set_defaults(func=_cmd_calibrate)

@@ -16,6 +16,8 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
              {name = "speed", kind = "speed", u_w = 5.0, duration = 20.0}]
     output = {plate = 0.02, thermo = 0.1, atoms = 1.0, contacts = 5.0, profiles = 0.5, restart = 2.0}
     prepare = {ke_per_grain = 1e-5}
+    # mu(I) calibration by plane shear of the same grains at p = p_w (``granstokes dem calibrate``)
+    calibration = {I_min = 1e-3, I_max = 0.5, points = 8, seeds = [1, 2], width = 10.0, strain = 5.0}
 
 Every key is optional except the drives; unknown keys are errors.
 """
@@ -35,6 +37,7 @@ from .contact import Contact
 MIN_WIDTH = 8.0  # d: narrower periodic boxes order the packing and correlate the plate with its image
 MIN_WIDTH_Z = 4.0
 MIN_DEPTH = 4.0
+MIN_CALIBRATION_STRAIN = 5.0  # issue 10: each calibration point is measured over at least this strain
 KAPPA_MIN = 1e4  # rigid limit: overlap under p_w d at most 1e-4 d
 
 
@@ -158,6 +161,44 @@ class Prepare:
 
 
 @dataclass(frozen=True)
+class Calibration:
+    """Plane-shear calibration of the config's grains (dem.calibrate) at the normal stress p = p_w, so
+    that the rigidity is the Stokes scene's kappa: ``points`` inertial numbers log-spaced in [I_min,
+    I_max] (DEM convention), each seed an independent cell of width ``width`` d (square in 2D, cubic in
+    3D), sheared ``strain_start`` (discarded) then ``strain`` (measured), sampled every ``sample``."""
+
+    I_min: float = 1e-2
+    I_max: float = 0.3
+    points: int = 4
+    seeds: tuple[int, ...] = (1,)
+    width: float = 12.0
+    strain_start: float = 1.0
+    strain: float = 5.0
+    strain_max: float | None = None
+    sample: float = 0.02
+    profile: float = 0.25
+
+    def __post_init__(self):
+        _positive("calibration.I_min", self.I_min)
+        require(finite(self.I_max) and self.I_min < self.I_max <= 1.0, "calibration.I_max",
+                f"in (I_min = {self.I_min:g}, 1] (dense flow)", self.I_max)
+        require(isinstance(self.points, int) and not isinstance(self.points, bool) and self.points >= 3,
+                "calibration.points", "an integer >= 3 (three fit parameters)", self.points)
+        require(len(self.seeds) >= 1 and all(isinstance(s, int) and 0 < s < 2**31 for s in self.seeds)
+                and len(set(self.seeds)) == len(self.seeds), "calibration.seeds",
+                "a list of distinct integers in [1, 2^31)", list(self.seeds))
+        _positive("calibration.width", self.width, MIN_WIDTH, strict=False)
+        _positive("calibration.strain_start", self.strain_start, strict=False)
+        _positive("calibration.strain", self.strain, MIN_CALIBRATION_STRAIN, strict=False)
+        if self.strain_max is not None:
+            require(finite(self.strain_max) and self.strain_max >= self.strain, "calibration.strain_max",
+                    f">= strain = {self.strain:g}", self.strain_max)
+        _positive("calibration.sample", self.sample)
+        require(finite(self.profile) and self.sample <= self.profile <= self.strain, "calibration.profile",
+                f"in [sample = {self.sample:g}, strain = {self.strain:g}]", self.profile)
+
+
+@dataclass(frozen=True)
 class Config:
     name: str
     drives: tuple[Drive, ...]
@@ -169,6 +210,7 @@ class Config:
     prepare: Prepare = field(default_factory=Prepare)
     seeds: tuple[int, ...] = (1,)
     dt: float | None = None
+    calibration: Calibration = field(default_factory=Calibration)
 
     def __post_init__(self):
         require(isinstance(self.name, str) and re.fullmatch(r"[A-Za-z0-9_.-]+", self.name) is not None,
@@ -212,12 +254,16 @@ class Config:
         return dataclasses.asdict(self)
 
 
-_TABLES = {"material": Material, "grains": Grains, "box": Box, "output": Output, "prepare": Prepare}
-_TOP = {"name", "seeds", "dt", "material", "grains", "box", "load", "drive", "output", "prepare"}
+_TABLES = {"material": Material, "grains": Grains, "box": Box, "output": Output, "prepare": Prepare,
+           "calibration": Calibration}
+_TOP = {"name", "seeds", "dt", "material", "grains", "box", "load", "drive", "output", "prepare", "calibration"}
 
 
 def _build(cls, table, where):
     require(isinstance(table, dict), where, "a table", table)
+    if "seeds" in table:  # TOML arrays -> the frozen dataclasses' tuples
+        require(isinstance(table["seeds"], list), f"{where}.seeds", "a list of integers", table["seeds"])
+        table = {**table, "seeds": tuple(table["seeds"])}
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(table) - known)
     require(not unknown, f"[{where}] keys", f"among {sorted(known)}", unknown)

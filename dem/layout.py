@@ -9,6 +9,14 @@ Run folder (``granstokes dem run``)::
     RUN/seed-S/DRIVE/restart/           drive.<step>.restart (latest kept)
     RUN/seed-S/DRIVE/segments/NNN/      raw LAMMPS output of each start/resume (removed once complete)
 
+Calibration folder (``granstokes dem calibrate``)::
+
+    DIR/config.toml                     the config as given (presets: the preset text)
+    DIR/calibration.json                the fitted mu(I), phi(I), intervals, bootstrap replicates, grains, provenance
+    DIR/points.csv                      one row per steady point and seed (``POINT_COLUMNS``)
+    DIR/state.json                      status of every point and seed, messages, timings
+    DIR/I-K/seed-S/                     in.lammps, log.lammps, series.csv (``SHEAR_SERIES_COLUMNS``), profile.txt
+
 Atom types: ``BED`` grains (the coarse-grained material), ``BASE`` (frozen rough base), ``PLATE``
 (one rigid body).  Dump columns: ``ATOM_COLUMNS`` (atoms.dump, sorted by id) and ``CONTACT_COLUMNS``
 (contacts.dump: every pair closer than r_1 + r_2; (dx, dy, dz) = x_1 - x_2, normal force on grain 1 =
@@ -31,12 +39,17 @@ RUN_JSON, CONFIG_TOML = "run.json", "config.toml"
 PREPARE, PREPARED_RESTART, GRAINS_CSV, GRAINS_DUMP = "prepare", "prepared.restart", "grains.csv", "grains.dump"
 PLATE_CSV, PROFILES_CSV, ATOMS, CONTACTS, LOG = "plate.csv", "profiles.csv", "atoms.dump", "contacts.dump", "log.lammps"
 SEGMENTS, RESTART_DIR = "segments", "restart"
+CALIBRATION_JSON, POINTS_CSV, CALIBRATION_STATE = "calibration.json", "points.csv", "state.json"
+SHEAR_SERIES_CSV, SHEAR_PROFILE_TXT, SHEAR_IN = "series.csv", "profile.txt", "in.lammps"
 
 # --- columns -------------------------------------------------------------------------------------
 PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y", "u_c", "n_c")
 ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "radius")
 CONTACT_COLUMNS = ("id1", "id2", "dist", "dx", "dy", "dz", "fn", "ft_x", "ft_y", "ft_z")
 GRAIN_COLUMNS = ("id", "type", "radius", "mass")
+#: calibration: the issue-10 contract of points.csv, and a point's time series (stresses compressive positive)
+POINT_COLUMNS = ("I", "I_err", "mu", "mu_err", "phi", "phi_err", "p", "strain", "seed")
+SHEAR_SERIES_COLUMNS = ("step", "t", "lx", "ly", "xy", "p_xx", "p_yy", "p_xy", "phi", "T")
 
 #: profile bin height in d (LAMMPS in-run chunk averages, profiles.csv)
 PROFILE_BIN = 1.0
@@ -52,6 +65,11 @@ def drive_dir(run: Path, seed: int, drive: str) -> Path:
 
 def prepare_dir(run: Path, seed: int) -> Path:
     return seed_dir(run, seed) / PREPARE
+
+
+def point_dir(folder: Path, index: int, seed: int) -> Path:
+    """Folder of calibration point ``index`` (0-based, increasing I) and seed."""
+    return Path(folder) / f"I-{index}" / f"seed-{seed}"
 
 
 def stage_key(seed: int, drive: str | None = None) -> str:

@@ -1,6 +1,7 @@
 """``granstokes demo`` (``make demo``): the continuum report, the quick DEM preset (imposed stress and
-imposed speed) and the smoke preset (a second, smaller scene for the cost-vs-noise chart), the
-comparison report over both, and one index page linking them.  Metrics at the top level come from the
+imposed speed) and the smoke preset (a second, smaller scene for the cost-vs-noise chart), the quick
+preset's independent mu(I) calibration by plane shear (``granstokes dem calibrate``, the same grains), the
+blind comparison report over both scenes (``compare --calibration``), and one index page linking them.  Metrics at the top level come from the
 quick preset's imposed-stress drive."""
 from __future__ import annotations
 
@@ -14,6 +15,8 @@ from compare.comparison import build
 from compare.report import conclusions, scorecard_html, slug, write_report
 from continuum.paper.report import write_continuum_report
 from dem import config as dem_config
+from dem import layout
+from dem.calibrate import calibrate as dem_calibrate
 from dem.runner import run as dem_run
 
 from .page import page
@@ -34,6 +37,19 @@ def _dem(preset: str, run_dir: Path) -> Path:
     return run_dir
 
 
+def _calibration(preset: str, folder: Path) -> Path:
+    """Calibrate a preset's grains into folder (resuming or skipping as ``_dem``); its calibration.json."""
+    state = folder / layout.CALIBRATION_STATE
+    status = json.loads(state.read_text()).get("status") if state.exists() else None
+    if status != "complete":
+        cfg, text = dem_config.preset(preset)
+        result = dem_calibrate(cfg, text, folder, resume=status is not None)
+        if result.status != "complete":
+            raise RuntimeError(f"calibration of {preset} did not complete: {result.status} {result.message} "
+                               f"(see {state}); rerun make demo to resume it")
+    return folder / layout.CALIBRATION_JSON
+
+
 def _stage(name: str, clock: dict, action):
     print(f"demo: {name} ...", file=sys.stderr, flush=True)
     start = time.perf_counter()
@@ -43,14 +59,16 @@ def _stage(name: str, clock: dict, action):
     return result
 
 
-def run_demo(out_dir, presets: tuple[str, ...] = ("quick", "smoke")) -> Path:
+def run_demo(out_dir, presets: tuple[str, ...] = ("quick", "smoke"), calibrated: str = "quick") -> Path:
     out = output_dir(out_dir, "--out")
     out.mkdir(parents=True, exist_ok=True)
     clock = {}
     _stage("continuum report (the paper's figures)", clock, lambda: write_continuum_report(out / "continuum"))
     run_dirs = [_stage(f"DEM preset {p}", clock, lambda p=p: _dem(p, out / f"dem-{p}")) for p in presets]
-    comparison = _stage("comparison (coarse-graining, calibration, predictions, uncertainty)", clock,
-                        lambda: build(run_dirs))
+    calibration = _stage(f"mu(I) calibration of the {calibrated} grains by plane shear", clock,
+                         lambda: _calibration(calibrated, out / f"calibration-{calibrated}"))
+    comparison = _stage("blind comparison (coarse-graining, predictions from the calibration, uncertainty)", clock,
+                        lambda: build(run_dirs, calibration=calibration))
     with staged(out / "compare") as work:
         write_report(comparison, work)
     return write_index(comparison, out, presets, clock)

@@ -5,7 +5,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from compare.calibrate import fit, mu_law
+from compare.calibrate import fit, load
+from compare.comparison import check_grains
+from continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
 from compare.models import depth_at_fraction
 from compare.plate import autocorrelation_time, block_estimate, friction, power_law, pooled, steady_state
 from granstokes.cli import main as granstokes_main
@@ -17,13 +19,65 @@ def test_calibration_recovers_a_known_law_within_its_interval():
     truth = (0.26, 0.62, 0.28)
     mu = mu_law(I, *truth) + rng.normal(0, 0.01, I.size)
     phi = 0.82 - 0.3 * I + rng.normal(0, 0.002, I.size)
-    cal = fit(pd.DataFrame({"I_dem": I, "mu": mu, "phi": phi}))
+    cal = fit(pd.DataFrame({"I_dem": I, "mu": mu, "phi": phi}), n_boot=200)
+    assert cal.kind == IN_DRIVE and not cal.is_prediction
     for name, value in zip(("mu_s", "mu_d", "I0_dem"), truth):
         lo, hi = cal.ci95[name]
         assert lo < value < hi and hi - lo < 0.3 * value
+        assert len(cal.replicates[name]) >= 190
     assert cal.phi_max == pytest.approx(0.82, abs=0.002) and cal.phi_slope == pytest.approx(0.3, abs=0.02)
     assert cal.rms_mu == pytest.approx(0.01, rel=0.15)
     assert cal.I0_paper == pytest.approx(cal.I0_dem / 2)
+
+
+def _synthetic_blocks(truth, seeds=(1, 2), n_blocks=12, noise=0.01, seed=3):
+    """Block means of a plane-shear calibration that follows the Jop law ``truth`` exactly (p = 20)."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for k, I in enumerate(np.geomspace(1e-3, 1.0, 10)):
+        for s in seeds:
+            for b in range(n_blocks):
+                p = 20 * (1 + rng.normal(0, 0.01))
+                mu = mu_law(I, *truth) + rng.normal(0, noise)
+                rows.append({"point": k, "seed": s, "block": b, "p": p, "tau": mu * p,
+                             "phi": 0.81 - 0.25 * I + rng.normal(0, 0.002), "rate": I * np.sqrt(p)})
+    return pd.DataFrame(rows)
+
+
+def test_plane_shear_bootstrap_intervals_cover_the_truth_and_shrink_with_data():
+    """Seeds-and-blocks bootstrap: the 95 % intervals contain the law the blocks were drawn from, and
+    four times the blocks narrow them by about two (the statistical error, not a model floor)."""
+    truth = (0.27, 0.62, 0.3)
+    cal = fit_blocks(_synthetic_blocks(truth), "synthetic", n_boot=200)
+    big = fit_blocks(_synthetic_blocks(truth, n_blocks=48), "synthetic", n_boot=200)
+    assert cal.kind == PLANE_SHEAR and cal.is_prediction
+    for name, value in zip(("mu_s", "mu_d", "I0_dem"), truth):
+        lo, hi = cal.ci95[name]
+        assert lo < value < hi
+        width = hi - lo
+        assert 0.3 < (big.ci95[name][1] - big.ci95[name][0]) / width < 0.75
+    assert cal.points.mu_err.iloc[0] == pytest.approx(0.01 / np.sqrt(24), rel=0.4)
+    assert cal.phi_max == pytest.approx(0.81, abs=0.002) and cal.phi_slope == pytest.approx(0.25, abs=0.03)
+
+
+def test_a_calibration_of_other_grains_is_refused(tmp_path):
+    """compare --calibration refuses, in one line naming the difference, a calibration whose grain table
+    is not the runs'."""
+    cal = fit_blocks(_synthetic_blocks((0.27, 0.62, 0.3)), "synthetic", n_boot=20)
+    doc = {**cal.contract(), "grains": {"dimension": 2, "mu_p": 0.5, "polydispersity": 0.2}, "provenance": {}}
+    (tmp_path / "calibration.json").write_text(json.dumps(doc))
+    loaded = load(tmp_path / "calibration.json")
+    assert loaded.mu_s == pytest.approx(cal.mu_s) and loaded.is_prediction
+    assert np.allclose(loaded.replicates["I0_dem"], cal.replicates["I0_dem"])
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "run.json").write_text(json.dumps({"config": {"grains": {"dimension": 2, "mu_p": 0.4,
+                                                                    "polydispersity": 0.2}}}))
+    with pytest.raises(ValueError, match=r"mu_p calibrated 0.5 vs run 0.4") as err:
+        check_grains(loaded, [run])
+    assert "\n" not in str(err.value)
+    (run / "run.json").write_text(json.dumps({"config": {"grains": doc["grains"]}}))
+    check_grains(loaded, [run])
 
 
 def test_too_few_points_are_refused():
@@ -105,6 +159,27 @@ def test_compare_report_on_a_smoke_run(smoke_run, tmp_path, capsys):
     assert drive["pressure_slope"] == pytest.approx(m["phi_bulk"], rel=0.15)
     assert drive["u_w_inf"]["dem"] > 0 and drive["steady_local"]["u_w"] > 0
     assert json.loads((tmp_path / "report" / "metrics.json").read_text())["mu_s"] == m["mu_s"]
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert not m["blind"] and "fit" in m["calibration"]["kind"] and "In-drive fit" in page
+    # blind: mu(I) and phi from a calibration.json of the same grains (here a synthetic one)
+    truth = (0.28, 0.62, 0.3)
+    cal = fit_blocks(_synthetic_blocks(truth), "synthetic", n_boot=50)
+    grains = json.loads((smoke_run / "run.json").read_text())["config"]["grains"]
+    (tmp_path / "cal").mkdir()
+    (tmp_path / "cal" / "calibration.json").write_text(json.dumps({**cal.contract(), "grains": grains}))
+    capsys.readouterr()
+    assert granstokes_main(["compare", str(smoke_run), "--calibration", str(tmp_path / "cal" / "calibration.json"),
+                            "--out", str(tmp_path / "blind"), "--json"]) == 0
+    b = json.loads(capsys.readouterr().out)
+    assert b["blind"] and b["mu_s"] == pytest.approx(cal.mu_s) and b["I0"] == pytest.approx(cal.I0_dem)
+    assert b["calibration"]["source"].endswith("calibration.json") and b["calibration_test"]["n_pairs"] >= 3
+    assert "Blind comparison" in (tmp_path / "blind" / "index.html").read_text()
+    (tmp_path / "cal" / "calibration.json").write_text(json.dumps({**cal.contract(),
+                                                                    "grains": {**grains, "mu_p": 0.3}}))
+    assert granstokes_main(["compare", str(smoke_run), "--calibration", str(tmp_path / "cal" / "calibration.json"),
+                            "--out", str(tmp_path / "refused")]) == 2
+    assert "mu_p calibrated 0.3 vs run 0.5" in capsys.readouterr().err
+    assert not (tmp_path / "refused").exists()
 
 
 def test_compare_refuses_a_folder_that_is_not_a_run(tmp_path, capsys):

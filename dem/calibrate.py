@@ -1,0 +1,351 @@
+"""``granstokes dem calibrate``: mu(I) and phi(I) of a config's grains by homogeneous plane shear.
+
+Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: dem.shear):
+
+* the grains are the config's own ``[grains]`` table with the contact law and stiffness derived as
+  for the Stokes scene (dem.contact, k_n from kappa and p_w), sheared at the normal stress p = p_w
+  (so that the rigidity number is the scene's kappa) with the scene's time step;
+* ``points`` inertial numbers log-spaced in [I_min, I_max]; I in the DEM convention,
+  I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy| (d = rho_p = 1);
+* each point and seed: an independent cell (insertion with that seed), sheared ``strain_start``
+  (discarded), then at least ``strain`` more, sampled every ``sample`` of strain; above
+  STRAIN_REFERENCE_I the measured strain grows as I (constant cost per point) up to ``strain_max``:
+  those points cost little and the fast end of the law (mu_d, I0) needs their precision;
+* errors: blocks of BLOCK_TAU integrated autocorrelation times (the longer of mu's and phi's; at least
+  MIN_BLOCKS blocks), and independent seeds (continuum.calibration bootstraps over both);
+* checks of every point and seed (all must pass for it to enter the fit): measured strain >= strain,
+  no drift (first and second halves of the blocks agree within DRIFT_Z standard errors in mu and phi),
+  <P_yy> = p within PRESSURE_Z standard errors, velocity profile linear (largest deviation from the
+  linear fit below HOMOGENEITY_TOL of the velocity difference across the cell).
+
+Output (dem.layout): DIR/calibration.json, DIR/points.csv, DIR/state.json, DIR/I-K/seed-S/.
+Points run concurrently (``jobs`` LAMMPS subprocesses, longest first); ``resume`` reruns the
+unfinished ones (a point restarts from its insertion: points are short).
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import shutil
+import signal
+import threading
+import time
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from continuum import calibration as fitting
+from granstokes.provenance import provenance
+from granstokes.validate import require
+
+from . import lammps_env, layout
+from .config import Config, parse
+from .runner import Interrupted, RunError, _Lammps, _write_json
+from .shear import SQUEEZE_TIME, ShearPoint, mean_grain_volume, shear_script
+from .sizing import PACKING
+
+BLOCK_TAU = 3.0
+MIN_BLOCKS = 6
+DRIFT_Z = 3.0
+PRESSURE_Z = 3.0
+HOMOGENEITY_TOL = 0.1
+#: the measured window is lengthened by this fraction so that the box-measured strain (L_y moves
+#: under the pressure control) still reaches ``strain``
+STRAIN_MARGIN = 0.03
+STRAIN_REFERENCE_I = 0.05
+#: default concurrent points: two single-rank LAMMPS processes on the 2-core machine (README)
+DEFAULT_JOBS = 2
+
+
+@dataclass(frozen=True)
+class CalibrationPlan:
+    """Sizes and step counts of a calibration, derived once from a validated Config."""
+
+    config: Config
+    dt: float
+    n_grains: int
+    points: tuple[ShearPoint, ...]
+
+    @property
+    def seeds(self) -> tuple[int, ...]:
+        return self.config.calibration.seeds
+
+    def tasks(self) -> list[tuple[int, int]]:
+        """(point index, seed), longest first (smallest I), so that concurrent jobs finish together."""
+        order = sorted(range(len(self.points)), key=lambda k: -self.steps(k))
+        return [(k, s) for k in order for s in self.seeds]
+
+    def steps(self, k: int) -> int:
+        p = self.points[k]
+        return round(SQUEEZE_TIME / self.dt) + p.start_steps + p.measure_steps
+
+    def as_dict(self) -> dict:
+        cal = self.config.calibration
+        return {"p": self.config.p_w, "dt": self.dt, "n_grains": self.n_grains, "width": cal.width,
+                "dimension": self.config.grains.dimension, "seeds": list(cal.seeds),
+                "strain_start": cal.strain_start, "strain": cal.strain, "sample_strain": cal.sample,
+                "strain_max": cal.strain_max,
+                "points": [{"I": p.I, "rate": p.rate, "start_steps": p.start_steps, "measure_steps": p.measure_steps,
+                            "sample_steps": p.sample} for p in self.points],
+                "total_steps": sum(self.steps(k) for k in range(len(self.points))) * len(cal.seeds),
+                "block": f"{BLOCK_TAU:g} integrated autocorrelation times (the longer of mu's and phi's), at least "
+                         f"{MIN_BLOCKS} blocks",
+                "checks": f"strain >= {cal.strain:g}; drift of mu and phi between halves < {DRIFT_Z:g} s.e.; "
+                          f"|<P_yy> - p| < {PRESSURE_Z:g} s.e.; velocity profile within {HOMOGENEITY_TOL:g} of linear",
+                "I_convention": "dem: I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy|"}
+
+
+def plan_calibration(cfg: Config) -> CalibrationPlan:
+    cal, dim, dt = cfg.calibration, cfg.grains.dimension, cfg.time_step
+    lz = cal.width if dim == 3 else 1.0
+    n = round(PACKING[dim] * cal.width**2 * lz / mean_grain_volume(cfg))
+    points = []
+    strain_max = cal.strain if cal.strain_max is None else cal.strain_max
+    for I in np.geomspace(cal.I_min, cal.I_max, cal.points):
+        strain = min(strain_max, max(cal.strain, cal.strain * I / STRAIN_REFERENCE_I))
+        rate = float(I) * math.sqrt(cfg.p_w)  # d = rho_p = 1
+        per_strain = 1.0 / (rate * dt)
+        sample = max(1, round(cal.sample * per_strain))
+        profile = max(1, round(cal.profile / cal.sample)) * sample
+        measure = math.ceil(strain * (1 + STRAIN_MARGIN) * per_strain / profile) * profile
+        points.append(ShearPoint(float(I), rate, dt, math.ceil(cal.strain_start * per_strain), measure, sample, profile))
+    return CalibrationPlan(cfg, dt, n, tuple(points))
+
+
+# --- analysis of one point and seed ------------------------------------------------------------------
+def integrated_time(x: np.ndarray) -> float:
+    """Integrated autocorrelation time (samples) 1 + 2 sum rho_k, summed while rho_k > 0."""
+    x = np.asarray(x, float) - np.mean(x)
+    n = len(x)
+    acf = np.correlate(x, x, "full")[n - 1:] / (np.arange(n, 0, -1) * max(np.var(x), 1e-300))
+    stop = np.argmax(acf[1:] <= 0) + 1 if np.any(acf[1:] <= 0) else n
+    return float(1 + 2 * acf[1:stop].sum())
+
+
+def _samples(folder: Path) -> pd.DataFrame:
+    """Per-sample tau, p, phi and the shear rate from the box (xy unwrapped across flips)."""
+    s = pd.read_csv(folder / layout.SHEAR_SERIES_CSV)
+    dxy = np.diff(s.xy.to_numpy())
+    dxy -= s.lx.to_numpy()[1:] * np.round(dxy / s.lx.to_numpy()[1:])
+    ly = 0.5 * (s.ly.to_numpy()[1:] + s.ly.to_numpy()[:-1])
+    out = s.iloc[1:].reset_index(drop=True)
+    return pd.DataFrame({"strain": np.cumsum(dxy / ly), "rate": dxy / ly / np.diff(s.t.to_numpy()),
+                         "tau": -out.p_xy, "p": out.p_yy, "phi": out.phi})
+
+
+def _profile_deviation(folder: Path, rate: float, ly: float) -> float:
+    """Largest |u - linear fit| of the window-averaged velocity profile over rate * L_y."""
+    rows = [line.split() for line in (folder / layout.SHEAR_PROFILE_TXT).read_text().splitlines()
+            if not line.startswith("#") and len(line.split()) == 4]
+    prof = pd.DataFrame(rows, columns=["chunk", "y", "count", "vx"]).astype(float).groupby("y").vx.mean()
+    y, u = prof.index.to_numpy() * ly, prof.to_numpy()
+    fit = np.polyval(np.polyfit(y, u, 1), y)
+    return float(np.max(np.abs(u - fit)) / (rate * ly))
+
+
+def analyse(folder: Path, cfg: Config, point: ShearPoint, seed: int) -> tuple[dict, pd.DataFrame, dict]:
+    """(points.csv row, block means, checks) of one point and seed."""
+    s = _samples(folder)
+    # the slowest of the measured quantities sets the block length (phi relaxes more slowly than mu)
+    tau_int = max(integrated_time((s.tau / s.p).to_numpy()), integrated_time(s.phi.to_numpy()))
+    length = max(1, min(math.ceil(BLOCK_TAU * tau_int), len(s) // MIN_BLOCKS))
+    nb = len(s) // length
+    blocks = (s.iloc[:nb * length].groupby(np.arange(nb * length) // length)[["tau", "p", "phi", "rate"]].mean()
+              .reset_index(names="block"))
+    I_b, mu_b = blocks.rate / np.sqrt(blocks.p), blocks.tau / blocks.p
+
+    def mean_err(x):
+        return float(np.mean(x)), float(np.std(x, ddof=1) / math.sqrt(len(x)))
+
+    (I, I_err), (mu, mu_err), (phi, phi_err), (p, p_err) = (mean_err(x) for x in (I_b, mu_b, blocks.phi, blocks.p))
+    half = nb // 2
+    drift = {}
+    for name, x in (("mu", mu_b), ("phi", blocks.phi)):
+        (a, ea), (b, eb) = mean_err(x[:half]), mean_err(x[half:])
+        drift[name] = float(abs(a - b) / math.hypot(ea, eb))
+    strain = float(s.strain.iloc[-1])
+    ly = float(pd.read_csv(folder / layout.SHEAR_SERIES_CSV).ly.mean())
+    deviation = _profile_deviation(folder, float(s.rate.mean()), ly)
+    checks = {"strain": strain, "strain_ok": strain >= cfg.calibration.strain,
+              "drift_z": drift, "drift_ok": max(drift.values()) < DRIFT_Z,
+              "p_mean": p, "p_err": p_err, "pressure_ok": abs(p - cfg.p_w) < PRESSURE_Z * p_err,
+              "profile_deviation": deviation, "homogeneous_ok": deviation < HOMOGENEITY_TOL,
+              "tau_int_strain": tau_int * cfg.calibration.sample, "blocks": nb,
+              "block_strain": length * cfg.calibration.sample}
+    checks["passed"] = all(checks[k] for k in ("strain_ok", "drift_ok", "pressure_ok", "homogeneous_ok"))
+    row = {"I": I, "I_err": I_err, "mu": mu, "mu_err": mu_err, "phi": phi, "phi_err": phi_err, "p": p,
+           "strain": strain, "seed": seed}
+    return row, blocks.assign(seed=seed), checks
+
+
+# --- running -----------------------------------------------------------------------------------------
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+class _Calibrator:
+    def __init__(self, plan: CalibrationPlan, out: Path, state: dict, lmp: _Lammps):
+        self.plan, self.out, self.state, self.lmp = plan, out, state, lmp
+        self.lock = threading.Lock()
+        self.slots = list(range(64))
+
+    def save(self) -> None:
+        with self.lock:
+            _write_json(self.out / layout.CALIBRATION_STATE, self.state)
+
+    def task(self, k: int, seed: int) -> None:
+        key = f"I-{k}/seed-{seed}"
+        d = layout.point_dir(self.out, k, seed)
+        old = self.state["points"].get(key, {})
+        if old.get("status") == "complete":  # re-analysed from its stored series: the fit uses the current analysis
+            row, blocks, checks = analyse(d, self.plan.config, self.plan.points[k], seed)
+            blocks.assign(point=k).to_csv(d / "blocks.csv", index=False)
+            with self.lock:
+                self.state["points"][key] = {**old, "row": row, "checks": checks}
+            return
+        if d.exists():
+            shutil.rmtree(d)
+        d.mkdir(parents=True)
+        point = self.plan.points[k]
+        (d / layout.SHEAR_IN).write_text(shear_script(self.plan.config, point, self.plan.n_grains, seed))
+        with self.lock:
+            slot = self.slots.pop(0)
+            self.state["points"][key] = {"status": "running", "I_target": point.I, "started": _now()}
+        self.save()
+        entry = {"status": "interrupted", "I_target": point.I, "message": "continue with --resume"}
+        try:
+            info = self.lmp.run(layout.SHEAR_IN, d, self.plan, self.plan.steps(k), 0,
+                                f"I={point.I:.3g} seed {seed}", position=slot)
+            row, blocks, checks = analyse(d, self.plan.config, point, seed)
+            blocks.assign(point=k).to_csv(d / "blocks.csv", index=False)
+            entry = {"status": "complete", "I_target": point.I, "row": row, "checks": checks,
+                     "wall_time": info["wall_time"], "steps": info["last_step"]}
+        except RunError as exc:
+            entry = {"status": "failed", "I_target": point.I, "message": str(exc)}
+            raise
+        finally:
+            with self.lock:
+                self.slots.insert(0, slot)
+                self.state["points"][key] = entry
+            self.save()
+
+    def execute(self, jobs: int) -> None:
+        pool = ThreadPoolExecutor(max_workers=jobs)
+        futures = [pool.submit(self.task, k, s) for k, s in self.plan.tasks()]
+        try:
+            done, _ = wait(futures, return_when=FIRST_EXCEPTION)
+            for f in done:
+                f.result()
+        except BaseException:
+            for f in futures:
+                f.cancel()
+            self.lmp.stop_all()
+            raise
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Calibration:
+    rows, blocks, excluded = [], [], []
+    for k, seed in sorted(plan.tasks()):
+        entry = state["points"][f"I-{k}/seed-{seed}"]
+        if entry["checks"]["passed"]:
+            rows.append({**entry["row"], "point": k})
+            blocks.append(pd.read_csv(layout.point_dir(out, k, seed) / "blocks.csv"))
+        else:
+            excluded.append(f"I-{k}/seed-{seed}")
+    cal = fitting.fit_blocks(pd.concat(blocks, ignore_index=True), str(out / layout.CALIBRATION_JSON))
+    points = pd.DataFrame(rows).sort_values(["point", "seed"])[list(layout.POINT_COLUMNS)]
+    points.to_csv(out / layout.POINTS_CSV, index=False)
+    wall = sum(e.get("wall_time", 0.0) for e in state["points"].values())
+    doc = {**cal.contract(), "grains": plan.config.as_dict()["grains"],
+           "provenance": {**state["provenance"], "seeds": list(plan.seeds),
+                          "analysed_and_fitted_by": provenance()["git"]},
+           "p": plan.config.p_w, "rms_mu": cal.rms_mu,
+           "points": cal.points.assign(n_seeds=[len(plan.seeds)] * len(cal.points)).to_dict("list"),
+           "excluded": excluded, "protocol": plan.as_dict(),
+           "cost": {"lammps_cpu_seconds": wall, "grain_steps": plan.n_grains * plan.as_dict()["total_steps"]},
+           "law": cal.as_dict()["law"]}
+    _write_json(out / layout.CALIBRATION_JSON, doc)
+    return cal
+
+
+@dataclass(frozen=True)
+class CalibrateResult:
+    out: Path
+    status: str
+    message: str
+    calibration: fitting.Calibration | None
+
+
+def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS, np: int = 1,
+              resume: bool = False, launcher: str | None = None, progress: bool = True,
+              announce=None) -> CalibrateResult:
+    """Run (or with ``resume`` continue: unfinished points rerun, finished ones re-analysed, then the
+    fit) the calibration of ``cfg`` into ``out``; everything is validated before the folder is touched
+    (ValueError / LammpsNotFound, nothing written); ``announce(line)`` then receives a summary."""
+    require(isinstance(jobs, int) and not isinstance(jobs, bool) and jobs >= 1, "--jobs", "an integer >= 1", jobs)
+    require(isinstance(np, int) and not isinstance(np, bool) and np >= 1, "--np", "an integer >= 1", np)
+    require(launcher is None or "{np}" in launcher, "--launcher", "a command template containing {np}", launcher)
+    out = Path(out)
+    plan = plan_calibration(cfg)
+    lammps_env.lmp_binary(), lammps_env.mpirun()
+    state_path = out / layout.CALIBRATION_STATE
+    if resume:
+        require(state_path.exists(), "--resume", f"an existing calibration folder with {layout.CALIBRATION_STATE}",
+                str(out))
+        stored = parse((out / layout.CONFIG_TOML).read_text())
+        require(stored.as_dict() == cfg.as_dict(), "--resume", f"the config stored in {out / layout.CONFIG_TOML}",
+                "a different config")
+        state = json.loads(state_path.read_text())
+        state.setdefault("resumes", []).append(_now())
+    else:
+        require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
+                str(out))
+        state = {"name": cfg.name, "status": "running", "message": "", "plan": plan.as_dict(),
+                 "provenance": {**provenance(), **lammps_env.lammps_info(), "np": np, "jobs": jobs},
+                 "points": {}, "started": _now()}
+        out.mkdir(parents=True, exist_ok=True)
+        (out / layout.CONFIG_TOML).write_text(text)
+    if announce is not None:
+        c = cfg.calibration
+        announce(f"dem calibrate: '{cfg.name}' grains, {len(plan.points)} inertial numbers in [{c.I_min:g}, "
+                 f"{c.I_max:g}] x {len(c.seeds)} seed(s), {plan.n_grains} grains at p = {cfg.p_w:g}, "
+                 f"{plan.as_dict()['total_steps']:.3g} steps -> {out}")
+    state["status"], state["message"] = "running", ""
+    runner = _Calibrator(plan, out, state, _Lammps(np, launcher, progress))
+    runner.save()
+    in_main = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGTERM)
+    if in_main:
+        signal.signal(signal.SIGTERM, _raise_interrupted)
+    t0 = time.monotonic()
+    cal = None
+    try:
+        runner.execute(jobs)
+        cal = _fit_and_write(plan, out, state)
+        state["status"] = "complete"
+        n_out = sum(not e["checks"]["passed"] for e in state["points"].values())
+        state["message"] = (f"mu_s = {cal.mu_s:.4g}, mu_d = {cal.mu_d:.4g}, I0 = {cal.I0_dem:.4g}"
+                            + (f"; {n_out} point(s) failed a check and were left out" if n_out else ""))
+    except RunError as exc:
+        state["status"], state["message"] = "failed", str(exc)
+    except (KeyboardInterrupt, Interrupted):
+        state["status"], state["message"] = "interrupted", "interrupted by SIGINT/SIGTERM; continue with --resume"
+    except ValueError as exc:  # too few steady points for the fit
+        state["status"], state["message"] = "failed", f"fit: {exc}"
+    finally:
+        if in_main:
+            signal.signal(signal.SIGTERM, previous)
+        state["finished"] = _now()
+        state["wall_time_this_invocation"] = time.monotonic() - t0
+        runner.save()
+    return CalibrateResult(out, state["status"], state["message"], cal)
+
+
+def _raise_interrupted(signum, frame):
+    raise Interrupted(f"received signal {signum}")
