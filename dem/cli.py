@@ -6,12 +6,13 @@
 """
 from __future__ import annotations
 
+import os
+import signal
 import sys
 
 from . import config as config_mod
 from .lammps_env import LammpsNotFound
-from .runner import DEFAULT_JOBS, DEFAULT_NP, run
-from .sizing import plan
+from .runner import DEFAULT_JOBS, DEFAULT_NP, check_request, run
 
 
 def _cmd_run(args) -> int:
@@ -19,17 +20,28 @@ def _cmd_run(args) -> int:
         if (args.config is None) == (args.preset is None):
             raise ValueError("give exactly one of CONFIG.toml or --preset")
         cfg, text = config_mod.load(args.config) if args.config else config_mod.preset(args.preset)
-        print(f"dem: scene '{cfg.name}' -> {args.out}", file=sys.stderr)
-        for reason in plan(cfg).reasons:
-            print(f"  {reason}", file=sys.stderr)
-        result = run(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
-                     progress=not args.quiet, jobs=args.jobs)
+        runner = check_request(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
+                               jobs=args.jobs)
     except (ValueError, OSError, LammpsNotFound) as exc:
         print(f"granstokes dem run: error: {exc}", file=sys.stderr)
         return 2
+    print(f"dem: scene '{cfg.name}' -> {args.out}", file=sys.stderr)
+    for reason in runner.plan.reasons:
+        print(f"  {reason}", file=sys.stderr)
+    print(f"  {runner.plan.cost_estimate(runner.jobs)}", file=sys.stderr)
+    cores = os.cpu_count() or 1
+    if args.np * runner.jobs > cores:
+        print(f"dem: warning: --np {args.np} x {runner.jobs} job(s) = {args.np * runner.jobs} ranks on {cores} cores: "
+              "oversubscribed, every rank waits for the others (slower than fewer ranks)", file=sys.stderr)
+    if args.dry_run:
+        return 0
+    result = run(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
+                 progress=not args.quiet, jobs=args.jobs)
     print(f"dem: {result.status}" + (f": {result.message}" if result.message else "")
           + f" (see {result.out / 'run.json'})", file=sys.stderr)
-    return {"complete": 0, "interrupted": 130}.get(result.status, 1)
+    if result.status == "interrupted":
+        return 128 + int(result.metadata.get("signal", signal.SIGINT))  # 130 SIGINT, 143 SIGTERM
+    return 0 if result.ok else 1
 
 
 def _cmd_calibrate(args) -> int:
@@ -66,6 +78,7 @@ def register(subparsers) -> None:
     r.add_argument("--launcher", help="launcher template with {np}, e.g. 'srun -n {np}' (default: the "
                                       "mpich wheel's mpirun)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--dry-run", action="store_true", help="validate, print the sizing and the cost estimate, run nothing")
     r.set_defaults(func=_cmd_run)
     c = sub.add_parser("calibrate", help="mu(I) of a config's grains by plane shear at controlled pressure",
                        description="Calibrate mu(I) and phi(I) by homogeneous (Lees-Edwards) plane shear of the "

@@ -113,7 +113,8 @@ def merge_drive(drive_dir: Path, segments: list[Path], starts: list[int], profil
         plate["mu_w"] = (-plate["f_x"] / plate["f_y"]).where(plate["f_y"] > 0)
     plate.to_csv(drive_dir / PLATE_CSV, index=False)
     profiles = merge_table([read_chunk_file(s / "profiles.txt") for s in segments], starts)
-    profiles_table(profiles, plate, profile_every, dt, dimension).to_csv(drive_dir / PROFILES_CSV, index=False)
+    if len(profiles) and len(plate):  # interrupted before the first profile interval: nothing to assemble yet
+        profiles_table(profiles, plate, profile_every, dt, dimension).to_csv(drive_dir / PROFILES_CSV, index=False)
     n_atoms = merge_dump([s / ATOMS for s in segments], starts, drive_dir / ATOMS)
     n_contacts = merge_dump([s / CONTACTS for s in segments], starts, drive_dir / CONTACTS)
     with (drive_dir / LOG).open("w") as log:

@@ -340,9 +340,13 @@ class Runner:
         except RunError as exc:
             st.status, st.message = "failed", str(exc)
             raise
-        except (KeyboardInterrupt, Interrupted):
-            st.status, st.message = "interrupted", "interrupted by SIGINT/SIGTERM; continue with --resume"
-            raise Interrupted(st.message) from None
+        except (KeyboardInterrupt, Interrupted) as exc:
+            signum = getattr(exc, "signum", signal.SIGINT)
+            st.status = "interrupted"
+            st.message = f"interrupted by {signal.Signals(signum).name}; continue with --resume"
+            new = Interrupted(st.message)
+            new.signum = signum
+            raise new from None
         finally:
             st.wall_time += time.monotonic() - t0
             self.record(meta, key, st)
@@ -384,6 +388,9 @@ class Runner:
             status, message = "failed", str(exc)
         except (Interrupted, KeyboardInterrupt) as exc:
             status, message = "interrupted", str(exc) or "interrupted by SIGINT"
+            meta["signal"] = getattr(exc, "signum", signal.SIGINT)
+        except Exception as exc:  # anything else (a merge of broken outputs...): never leave "running"
+            status, message = "failed", f"{type(exc).__name__}: {exc}"
         meta["status"], meta["message"] = status, message
         meta["timings"]["finished"] = _now()
         meta["timings"]["wall_time_this_invocation"] = time.monotonic() - t0
@@ -395,6 +402,28 @@ def _now() -> str:
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
 
 
+def check_request(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
+                  launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> "Runner":
+    """Everything ``run`` checks before it touches the folder (ValueError / LammpsNotFound naming the
+    parameter): ranks, jobs, the launcher, the sizing, the wheels, the folder and a resume's config."""
+    require(isinstance(np, int) and np >= 1, "--np", "an integer >= 1 (MPI ranks per LAMMPS process)", np)
+    require(isinstance(jobs, int) and jobs >= 1, "--jobs", "an integer >= 1 (beds run side by side)", jobs)
+    require(launcher is None or "{np}" in launcher, "--launcher", "a command template containing {np}", launcher)
+    out = Path(out)
+    require(not out.exists() or out.is_dir(), "--out", "a folder (this path is an existing file)", str(out))
+    runner = Runner(cfg, text, out, np, launcher, progress, min(jobs, len(cfg.seeds)))  # sizing: raises on loads outside mu(I)
+    lammps_env.lmp_binary(), lammps_env.mpirun()
+    meta_path = out / layout.RUN_JSON
+    if resume:
+        require(meta_path.exists(), "--resume", "given with an existing run folder (with run.json)", str(out))
+        stored = parse((out / layout.CONFIG_TOML).read_text())
+        require(stored.as_dict() == cfg.as_dict(), "--resume",
+                f"given with the config stored in {out / layout.CONFIG_TOML}", "a different config")
+    else:
+        require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)", str(out))
+    return runner
+
+
 def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
         launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> RunResult:
     """Run (or with ``resume`` continue) the scene ``cfg`` (TOML ``text``) in folder ``out``, the seeds'
@@ -404,26 +433,14 @@ def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: b
     wheel, a folder that already holds another run, or a resume whose config differs raise
     ValueError / LammpsNotFound and write nothing.
     """
-    require(isinstance(np, int) and np >= 1, "np", "an integer >= 1 (MPI ranks per LAMMPS process)", np)
-    require(isinstance(jobs, int) and jobs >= 1, "jobs", "an integer >= 1 (beds run side by side)", jobs)
-    if launcher is not None and "{np}" not in launcher:
-        raise ValueError(f"launcher must be a command template containing {{np}}, got {launcher!r}")
+    runner = check_request(cfg, text, out, np, resume, launcher, progress, jobs)
     out = Path(out)
-    runner = Runner(cfg, text, out, np, launcher, progress, min(jobs, len(cfg.seeds)))  # sizing: raises on loads outside mu(I)
-    lammps_env.lmp_binary(), lammps_env.mpirun()
     meta_path = out / layout.RUN_JSON
     if resume:
-        if not meta_path.exists():
-            raise ValueError(f"--resume needs an existing run folder with run.json, {out} has none")
-        stored = parse((out / layout.CONFIG_TOML).read_text())
-        if stored.as_dict() != cfg.as_dict():
-            raise ValueError(f"--resume: the config differs from the one stored in {out / layout.CONFIG_TOML}")
         meta = json.loads(meta_path.read_text())
         meta["status"], meta["message"] = "running", ""
         meta.setdefault("resumes", []).append(_now())
     else:
-        if out.exists() and any(out.iterdir()):
-            raise ValueError(f"output folder {out} is not empty: choose a new --out or pass --resume")
         meta = runner.new_metadata()  # queries the LAMMPS library: fails before anything is written
         out.mkdir(parents=True, exist_ok=True)
         (out / layout.CONFIG_TOML).write_text(text)
@@ -440,4 +457,6 @@ def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: b
 
 
 def _raise_interrupted(signum, frame):
-    raise Interrupted(f"received signal {signum}")
+    exc = Interrupted(f"received signal {signum} ({signal.Signals(signum).name}); continue with --resume")
+    exc.signum = signum
+    raise exc

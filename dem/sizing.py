@@ -13,12 +13,18 @@ from dataclasses import dataclass
 
 from continuum.scales import Scales
 from continuum.steady import steady_wall_speed
+from granstokes.validate import require
 
 from .config import Config, Drive
 from .contact import grain_volume
 
 #: packing fractions used to turn a bed depth into a grain count (random close packing, loose side)
 PACKING = {2: 0.80, 3: 0.60}
+#: LAMMPS counts the steps of a run in a 32-bit integer ("Invalid run command N value" above it)
+MAX_STEPS = 2**31 - 1
+#: serial LAMMPS throughput on this kind of machine, atom-steps per second (bench/RESULTS.md: 2D 10.4-10.8 M,
+#: 3D 6.9 M, one rank): the cost estimate printed before a run
+THROUGHPUT = {2: 10e6, 3: 7e6}
 
 
 def drive_scales(cfg: Config, drive: Drive) -> Scales:
@@ -71,6 +77,20 @@ class Plan:
         """Shear-wave transit time over the bed depth (dem.contact: c_s = d sqrt(k_t/m))."""
         return self.depth / self.config.contact.shear_wave_speed
 
+    @property
+    def atom_steps(self) -> float:
+        """grains x steps of the whole run: every seed's preparation (at most) and drives."""
+        c = self.config.prepare
+        prepare = (c.settle_max + c.relax_max) / self.dt
+        return float(len(self.config.seeds) * self.n_grains * (prepare + sum(d.steps for d in self.drives)))
+
+    def cost_estimate(self, jobs: int = 1) -> str:
+        """One line: the run's atom-steps and the expected wall time at the measured throughput."""
+        minutes = self.atom_steps / THROUGHPUT[self.dimension] / max(1, jobs) / 60
+        return (f"cost: {self.n_grains} grains x {len(self.config.seeds)} seed(s), {self.atom_steps:.3g} atom-steps "
+                f"(preparation at most), about {minutes:.2g} min with {jobs} job(s) at "
+                f"{THROUGHPUT[self.dimension]:.2g} atom-steps/s per job (bench/RESULTS.md)")
+
     def as_dict(self) -> dict:
         return {"depth": self.depth, "n_grains_target": self.n_grains, "width": self.config.box.width,
                 "elastic_start": {"shear_wave_speed": self.config.contact.shear_wave_speed,
@@ -105,6 +125,8 @@ def plan(cfg: Config) -> Plan:
         if d.kind == "speed":
             u_w = d.u_w if d.u_w is not None else s.U * steady_wall_speed(cfg.material.friction, s.mu_w)
         steps = max(1, round(duration / dt))
+        require(steps <= MAX_STEPS, f"drive[{d.name}] duration", f"at most {MAX_STEPS * dt:.4g} time units "
+                f"({MAX_STEPS} steps of dt = {dt:.4g}, LAMMPS's limit)", duration)
         reason = (f"drive {d.name}: mu_w = {s.mu_w:.4g} (mu~_w = {s.mu_w_tilde:.3g}), delta_s = {s.delta_s:.3g} d, "
                   f"t_s = {s.t_s:.3g}, U = {s.U:.3g}; duration {duration:.4g} ({why}); "
                   + (f"tau_w = {tau_w:.4g}" if tau_w is not None else f"u_w = {u_w:.4g}"))

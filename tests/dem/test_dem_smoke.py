@@ -139,3 +139,20 @@ def test_contact_dump_balances_the_static_bed(smoke):
     weight_above = np.array([mass[bed["y"].to_numpy() > y].sum() / area for y in planes])
     assert np.allclose(first["p_yy"], f_y + weight_above, rtol=0.03)
     assert np.all(np.abs(first["tau_xy"]) < 0.05 * first["p_yy"])
+
+
+def test_sigterm_interrupts_with_status_143_and_says_so(tmp_path):
+    """SIGTERM to the runner mid-drive: exit status 143, run.json says interrupted (never running)."""
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "granstokes.cli", "dem", "run", "--preset", "smoke", "--out",
+                             str(out), "--quiet"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if list(out.glob("seed-*/*/segments/000/plate.csv")):
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    meta = json.loads((out / "run.json").read_text())
+    assert proc.returncode == 143 and meta["status"] == "interrupted" and "SIGTERM" in meta["message"], (meta, err)
+    assert "Traceback" not in err

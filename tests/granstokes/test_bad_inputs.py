@@ -19,6 +19,8 @@ def _case(tmp_path, monkeypatch, capsys, argv, name):
     (tmp_path / "not_json.toml").write_text("mu_s = 0.3\n")
     (tmp_path / "lacks_keys.json").write_text(json.dumps({"mu_s": 0.3}))
     (tmp_path / "not_a_run").mkdir()
+    from dem import config
+    (tmp_path / "forever.toml").write_text(config.preset_text("smoke").replace("duration = 10.0", "duration = 1e9"))
     monkeypatch.chdir(tmp_path)
     before = _files(tmp_path)
     try:
@@ -73,9 +75,12 @@ CASES = [
     (["dem", "run", "--preset", "huge", "--out", "r"], "preset"),
     (["dem", "run", "--out", "r"], "CONFIG.toml"),
     (["dem", "run", "not_json.toml", "--out", "r"], "drive"),
-    (["dem", "run", "--preset", "smoke", "--out", "r", "--np", "0"], "np"),
+    (["dem", "run", "--preset", "smoke", "--out", "r", "--np", "0"], "--np"),
     (["dem", "run", "--preset", "smoke", "--out", "r", "--resume"], "--resume"),
-    (["dem", "run", "--preset", "smoke", "--out", "r", "--launcher", "srun"], "launcher"),
+    (["dem", "run", "--preset", "smoke", "--out", "r", "--launcher", "srun"], "--launcher"),
+    (["dem", "run", "--preset", "smoke", "--out", "r", "--jobs", "0"], "--jobs"),
+    (["dem", "run", "--preset", "smoke", "--out", "a_file.txt"], "--out"),
+    (["dem", "run", "forever.toml", "--out", "r"], "duration"),
     # compare
     (["compare", "not_a_run", "--out", "report"], "RUN_DIR"),
     (["compare", "missing_run", "--out", "report"], "RUN_DIR"),
@@ -93,3 +98,10 @@ def test_at_least_forty_cases_over_every_subcommand():
     commands = {argv[0] for argv, _ in CASES}
     assert len(CASES) >= 40 and commands >= {"continuum", "predict", "paper-figures", "stability", "dem", "compare",
                                              "demo"}
+
+
+def test_dry_run_prints_the_cost_and_writes_nothing(tmp_path, capsys):
+    assert main(["dem", "run", "--preset", "quick", "--out", str(tmp_path / "r"), "--dry-run", "--np", "64"]) == 0
+    err = capsys.readouterr().err
+    assert "cost:" in err and "atom-steps" in err and "min" in err and "oversubscribed" in err
+    assert not (tmp_path / "r").exists()
