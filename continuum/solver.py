@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from granstokes.provenance import provenance
+
 from . import observables as obs
 from .mesh import Mesh
 from .problems import ImposedSpeed, ImposedStress
@@ -106,7 +108,8 @@ class Solution:
     def metadata(self) -> dict:
         return {**self.summary(), "u_w_imposed": self.u_w_imposed, "numerics": asdict(self.numerics),
                 "stats": asdict(self.stats), "units": UNITS,
-                "delta_definition": "depth where mu - mu_s falls to 1e-3 of mu_w(t) - mu_s"}
+                "delta_definition": "depth where mu - mu_s falls to 1e-3 of mu_w(t) - mu_s",
+                "provenance": provenance()}
 
     def profiles(self) -> pd.DataFrame:
         """Long table: one row per (t, y~) with tau~, mu, mu~, u~."""

@@ -15,6 +15,7 @@ from ..scales import UNITS
 from ..solver import solve_speed, solve_stress
 from ..steady import steady_wall_speed
 from granstokes.page import page
+from granstokes.provenance import provenance
 
 
 
@@ -90,5 +91,6 @@ def write_continuum_report(out_dir) -> Path:
     index = out / "index.html"
     index.write_text(page("granstokes continuum", "".join(body)))
     (out / "continuum_report.json").write_text(json.dumps({"figures": {k: str(v) for k, v in pngs.items()},
-                                                           "timing": result["timing"], "units": UNITS}, indent=2))
+                                                           "timing": result["timing"], "units": UNITS,
+                                                           "provenance": provenance()}, indent=2))
     return index

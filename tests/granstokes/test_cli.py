@@ -120,6 +120,7 @@ def test_save_writes_pandas_readable_tables_and_metadata(capsys, tmp_path):
     assert wall.u.to_numpy() == pytest.approx([1.334, 1.334], rel=1e-9)  # the imposed speed, at the wall
     assert series.u_w.iloc[1:].to_numpy() == pytest.approx(1.334, rel=1e-8)
     assert meta["units"]["inertial_number"].startswith("paper:") and meta["stats"]["steps"] == len(series) - 1
+    assert meta["provenance"]["granstokes"] and {"numpy", "scipy", "python"} <= set(meta["provenance"])
 
 
 def test_version_names_the_package_and_the_commit(capsys):
