@@ -24,29 +24,25 @@ from .staging import staged
 from .validate import output_dir
 
 
-def _dem(preset: str, run_dir: Path) -> Path:
-    """Run a DEM preset into run_dir, resuming an unfinished run and skipping a complete one."""
-    meta = run_dir / "run.json"
-    status = json.loads(meta.read_text()).get("status") if meta.exists() else None
+def _resumable(what: str, preset: str, folder: Path, state: Path, action) -> None:
+    """Run ``action(cfg, text, folder, resume=...)`` on a preset unless ``state`` says complete, resuming an
+    unfinished one; a run that does not complete stops the demo with where to look."""
+    status = json.loads(state.read_text()).get("status") if state.exists() else None
     if status != "complete":
         cfg, text = dem_config.preset(preset)
-        result = dem_run(cfg, text, run_dir, resume=status is not None)
+        result = action(cfg, text, folder, resume=status is not None)
         if result.status != "complete":
-            raise RuntimeError(f"DEM preset {preset} did not complete: {result.status} {result.message} "
-                               f"(see {meta}); rerun make demo to resume it")
+            raise RuntimeError(f"{what} of preset {preset} did not complete: {result.status} {result.message} "
+                               f"(see {state}); rerun make demo to resume it")
+
+
+def _dem(preset: str, run_dir: Path) -> Path:
+    _resumable("the DEM run", preset, run_dir, run_dir / layout.RUN_JSON, dem_run)
     return run_dir
 
 
 def _calibration(preset: str, folder: Path) -> Path:
-    """Calibrate a preset's grains into folder (resuming or skipping as ``_dem``); its calibration.json."""
-    state = folder / layout.CALIBRATION_STATE
-    status = json.loads(state.read_text()).get("status") if state.exists() else None
-    if status != "complete":
-        cfg, text = dem_config.preset(preset)
-        result = dem_calibrate(cfg, text, folder, resume=status is not None)
-        if result.status != "complete":
-            raise RuntimeError(f"calibration of {preset} did not complete: {result.status} {result.message} "
-                               f"(see {state}); rerun make demo to resume it")
+    _resumable("the mu(I) calibration", preset, folder, folder / layout.CALIBRATION_STATE, dem_calibrate)
     return folder / layout.CALIBRATION_JSON
 
 
