@@ -159,7 +159,7 @@ def delta_mu(a: DriveAnalysis, mu_s: float) -> np.ndarray:
         keep = (frame.depth >= calibrate.WALL_EXCLUSION) & np.isfinite(frame.mu)
         mu_w = float(np.interp(t, a.series.t, mu_w_smooth))
         excess = (frame.mu[keep].to_numpy() - mu_s) / (mu_w - mu_s)
-        out.append(crossing_depth(frame.depth[keep].to_numpy(), excess, DELTA_THRESHOLD, order=1))
+        out.append(crossing_depth(frame.depth[keep].to_numpy(), excess, DELTA_THRESHOLD))
     return np.array(out, dtype=float)
 
 

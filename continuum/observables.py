@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
+from .crossing import crossing_depth
 from .mesh import Mesh
 from .rheology import Friction
 from .steady import DELTA_THRESHOLD
@@ -33,18 +34,9 @@ def velocity(fr: Friction, mu_w: float, mesh: Mesh, tau):
 
 def layer_thickness(fr: Friction, mu_w: float, mesh: Mesh, tau, threshold: float = DELTA_THRESHOLD):
     """delta(t~)/delta_s: first depth where (mu - mu_s) falls to ``threshold`` of the wall excess
-    (mu(0) - mu_s); log-linear interpolation between nodes (exact for an exponential tail)."""
+    (mu(0) - mu_s), log-linear between nodes (exact for an exponential tail; continuum.crossing)."""
     mu = friction_profile(fr, mu_w, mesh, tau)
-    excess = (mu - fr.mu_s) / (mu[..., :1] - fr.mu_s)
-    below = excess < threshold
-    i = np.argmax(below, axis=-1)  # first node below the threshold (node N always is: excess = 0)
-    rows = np.indices(i.shape)
-    e0, e1 = excess[(*rows, i - 1)], excess[(*rows, i)]
-    y0, y1 = mesh.y[i - 1], mesh.y[i]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        frac_log = np.log(e0 / threshold) / np.log(e0 / e1)
-    frac = np.where(e1 > 0, frac_log, (e0 - threshold) / (e0 - e1))
-    return y0 + frac * (y1 - y0)
+    return crossing_depth(mesh.y, (mu - fr.mu_s) / (mu[..., :1] - fr.mu_s), threshold, log=True)
 
 
 class SeriesRecorder:

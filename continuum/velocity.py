@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import brentq
 
+from .crossing import crossing_depth
 from .mesh import Mesh
 from .rheology import finite, require
 from .rules import ShearLaw, YieldRule
@@ -152,29 +153,16 @@ class VelocitySolution:
         return self.u[:, 0]
 
 
-def _yield_front(mu, y_face, mu_s):
-    """Deepest face where mu >= mu_s (linear interpolation of mu - mu_s); 0 if none."""
-    flowing = mu >= mu_s
-    if not flowing.any():
-        return 0.0
-    j = len(mu) - 1 - np.argmax(flowing[::-1])
-    if j == len(mu) - 1:
-        return float(y_face[j])
-    a, b = mu[j] - mu_s, mu[j + 1] - mu_s
-    return float(y_face[j] + a / (a - b) * (y_face[j + 1] - y_face[j]))
+def _yield_front(mu, y_face, mu_s) -> float:
+    """Deepest face where mu >= mu_s (continuum.crossing, linear in mu - mu_s)."""
+    return crossing_depth(y_face, mu, mu_s, first=False)
 
 
-def _layer_thickness(mu, y_face, mu_s, mu_wall):
-    """Depth where (mu - mu_s) falls to DELTA_THRESHOLD of (mu_wall - mu_s) (as continuum.observables)."""
-    excess = (mu - mu_s) / (mu_wall - mu_s)
-    below = np.nonzero(excess < DELTA_THRESHOLD)[0]
-    if len(below) == 0:
-        return float(y_face[-1])
-    j = below[0]
-    if j == 0:
-        return 0.0
-    a, b = excess[j - 1] - DELTA_THRESHOLD, excess[j] - DELTA_THRESHOLD
-    return float(y_face[j - 1] + a / (a - b) * (y_face[j] - y_face[j - 1]))
+def _layer_thickness(mu, y_face, mu_s, mu_wall) -> float:
+    """Depth where (mu - mu_s) falls to DELTA_THRESHOLD of (mu_wall - mu_s), linear (continuum.crossing);
+    the bed bottom when it never does."""
+    d = crossing_depth(y_face, (mu - mu_s) / (mu_wall - mu_s), DELTA_THRESHOLD)
+    return float(y_face[-1]) if np.isnan(d) else d
 
 
 def initial_at_yield(problem: VelocityProblem) -> np.ndarray:
