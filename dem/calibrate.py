@@ -16,7 +16,8 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
 * checks of every point and seed (all must pass for it to enter the fit): measured strain >= strain,
   no drift (first and second halves of the blocks agree within DRIFT_Z standard errors in mu and phi),
   <P_yy> = p within PRESSURE_Z standard errors, velocity profile linear (largest deviation from the
-  linear fit below HOMOGENEITY_TOL of the velocity difference across the cell).
+  linear fit below HOMOGENEITY_TOL of the velocity difference across the cell), blocks longer than the
+  autocorrelation time (the MIN_BLOCKS cap can make them shorter when the window is too short).
 
 Output (dem.layout): DIR/calibration.json, DIR/points.csv, DIR/state.json, DIR/I-K/seed-S/.
 Points run concurrently (``jobs`` LAMMPS subprocesses, longest first); ``resume`` reruns the
@@ -95,7 +96,8 @@ class CalibrationPlan:
                 "block": f"{BLOCK_TAU:g} integrated autocorrelation times (the longer of mu's and phi's), at least "
                          f"{MIN_BLOCKS} blocks",
                 "checks": f"strain >= {cal.strain:g}; drift of mu and phi between halves < {DRIFT_Z:g} s.e.; "
-                          f"|<P_yy> - p| < {PRESSURE_Z:g} s.e.; velocity profile within {HOMOGENEITY_TOL:g} of linear",
+                          f"|<P_yy> - p| < {PRESSURE_Z:g} s.e.; velocity profile within {HOMOGENEITY_TOL:g} of linear; "
+                          "blocks longer than the autocorrelation time",
                 "I_convention": "dem: I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy|"}
 
 
@@ -176,7 +178,8 @@ def analyse(folder: Path, cfg: Config, point: ShearPoint, seed: int) -> tuple[di
               "profile_deviation": deviation, "homogeneous_ok": deviation < HOMOGENEITY_TOL,
               "tau_int_strain": tau_int * cfg.calibration.sample, "blocks": nb,
               "block_strain": length * cfg.calibration.sample}
-    checks["passed"] = all(checks[k] for k in ("strain_ok", "drift_ok", "pressure_ok", "homogeneous_ok"))
+    checks["blocks_ok"] = checks["block_strain"] >= checks["tau_int_strain"]
+    checks["passed"] = all(checks[k] for k in ("strain_ok", "drift_ok", "pressure_ok", "homogeneous_ok", "blocks_ok"))
     row = {"I": I, "I_err": I_err, "mu": mu, "mu_err": mu_err, "phi": phi, "phi_err": phi_err, "p": p,
            "strain": strain, "seed": seed}
     return row, blocks.assign(seed=seed), checks
