@@ -194,7 +194,7 @@ class _Calibrator:
     def __init__(self, plan: CalibrationPlan, out: Path, state: dict, lmp: _Lammps):
         self.plan, self.out, self.state, self.lmp = plan, out, state, lmp
         self.lock = threading.Lock()
-        self.slots = list(range(64))
+        self.slots: list[int] = []  # progress-bar rows, one per concurrent job
 
     def save(self) -> None:
         with self.lock:
@@ -206,7 +206,7 @@ class _Calibrator:
         old = self.state["points"].get(key, {})
         if old.get("status") == "complete":  # re-analysed from its stored series: the fit uses the current analysis
             row, blocks, checks = analyse(d, self.plan.config, self.plan.points[k], seed)
-            blocks.assign(point=k).to_csv(d / "blocks.csv", index=False)
+            blocks.assign(point=k)[list(layout.BLOCK_COLUMNS)].to_csv(d / layout.BLOCKS_CSV, index=False)
             with self.lock:
                 self.state["points"][key] = {**old, "row": row, "checks": checks}
             return
@@ -224,7 +224,7 @@ class _Calibrator:
             info = self.lmp.run(layout.SHEAR_IN, d, self.plan, self.plan.steps(k), 0,
                                 f"I={point.I:.3g} seed {seed}", position=slot)
             row, blocks, checks = analyse(d, self.plan.config, point, seed)
-            blocks.assign(point=k).to_csv(d / "blocks.csv", index=False)
+            blocks.assign(point=k)[list(layout.BLOCK_COLUMNS)].to_csv(d / layout.BLOCKS_CSV, index=False)
             entry = {"status": "complete", "I_target": point.I, "row": row, "checks": checks,
                      "wall_time": info["wall_time"], "steps": info["last_step"]}
         except RunError as exc:
@@ -237,6 +237,7 @@ class _Calibrator:
             self.save()
 
     def execute(self, jobs: int) -> None:
+        self.slots = list(range(jobs))
         pool = ThreadPoolExecutor(max_workers=jobs)
         futures = [pool.submit(self.task, k, s) for k, s in self.plan.tasks()]
         try:
@@ -258,7 +259,7 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
         entry = state["points"][f"I-{k}/seed-{seed}"]
         if entry["checks"]["passed"]:
             rows.append({**entry["row"], "point": k})
-            blocks.append(pd.read_csv(layout.point_dir(out, k, seed) / "blocks.csv"))
+            blocks.append(pd.read_csv(layout.point_dir(out, k, seed) / layout.BLOCKS_CSV))
         else:
             excluded.append(f"I-{k}/seed-{seed}")
     cal = fitting.fit_blocks(pd.concat(blocks, ignore_index=True), str(out / layout.CALIBRATION_JSON))
