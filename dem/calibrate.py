@@ -16,7 +16,8 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
 * checks of every point and seed (all must pass for it to enter the fit): measured strain >= strain,
   no drift (first and second halves of the blocks agree within DRIFT_Z standard errors in mu and phi),
   <P_yy> = p within PRESSURE_Z standard errors, velocity profile linear (largest deviation from the
-  linear fit below HOMOGENEITY_TOL of the velocity difference across the cell).
+  linear fit below HOMOGENEITY_TOL of the velocity difference across the cell), blocks longer than the
+  autocorrelation time (the MIN_BLOCKS cap can make them shorter when the window is too short).
 
 Output (dem.layout): DIR/calibration.json, DIR/points.csv, DIR/state.json, DIR/I-K/seed-S/.
 Points run concurrently (``jobs`` LAMMPS subprocesses, longest first); ``resume`` reruns the
@@ -95,7 +96,8 @@ class CalibrationPlan:
                 "block": f"{BLOCK_TAU:g} integrated autocorrelation times (the longer of mu's and phi's), at least "
                          f"{MIN_BLOCKS} blocks",
                 "checks": f"strain >= {cal.strain:g}; drift of mu and phi between halves < {DRIFT_Z:g} s.e.; "
-                          f"|<P_yy> - p| < {PRESSURE_Z:g} s.e.; velocity profile within {HOMOGENEITY_TOL:g} of linear",
+                          f"|<P_yy> - p| < {PRESSURE_Z:g} s.e.; velocity profile within {HOMOGENEITY_TOL:g} of linear; "
+                          "blocks longer than the autocorrelation time",
                 "I_convention": "dem: I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy|"}
 
 
@@ -176,7 +178,8 @@ def analyse(folder: Path, cfg: Config, point: ShearPoint, seed: int) -> tuple[di
               "profile_deviation": deviation, "homogeneous_ok": deviation < HOMOGENEITY_TOL,
               "tau_int_strain": tau_int * cfg.calibration.sample, "blocks": nb,
               "block_strain": length * cfg.calibration.sample}
-    checks["passed"] = all(checks[k] for k in ("strain_ok", "drift_ok", "pressure_ok", "homogeneous_ok"))
+    checks["blocks_ok"] = checks["block_strain"] >= checks["tau_int_strain"]
+    checks["passed"] = all(checks[k] for k in ("strain_ok", "drift_ok", "pressure_ok", "homogeneous_ok", "blocks_ok"))
     row = {"I": I, "I_err": I_err, "mu": mu, "mu_err": mu_err, "phi": phi, "phi_err": phi_err, "p": p,
            "strain": strain, "seed": seed}
     return row, blocks.assign(seed=seed), checks
@@ -191,7 +194,7 @@ class _Calibrator:
     def __init__(self, plan: CalibrationPlan, out: Path, state: dict, lmp: _Lammps):
         self.plan, self.out, self.state, self.lmp = plan, out, state, lmp
         self.lock = threading.Lock()
-        self.slots = list(range(64))
+        self.slots: list[int] = []  # progress-bar rows, one per concurrent job
 
     def save(self) -> None:
         with self.lock:
@@ -203,7 +206,7 @@ class _Calibrator:
         old = self.state["points"].get(key, {})
         if old.get("status") == "complete":  # re-analysed from its stored series: the fit uses the current analysis
             row, blocks, checks = analyse(d, self.plan.config, self.plan.points[k], seed)
-            blocks.assign(point=k).to_csv(d / "blocks.csv", index=False)
+            blocks.assign(point=k)[list(layout.BLOCK_COLUMNS)].to_csv(d / layout.BLOCKS_CSV, index=False)
             with self.lock:
                 self.state["points"][key] = {**old, "row": row, "checks": checks}
             return
@@ -221,7 +224,7 @@ class _Calibrator:
             info = self.lmp.run(layout.SHEAR_IN, d, self.plan, self.plan.steps(k), 0,
                                 f"I={point.I:.3g} seed {seed}", position=slot)
             row, blocks, checks = analyse(d, self.plan.config, point, seed)
-            blocks.assign(point=k).to_csv(d / "blocks.csv", index=False)
+            blocks.assign(point=k)[list(layout.BLOCK_COLUMNS)].to_csv(d / layout.BLOCKS_CSV, index=False)
             entry = {"status": "complete", "I_target": point.I, "row": row, "checks": checks,
                      "wall_time": info["wall_time"], "steps": info["last_step"]}
         except RunError as exc:
@@ -234,6 +237,7 @@ class _Calibrator:
             self.save()
 
     def execute(self, jobs: int) -> None:
+        self.slots = list(range(jobs))
         pool = ThreadPoolExecutor(max_workers=jobs)
         futures = [pool.submit(self.task, k, s) for k, s in self.plan.tasks()]
         try:
@@ -255,7 +259,7 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
         entry = state["points"][f"I-{k}/seed-{seed}"]
         if entry["checks"]["passed"]:
             rows.append({**entry["row"], "point": k})
-            blocks.append(pd.read_csv(layout.point_dir(out, k, seed) / "blocks.csv"))
+            blocks.append(pd.read_csv(layout.point_dir(out, k, seed) / layout.BLOCKS_CSV))
         else:
             excluded.append(f"I-{k}/seed-{seed}")
     cal = fitting.fit_blocks(pd.concat(blocks, ignore_index=True), str(out / layout.CALIBRATION_JSON))

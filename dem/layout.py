@@ -16,6 +16,7 @@ Calibration folder (``granstokes dem calibrate``)::
     DIR/points.csv                      one row per steady point and seed (``POINT_COLUMNS``)
     DIR/state.json                      status of every point and seed, messages, timings
     DIR/I-K/seed-S/                     in.lammps, log.lammps, series.csv (``SHEAR_SERIES_COLUMNS``), profile.txt
+                                        (u_x in bins across L_y), blocks.csv (``BLOCK_COLUMNS``: block means)
 
 Atom types: ``BED`` grains (the coarse-grained material), ``BASE`` (frozen rough base), ``PLATE``
 (one rigid body).  Dump columns: ``ATOM_COLUMNS`` (atoms.dump, sorted by id) and ``CONTACT_COLUMNS``
@@ -40,7 +41,7 @@ PREPARE, PREPARED_RESTART, GRAINS_CSV, GRAINS_DUMP = "prepare", "prepared.restar
 PLATE_CSV, PROFILES_CSV, ATOMS, CONTACTS, LOG = "plate.csv", "profiles.csv", "atoms.dump", "contacts.dump", "log.lammps"
 SEGMENTS, RESTART_DIR = "segments", "restart"
 CALIBRATION_JSON, POINTS_CSV, CALIBRATION_STATE = "calibration.json", "points.csv", "state.json"
-SHEAR_SERIES_CSV, SHEAR_PROFILE_TXT, SHEAR_IN = "series.csv", "profile.txt", "in.lammps"
+SHEAR_SERIES_CSV, SHEAR_PROFILE_TXT, SHEAR_IN, BLOCKS_CSV = "series.csv", "profile.txt", "in.lammps", "blocks.csv"
 
 # --- columns -------------------------------------------------------------------------------------
 PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y", "u_c", "n_c")
@@ -50,6 +51,7 @@ GRAIN_COLUMNS = ("id", "type", "radius", "mass")
 #: calibration: the issue-10 contract of points.csv, and a point's time series (stresses compressive positive)
 POINT_COLUMNS = ("I", "I_err", "mu", "mu_err", "phi", "phi_err", "p", "strain", "seed")
 SHEAR_SERIES_COLUMNS = ("step", "t", "lx", "ly", "xy", "p_xx", "p_yy", "p_xy", "phi", "T")
+BLOCK_COLUMNS = ("block", "tau", "p", "phi", "rate", "seed", "point")
 
 #: profile bin height in d (LAMMPS in-run chunk averages, profiles.csv)
 PROFILE_BIN = 1.0

