@@ -126,7 +126,8 @@ def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
                  "mu": cont.mu, "I_dem": material.friction.I_of_mu(cont.mu.clip(upper=material.mu_d - 1e-9),
                                                                    material.I0)}
         for ax, f in zip(axes, fields):
-            ax.plot(dem[f], depth, color=f"C{k}", label=f"t = {t:.3g}")
+            early = " (elastic start: not compared)" if t < spec.compared_from else ""
+            ax.plot(dem[f], depth, color=f"C{k}", label=f"t = {t:.3g}{early}")
             ax.plot(model[f], cont.depth, color=f"C{k}", ls="--")
     for ax, f in zip(axes, fields):
         ax.set_xlabel(f)
@@ -134,7 +135,8 @@ def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
     axes[5].set(xscale="log", xlim=(1e-5, 2))
     axes[0].set(ylabel="depth below the plate [d]", ylim=(spec.depth, 0))
     axes[0].legend(fontsize=7, title="solid DEM, dashed velocity form", title_fontsize=7)
-    fig.suptitle(f"{g.label}: transient profiles (DEM units; I in the DEM convention)")
+    fig.suptitle(f"{g.label}: transient profiles (DEM units; I in the DEM convention); shear-wave transit "
+                 f"{spec.transit_time:.3g}, compared from {spec.compared_from:.3g}")
     path = out / f"transient_{slug(g.label)}.png"
     fig.savefig(path, dpi=110)
     return path

@@ -111,6 +111,18 @@ def test_compare_report_on_a_smoke_run(tmp_path, capsys):
     assert m["pressure_slope"] == pytest.approx(m["phi_bulk"], rel=0.15)
     assert 0 < m["mu_s"] < m["mu_d"]
     assert m["u_w_inf"]["dem"] > 0 and m["u_w_inf"]["velocity_form"] > 0
+    (d,) = m["drives"].values()
+    # the steady window's coarse-grained bulk tau is the plate's <tau_w> within 2 standard errors of the
+    # difference (block errors of the frames and of the plate record over the same window: ~10 % of tau
+    # for the smoke's 3 time units; the pre-issue-9 estimators missed by 18 %)
+    tb = d["tau_bulk"]
+    assert tb["agree"] and abs(tb["cg"] - tb["plate"]) <= 2 * tb["difference_stderr"]
+    assert tb["difference_stderr"] < 0.15 * tb["plate"]
+    # the plate grips: slip consistent with <= 5 % (the old plate of touching grains: 46 %)
+    assert 0 < d["slip_err"] and d["slip"] - 2 * d["slip_err"] < 0.05 and "autocorrelation" in d["slip_method"]
+    for key in ("u_w_inf", "mu_w_inf", "delta_s"):
+        assert d[key]["dem_stderr"] > 0 and d[key]["dem_method"]
+    assert 0 < d["elastic_start"]["transit_time"] < d["elastic_start"]["compared_from"]
     page = (tmp_path / "report" / "index.html").read_text()
     assert "continuum vs DEM" in page and page.count("<img") >= 5
     assert json.loads((tmp_path / "report" / "metrics.json").read_text())["mu_s"] == m["mu_s"]

@@ -68,12 +68,14 @@ def test_unknown_preset_and_cli_errors_write_nothing(tmp_path, capsys):
         config.preset("huge")
     out = tmp_path / "out"
     assert granstokes_main(["dem", "run", "--preset", "huge", "--out", str(out)]) == 2
-    assert "preset must be one of ['paper', 'quick', 'smoke']" in capsys.readouterr().err
+    assert "preset must be one of ['paper', 'quick', 'smoke', 'spheres']" in capsys.readouterr().err
     bad = tmp_path / "bad.toml"
     bad.write_text(SMOKE.replace("p_w = 10.0", "p_w = -1.0"))
     assert granstokes_main(["dem", "run", str(bad), "--out", str(out)]) == 2
     assert "load.p_w must be a finite number > 0, got -1.0" in capsys.readouterr().err
     assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--np", "0"]) == 2
+    assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--jobs", "0"]) == 2
+    assert "jobs must be an integer >= 1" in capsys.readouterr().err
     assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume"]) == 2
     assert not out.exists()
 
@@ -141,6 +143,18 @@ def test_lammps_failures_are_explained_in_run_json(tmp_path, script, code, messa
     assert (out / "config.toml").read_text() == text and (out / "seed-1" / "prepare" / "prepare.in").exists()
     assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--resume", "--quiet",
                      "--launcher", launcher]) == code
+
+
+def test_concurrent_beds_stop_together_when_one_fails(tmp_path):
+    """Two seeds side by side (jobs 2) under a launcher template: the stand-in LAMMPS fails, the run
+    says so, and no stage is left 'running'."""
+    text = config.preset_text("smoke").replace("seeds = [1]", "seeds = [1, 2]")
+    out = tmp_path / "out"
+    result = run(config.parse(text), text, out, np=1, jobs=2, launcher="sh -c 'exit 139' {np}", progress=False)
+    meta = json.loads((out / "run.json").read_text())
+    assert result.status == meta["status"] == "failed" and meta["provenance"]["jobs"] == 2
+    assert {meta["stages"][f"seed-{s}"]["status"] for s in (1, 2)} <= {"failed", "interrupted"}
+    assert "segmentation fault" in meta["message"]
 
 
 def test_documented_example_is_valid():
