@@ -53,7 +53,7 @@ def main():
         g = analyse_drive(spec, CGSettings())
         late = g.delta[g.delta.t >= STEADY_WINDOW_LATEST * g.delta.t.max()].delta_u
         rows.append({"variant": name, "grains": len(spec.folders[0].grains), "seeds": len(spec.folders),
-                     "grains_x_steps": spec.cost, "wall_s": wall, "stderr_over": g.steady["u_w"]["stderr_over"], "u_w_inf": g.steady["u_w"]["value"],
+                     "grains_x_steps": spec.cost, "wall_s": wall, "stderr_over": g.steady["u_w"]["method"], "u_w_inf": g.steady["u_w"]["value"],
                      "rel_stderr_u_w_inf": g.steady["u_w"]["stderr"] / g.steady["u_w"]["value"],
                      "delta_s": late.mean(), "rel_stderr_delta_s": late.std(ddof=1) / np.sqrt(len(late)) / late.mean()})
     df = pd.DataFrame(rows)

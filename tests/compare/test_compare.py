@@ -120,7 +120,7 @@ def test_compare_report_on_a_smoke_run(tmp_path, capsys):
     assert tb["difference_stderr"] < 0.15 * tb["plate"]
     # the plate grips: slip consistent with <= 5 % (the old plate of touching grains: 46 %)
     assert 0 < d["slip_err"] and d["slip"] - 2 * d["slip_err"] < 0.05 and "autocorrelation" in d["slip_method"]
-    for key in ("u_w_inf", "mu_w_inf", "delta_s"):
+    for key in ("mu_w_inf", "delta_s"):  # u_w_inf is the imposed speed here
         assert d[key]["dem_stderr"] > 0 and d[key]["dem_method"]
     assert 0 < d["elastic_start"]["transit_time"] < d["elastic_start"]["compared_from"]
     page = (tmp_path / "report" / "index.html").read_text()
