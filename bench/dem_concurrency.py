@@ -1,9 +1,9 @@
 """Seeds side by side: the demo's DEM wall time (quick + smoke presets) run one bed at a time on 2 MPI
 ranks (the old default, ``--jobs 1 --np 2``) against independent beds run concurrently as separate
-LAMMPS processes (``--jobs 2 --np 1``, the new default), and the quick preset alone under
-``--jobs 1 --np 1`` (is one rank per bed already faster than two?).
+LAMMPS processes (``--jobs 2 --np 1``, the new default).  ``--keep DIR`` keeps the new default's run
+folders (DIR/quick, DIR/smoke: the demo's DEM, for its comparison report).
 
-    .venv/bin/python bench/dem_concurrency.py [--out DIR]
+    .venv/bin/python bench/dem_concurrency.py [--out FILE] [--keep DIR]
 
 All configurations run in this one process, one after another (interleaved ``REPEATS`` times, best
 kept: the machine is shared); wall time is the whole ``dem.runner.run`` call (prepare + drives +
@@ -23,7 +23,8 @@ from dem.runner import run
 HERE = Path(__file__).resolve().parent
 REPEATS = 1  # each configuration costs ~2 min of both cores: one interleaved pass
 DEMO = ("quick", "smoke")
-CONFIGS = {"jobs 1, np 2 (before)": (1, 2), "jobs 2, np 1 (after)": (2, 1), "jobs 1, np 1": (1, 1)}
+BEFORE, AFTER = "jobs 1, np 2 (before)", "jobs 2, np 1 (after)"
+CONFIGS = {BEFORE: (1, 2), AFTER: (2, 1)}
 
 
 def demo_dem(root: Path, jobs: int, np_: int) -> float:
@@ -39,15 +40,17 @@ def demo_dem(root: Path, jobs: int, np_: int) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, default=HERE / "dem_concurrency.json")
+    ap.add_argument("--keep", type=Path, help="keep the new default's run folders here")
     args = ap.parse_args()
     best = {}
     with tempfile.TemporaryDirectory() as tmp:
         for r in range(REPEATS):
             for label, (jobs, np_) in CONFIGS.items():
-                wall = demo_dem(Path(tmp) / f"{r}-{jobs}-{np_}", jobs, np_)
+                root = args.keep if (args.keep and label == AFTER and r == 0) else Path(tmp) / f"{r}-{jobs}-{np_}"
+                wall = demo_dem(root, jobs, np_)
                 best[label] = min(best.get(label, wall), wall)
                 print(f"{label}: {wall:.1f} s", flush=True)
-    before, after = best["jobs 1, np 2 (before)"], best["jobs 2, np 1 (after)"]
+    before, after = best[BEFORE], best[AFTER]
     out = {"walls": best, "speedup": before / after, "presets": DEMO, "repeats": REPEATS}
     args.out.write_text(json.dumps(out, indent=2))
     print("\n| configuration | demo DEM wall time (quick + smoke) |\n|---|---|")

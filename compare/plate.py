@@ -136,8 +136,7 @@ def window_values(record: PlateRecord, t0: float) -> dict:
     """u_w and mu_w = <tau_w>/<p> over t >= t0, with block errors."""
     s = tail(record, t0)
     return {"u_w": block_estimate({"u_w": s["u_w"]}),
-            "mu_w": block_estimate({"tau": s["tau_w"], "p": s["p"]}, lambda m: m["tau"] / m["p"]),
-            "tau_w": block_estimate({"tau": s["tau_w"]})}
+            "mu_w": block_estimate({"tau": s["tau_w"], "p": s["p"]}, lambda m: friction(m["tau"], m["p"]))}
 
 
 def slip(record: PlateRecord) -> dict:

@@ -154,8 +154,9 @@ def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
         cont = vel[np.isclose(vel.t, t)]
         model = {"u_x": cont.u, "mu": cont.mu,
                  "I_dem": material.friction.I_of_mu(cont.mu.clip(upper=material.mu_d - 1e-9), material.I0)}
+        early = " (elastic start: not compared)" if t < spec.compared_from else ""
         for ax, f in zip(axes, model):
-            ax.plot(dem[f], dem.depth, color=f"C{k}", label=f"t = {t:.3g}")
+            ax.plot(dem[f], dem.depth, color=f"C{k}", label=f"t = {t:.3g}{early}")
             ax.plot(model[f], cont.depth, color=f"C{k}", ls="--")
     for ax, f in zip(axes, ("u_x", "mu", "I_dem")):
         ax.set_xlabel(FIELD_LABELS[f])
@@ -163,7 +164,8 @@ def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
     axes[2].set(xscale="log", xlim=(1e-5, 2))
     axes[0].set(ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
     axes[0].legend(fontsize=7, title="solid DEM, dashed local mu(I)", title_fontsize=7)
-    fig.suptitle(f"{g.label}: transient profiles at snapshot times [sqrt(d/g)]; DEM units, I in the DEM convention")
+    fig.suptitle(f"{g.label}: transient profiles at snapshot times [sqrt(d/g)] (DEM units, I in the DEM convention); "
+                 f"shear-wave transit {spec.transit_time:.3g}, compared from {spec.compared_from:.3g}")
     path = out / f"transient_{slug(g.label)}.png"
     fig.savefig(path, dpi=100)
     return path

@@ -31,6 +31,8 @@ PLATE_DIAMETER = 1.0  # d: the plate's glued grains, bed-like (measured slip: be
 #: the largest grain that fits through a gap of the plate is this fraction of the smallest bed grain:
 #: the bed grains nest as deep as they can without one passing through (measured slip: bench/RESULTS.md)
 PLATE_GAP_FRACTION = 0.9
+#: 3D: the plate's grains along z, this far apart (overlapping ridges across the flow)
+PLATE_RIDGE_PITCH = 0.5
 #: Coulomb friction of the bed-plate contacts (a rough, gripping plate; bed-bed contacts keep mu_p)
 PLATE_FRICTION = 1.0
 #: bed grains are binned up to this height above the plate's initial position (nothing is lost above it)
@@ -200,7 +202,7 @@ def _place_plate(plan: Plan) -> str:
         f"create_atoms {PLATE} single {(i + 0.5) * ax:.10g} ${{y_plate}} {0.0 if dim == 2 else (k + 0.5) * az:.10g} units box"
         for k in range(nz) for i in range(nx))
     return f"""
-# --- plate: {nx * nz} unit grains {ax:.4g} d apart (a {'row' if dim == 2 else 'square lattice'}) glued into one rigid body just above the highest grain ---
+# --- plate: {nx * nz} unit grains {ax:.4g} d apart (a {'row' if dim == 2 else 'ridges along z'}) glued into one rigid body just above the highest grain ---
 variable top_atom atom y+radius
 compute top bed reduce max v_top_atom
 thermo_style custom step v_t c_ke_bed atoms c_top
@@ -378,19 +380,21 @@ run {drive.steps} upto
 
 
 def plate_pitch(dim: int, d_min: float) -> float:
-    """Largest spacing of the plate grains at which no bed grain of diameter ``d_min`` passes between
-    them, times PLATE_GAP_FRACTION: 2D row, the gap between neighbours; 3D square lattice, the hole at
-    the centre of a square (diagonal s sqrt 2 minus one plate grain)."""
+    """Largest x spacing of the plate grains at which the largest grain fitting through a gap is
+    PLATE_GAP_FRACTION of the smallest bed grain ``d_min``: 2D, the gap between neighbours; 3D, ridges
+    along z (grains PLATE_RIDGE_PITCH apart, overlapping: one rigid body) whose rectangular holes have a
+    half-diagonal of (D_p + f d_min)/2.  The grooves between the ridges hold the bed grains against the
+    flow as the 2D gaps do (a square lattice of holes held them 20 % slower than the plate)."""
     opening = PLATE_DIAMETER + PLATE_GAP_FRACTION * d_min
-    return opening if dim == 2 else opening / math.sqrt(2)
+    return opening if dim == 2 else math.sqrt(opening ** 2 - PLATE_RIDGE_PITCH ** 2)
 
 
 def plate_layout(plan: Plan) -> tuple[int, int, float, float]:
-    """Plate grains per direction (x, z) and their spacings (<= plate_pitch, fitting the periodic box)."""
+    """Plate grains per direction (x, z) and their spacings (<= the pitches, fitting the periodic box)."""
     pitch = plate_pitch(plan.dimension, 1.0 - plan.config.grains.polydispersity)
     nx = math.ceil(plan.config.box.width / pitch)
     zw = plan.config.width_z or 1.0
-    nz = 1 if plan.dimension == 2 else math.ceil(zw / pitch)
+    nz = 1 if plan.dimension == 2 else math.ceil(zw / PLATE_RIDGE_PITCH)
     return nx, nz, plan.config.box.width / nx, zw / nz
 
 
@@ -421,6 +425,6 @@ def plate_geometry(plan: Plan) -> dict:
             "nesting_depth": nest, "mass": mass, "mass_per_area": mass / plan.area, "area": plan.area,
             "surface_offset": nest - 0.5,
             "design": "one rigid body of unit grains spaced so that the largest grain fitting through a gap is "
-                      f"{PLATE_GAP_FRACTION:g} of the smallest bed grain (2D row, 3D square lattice); unit bed "
+                      f"{PLATE_GAP_FRACTION:g} of the smallest bed grain (2D row; 3D ridges along z); unit bed "
                       "grains nest nesting_depth below the plate grains' centres; bed-plate contacts have Coulomb friction "
                       "`friction`"}

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from dem import config, layout, outputs
+from dem import config, lammps_env, layout, outputs
 from granstokes.cli import main as granstokes_main  # the `granstokes` console script
 
 pytestmark = pytest.mark.slow
@@ -19,15 +19,13 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def smoke(tmp_path_factory):
     out = tmp_path_factory.mktemp("dem") / "smoke"
-    t0 = time.monotonic()
     assert granstokes_main(["dem", "run", "--preset", "smoke", "--out", str(out), "--quiet"]) == 0
-    wall = time.monotonic() - t0
-    return out, wall
+    return out, None
 
 
-def test_smoke_completes_fast_with_metadata(smoke):
-    out, wall = smoke
-    assert wall < 60
+def test_smoke_completes_with_metadata(smoke):
+    """(Its speed is in bench/RESULTS.md: no timed tests on a shared machine.)"""
+    out, _ = smoke
     meta = json.loads((out / "run.json").read_text())
     assert meta["status"] == "complete"
     assert meta["stages"]["seed-1"]["info"]["relaxed"]
@@ -122,7 +120,7 @@ def test_killed_run_resumes_with_continuous_output(tmp_path):
 
 def test_contact_dump_balances_the_static_bed(smoke):
     """At step 0 (the relaxed bed) the contact forces through any horizontal plane, read from the
-    contact dump (normal + tangential, force on grain 1 as documented), carry the plate load and
+    contact dump (normal + tangential, force on grain 1 as documented), carry the plate load p_w and
     the weight of the bed grains above the plane: checks the dump's columns and sign conventions."""
     out, _ = smoke
     d = out / "seed-1" / "speed"
@@ -133,7 +131,8 @@ def test_contact_dump_balances_the_static_bed(smoke):
     planes = np.arange(4.0, plate_y - 2.0, 1.0)
     stress = outputs.plane_stress(d, planes, area)
     first = stress[stress["step"] == 0]
-    f_y = pd.read_csv(d / "plate.csv")["f_y"].iloc[0]
+    f_y = json.loads((out / "run.json").read_text())["config"]["p_w"]  # the applied load (plate.csv's row 0
+    # carries the damping of the speed drive's impulsive start: the plate is set moving at step 0)
     bed = atoms[atoms["type"] == 1]
     mass = grains["mass"].reindex(bed["id"]).to_numpy()
     weight_above = np.array([mass[bed["y"].to_numpy() > y].sum() / area for y in planes])
@@ -156,3 +155,22 @@ def test_sigterm_interrupts_with_status_143_and_says_so(tmp_path):
     meta = json.loads((out / "run.json").read_text())
     assert proc.returncode == 143 and meta["status"] == "interrupted" and "SIGTERM" in meta["message"], (meta, err)
     assert "Traceback" not in err
+
+
+def test_seeds_run_side_by_side_under_a_launcher_template(tmp_path):
+    """Two independent beds (seeds 1, 2) as concurrent LAMMPS processes (jobs 2, one rank each) under a
+    launcher template (the mpich wheel's mpirun standing in for srun): both complete, and they are
+    different beds (different random packings, so different plate records)."""
+    text = (config.preset_text("smoke").replace("seeds = [1]", "seeds = [1, 2]").replace("width = 40.0", "width = 8.0")
+            .replace("depth = 12.0", "depth = 6.0").replace("duration = 10.0", "duration = 0.5"))
+    cfg_path = tmp_path / "pair.toml"
+    cfg_path.write_text(text)
+    out = tmp_path / "run"
+    launcher = f"{lammps_env.mpirun()} -np {{np}}"
+    assert granstokes_main(["dem", "run", str(cfg_path), "--out", str(out), "--quiet", "--jobs", "2", "--np", "1",
+                            "--launcher", launcher]) == 0
+    meta = json.loads((out / "run.json").read_text())
+    assert meta["provenance"]["jobs"] == 2 and meta["provenance"]["launcher"].endswith("-np 1")
+    assert all(st["status"] == "complete" for st in meta["stages"].values()) and len(meta["stages"]) == 4
+    plates = [pd.read_csv(out / f"seed-{s}" / "speed" / "plate.csv") for s in (1, 2)]
+    assert len(plates[0]) == len(plates[1]) and not np.allclose(plates[0]["f_x"], plates[1]["f_x"])
