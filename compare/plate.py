@@ -21,6 +21,7 @@ import pandas as pd
 from scipy import stats
 
 from dem.layout import PLATE_CSV
+from granstokes.statistics import autocorrelation_time
 
 #: steady-state criterion (stated in every report): the running mean over 5 % of the record stays
 #: within max(3 standard errors of the final-quarter mean, 5 % of the total change) of that mean
@@ -42,8 +43,6 @@ def steady_window_start(t_steady: float, t_end: float) -> float:
 #: then biases the error low by ~1/BLOCK_TAUS in variance (AR(1): -5 % in the error, tested); when the
 #: series holds fewer than MIN_BLOCKS such blocks, MIN_BLOCKS shorter ones are used and the method says so
 BLOCK_TAUS, MIN_BLOCKS = 10.0, 4
-#: Sokal's automatic window for the integrated autocorrelation time: sum lags up to M >= SOKAL_C tau
-SOKAL_C = 5.0
 #: with this many beds or more, the error of a drive's value is their spread (fewer: pooled blocks)
 MIN_SEEDS_SPREAD = 3
 #: the slip of the bed grains touching the plate is measured over the second half of each drive
@@ -70,21 +69,6 @@ class PlateRecord:
     def mu_w(self) -> np.ndarray:
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(self.p > 0, self.tau_w / self.p, np.nan)
-
-
-def autocorrelation_time(y: np.ndarray) -> float:
-    """Integrated autocorrelation time in samples, tau = 1/2 + sum_k rho(k), summed up to Sokal's window
-    (the first M >= SOKAL_C tau(M)); 1/2 for white noise."""
-    y = np.asarray(y, dtype=float) - np.mean(y)
-    n = len(y)
-    if n < 2 or not np.any(y):
-        return 0.5
-    f = np.fft.rfft(y, 2 * n)
-    acf = np.fft.irfft(f * np.conj(f))[:n]
-    rho = acf / acf[0]
-    tau = 0.5 + np.cumsum(rho[1:])
-    window = np.nonzero(np.arange(1, n) >= SOKAL_C * tau)[0]
-    return float(max(0.5, tau[window[0]] if len(window) else tau[-1]))
 
 
 def block_estimate(series: dict, f=None) -> dict:

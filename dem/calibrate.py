@@ -41,6 +41,7 @@ import pandas as pd
 
 from continuum import calibration as fitting
 from granstokes.provenance import provenance
+from granstokes.statistics import autocorrelation_time
 from granstokes.validate import require
 
 from . import lammps_env, layout
@@ -119,15 +120,6 @@ def plan_calibration(cfg: Config) -> CalibrationPlan:
 
 
 # --- analysis of one point and seed ------------------------------------------------------------------
-def integrated_time(x: np.ndarray) -> float:
-    """Integrated autocorrelation time (samples) 1 + 2 sum rho_k, summed while rho_k > 0."""
-    x = np.asarray(x, float) - np.mean(x)
-    n = len(x)
-    acf = np.correlate(x, x, "full")[n - 1:] / (np.arange(n, 0, -1) * max(np.var(x), 1e-300))
-    stop = np.argmax(acf[1:] <= 0) + 1 if np.any(acf[1:] <= 0) else n
-    return float(1 + 2 * acf[1:stop].sum())
-
-
 def _samples(folder: Path) -> pd.DataFrame:
     """Per-sample tau, p, phi and the shear rate from the box (xy unwrapped across flips)."""
     s = pd.read_csv(folder / layout.SHEAR_SERIES_CSV)
@@ -153,7 +145,8 @@ def analyse(folder: Path, cfg: Config, point: ShearPoint, seed: int) -> tuple[di
     """(points.csv row, block means, checks) of one point and seed."""
     s = _samples(folder)
     # the slowest of the measured quantities sets the block length (phi relaxes more slowly than mu)
-    tau_int = max(integrated_time((s.tau / s.p).to_numpy()), integrated_time(s.phi.to_numpy()))
+    # 1 + 2 sum rho = 2 tau of granstokes.statistics (Sokal's window)
+    tau_int = 2 * max(autocorrelation_time((s.tau / s.p).to_numpy()), autocorrelation_time(s.phi.to_numpy()))
     length = max(1, min(math.ceil(BLOCK_TAU * tau_int), len(s) // MIN_BLOCKS))
     nb = len(s) // length
     blocks = (s.iloc[:nb * length].groupby(np.arange(nb * length) // length)[["tau", "p", "phi", "rate"]].mean()
