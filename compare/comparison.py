@@ -262,7 +262,7 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
     t0 = {a.label: a.t_window for a in drives}
     rows, edges, bands = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
                         delta_s, t0, {"ngf": fluidity.drive} if fluidity else {}, progress)
-    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a, phi)], len(replicates), edges, bands)
+    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a)], len(replicates), edges, bands)
     return Comparison(runs, compared, pairs, cal, source, replicates, material, phi,
                       mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings, law_test(pairs, cal))
 

@@ -123,13 +123,14 @@ def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
 SLIP_MAX = 0.05
 
 
-def scene_checks(a: DriveAnalysis, phi: float) -> list[dict]:
+def scene_checks(a: DriveAnalysis) -> list[dict]:
     """The scene's own quality figures, each with its error, target and verdict: the slip of the grains
     touching the plate, the bulk coarse-grained shear stress against the plate's <tau_w>
     (compare.analysis.bulk_tau), the pressure slope against phi rho_p g."""
     whole = a.mean_profile[bulk(a.mean_profile, a.spec.depth)]
     fit = stats.linregress(whole.depth, whole.p)
     bt, sl = a.bulk_tau, a.slip
+    phi = float(whole.phi.mean())  # hydrostatics: the weight of the grains over the same depths
     pressure = fit.slope / phi
     return [
         {"drive": a.label, "check": "slip at the plate", "unit": "1", "value": sl["value"], "err": sl["stderr"],
@@ -138,7 +139,7 @@ def scene_checks(a: DriveAnalysis, phi: float) -> list[dict]:
         {"drive": a.label, "check": "bulk CG tau - plate <tau_w>", "unit": "rho_p g d", "value": bt["difference"],
          "err": bt["difference_stderr"], "how": bt["cg"]["method"], "target": "0",
          "verdict": "within error" if bt["agree"] else "off"},
-        {"drive": a.label, "check": "pressure slope / (phi rho_p g)", "unit": "1", "value": pressure,
+        {"drive": a.label, "check": "pressure slope / (mean phi rho_p g)", "unit": "1", "value": pressure,
          "err": fit.stderr / phi, "how": "least squares over the bulk of the whole run's mean profile (depths "
          "correlated: a lower bound)", "target": "1",
          "verdict": "within error" if abs(pressure - 1) <= SIGMA_CONSISTENT * fit.stderr / phi else "off"},
