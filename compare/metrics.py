@@ -36,7 +36,7 @@ DEFINITIONS = {
     "slip": f"1 - <u_x of the bed grains touching a plate grain>/<plate u_x> over the final {1 - SLIP_FROM:.0%} of "
             "the drive (grain-weighted over every step)",
     "tau_bulk": "coarse-grained tau = -sigma_xy (contact + kinetic) averaged over the bulk in each frame of the "
-                "steady window, against the plate's <tau_w> over the same window",
+                f"final {1 - STEADY_WINDOW_LATEST:.0%} of the drive, against the plate's <tau_w> over the same window",
     "elastic_start": f"transit_time = depth/c_s of the shear wave through the deposited bed (run.json); "
                      f"the early exponents (alpha) are fitted from {TRANSITS_BEFORE_COMPARISON:g} transits on",
     "units": UNITS["dem_units"],
