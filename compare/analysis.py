@@ -23,8 +23,8 @@ from dem import layout
 
 from .calibrate import WALL_EXCLUSION
 from .models import Drive, depth_at_fraction
-from .plate import (STEADY_LAST, PlateRecord, block_estimate, pooled, slip, steady_state, steady_window_start,
-                    tail, window_values)
+from .plate import (STEADY_LAST, STEADY_WINDOW_LATEST, PlateRecord, block_estimate, pooled, slip, steady_state,
+                    steady_window_start, tail, window_values)
 from .profiles import CGSettings, DepthProfiles, derive, ensemble
 from .reader import DriveFolder
 
@@ -212,7 +212,9 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
             rows.append((t, depth_at_fraction(g.depth.to_numpy(), g.u_x.to_numpy(), u_w)))
     delta = pd.DataFrame(rows, columns=["t", "delta_u"])
     slips = pooled([slip(p) for p in plates])
-    check = bulk_tau(plates, profiles, surface, spec.depth, t0, t_end)
+    # the final 30 %: a steady plate record can begin while the creep below still deepens (the bed's
+    # momentum still grows and the bulk tau lags the plate's)
+    check = bulk_tau(plates, profiles, surface, spec.depth, STEADY_WINDOW_LATEST * t_end, t_end)
     return DriveAnalysis(spec, plates, profiles, series, steady, t0, t_end, slips, check, steady_profile,
                          mean_profile, inst, delta)
 

@@ -42,7 +42,7 @@ DEFINITIONS = {
     "slip": ("1", f"1 - <u_x of the bed grains touching a plate grain>/<plate u_x> over the final {1 - SLIP_FROM:.0%} "
                   "of the drive (grain-weighted over every step)"),
     "tau_bulk": ("rho_p g d", "coarse-grained tau = -sigma_xy (contact + kinetic) averaged over the bulk in each frame "
-                              "of the steady window, against the plate's <tau_w> over the same window"),
+                              "of the final 30 % of the drive, against the plate's <tau_w> over the same window"),
     "elastic_start": ("sqrt(d/g)", f"transit_time = depth/c_s of the shear wave through the deposited bed (run.json); "
                                    f"transients (the early exponents alpha) are compared from "
                                    f"{TRANSITS_BEFORE_COMPARISON:g} transits on"),
