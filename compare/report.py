@@ -357,11 +357,11 @@ def conclusions(c: Comparison) -> list[str]:
     if len(blind) and blind.model.nunique() > 1:
         tally = blind.groupby("model", sort=False).agg(n=("sigma", "size"),
                                                         ok=("verdict", lambda v: int((v == "consistent").sum())),
-                                                        median=("sigma", lambda v: float(np.median(np.abs(v)))))
-        best = tally.sort_values(["ok", "median"], ascending=[False, True]).index[0]
+                                                        med=("sigma", lambda v: float(np.median(np.abs(v)))))
+        best = tally.sort_values(["ok", "med"], ascending=[False, True]).index[0]
         label = blind[blind.model == best].model_label.iloc[0]
         out.append("Blind rows only: " + "; ".join(f"{html.escape(m)} {t.ok} of {t.n} consistent (median |sigma| "
-                                                     f"{t.median:.1f})" for m, t in tally.iterrows())
+                                                     f"{t.med:.1f})" for m, t in tally.iterrows())
                    + f". The DEM supports <b>{html.escape(label)}</b> best.")
     fl = c.fluidity
     if fl is not None:
