@@ -22,7 +22,7 @@ from .mesh import Mesh
 from .rheology import finite, require
 from .rules import ShearLaw, YieldRule
 from .scales import Material, Scales
-from .solver import Numerics
+from .solver import Numerics, check_times
 from .steady import DELTA_THRESHOLD
 from .stepper import StepStats, integrate
 
@@ -202,9 +202,7 @@ def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRu
     if compare_steady:
         require(scene.depth >= scales.delta_s, "depth",
                 f">= delta_s = {scales.delta_s:.6g} for a steady comparison (or compare_steady=False)", scene.depth)
-    t = np.asarray(times, dtype=float)
-    require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
-            "times", "a non-empty, strictly increasing list of finite numbers > 0", list(map(float, t)))
+    t = check_times(times)
     mesh = numerics.mesh()
     tau_w = None if mu_w is None else mu_w * scene.p_w
     problem = VelocityProblem(scene, rule, mesh, tau_w=tau_w, u_w=u_w)
