@@ -360,7 +360,7 @@ def conclusions(c: Comparison) -> list[str]:
                                                         med=("sigma", lambda v: float(np.median(np.abs(v)))))
         best = tally.sort_values(["ok", "med"], ascending=[False, True]).index[0]
         label = blind[blind.model == best].model_label.iloc[0]
-        out.append("Blind rows only: " + "; ".join(f"{html.escape(m)} {t.ok} of {t.n} consistent (median |sigma| "
+        out.append("Blind rows only: " + "; ".join(f"{html.escape(m)} {int(t.ok)} of {int(t.n)} consistent (median |sigma| "
                                                      f"{t.med:.1f})" for m, t in tally.iterrows())
                    + f". The DEM supports <b>{html.escape(label)}</b> best.")
     fl = c.fluidity

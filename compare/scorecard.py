@@ -121,6 +121,9 @@ def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
 
 #: the plate grips when at most this fraction of its speed is lost to slip (issue: a plate that grips)
 SLIP_MAX = 0.05
+#: the pressure slope's least-squares error counts correlated depths as independent (a lower bound): the
+#: check passes within this relative tolerance as well (the smoke CG test's 10 %)
+PRESSURE_TOLERANCE = 0.1
 
 
 def scene_checks(a: DriveAnalysis) -> list[dict]:
@@ -141,8 +144,9 @@ def scene_checks(a: DriveAnalysis) -> list[dict]:
          "verdict": "within error" if bt["agree"] else "off"},
         {"drive": a.label, "check": "pressure slope / (mean phi rho_p g)", "unit": "1", "value": pressure,
          "err": fit.stderr / phi, "how": "least squares over the bulk of the whole run's mean profile (depths "
-         "correlated: a lower bound)", "target": "1",
-         "verdict": "within error" if abs(pressure - 1) <= SIGMA_CONSISTENT * fit.stderr / phi else "off"},
+         "correlated: a lower bound; passes within 10 %)", "target": "1",
+         "verdict": "within error" if abs(pressure - 1) <= max(SIGMA_CONSISTENT * fit.stderr / phi, PRESSURE_TOLERANCE)
+         else "off"},
     ]
 
 
