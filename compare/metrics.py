@@ -31,6 +31,8 @@ DEFINITIONS = {
                           f"down to {WALL_EXCLUSION:g} d above the base; local mu(I) is rigid there (0)"),
     "sigma": ("1", "(DEM - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical_err^2), band_sd = band width / 3.92; "
                    f"'consistent' when |sigma| <= {SIGMA_CONSISTENT:g}"),
+    "model_at_end": ("unit of the row", "the model's free response averaged over the DEM record's final quarter "
+                                        "(as the DEM's steady value): near 'predicted' when the model is steady by then"),
     "band": ("unit of the row", "95 % band of the prediction from the calibration's uncertainty (compare.scorecard)"),
     "dem_err": ("unit of the row", f"standard error of the DEM value: spread over seeds (>= 2 seeds), else over "
                                    f"{BLOCKS} blocks of the steady window, or the estimator's resolution; dem_how says"),
@@ -113,7 +115,7 @@ def _clean(v):
 
 
 SCORECARD_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted",
-                  "band", "numerical_err", "sigma", "verdict", "blind")
+                  "band", "numerical_err", "sigma", "verdict", "blind", "model_at_end")
 
 
 def metrics(c: Comparison) -> dict:

@@ -358,7 +358,8 @@ def conclusions(c: Comparison) -> list[str]:
         tally = blind.groupby("model", sort=False).agg(n=("sigma", "size"),
                                                         ok=("verdict", lambda v: int((v == "consistent").sum())),
                                                         med=("sigma", lambda v: float(np.median(np.abs(v)))))
-        best = tally.sort_values(["ok", "med"], ascending=[False, True]).index[0]
+        tally["share"] = tally.ok / tally.n
+        best = tally.sort_values(["share", "med"], ascending=[False, True]).index[0]
         label = blind[blind.model == best].model_label.iloc[0]
         out.append("Blind rows only: " + "; ".join(f"{html.escape(m)} {int(t.ok)} of {int(t.n)} consistent (median |sigma| "
                                                      f"{t.med:.1f})" for m, t in tally.iterrows())
@@ -372,6 +373,14 @@ def conclusions(c: Comparison) -> list[str]:
         if fl.at_bound:
             text += " The fit ran into its search range: that profile does not determine A, and the NGF rows test little."
         out.append(text)
+    steady_rows = rows[np.isfinite(rows.model_at_end.astype(float))] if "model_at_end" in rows else rows.iloc[0:0]
+    late = steady_rows[(steady_rows.model_at_end / steady_rows.predicted - 1).abs() > MODEL_UNSTEADY]
+    if len(late):
+        out.append("Steady values are compared with each model's exact steady state; over the DEM's final quarter "
+                   "some models are still on their way: " + ", ".join(
+                       f"{html.escape(r.model)} on {html.escape(r.drive)} at {r.model_at_end:.3g} "
+                       f"({(r.model_at_end / r.predicted - 1) * 100:+.0f} % of its steady {r.predicted:.3g})"
+                       for r in late.itertuples()) + ": there the DEM record is short of the model's time scale.")
     creep = rows[(rows.observable == "creep_length") & (rows.model == "local")]
     if len(creep):
         out.append(f"Below the layer the DEM creeps with an e-folding length of "
@@ -387,6 +396,9 @@ def conclusions(c: Comparison) -> list[str]:
                    "compared, since the continuum is rigid.")
     return out
 
+
+#: a model whose free response over the DEM's final quarter is this far from its steady value is not steady yet
+MODEL_UNSTEADY = 0.05
 
 HOW_TO_READ = {
     "scorecard": "Each bar is one scorecard row: how many combined standard errors the DEM lies from the prediction. "

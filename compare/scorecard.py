@@ -35,6 +35,7 @@ from continuum.scales import Material
 from .analysis import DriveAnalysis
 from .calibrate import WALL_EXCLUSION
 from .models import Drive, Prediction, SceneModel, Steady, depth_at_fraction
+from .plate import STEADY_LAST
 
 OBSERVABLES = {
     "u_w_inf": ("sqrt(g d)", "steady plate speed"),
@@ -227,6 +228,14 @@ class Scorecard:
         return cls(rows, pd.DataFrame(scene), replicates, edge_stability, bands)
 
 
+def _final_quarter(series: pd.DataFrame, a: DriveAnalysis) -> float:
+    """The model's free response averaged like the DEM's steady value: over the record's final quarter
+    (compare.plate.STEADY_LAST), on the DEM's output times: is the model itself steady by then?"""
+    t = a.series.t.to_numpy()
+    last = t >= t[0] + STEADY_LAST * (t[-1] - t[0])
+    return float(np.mean(np.interp(t[last], series.t, series[a.response])))
+
+
 def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
     """Interpolation error of a model's t90: the change when every other output time is dropped."""
     t = a.series.t.to_numpy()
@@ -260,6 +269,7 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                 except ValueError:  # a replicate that cannot sustain the drive (e.g. mu_d below mu_w)
                     continue
             times = pred.series.t.to_numpy()
+            end_value = _final_quarter(pred.series, a)
             t90_sd, bands[(a.label, model.key)] = _linearised(model, material, a.spec.drive, times, a, replicates)
             for obs, measured in dem.items():
                 value = central.get(obs)
@@ -284,5 +294,6 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                              "model": model.key, "model_label": model.label, "predicted": value,
                              "band": [float(lo), float(hi)], "numerical_err": numerical, "sigma": float(sigma),
                              "verdict": "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees",
-                             "blind": fitted_on.get(model.key) != a.label})
+                             "blind": fitted_on.get(model.key) != a.label,
+                             "model_at_end": end_value if obs == f"{a.response}_inf" else np.nan})
     return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands
