@@ -106,8 +106,9 @@ def profiles_table(raw: pd.DataFrame, plate: pd.DataFrame, every: int, dt: float
 def merge_drive(drive_dir: Path, segments: list[Path], starts: list[int], profile_every: int, dt: float,
                 dimension: int) -> dict:
     """Assemble the drive's output files from its segments; returns a summary for run.json."""
-    plates = [pd.read_csv(s / PLATE_CSV) if (s / PLATE_CSV).exists() else pd.DataFrame(columns=["step"])
-              for s in segments]
+    # a segment killed at its start may have no plate.csv yet, or an empty one
+    plates = [pd.read_csv(s / PLATE_CSV) if (s / PLATE_CSV).exists() and (s / PLATE_CSV).stat().st_size
+              else pd.DataFrame(columns=["step"]) for s in segments]
     plate = merge_table(plates, starts)
     if len(plate):  # no friction coefficient while the plate is out of contact
         plate["mu_w"] = (-plate["f_x"] / plate["f_y"]).where(plate["f_y"] > 0)

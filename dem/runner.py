@@ -323,10 +323,15 @@ class Runner:
         try:
             self._stage(meta, key, st, lambda: self.lmp.run("in.lammps", seg, self.plan, dp.steps, start, key,
                                                                  self.position(seed)))
-        finally:
-            st.info.update(outputs.merge_drive(d, segments, starts, self.plan.intervals["profiles"],
-                                                self.plan.dt, self.plan.dimension))
+        except BaseException:  # assemble what there is, but never let that mask why the drive stopped
+            try:
+                st.info.update(self._merge(d, segments, starts))
+            except Exception as exc:
+                st.info["merge_error"] = f"{type(exc).__name__}: {exc}"
             self.record(meta, key, st)
+            raise
+        st.info.update(self._merge(d, segments, starts))
+        self.record(meta, key, st)
         st.status, st.message = "complete", f"{dp.steps} steps ({dp.duration:.4g} time units)"
         for _, p in _restarts(d)[:-1]:
             p.unlink()
@@ -351,6 +356,10 @@ class Runner:
             st.wall_time += time.monotonic() - t0
             self.record(meta, key, st)
         return info
+
+    def _merge(self, d: Path, segments, starts) -> dict:
+        return outputs.merge_drive(d, segments, starts, self.plan.intervals["profiles"], self.plan.dt,
+                                   self.plan.dimension)
 
     def position(self, seed: int) -> int:
         """Progress-bar line of a seed's bed: one line per concurrent job."""
