@@ -1,9 +1,8 @@
 """``granstokes demo`` (``make demo``): the continuum report, the quick DEM preset (imposed stress and
-imposed speed) and the smoke preset (a second, smaller scene for the cost-vs-noise chart), the quick
-preset's independent mu(I) calibration by plane shear (``granstokes dem calibrate``, the same grains, at the
-demo's reduced protocol DEMO_CALIBRATION), the
-blind comparison report over both scenes (``compare --calibration``), and one index page linking them.  Metrics at the top level come from the
-quick preset's imposed-stress drive."""
+imposed speed) and the smoke preset (a second, smaller scene), an independent mu(I) calibration of the
+quick grains by plane shear (``granstokes dem calibrate`` at the demo's reduced protocol DEMO_CALIBRATION),
+the blind comparison over both scenes (``compare --calibration``), and one index page with the scorecard
+and the conclusions, linking both reports."""
 from __future__ import annotations
 
 import html
