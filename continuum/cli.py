@@ -9,12 +9,15 @@ from pathlib import Path
 
 from granstokes.validate import finite, output_dir, output_file, require
 
-from .rheology import Friction
-from .scales import UNITS
-from .solver import Numerics, Solution, check_times, solve_speed, solve_stress
+#: the CLI's accuracy for an imposed stress (an imposed speed gets one solve with its error estimates:
+#: its wall layer converges at first order before t~_mud, so 1e-6 costs minutes; bench/RESULTS.md)
+STRESS_ACCURACY = 1e-6
+DEFAULT_CELLS = 64
 
 
-def _friction_and_case(args) -> tuple[Friction, str, float]:
+def _friction_and_case(args):
+    from .rheology import Friction
+
     fr = Friction(args.mu_s, args.mu_d)
     if args.mu_w is not None:
         return fr, "stress", fr.check_mu_w(args.mu_w)
@@ -25,15 +28,23 @@ def _friction_and_case(args) -> tuple[Friction, str, float]:
 
 
 def run_continuum(args) -> int:
+    from .solver import Numerics, check_times, solve_speed, solve_stress
+
     fr, imposed, value = _friction_and_case(args)
     times = check_times(args.times)
     numerics = Numerics(n_cells=args.n_cells, rtol=args.rtol, method=args.method)
+    accuracy = args.accuracy if args.accuracy is not None else (STRESS_ACCURACY if imposed == "stress" else None)
+    if accuracy is not None:
+        from .solver import ACCURACY_RANGE
+
+        require(finite(accuracy) and ACCURACY_RANGE[0] <= accuracy <= ACCURACY_RANGE[1], "--accuracy",
+                f"in [{ACCURACY_RANGE[0]:g}, {ACCURACY_RANGE[1]:g}]", accuracy)
     if args.plot is not None:
         output_file(args.plot, "--plot", ".png")
     if args.save is not None:
         output_dir(args.save, "--save")
     solve = solve_stress if imposed == "stress" else solve_speed
-    sol = solve(fr, value, times, numerics)
+    sol = solve(fr, value, times, numerics, accuracy=accuracy, estimate=True)
     if args.json:
         print(json.dumps(sol.summary()))
     else:
@@ -45,18 +56,27 @@ def run_continuum(args) -> int:
     return 0
 
 
-def format_table(sol: Solution) -> str:
+def format_table(sol) -> str:
+    from .scales import UNITS
+
+    asked = f"accuracy {sol.accuracy:g} reached" if sol.accuracy else "one solve, no accuracy asked"
     lines = [f"imposed {sol.imposed}: mu_s = {sol.friction.mu_s:.6g}, mu_d = {sol.friction.mu_d:.6g}, "
              f"mu_w_inf = {sol.mu_w_inf:.6g}, beta_w = {sol.beta_w:.6g}",
              f"units: {UNITS['tilde_variables']}",
-             f"{'t~':>12} {'u~_w':>12} {'mu_w':>12} {'delta/delta_s':>14}"]
-    lines += [f"{t:12.4e} {u:12.6f} {m:12.6f} {d:14.6f}" for t, u, m, d in zip(sol.t, sol.u_w, sol.mu_w, sol.delta)]
+             f"numerics: {sol.numerics.n_cells} cells, order {sol.numerics.order}, stretch {sol.mesh.stretch:.3g}, "
+             f"rtol {sol.numerics.rtol:.2g}; {asked}; +- are estimated absolute errors",
+             f"{'t~':>12} {'u~_w':>24} {'mu_w':>24} {'delta/delta_s':>24}"]
+    err = sol.errors
+    for k, t in enumerate(sol.t):
+        cells = [f"{getattr(sol, q)[k]:.9f} +- {err[q][k]:.1e}" if q in err else f"{getattr(sol, q)[k]:.9f}"
+                 for q in ("u_w", "mu_w", "delta")]
+        lines.append(f"{t:12.4e} " + " ".join(f"{c:>24}" for c in cells))
     st = sol.steady
-    lines.append(f"{'steady':>12} {st['u_w']:12.6f} {st['mu_w']:12.6f} {st['delta']:14.6f}")
+    lines.append(f"{'steady':>12} {st['u_w']:24.9f} {st['mu_w']:24.9f} {st['delta']:24.9f}  (exact)")
     return "\n".join(lines)
 
 
-def plot_profiles(sol: Solution, path: Path) -> None:
+def plot_profiles(sol, path: Path) -> None:
     """tau~, mu~ and u~ profiles at the requested times."""
     from matplotlib.figure import Figure
 
@@ -89,7 +109,10 @@ def register(sub) -> None:
     p.add_argument("--plot", type=Path, help="draw the profiles at the requested times into FILE.png")
     p.add_argument("--save", type=Path, metavar="DIR",
                    help="write continuum_profiles.csv, continuum_series.csv (every step) and continuum.json")
-    p.add_argument("--n-cells", type=int, default=Numerics.n_cells, help="mesh cells (default %(default)s)")
-    p.add_argument("--rtol", type=float, default=Numerics.rtol, help="time-step tolerance (default %(default)s)")
-    p.add_argument("--method", default=Numerics.method, help="time stepper: sdirk4 or tr-bdf2")
+    p.add_argument("--accuracy", type=float, metavar="TOL",
+                   help=f"refine until every estimated relative error is below TOL (default {STRESS_ACCURACY:g} for an "
+                        "imposed stress; an imposed speed: one solve with its error estimates)")
+    p.add_argument("--n-cells", type=int, default=DEFAULT_CELLS, help="(starting) mesh cells (default %(default)s)")
+    p.add_argument("--rtol", type=float, help="time-step tolerance (default: matched to the mesh's space error)")
+    p.add_argument("--method", default="sdirk4", help="time stepper: sdirk4 or tr-bdf2")
     p.set_defaults(func=run_continuum)

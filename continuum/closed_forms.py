@@ -125,3 +125,52 @@ def speed_time_scales(fr: Friction, u_w: float, mu_w_inf: float) -> dict:
     """Scales of the two imposed-speed stages: t_mud ~ u~_w^2 (eq. TimeScaleMuD) while mu_w ~ mu_d,
     t_muw ~ (u~_w/(mu_w^inf - mu_s))^2 (eq. TimeScaleMuW) to reach the steady mu_w^inf."""
     return {"t_mud": u_w**2, "t_muw": (u_w / (mu_w_inf - fr.mu_s)) ** 2}
+
+
+class SmallTimeLimit:
+    """The t~ -> 0 (beta_w -> 0) similarity solution of eq. GranularStokesEqn for an imposed stress.
+
+    For t~ << 1 the layer is thin, p~ = 1 + beta_w y~ -> 1, and tau~ = F(eta), eta = y~/sqrt(t~),
+    solves -(eta/2) F' = (mu_d - mu_w F)^2 F'' with F(0) = 1, F(inf) = mu_s/mu_w (the initial state);
+    then u~_w = sqrt(t~) int_0^inf (1/mu~ - 1)/Dmu d eta and delta = eta_delta sqrt(t~), with
+    mu~ = (mu_d - mu_w F)/Dmu.  Solved by collocation (scipy solve_bvp) on eta in [0, ETA_MAX Dmu]."""
+
+    ETA_MAX = 24.0
+
+    def __init__(self, fr: Friction, mu_w: float, tol: float = 1e-10):
+        from scipy.integrate import solve_bvp
+
+        self.fr, self.mu_w = fr, mu_w
+        far = fr.mu_s / mu_w
+        eta = np.linspace(0.0, self.ETA_MAX * fr.dmu, 400)
+
+        def rhs(e, z):
+            return np.vstack([z[1], -0.5 * e * z[1] / (fr.mu_d - mu_w * z[0]) ** 2])
+
+        def bc(za, zb):
+            return np.array([za[0] - 1.0, zb[0] - far])
+
+        guess = np.vstack([far + (1 - far) * erfc(eta / (2 * fr.dmu)), np.zeros_like(eta)])
+        sol = solve_bvp(rhs, bc, eta, guess, tol=tol, max_nodes=100000)
+        if not sol.success:
+            raise RuntimeError(f"small-time similarity solution: {sol.message}")
+        self.solution = sol
+
+    def mu(self, eta):
+        return self.mu_w * self.solution.sol(eta)[0]
+
+    @property
+    def wall_speed_coefficient(self) -> float:
+        """u~_w/sqrt(t~) as t~ -> 0."""
+        fr = self.fr
+        return quad(lambda e: (fr.dmu / (fr.mu_d - self.mu(e)) - 1.0) / fr.dmu, 0.0, self.solution.x[-1],
+                    limit=400, epsabs=1e-13, epsrel=1e-12)[0]
+
+    @property
+    def delta_coefficient(self) -> float:
+        """delta/sqrt(t~) as t~ -> 0 (delta/delta_s; DELTA_THRESHOLD of the wall excess)."""
+        from scipy.optimize import brentq
+
+        fr = self.fr
+        f = lambda e: (self.mu(e) - fr.mu_s) / (self.mu_w - fr.mu_s) - DELTA_THRESHOLD
+        return brentq(f, 0.0, self.solution.x[-1], xtol=1e-14, rtol=1e-13)

@@ -7,6 +7,9 @@ where f falls below ``level``, interpolated between the bracketing nodes j-1 and
 * ``log=False``: linearly in f (noisy data, a simple zero);
 * ``log=True``: linearly in log f where both nodes are positive (exact for an exponential tail, the
   erfc-like tail of delta), linearly where the lower node is not;
+* ``cubic=True``: instead, the cubic through the nodes j-2..j+1 (in log f where those are positive and
+  ``log``), solved for the level by safeguarded Newton in [y_j-1, y_j]: fourth-order accurate for a
+  smooth profile (the continuum solver's delta; the linear forms are second-order);
 * ``first=True``: j is the first node below ``level`` (nan where f never falls below it, y[0] where
   f[0] already does); ``first=False``: j - 1 is the last node at or above ``level`` (y[0] where none is,
   y[-1] where the last node is).
@@ -16,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def crossing_depth(y, f, level: float, *, log: bool = False, first: bool = True):
+def crossing_depth(y, f, level: float, *, log: bool = False, first: bool = True, cubic: bool = False):
     """Depth(s) where ``f`` crosses ``level`` downward; a float for a 1-D ``f``, an array otherwise."""
     y, f = np.asarray(y, dtype=float), np.asarray(f, dtype=float)
     f2 = f.reshape(-1, f.shape[-1])
@@ -40,5 +43,29 @@ def crossing_depth(y, f, level: float, *, log: bool = False, first: bool = True)
         if log:
             frac = np.where((f1 > 0) & (f0 > 0), np.log(f0 / level) / np.log(f0 / f1), frac)
     out = y0 + frac * (y1 - y0)
+    if cubic and n >= 4:
+        out = _cubic_crossing(y, f2, jj, level, log, out)
     out = np.where(at_top, y[0], np.where(at_bottom, y[-1], np.where(never, np.nan, out)))
     return float(out[0]) if f.ndim == 1 else out.reshape(f.shape[:-1])
+
+
+def _cubic_crossing(y, f2, jj, level, log, guess):
+    """Refine the crossing in [y_j-1, y_j] on the cubic through nodes j-2..j+1 (see the module)."""
+    n = f2.shape[-1]
+    cols = np.clip(jj - 2, 0, n - 4)[:, None] + np.arange(4)
+    rows = np.arange(len(f2))[:, None]
+    fv = f2[rows, cols]
+    use_log = log & np.all(fv > 0, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.where(use_log[:, None], np.log(np.where(fv > 0, fv, 1.0)), fv) - np.where(
+            use_log, np.log(level), level)[:, None]
+    lo, hi = y[jj - 1], y[jj]
+    scale = hi - lo
+    z = (y[cols] - lo[:, None]) / scale[:, None]
+    coef = np.linalg.solve(z[..., None] ** np.arange(4), g[..., None])[..., 0]  # g(z) = sum_k coef_k z^k
+    s = (guess - lo) / scale
+    for _ in range(8):
+        value = ((coef[:, 3] * s + coef[:, 2]) * s + coef[:, 1]) * s + coef[:, 0]
+        slope = (3 * coef[:, 3] * s + 2 * coef[:, 2]) * s + coef[:, 1]
+        s = np.clip(s - value / np.where(slope != 0, slope, np.inf), 0.0, 1.0)
+    return np.where(np.isfinite(s), lo + s * scale, guess)

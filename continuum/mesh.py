@@ -1,18 +1,77 @@
-"""Graded finite-difference mesh on y~ in [0, 1], refined at the moving wall.
+"""Graded finite-difference mesh on y~ in [0, 1], refined at the moving wall, and its operators.
 
 At t~ = 1e-4 the layer is ~0.01 thick; at t~ = 10 it fills the domain.  A smooth exponential
-map y~(xi) = (exp(a xi) - 1)/(exp(a) - 1) of a uniform xi-grid keeps the three-point second
-difference second-order accurate globally (Kalnay de Rivas 1972), with cells growing by the
-constant factor exp(a/N) from the wall.
+map y~(xi) = (exp(a xi) - 1)/(exp(a) - 1) of a uniform xi-grid grows the cells by the constant
+factor exp(a/N) from the wall, so that a layer of any thickness above the first cell spans about the
+same number of cells.  Two discretisations of d2/dy~2 and of the quadrature:
+
+* order 2: the three-point second difference on the nodes (Kalnay de Rivas 1972) and the trapezoidal
+  rule, the standard method of lines (the baseline, the stability maps);
+* order 4: five-point differences in xi, with the map's exact derivatives
+  (d2/dy2 = (d2/dxi2 - a d/dxi)/y'^2 since y'' = a y'), six-point one-sided rows next to the ends,
+  and the four-point (cubic) rule on each cell in xi for the integrals.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache, wraps
+from math import factorial
 
 import numpy as np
 
 from .rheology import require
+
+ORDERS = (2, 4)
+#: operators on at most this many nodes are applied as dense matrices
+DENSE_UP_TO = 300
+CENTRED = (-2, -1, 0, 1, 2)
+
+
+@lru_cache(maxsize=None)
+def fd_weights(offsets: tuple[int, ...], derivative: int) -> np.ndarray:
+    """Weights w with sum_k w_k f(x + k h) = h^derivative f^(derivative)(x) + O(h^len(offsets)), for
+    integer offsets k (the Taylor/Vandermonde conditions, exact in rationals up to round-off)."""
+    k = np.asarray(offsets, dtype=float)
+    vander = np.array([k**m / factorial(m) for m in range(len(k))])
+    rhs = np.zeros(len(k))
+    rhs[derivative] = 1.0
+    return np.linalg.solve(vander, rhs)
+
+
+def _per_order(method):
+    """Memoise a Mesh operator per instance and order (the mesh is immutable)."""
+    @wraps(method)
+    def memoised(self, order: int):
+        memo = self.__dict__.setdefault("_operators", {})
+        key = (method.__name__, order)
+        if key not in memo:
+            require(order in ORDERS, "order", f"one of {ORDERS}", order)
+            memo[key] = method(self, order)
+        return memo[key]
+    return memoised
+
+
+@dataclass(frozen=True, eq=False)
+class Stencil:
+    """A linear operator on nodal values, row r = sum_k weights[r, k] f[cols[r, k]]; cols of a row
+    are consecutive (a band)."""
+
+    cols: np.ndarray
+    weights: np.ndarray
+
+    @cached_property
+    def matrix(self):
+        """The operator as a matrix: dense while small (fastest), else sparse (CSR)."""
+        import scipy.sparse as sp
+
+        rows = np.broadcast_to(np.arange(len(self.cols))[:, None], self.cols.shape)
+        m = sp.csr_matrix((self.weights.ravel(), (rows.ravel(), self.cols.ravel())),
+                          shape=(len(self.cols), int(self.cols.max()) + 1))
+        return m.toarray() if m.shape[1] <= DENSE_UP_TO else m
+
+    def __call__(self, f):
+        f = np.asarray(f)
+        return (self.matrix @ f.reshape(-1, f.shape[-1]).T).T.reshape(*f.shape[:-1], -1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -20,16 +79,27 @@ class Mesh:
     """Nodes y[0] = 0 (wall) < ... < y[N] = 1 (bottom of the steady layer, y = delta_s)."""
 
     y: np.ndarray
+    stretch: float = 0.0
 
     @classmethod
     def graded(cls, n_cells: int = 200, stretch: float = 6.0) -> "Mesh":
         """Exponentially graded mesh; ``stretch`` = a, largest/smallest cell = exp(a) (about)."""
         require(isinstance(n_cells, (int, np.integer)) and n_cells >= 8, "n_cells", "an integer >= 8", n_cells)
-        require(0 <= stretch <= 30, "stretch", "in [0, 30]", stretch)
+        require(0 <= stretch <= MAX_STRETCH, "stretch", f"in [0, {MAX_STRETCH:g}]", stretch)
         xi = np.linspace(0.0, 1.0, n_cells + 1)
         y = xi if stretch == 0 else np.expm1(stretch * xi) / np.expm1(stretch)
         y[-1] = 1.0
-        return cls(y)
+        return cls(y, float(stretch))
+
+    @classmethod
+    def for_first_cell(cls, n_cells: int, first_cell: float) -> "Mesh":
+        """The graded mesh whose first cell is ``first_cell`` (uniform if that is 1/N or more)."""
+        if first_cell * n_cells >= 1.0:
+            return cls.graded(n_cells, 0.0)
+        a = 1.0
+        for _ in range(100):  # a = log(1 + (a/N)/first_cell): first cell = (exp(a/N) - 1)/(exp(a) - 1)
+            a = np.log1p(np.expm1(a / n_cells) / first_cell)
+        return cls.graded(n_cells, float(a))
 
     @property
     def n_cells(self) -> int:
@@ -40,8 +110,16 @@ class Mesh:
         return np.diff(self.y)
 
     @cached_property
+    def dy_dxi(self) -> np.ndarray:
+        """y'(xi) of the map at the nodes (exact)."""
+        a = self.stretch
+        if a == 0:
+            return np.ones_like(self.y)
+        return a * np.exp(a * np.linspace(0.0, 1.0, len(self.y))) / np.expm1(a)
+
+    @cached_property
     def weights(self) -> np.ndarray:
-        """Trapezoidal quadrature weights: integral f dy ~ weights @ f."""
+        """Trapezoidal quadrature weights: integral f dy ~ weights @ f (order 2)."""
         w = np.zeros_like(self.y)
         w[:-1] += self.h / 2
         w[1:] += self.h / 2
@@ -49,6 +127,81 @@ class Mesh:
 
     @cached_property
     def d2(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Coefficients (lower, diag, upper) of d2/dy2 at the interior nodes 1..N-1."""
+        """Coefficients (lower, diag, upper) of the three-point d2/dy2 at the interior nodes 1..N-1."""
         hm, hp = self.h[:-1], self.h[1:]
         return 2 / (hm * (hm + hp)), -2 / (hm * hp), 2 / (hp * (hm + hp))
+
+    @_per_order
+    def second_derivative(self, order: int) -> Stencil:
+        """d2/dy2 at the interior nodes 1..N-1, of the given order (ORDERS)."""
+        n = self.n_cells
+        rows = np.arange(1, n)
+        if order == 2:
+            return Stencil(rows[:, None] + np.arange(-1, 2), np.column_stack(self.d2))
+        require(n >= 8, "n_cells", "an integer >= 8 for order 4", n)
+        start = np.clip(rows - 2, 0, n - 5)            # six consecutive nodes holding each row's stencil
+        cols = start[:, None] + np.arange(6)
+        d2, d1 = np.zeros((n - 1, 6)), np.zeros((n - 1, 6))
+        for r, i in enumerate(rows):
+            off = i - start[r]  # position of node i in its window
+            if i == 1:            # one-sided rows: d2 on all six nodes, d1 on five
+                d2[r], d1[r, :5] = fd_weights(tuple(range(-1, 5)), 2), fd_weights(tuple(range(-1, 4)), 1)
+            elif i == n - 1:
+                d2[r], d1[r, 1:] = fd_weights(tuple(range(-4, 2)), 2), fd_weights(tuple(range(-3, 2)), 1)
+            else:
+                d2[r, off - 2:off + 3] = fd_weights(CENTRED, 2)
+                d1[r, off - 2:off + 3] = fd_weights(CENTRED, 1)
+        dxi = 1.0 / n
+        yp = self.dy_dxi[rows]
+        return Stencil(cols, (d2 / dxi**2 - self.stretch * d1 / dxi) / yp[:, None] ** 2)
+
+    @_per_order
+    def cell_integrals(self, order: int) -> Stencil:
+        """integral of f over each cell [y_j, y_j+1] (rows j = 0..N-1), of the given order."""
+        n = self.n_cells
+        cells = np.arange(n)
+        if order == 2:
+            return Stencil(cells[:, None] + np.arange(2), np.column_stack([self.h / 2, self.h / 2]))
+        start = np.clip(cells - 1, 0, n - 3)
+        w = np.tile(np.array([-1.0, 13.0, 13.0, -1.0]) / 24, (n, 1))  # cubic through j-1..j+2
+        w[0] = np.array([9.0, 19.0, -5.0, 1.0]) / 24
+        w[-1] = w[0][::-1]
+        cols = start[:, None] + np.arange(4)
+        return Stencil(cols, w / n * self.dy_dxi[cols])
+
+    @_per_order
+    def cell_integrals_from_node1(self, order: int) -> Stencil:
+        """As ``cell_integrals`` for the cells 1..N-1, using nodes 1..N only (the wall node may be
+        singular: continuum.problems.ImposedSpeed)."""
+        cells = self.cell_integrals(order)
+        cols, w = cells.cols[1:].copy(), cells.weights[1:].copy()
+        if order == 4:
+            cols[0] = 1 + np.arange(4)
+            w[0] = np.array([9.0, 19.0, -5.0, 1.0]) / 24 / self.n_cells * self.dy_dxi[cols[0]]
+        return Stencil(cols, w)
+
+    @_per_order
+    def quadrature_from_node1(self, order: int) -> np.ndarray:
+        """Weights q (q[0] = 0) with int_y1^1 f dy ~ q @ f."""
+        cells = self.cell_integrals_from_node1(order)
+        q = np.zeros_like(self.y)
+        np.add.at(q, cells.cols, cells.weights)
+        return q
+
+    @_per_order
+    def quadrature(self, order: int) -> np.ndarray:
+        """Weights q with integral_0^1 f dy ~ q @ f, of the given order."""
+        cells = self.cell_integrals(order)
+        q = np.zeros_like(self.y)
+        np.add.at(q, cells.cols, cells.weights)
+        return q
+
+    def integral_from_bottom(self, f, order: int):
+        """int_y^1 f dy at every node (last axis), of the given order."""
+        pieces = self.cell_integrals(order)(f)
+        up = np.cumsum(pieces[..., ::-1], axis=-1)[..., ::-1]
+        return np.concatenate([up, np.zeros_like(up[..., :1])], axis=-1)
+
+
+#: the map's largest stretch: exp(40) ~ 2e17 between the largest and the smallest cell
+MAX_STRETCH = 40.0

@@ -1,12 +1,12 @@
 """Quantities derived from a shear-stress profile tau~(y~) on a Mesh (paper section 3.3).
 
 All take the friction law, the reference wall friction mu_w (imposed, or mu_w^inf for an imposed
-speed), the mesh and tau~ at every node (last axis; leading axes are times).
+speed), the mesh and tau~ at every node (last axis; leading axes are times), and the ``order`` of
+the discretisation (continuum.mesh: 2 or 4), to which the integrals and the crossing are matched.
 """
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
 
 from .crossing import crossing_depth
 from .mesh import Mesh
@@ -25,30 +25,49 @@ def shear_rate(fr: Friction, mu_w: float, mesh: Mesh, tau):
     return np.sqrt(1.0 + fr.beta(mu_w) * mesh.y) / fr.dmu * (1.0 / mt - 1.0)
 
 
-def velocity(fr: Friction, mu_w: float, mesh: Mesh, tau):
-    """u~(y~) integrated from u~(1) = 0 upwards with the trapezoidal rule (second order)."""
+def velocity(fr: Friction, mu_w: float, mesh: Mesh, tau, order: int = 4, wall_speed: float | None = None):
+    """u~(y~) integrated from u~(1) = 0 upwards (the mesh's rule of that order).  With an imposed
+    ``wall_speed`` the wall node may be singular (continuum.problems.ImposedSpeed): the profile is
+    integrated from nodes 1..N, and u~(0) is the imposed speed (the constraint, which holds to
+    round-off, carries the first cell)."""
     rate = shear_rate(fr, mu_w, mesh, tau)
-    up = cumulative_trapezoid(rate[..., ::-1], -mesh.y[::-1], axis=-1, initial=0.0)
-    return up[..., ::-1]
+    if wall_speed is None:
+        return mesh.integral_from_bottom(rate, order)
+    pieces = mesh.cell_integrals_from_node1(order)(rate)
+    up = np.cumsum(pieces[..., ::-1], axis=-1)[..., ::-1]
+    return np.concatenate([np.full_like(up[..., :1], wall_speed), up, np.zeros_like(up[..., :1])], axis=-1)
 
 
-def layer_thickness(fr: Friction, mu_w: float, mesh: Mesh, tau, threshold: float = DELTA_THRESHOLD):
+def layer_thickness(fr: Friction, mu_w: float, mesh: Mesh, tau, order: int = 4, threshold: float = DELTA_THRESHOLD):
     """delta(t~)/delta_s: first depth where (mu - mu_s) falls to ``threshold`` of the wall excess
-    (mu(0) - mu_s), log-linear between nodes (exact for an exponential tail; continuum.crossing)."""
+    (mu(0) - mu_s), interpolated in log (mu - mu_s) between nodes (continuum.crossing): linearly for
+    order 2 (exact for an exponential tail), on a cubic for order 4."""
     mu = friction_profile(fr, mu_w, mesh, tau)
-    return crossing_depth(mesh.y, (mu - fr.mu_s) / (mu[..., :1] - fr.mu_s), threshold, log=True)
+    return crossing_depth(mesh.y, (mu - fr.mu_s) / (mu[..., :1] - fr.mu_s), threshold, log=True, cubic=order > 2)
 
 
 class SeriesRecorder:
-    """Observer: records t~, u~_w, mu_w and delta after every accepted time step."""
+    """Observer: keeps t~ and the state after every accepted time step; ``table()`` derives u~_w,
+    mu_w and delta from them in one vectorised pass."""
 
     def __init__(self, problem):
         self.problem = problem
-        self.rows: list[tuple[float, float, float, float]] = []
+        self.times: list[float] = []
+        self.states: list[np.ndarray] = []
 
     def __call__(self, t, x):
+        self.times.append(t)
+        self.states.append(x.copy())
+
+    def table(self) -> np.ndarray:
+        """Rows (t, u_w, mu_w, delta); delta = 0 at t = 0."""
         pb = self.problem
-        tau = pb.full(x)
-        u_w = float(pb.mesh.weights @ shear_rate(pb.friction, pb.mu_w, pb.mesh, tau))
-        delta = float(layer_thickness(pb.friction, pb.mu_w, pb.mesh, tau)) if t > 0 else 0.0
-        self.rows.append((t, u_w, pb.mu_w * tau[0], delta))
+        t = np.array(self.times)
+        tau = np.array([pb.full(x) for x in self.states]).reshape(len(t), -1)
+        delta = np.zeros(len(t))
+        if len(t):
+            late = t > 0
+            delta[late] = layer_thickness(pb.friction, pb.mu_w, pb.mesh, tau[late], pb.order)
+        u_w = velocity(pb.friction, pb.mu_w, pb.mesh, tau, pb.order, getattr(pb, "u_w", None))[:, 0]
+        return np.column_stack([t, u_w,
+                                pb.mu_w * tau[:, 0], delta]) if len(t) else np.empty((0, 4))

@@ -1,6 +1,7 @@
 """The paper's shear-stress diffusion problem (the evolution rate), apart from the numerics.
 
-Unknowns x are tau~ at nodes 0..N-1 of a Mesh; tau~(y~=1) = 1 is fixed.  Written as
+Unknowns x are tau~ at nodes 0..N-1 of a Mesh; tau~(y~=1) = 1 is fixed.  The mesh's d2/dy~2 and
+quadrature are of ``order`` 2 (three-point, trapezoid) or 4 (continuum.mesh).  Written as
 M x' = F(x) for continuum.stepper: the interior rows are eq. GranularStokesEqn,
 
     d tau~/d t~ = D(y~, tau~) d2 tau~/dy~2,   D = (mu_d p~ - mu_w tau~)^2 / p~^(3/2),  p~ = 1 + beta_w y~,
@@ -17,22 +18,31 @@ import numpy as np
 from .mesh import Mesh
 from .rheology import Friction, finite, require
 from .steady import mu_w_for_speed
+from .stepper import Jacobian
 
 
 class ShearStressDiffusion:
-    """Interior rate of eq. GranularStokesEqn and its tridiagonal Jacobian; row 0 is the wall."""
+    """Interior rate of eq. GranularStokesEqn and its banded Jacobian; row 0 is the wall."""
 
     imposed: str
+    dense_wall: bool
 
-    def __init__(self, friction: Friction, mu_w: float, mesh: Mesh):
+    def __init__(self, friction: Friction, mu_w: float, mesh: Mesh, order: int = 4):
         self.friction = friction
         self.mu_w = friction.check_mu_w(mu_w)
         self.beta = friction.beta(self.mu_w)
-        self.mesh = mesh
+        self.mesh, self.order = mesh, order
         self.p = 1.0 + self.beta * mesh.y
         self._p32 = self.p[1:-1] ** 1.5
         self.mass = np.ones(mesh.n_cells)
         self.mass[0] = 0.0
+        self.lap = mesh.second_derivative(order)
+        # band positions of the Laplacian's entries on the unknowns (node N is fixed)
+        n = mesh.n_cells
+        rows = np.broadcast_to(np.arange(1, n)[:, None], self.lap.cols.shape)
+        self._on_unknowns = self.lap.cols < n
+        self.kl = self.ku = int(np.max(np.abs(self.lap.cols - rows)))
+        self._band_at = (self.ku + rows - self.lap.cols)[self._on_unknowns], self.lap.cols[self._on_unknowns]
 
     def initial(self) -> np.ndarray:
         """tau~(y~, 0) = mu_s p~/mu_w at nodes 0..N-1 (eq. InitStokesEqn)."""
@@ -44,8 +54,7 @@ class ShearStressDiffusion:
 
     def _terms(self, x: np.ndarray):
         tau = self.full(x)
-        cl, cd, cu = self.mesh.d2
-        lap = cl * tau[:-2] + cd * tau[1:-1] + cu * tau[2:]
+        lap = self.lap.matrix @ tau
         s = self.friction.mu_d * self.p[1:-1] - self.mu_w * tau[1:-1]
         return lap, s, s * s / self._p32
 
@@ -54,27 +63,21 @@ class ShearStressDiffusion:
         lap, _, diff = self._terms(x)
         return np.concatenate(([self.wall_residual(x)], diff * lap))
 
-    def jacobian(self, x: np.ndarray):
-        """dF/dx as (sub, diag, sup, row0): tridiagonal bands, and a dense row 0 or None."""
+    def jacobian(self, x: np.ndarray) -> Jacobian:
+        """dF/dx: the Laplacian's band times the diffusivity, its derivative on the diagonal; row 0
+        is the wall (dense for the imposed speed)."""
         lap, s, diff = self._terms(x)
-        cl, cd, cu = self.mesh.d2
-        diag = diff * cd - 2 * self.mu_w * s / self._p32 * lap
+        bands = np.zeros((self.kl + self.ku + 1, len(x)))
+        bands[self._band_at] = (diff[:, None] * self.lap.weights)[self._on_unknowns]
+        bands[self.ku, 1:] -= 2 * self.mu_w * s / self._p32 * lap
         row0 = self.wall_gradient(x)
-        return (diff * cl, np.concatenate(([row0[0]], diag)),
-                np.concatenate(([row0[1]], (diff * cu)[:-1])), row0 if self.dense_wall else None)
-
-    def project(self, x: np.ndarray) -> np.ndarray:
-        """Satisfy the wall row exactly: it is linear in x[0] for both wall conditions."""
-        x[0] -= self.wall_residual(x) / self.wall_gradient(x)[0]
-        return x
+        j = np.arange(min(self.ku + 1, len(x)))
+        bands[self.ku - j, j] = row0[j]
+        return Jacobian(bands, self.kl, self.ku, row0 if self.dense_wall else None)
 
     def mu(self, x: np.ndarray) -> np.ndarray:
         """Local friction mu = mu_w tau~/p~ at all nodes."""
         return self.mu_w * self.full(x) / self.p
-
-    def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
-        """Largest fraction of a Newton update to take (1: no limit)."""
-        return 1.0
 
 
 class ImposedStress(ShearStressDiffusion):
@@ -91,11 +94,21 @@ class ImposedStress(ShearStressDiffusion):
         g[0] = 1.0
         return g
 
+    def project(self, x: np.ndarray) -> np.ndarray:
+        """Satisfy the wall row exactly."""
+        x[0] = 1.0
+        return x
+
+    def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
+        """Largest fraction of a Newton update to take (1: no limit)."""
+        return 1.0
+
 
 class ImposedSpeed(ShearStressDiffusion):
     """Imposed wall speed u~_w: the wall stress is the extra unknown fixed by
-    eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~ (with the mesh's
-    quadrature, the one that gives the velocity profile, so the constraint holds to round-off).
+    eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~, with the first cell
+    by the trapezoidal rule and the others by the mesh's rule of the problem's order on nodes 1..N
+    (the quadrature that gives the velocity profile, so the constraint holds to round-off).
 
     The wall unknown is v = 1/mu~(0) (the wall shear rate, up to a factor), in which the
     constraint is linear: it is solved exactly after each Newton solve.
@@ -105,17 +118,20 @@ class ImposedSpeed(ShearStressDiffusion):
     exponentially thin for t~ << t_mud ~ u~_w^2 (the velocity form du/dt ~ d/dy(-1/u_y) is a heat
     equation for y(u) in the hodograph plane); on the mesh it is carried by the first cell, where
     the constraint gives mu~_w ~ h_0/(2 Dmu u~_w), i.e. mu_w = mu_d - O(h_0): the wall friction is
-    as close to mu_d as the mesh can show.  Newton updates are limited to keep mu~ > 0.
+    as close to mu_d as the mesh can show (first order in h_0 until t~ ~ t_mud).  Newton updates are
+    limited to keep mu~ > 0.
     """
 
     imposed = "speed"
     dense_wall = True
 
-    def __init__(self, friction: Friction, u_w: float, mesh: Mesh):
+    def __init__(self, friction: Friction, u_w: float, mesh: Mesh, order: int = 4):
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
         self.u_w = float(u_w)
-        super().__init__(friction, mu_w_for_speed(friction, u_w), mesh)
-        self._wq = mesh.weights[:-1] * np.sqrt(self.p[:-1]) / friction.dmu
+        super().__init__(friction, mu_w_for_speed(friction, u_w), mesh, order)
+        q = mesh.quadrature_from_node1(order).copy()
+        q[:2] += mesh.h[0] / 2
+        self._wq = q[:-1] * np.sqrt(self.p[:-1]) / friction.dmu
 
     def initial(self) -> np.ndarray:
         x = super().initial()
@@ -127,10 +143,11 @@ class ImposedSpeed(ShearStressDiffusion):
         tau0 = (fr.mu_d - fr.dmu / x[0]) * self.p[0] / self.mu_w
         return np.concatenate(([tau0], x[1:], [1.0]))
 
-    def jacobian(self, x: np.ndarray):
-        sub, diag, sup, row0 = super().jacobian(x)
-        sub[0] *= self.friction.dmu * self.p[0] / (self.mu_w * x[0] ** 2)  # d tau~_0 / d v
-        return sub, diag, sup, row0
+    def jacobian(self, x: np.ndarray) -> Jacobian:
+        jac = super().jacobian(x)
+        k = np.arange(1, min(self.kl, len(x) - 1) + 1)
+        jac.bands[self.ku + k, 0] *= self.friction.dmu * self.p[0] / (self.mu_w * x[0] ** 2)  # d tau~_0 / d v
+        return jac
 
     def mu_tilde(self, x: np.ndarray) -> np.ndarray:
         """mu~ at nodes 0..N-1."""
@@ -146,6 +163,11 @@ class ImposedSpeed(ShearStressDiffusion):
         grad = self._wq / self.mu_tilde(x) ** 2 * self.mu_w / (self.p[:-1] * self.friction.dmu)
         grad[0] = self._wq[0]
         return grad
+
+    def project(self, x: np.ndarray) -> np.ndarray:
+        """Satisfy the constraint exactly: it is linear in v = x[0]."""
+        x[0] -= self.wall_residual(x) / self._wq[0]
+        return x
 
     def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
         """At most halve mu~ at an interior node, or v at the wall, in one Newton update."""

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -12,32 +12,81 @@ import pandas as pd
 from granstokes.provenance import provenance
 
 from . import observables as obs
-from .mesh import Mesh
+from .closed_forms import SELF_SIMILAR_DELTA
+from .mesh import MAX_STRETCH, ORDERS, Mesh
 from .problems import ImposedSpeed, ImposedStress
 from .rheology import Friction, finite, require
 from .scales import UNITS
-from .steady import steady_delta, steady_wall_speed
+from .steady import mu_w_for_speed, steady_delta, steady_wall_speed
 from .stepper import TABLEAUX, StepStats, integrate
+
+
+#: the first output time's layer is given this fraction of the mesh (the map's xi at delta(t_min))
+LAYER_SHARE = 0.3
+#: default time tolerance: MATCHED_RTOL on MATCHED_CELLS cells, scaled as n_cells^-4 (measured: the
+#: time error of u~_w then stays below the fourth-order space error of the mesh, bench/work_precision.py)
+MATCHED_RTOL, MATCHED_CELLS = 1e-8, 256
+#: atol = ATOL_PER_RTOL rtol (tau~ is O(1))
+ATOL_PER_RTOL = 1e-2
+#: the first time step, as a fraction of the first output time
+INITIAL_STEP = 1e-5
+#: the two solves of an error estimate: the coarse one has half the cells and this times the tolerance
+#: (every error 2^4 = 16 times larger: fourth order in space, tolerance-proportional in time)
+REFINEMENT = 2
+ORDER_GAIN = REFINEMENT**4
+#: the Richardson estimate times this bounds the true error (measured: the bare estimate is within a
+#: factor 2 of it either way, tests/continuum/test_accuracy.py)
+SAFETY = 3.0
 
 
 @dataclass(frozen=True)
 class Numerics:
-    """Resolution and tolerances.  Defaults reach ~1e-6 relative accuracy in u~_w (bench/)."""
+    """Resolution and tolerances of one solve.  ``stretch=None``: the map follows the first output
+    time (``stretch_for``); ``order``: of the spatial discretisation (continuum.mesh)."""
 
-    n_cells: int = 200
-    stretch: float = 6.0
-    rtol: float = 1e-6
-    atol: float = 1e-8
+    n_cells: int = 64
+    stretch: float | None = None
+    rtol: float | None = None
+    atol: float | None = None
     method: str = "sdirk4"
+    order: int = 4
 
     def __post_init__(self):
-        Mesh.graded(self.n_cells, self.stretch)  # validates both
+        Mesh.graded(self.n_cells, 0.0 if self.stretch is None else self.stretch)  # validates both
+        require(self.order in ORDERS, "order", f"one of {ORDERS}", self.order)
         require(self.method in TABLEAUX, "method", f"one of {sorted(TABLEAUX)}", self.method)
+        if self.rtol is None:  # time error matched to the fourth-order space error of this mesh
+            object.__setattr__(self, "rtol", min(MATCHED_RTOL * (MATCHED_CELLS / self.n_cells) ** 4, 1e-3))
+        if self.atol is None:
+            object.__setattr__(self, "atol", self.rtol * ATOL_PER_RTOL)
         require(finite(self.rtol) and 0 < self.rtol < 1, "rtol", "in (0, 1)", self.rtol)
         require(finite(self.atol) and 0 < self.atol < 1, "atol", "in (0, 1)", self.atol)
 
-    def mesh(self) -> Mesh:
-        return Mesh.graded(self.n_cells, self.stretch)
+    def mesh(self, stretch: float | None = None) -> Mesh:
+        """The mesh of ``n_cells`` with this stretch, else ``stretch`` (else uniform)."""
+        return Mesh.graded(self.n_cells, self.stretch if self.stretch is not None else (stretch or 0.0))
+
+    def coarser(self) -> "Numerics":
+        """The estimate's companion: half the cells, ORDER_GAIN times the tolerances."""
+        return replace(self, n_cells=self.n_cells // REFINEMENT, rtol=min(self.rtol * ORDER_GAIN, 0.1),
+                       atol=min(self.atol * ORDER_GAIN, 0.1))
+
+    def finer(self) -> "Numerics":
+        return replace(self, n_cells=self.n_cells * REFINEMENT, rtol=self.rtol / ORDER_GAIN,
+                       atol=self.atol / ORDER_GAIN)
+
+
+def stretch_for(fr: Friction, mu_w: float, t_min: float) -> float:
+    """The map's stretch a that puts LAYER_SHARE of the xi-grid inside the layer at t_min:
+    ln(1 + delta (e^a - 1)) = LAYER_SHARE a, with the short-time thickness
+    delta ~ SELF_SIMILAR_DELTA Dmu mu~_w sqrt(t~) (the wall diffusivity is (Dmu mu~_w)^2)."""
+    delta = SELF_SIMILAR_DELTA * fr.dmu * max(fr.tilde(mu_w), 0.05) * np.sqrt(t_min)
+    if delta >= LAYER_SHARE:
+        return 0.0
+    a = 1.0
+    for _ in range(200):
+        a = np.log1p(np.expm1(LAYER_SHARE * a) / delta)
+    return float(min(a, MAX_STRETCH))
 
 
 def check_times(times, name: str = "times") -> np.ndarray:
@@ -64,6 +113,8 @@ class Solution:
     series: pd.DataFrame        # columns t, u_w, mu_w, delta at every accepted step
     stats: StepStats
     numerics: Numerics
+    errors: dict = field(default_factory=dict)  # u_w, mu_w, delta -> absolute error estimates (aligned with t)
+    accuracy: float | None = None               # the relative accuracy asked for (None: one solve)
 
     @property
     def beta_w(self) -> float:
@@ -79,7 +130,8 @@ class Solution:
 
     @cached_property
     def velocity(self) -> np.ndarray:
-        return obs.velocity(self.friction, self.mu_w_inf, self.mesh, self.tau)
+        return obs.velocity(self.friction, self.mu_w_inf, self.mesh, self.tau, self.numerics.order,
+                            wall_speed=self.u_w_imposed)
 
     @property
     def u_w(self) -> np.ndarray:
@@ -91,19 +143,23 @@ class Solution:
 
     @cached_property
     def delta(self) -> np.ndarray:
-        return obs.layer_thickness(self.friction, self.mu_w_inf, self.mesh, self.tau)
+        return obs.layer_thickness(self.friction, self.mu_w_inf, self.mesh, self.tau, self.numerics.order)
 
     @property
     def steady(self) -> dict:
+        """The exact steady state (continuum.steady: closed forms, a root to 1e-15 for a speed)."""
         return {"u_w": steady_wall_speed(self.friction, self.mu_w_inf), "mu_w": self.mu_w_inf,
-                "delta": steady_delta(self.friction, self.mu_w_inf)}
+                "delta": steady_delta(self.friction, self.mu_w_inf),
+                "u_w_err": 0.0, "mu_w_err": 0.0, "delta_err": 0.0}
 
     def summary(self) -> dict:
-        """The CLI's JSON contract (granstokes continuum --json)."""
-        return {"imposed": self.imposed, "mu_s": self.friction.mu_s, "mu_d": self.friction.mu_d,
-                "mu_w_inf": self.mu_w_inf, "beta_w": self.beta_w, "t": self.t.tolist(),
-                "u_w": self.u_w.tolist(), "mu_w": self.mu_w.tolist(), "delta": self.delta.tolist(),
-                "steady": self.steady}
+        """The CLI's JSON contract (granstokes continuum --json): values and their error estimates."""
+        out = {"imposed": self.imposed, "mu_s": self.friction.mu_s, "mu_d": self.friction.mu_d,
+               "mu_w_inf": self.mu_w_inf, "beta_w": self.beta_w, "t": self.t.tolist()}
+        for name in QUANTITIES:
+            out[name] = getattr(self, name).tolist()
+            out[f"{name}_err"] = self.errors[name].tolist() if name in self.errors else None
+        return {**out, "accuracy": self.accuracy, "steady": self.steady}
 
     def metadata(self) -> dict:
         return {**self.summary(), "u_w_imposed": self.u_w_imposed, "numerics": asdict(self.numerics),
@@ -127,25 +183,71 @@ class Solution:
         (out / f"{stem}.json").write_text(json.dumps(self.metadata(), indent=2))
 
 
-def _run(problem, times, numerics: Numerics, fixed_times=None) -> Solution:
-    t = check_times(times)
-    recorder = obs.SeriesRecorder(problem)
+#: the quantities whose accuracy is estimated and controlled
+QUANTITIES = ("u_w", "mu_w", "delta")
+#: default relative accuracy of every number returned, and the range that can be asked for
+DEFAULT_ACCURACY = 1e-6
+ACCURACY_RANGE = (1e-10, 1e-2)
+#: refinement stops here (a request that needs more is refused with the accuracy reached)
+MAX_CELLS = 2048
+
+
+def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
+    recorder = obs.SeriesRecorder(problem) if record else None
     states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
-                              fixed_times=fixed_times, observer=recorder)
+                              h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder)
     tau = np.array([problem.full(x) for x in states])
-    series = pd.DataFrame(recorder.rows, columns=["t", "u_w", "mu_w", "delta"])
+    series = pd.DataFrame(recorder.table() if record else np.empty((0, 4)), columns=["t", "u_w", "mu_w", "delta"])
     return Solution(problem.imposed, problem.friction, problem.mu_w,
                     getattr(problem, "u_w", None), problem.mesh, t, tau, series, stats, numerics)
 
 
-def solve_stress(friction: Friction, mu_w: float, times, numerics: Numerics = Numerics(),
-                 fixed_times=None) -> Solution:
-    """Imposed wall stress: eq. GranularStokesEqn with tau~(0) = tau~(1) = 1."""
-    return _run(ImposedStress(friction, mu_w, numerics.mesh()), times, numerics, fixed_times)
+def _estimate(fine: Solution, coarse: Solution) -> dict:
+    """Absolute error estimates of ``fine`` from its companion: SAFETY |fine - coarse|/(ORDER_GAIN - 1)."""
+    return {q: SAFETY * np.abs(getattr(fine, q) - getattr(coarse, q)) / (ORDER_GAIN - 1) for q in QUANTITIES}
 
 
-def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics = Numerics(),
-                fixed_times=None) -> Solution:
+def _solve(make_problem, mu_w, friction, times, numerics, accuracy, estimate, fixed_times) -> Solution:
+    t = check_times(times)
+    numerics = numerics or Numerics()
+    stretch = stretch_for(friction, mu_w, t[0])
+
+    def run(num, record=True):
+        return _run(make_problem(num.mesh(stretch), num.order), t, num, fixed_times, record)
+
+    if accuracy is None and not estimate:
+        return run(numerics)
+    if accuracy is not None:
+        require(finite(accuracy) and ACCURACY_RANGE[0] <= accuracy <= ACCURACY_RANGE[1], "accuracy",
+                f"in [{ACCURACY_RANGE[0]:g}, {ACCURACY_RANGE[1]:g}]", accuracy)
+    coarse = run(numerics.coarser(), record=False)
+    while True:
+        fine = run(numerics)
+        errors = _estimate(fine, coarse)
+        worst = max(float(np.max(errors[q] / np.abs(getattr(fine, q)))) for q in QUANTITIES)
+        if accuracy is None or worst <= accuracy:
+            return replace(fine, errors=errors, accuracy=accuracy)
+        needed = numerics.n_cells * (worst / accuracy) ** 0.25  # fourth order in space
+        require(needed <= MAX_CELLS and numerics.n_cells * REFINEMENT <= MAX_CELLS, "accuracy",
+                f">= {worst * (numerics.n_cells / MAX_CELLS) ** 4:.1e} for this request "
+                f"(reachable with at most {MAX_CELLS} cells)", accuracy)
+        numerics, coarse = numerics.finer(), fine
+
+
+def solve_stress(friction: Friction, mu_w: float, times, numerics: Numerics | None = None, *,
+                 accuracy: float | None = None, estimate: bool = False, fixed_times=None) -> Solution:
+    """Imposed wall stress: eq. GranularStokesEqn with tau~(0) = tau~(1) = 1.  ``accuracy``: refine
+    (from ``numerics``) until every estimated relative error is below it; None: one solve as given,
+    with error estimates (from the coarser companion solve) if ``estimate``."""
+    mu_w = friction.check_mu_w(mu_w)
+    return _solve(lambda mesh, order: ImposedStress(friction, mu_w, mesh, order), mu_w, friction, times,
+                  numerics, accuracy, estimate, fixed_times)
+
+
+def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics | None = None, *,
+                accuracy: float | None = None, estimate: bool = False, fixed_times=None) -> Solution:
     """Imposed wall speed: eq. GranularStokesEqn_muBIS with the integral condition
-    eq. GranularStokesEqn_muBIS_BCs."""
-    return _run(ImposedSpeed(friction, u_w, numerics.mesh()), times, numerics, fixed_times)
+    eq. GranularStokesEqn_muBIS_BCs (``accuracy``, ``estimate`` as for solve_stress)."""
+    mu_w = mu_w_for_speed(friction, u_w)
+    return _solve(lambda mesh, order: ImposedSpeed(friction, u_w, mesh, order), mu_w, friction, times,
+                  numerics, accuracy, estimate, fixed_times)

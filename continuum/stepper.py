@@ -3,8 +3,8 @@ zero on algebraic rows), adaptive steps from an embedded error estimate.
 
 Every implicit stage solves  M X - h a_ii F(X) = M x_n + h sum_j a_ij F_j  (algebraic rows:
 F(X) = 0) by simplified Newton: one factorisation of M - h a_ii J per step (all SDIRK stages share
-a_ii).  J is tridiagonal, except that row 0 may be dense (the imposed-speed integral condition); the
-system is solved by bordering with LAPACK gttrf/gttrs.  All tableaux are stiffly accurate
+a_ii).  J is banded (a ``Jacobian``), except that row 0 may be dense (the imposed-speed integral
+condition); the system is solved by bordering with LAPACK gbtrf/gbtrs.  All tableaux are stiffly accurate
 (x_{n+1} is the last stage), so algebraic rows hold at every step (index-1 DAEs).
 
 Methods (``TABLEAUX``), plus ``explicit_euler`` (first order, conditionally stable: the
@@ -22,7 +22,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg.lapack import dgttrf, dgttrs
+from scipy.linalg.lapack import dgbtrf, dgbtrs
 
 
 @dataclass(frozen=True)
@@ -76,30 +76,54 @@ class NewtonFailure(RuntimeError):
     pass
 
 
+@dataclass
+class Jacobian:
+    """dF/dx as a band, ``bands[ku + i - j, j] = J[i, j]`` (scipy's solve_banded layout), and
+    optionally a dense row 0 that replaces the band's row 0."""
+
+    bands: np.ndarray
+    kl: int
+    ku: int
+    row0: np.ndarray | None = None
+
+    @classmethod
+    def tridiagonal(cls, sub, diag, sup, row0=None) -> "Jacobian":
+        """From the sub-, main and super-diagonal (lengths n-1, n, n-1)."""
+        bands = np.zeros((3, len(diag)))
+        bands[0, 1:], bands[1], bands[2, :-1] = sup, diag, sub
+        return cls(bands, 1, 1, row0)
+
+
 class NewtonMatrix:
     """LU factors of A = M - dh J(x), reused for every Newton iteration and stage of a step.
 
-    A is tridiagonal (LAPACK gttrf/gttrs, partial pivoting), except that row 0 may be dense (the
+    A is banded (LAPACK gbtrf/gbtrs, partial pivoting), except that row 0 may be dense (the
     imposed-speed integral condition); then it is eliminated by bordering:
-    [[a, c], [b1 e_1, T]] [x0; z] = [r0; r]  =>  x0 = (r0 - c.T^-1 r)/(a - c.T^-1 b1 e_1).
+    [[a, c], [b, T]] [x0; z] = [r0; r]  =>  x0 = (r0 - c.T^-1 r)/(a - c.T^-1 b).
     """
 
     def __init__(self, problem, x, dh):
-        sub, diag, sup, row0 = problem.jacobian(x)
+        jac = problem.jacobian(x)
+        if isinstance(jac, tuple):
+            jac = Jacobian.tridiagonal(*jac)
         mass = problem.mass
-        self.dh, self.dense = dh, row0 is not None
+        kl, ku = jac.kl, jac.ku
+        self.dh, self.dense, self.kl, self.ku = dh, jac.row0 is not None, kl, ku
         first = 1 if self.dense else 0
-        self.factors = dgttrf(-dh * sub[first:], mass[first:] - dh * diag[first:], -dh * sup[first:])
-        if self.factors[-1] != 0:
+        ab = np.zeros((2 * kl + ku + 1, len(mass) - first))
+        ab[kl:] = -dh * jac.bands[:, first:]
+        ab[kl + ku] += mass[first:]
+        self.lu, self.piv, info = dgbtrf(ab, kl, ku, overwrite_ab=True)
+        if info != 0:
             raise NewtonFailure("singular Newton matrix")
         if self.dense:
-            e1 = np.zeros(len(diag) - 1)
-            e1[0] = -dh * sub[0]
-            self.zb = self._solve(e1)
-            self.refresh_row0(mass[0], row0)
+            column0 = np.zeros(len(mass) - 1)
+            column0[:kl] = -dh * jac.bands[ku + 1:, 0][:len(column0)]
+            self.zb = self._solve(column0)
+            self.refresh_row0(mass[0], jac.row0)
 
     def _solve(self, r):
-        return dgttrs(*self.factors[:-1], r)[0]
+        return dgbtrs(self.lu, self.kl, self.ku, r, self.piv)[0]
 
     def refresh_row0(self, mass0, row0):
         """Replace the dense row 0 by its value at the current iterate (cheap: T is unchanged)."""
@@ -118,14 +142,14 @@ class NewtonMatrix:
 def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8, full=False):
     """Solve M X - dh F(X) = rhs by simplified Newton from the guess x.
 
-    Stops when the contraction-corrected update theta/(1-theta) |dx| (weighted RMS) is below
-    ``tol`` (Hairer & Wanner 1996, IV.8), then applies the problem's exact projection onto its
-    algebraic constraints (if any); returns (X, F(X)).  ``full``: refactorise at every iterate
-    (full Newton, the fallback when the frozen matrix does not contract)."""
+    Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta), 1 at
+    the first iterate) is below ``tol`` (Hairer & Wanner 1996, IV.8), then applies the problem's
+    exact projection onto its algebraic constraints (if any); returns (X, F(X)).  ``full``: refactorise at every iterate (full
+    Newton, the fallback when the frozen matrix does not contract)."""
     x = x.copy()
     mass, dh = problem.mass, matrix.dh
     rate = problem.rate(x)
-    previous = None
+    previous, eta = None, 1.0
     for _ in range(max_iter):
         stats.newton_iterations += 1
         if full:
@@ -136,11 +160,14 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8, full=F
         if not np.all(np.isfinite(dx)):
             break
         x += problem.step_fraction(x, dx) * dx
-        size = np.sqrt(np.mean((dx / weights) ** 2))
-        theta = 0.5 if previous is None else min(size / previous, 0.99 if full else np.inf)
-        if theta >= 1.0:  # the frozen matrix does not contract: give up (the caller tries full Newton)
-            break
-        if size * theta / (1.0 - theta) < tol or size < 1e-3 * tol:
+        scaled = dx / weights
+        size = np.sqrt(scaled @ scaled / len(scaled))
+        if previous is not None:
+            theta = size / previous
+            if theta >= (0.99 if full else 1.0):  # no contraction: give up (the caller tries full Newton)
+                break
+            eta = theta / (1.0 - theta)
+        if eta * size < tol or size < 1e-3 * tol:
             x = problem.project(x)
             return x, problem.rate(x)
         rate = problem.rate(x)
@@ -223,7 +250,8 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
             h = 0.25 * h_try
             continue
         if schedule is None:
-            err = max(np.sqrt(np.mean((err_vec[differential] / weights[differential]) ** 2)), 1e-10)
+            scaled = err_vec[differential] / weights[differential]
+            err = max(np.sqrt(scaled @ scaled / len(scaled)), 1e-10)
             factor = 0.9 * err ** (-1.0 / tab.err_order)
             if err > 1.0:
                 stats.rejected += 1

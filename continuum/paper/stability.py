@@ -83,7 +83,7 @@ def _stress_outcome(sol) -> Outcome:
 
 def _explicit(fr, mu_w, n, factor) -> Outcome:
     mesh = Mesh.graded(n, 0.0)
-    pb = ImposedStress(fr, mu_w, mesh)
+    pb = ImposedStress(fr, mu_w, mesh, order=2)  # the three-point scheme of explicit_bound
     dt = factor * explicit_bound(fr, mu_w, mesh)
     steps = int(math.ceil(T_END / dt))
     states, _ = explicit_euler(pb, [steps * dt], np.arange(1, steps + 1) * dt)

@@ -13,9 +13,11 @@ SPEEDS = (0.198, 1.334, 4.629)
 
 @pytest.mark.parametrize("u_w", SPEEDS)
 def test_constraint_and_bounds_hold_at_every_step(paper_friction, u_w):
-    """At every accepted step the integral condition holds to 1e-8 and mu_s <= mu < mu_d."""
+    """At every accepted step the integral condition holds to 1e-8 and mu_s <= mu < mu_d: the
+    comparison principle of the second-order scheme (an M-matrix; the fourth-order stencils are not
+    monotone and undershoot at an unresolved front)."""
     fr = paper_friction
-    pb = ImposedSpeed(fr, u_w, Mesh.graded(200))
+    pb = ImposedSpeed(fr, u_w, Mesh.graded(200), order=2)
     rows = []
 
     def check(t, x):
@@ -30,14 +32,15 @@ def test_constraint_and_bounds_hold_at_every_step(paper_friction, u_w):
 
 @pytest.mark.parametrize("u_w", SPEEDS[:2])
 def test_steady_wall_friction_matches_the_imposed_stress_case(paper_friction, u_w):
-    """mu_w(t~ -> inf) equals mu_w^inf of the matching imposed-stress case, to the mesh's O(h^2):
-    the gap shrinks four-fold per mesh halving; and that stress case's steady speed is u~_w."""
+    """mu_w(t~ -> inf) equals mu_w^inf of the matching imposed-stress case, to the mesh's O(h^3)
+    (the trapezoidal first cell of the constraint; fourth order elsewhere): the gap shrinks
+    eight-fold per mesh halving; and that stress case's steady speed is u~_w."""
     fr = paper_friction
     gaps = []
     for n in (100, 200):
         sol = solve_speed(fr, u_w, [1e3], Numerics(n_cells=n))
         gaps.append(sol.mu_w[-1] - sol.mu_w_inf)
-    assert gaps[0] / gaps[1] == pytest.approx(4.0, rel=0.05)
+    assert gaps[0] / gaps[1] == pytest.approx(8.0, rel=0.1)
     assert abs(gaps[1]) < 1e-5
     stress = solve_stress(fr, sol.mu_w_inf, [1e3])
     assert stress.u_w[-1] == pytest.approx(u_w, rel=1e-4)

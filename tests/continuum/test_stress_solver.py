@@ -25,12 +25,14 @@ def observed_orders(values):
     return np.log2(d[:-1] / d[1:])
 
 
-def test_space_convergence_is_second_order(paper_friction):
-    """Mesh halving with a fixed map: u~_w(t~) and tau~ at the common nodes converge at order 2."""
+def test_second_order_scheme_converges_at_order_2(paper_friction):
+    """The baseline three-point scheme, mesh halving with a fixed map: u~_w(t~) and tau~ at the
+    common nodes converge at order 2."""
     mu_w = paper_friction.mu_w_from_tilde(0.5)
     uw, tau = [], []
     for n in (50, 100, 200, 400):
-        sol = solve_stress(paper_friction, mu_w, [0.01, 0.1, 1.0], Numerics(n_cells=n, rtol=1e-9, atol=1e-11))
+        sol = solve_stress(paper_friction, mu_w, [0.01, 0.1, 1.0],
+                           Numerics(n_cells=n, stretch=6.0, rtol=1e-9, atol=1e-11, order=2))
         uw.append(sol.u_w)
         tau.append(sol.tau[:, :: n // 50])
     assert observed_orders(uw) == pytest.approx([2.0, 2.0], abs=0.15)
@@ -67,25 +69,22 @@ def test_delta_grows_as_sqrt_t(solutions, paper_friction, mt):
 
 @pytest.mark.parametrize("mt", CASES)
 def test_wall_speed_grows_to_the_steady_value(paper_friction, mt):
-    """u~_w(t~) increases monotonically (to within the time-step tolerance, 1e-6 relative, once
-    steady); its long-time value converges (order 2 in the mesh) to the exact steady wall speed."""
+    """u~_w(t~) increases monotonically (to within the time-step tolerance once steady); at
+    t~ = 1e3 it equals the exact steady wall speed within the solver's own error estimate (asked
+    below 1e-6 relative)."""
     fr = paper_friction
     mu_w = fr.mu_w_from_tilde(mt)
     exact = steady_wall_speed(fr, mu_w)
-    gaps = []
-    for n in (100, 200):
-        sol = solve_stress(fr, mu_w, [1e3], Numerics(n_cells=n))
-        assert np.all(np.diff(sol.series["u_w"]) > -1e-6 * exact)
-        gaps.append(sol.u_w[0] - exact)
-    assert abs(gaps[1]) < 2e-4 * exact
-    assert gaps[0] / gaps[1] == pytest.approx(4.0, rel=0.1)
+    sol = solve_stress(fr, mu_w, [1e3], accuracy=1e-6)
+    assert np.all(np.diff(sol.series["u_w"]) > -1e-6 * exact)
+    assert abs(sol.u_w[0] - exact) <= sol.errors["u_w"][0] < 1e-6 * exact
 
 
 @pytest.mark.parametrize("mt", (0.99, 0.5, 0.1, 0.01))
 def test_friction_stays_between_mu_s_and_mu_d(paper_friction, mt):
     """At every accepted step: mu_s <= mu <= mu_w < mu_d (comparison principle), to round-off."""
     fr = paper_friction
-    pb = ImposedStress(fr, fr.mu_w_from_tilde(mt), Mesh.graded(200))
+    pb = ImposedStress(fr, fr.mu_w_from_tilde(mt), Mesh.graded(200), order=2)
     worst = []
     integrate(pb, [10.0], observer=lambda t, x: worst.append(
         (np.min(pb.mu(x) - fr.mu_s), np.max(pb.mu(x) - pb.mu_w))))
