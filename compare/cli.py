@@ -4,12 +4,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from dem.layout import RUN_JSON
-from granstokes.staging import staged
 from granstokes.validate import output_dir, require
 
 
 def run_compare(args) -> int:
+    from dem.layout import RUN_JSON
+    from granstokes.staging import staged
+
     for run in args.runs:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))

@@ -112,9 +112,8 @@ def _local_steady(material: Material, drive: Drive) -> Steady:
 def _local_transient(material: Material, drive: Drive, times) -> tuple[pd.DataFrame, pd.DataFrame]:
     vel = solve_velocity(drive.scene(material), times, rule=YieldRule.for_layer(drive.scales(material)),
                          initial="rest", numerics=VELOCITY_NUMERICS, compare_steady=False, **drive.load)
-    mu_w = vel.series.set_index("t")["mu_w"].reindex(times, method="nearest").to_numpy()
     mu = np.array([np.interp(vel.y, vel.y_face, m) for m in vel.mu])
-    return _series(times, vel.y, vel.u, mu_w), _profiles(times, vel.y, vel.u, mu)
+    return _series(times, vel.y, vel.u, vel.mu_w), _profiles(times, vel.y, vel.u, mu)
 
 
 # --- the paper's stress-diffusion model --------------------------------------------------------------

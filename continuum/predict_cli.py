@@ -14,7 +14,8 @@ DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rh
   ln g interpolated linearly from the cell centres).
 
 Bad input raises ValueError naming the parameter and its range (the root parser, granstokes.cli, prints
-one line and exits 2).
+one line and exits 2).  The solvers are imported when a prediction runs, not when the parser is built
+(start-up time).
 """
 from __future__ import annotations
 
@@ -24,14 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .ngf import NonlocalFluidity, TransientNumerics, solve_steady, solve_transient
 from granstokes.validate import finite, require
-
-from .rules import EPS_FRACTION, YieldRule
-from .scales import UNITS, Material, Scales
-from .scene import scene_steady
-from .solver import check_times
-from .velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 MODELS = ("local", "ngf")
 
@@ -64,7 +58,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _scene(args) -> BedScene:
+def _scene(args):
+    from .scales import Material
+    from .velocity import BedScene
+
     require(args.model in MODELS, "--model", f"one of {MODELS}", args.model)
     for name in ("mu_s", "mu_d", "I0", "phi", "p_w", "depth", "plate_mass"):
         require(finite(getattr(args, name)), f"--{name.replace('_', '-')}", "a finite number", getattr(args, name))
@@ -88,15 +85,18 @@ def _drive(args, mu_top: float, top_name: str = "mu_d") -> dict:
     return {"u_w": float(args.u_w)}
 
 
-def _local_transient(scene: BedScene, t, drive: dict):
+def _local_transient(scene, t, drive: dict):
+    from .rules import YieldRule
+    from .scales import Scales
+    from .velocity import VELOCITY_NUMERICS, solve_velocity
+
     m = scene.material
     sc = Scales(m, scene.p_w, drive["mu_w"]) if "mu_w" in drive else Scales.for_speed(m, scene.p_w, drive["u_w"])
     rule = YieldRule.for_layer(sc)
     out = []
     for numerics in (VELOCITY_NUMERICS, replace(VELOCITY_NUMERICS, n_cells=VELOCITY_NUMERICS.n_cells // 2)):
         vel = solve_velocity(scene, t, rule=rule, initial="rest", numerics=numerics, compare_steady=False, **drive)
-        mu_w = np.full(len(t), drive["mu_w"]) if "mu_w" in drive else -vel.s[:, 0] / scene.p_w
-        out.append((vel, mu_w))
+        out.append((vel, vel.mu_w))
     (fine, mw), (coarse, mw_c) = out
     return fine.y, fine.u, mw, np.abs(fine.u[:, 0] - coarse.u[:, 0]) / 3, np.abs(mw - mw_c) / 3
 
@@ -107,6 +107,12 @@ def _g_at_nodes(y, y_cell, g):
 
 def predict(args) -> dict:
     """The prediction as a JSON-ready dict (lists and floats)."""
+    from .ngf import NonlocalFluidity, TransientNumerics, mu_max, solve_steady, solve_transient
+    from .rules import EPS_FRACTION
+    from .scales import UNITS
+    from .scene import scene_steady
+    from .solver import check_times
+
     scene = _scene(args)
     m = scene.material
     if args.model == "local":
@@ -119,7 +125,6 @@ def predict(args) -> dict:
         require(args.boundary in ("neumann", "dirichlet"), "--boundary", "'neumann' or 'dirichlet'", args.boundary)
         require(finite(args.t0_hat) and args.t0_hat > 0, "--t0-hat", "a finite number > 0", args.t0_hat)
         fluidity = NonlocalFluidity(A=args.A, boundary=args.boundary, t0_hat=args.t0_hat)
-        from .ngf import mu_max
         drive = _drive(args, mu_max(m, fluidity), "mu(I_max = 10), just below mu_d")
     out = {"model": args.model, "imposed": "stress" if "mu_w" in drive else "speed", "units": UNITS["dem_units"],
            "I_convention": "dem: I = |du/dy| d/sqrt(p/rho_p)",

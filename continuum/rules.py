@@ -103,13 +103,16 @@ class ShearLaw:
             slope[low] = mu_low**3 / (2 * alpha * Il)
         return mu, slope
 
-    def stress(self, g, p):
-        """s = mu(I) p g / sqrt(g^2 + eps^2) and ds/dg, with I = |g| d sqrt(rho_p/p)."""
+    def stress(self, g, p, derivative: bool = True):
+        """s = mu(I) p g / sqrt(g^2 + eps^2) and ds/dg (``derivative``; else s alone), with
+        I = |g| d sqrt(rho_p/p)."""
         eps = self.rule.eps
         ag = np.abs(g)
         root = np.sqrt(g * g + eps * eps)
         dI = self.d * np.sqrt(self.rho / p)
         mu, slope = self.mu_and_slope(ag * dI)
         s = mu * p * g / root
+        if not derivative:
+            return s
         ds = p * (slope * dI * ag / root + mu * eps * eps / root**3)
         return s, ds

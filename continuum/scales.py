@@ -14,8 +14,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from scipy.optimize import brentq
-
 from granstokes.validate import finite, require
 
 from .rheology import SHEAR_RATE_FACTOR, Friction, convert_I
@@ -100,6 +98,8 @@ class Scales:
 
         lo, hi = fr.mu_s * (1 + 1e-9), fr.mu_d - 1e-12 * fr.dmu
         require(residual(lo) < 0 < residual(hi), "u_w", "a speed reachable with mu_s < mu_w < mu_d", u_w)
+        from scipy.optimize import brentq  # imported here: it would cost every CLI start-up ~0.3 s
+
         mu_w = brentq(residual, lo, hi, xtol=1e-15, rtol=1e-15)
         return cls(material, p_w, mu_w)
 

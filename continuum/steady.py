@@ -9,7 +9,6 @@ s = sqrt(1 + beta_w y~) the integrand is rational in s and integrates in closed 
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .rheology import Friction, finite, require
 
@@ -60,6 +59,8 @@ def mu_w_for_speed(fr: Friction, u_w: float) -> float:
         return steady_wall_speed(fr, fr.mu_d - np.exp(log_mt) * fr.dmu) - u_w
 
     require(residual(hi) < 0 < residual(lo), "u_w", "a speed reachable with mu_s < mu_w < mu_d", u_w)
+    from scipy.optimize import brentq  # imported here: it would cost every CLI start-up ~0.3 s
+
     return fr.mu_d - np.exp(brentq(residual, lo, hi, xtol=1e-15, rtol=1e-15)) * fr.dmu
 
 

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import brentq
 
 from .crossing import crossing_depth
 from .mesh import Mesh
@@ -70,6 +69,7 @@ class VelocityProblem:
         self.scene, self.rule = scene, rule
         self.y = mesh_unit.y * scene.depth
         self.h = np.diff(self.y)
+        self.half_over_h = 0.5 / self.h
         self.p_face = scene.p_w + scene.weight_gradient * (self.y[:-1] + self.h / 2)
         self.law = ShearLaw(rule, m.friction, m.I0_paper, m.d, m.rho_p)
         self.rho_b = rho_b = m.phi * m.rho_p
@@ -79,43 +79,51 @@ class VelocityProblem:
         self.tau_w, self.u_w = tau_w, u_w
         self.imposed = "stress" if tau_w is not None else "speed"
         self.mass[0] = scene.plate_mass + rho_b * self.h[0] / 2 if tau_w is not None else 0.0
+        self.body = scene.body_force * np.append(self.h[0] / 2, self.mass[1:] / rho_b)  # force per node
         self.u0 = np.zeros(n) if u0 is None else np.asarray(u0, dtype=float)[:n].copy()
         if u_w is not None:
             self.u0[0] = u_w
+        self._full = np.zeros(n + 1)  # u with u_N = 0, reused by every evaluation
 
     dense_wall = False
 
     def initial(self) -> np.ndarray:
         return self.u0.copy()
 
-    def full(self, x):
-        return np.append(x, 0.0)
+    def shear(self, x):
+        """Face shear rates g = 1/2 du/dy of the nodal u (the last axis; u_N = 0)."""
+        if x.ndim > 1:
+            return np.diff(np.concatenate([x, np.zeros((*x.shape[:-1], 1))], axis=-1), axis=-1) * self.half_over_h
+        full = self._full
+        full[:-1] = x
+        return (full[1:] - full[:-1]) * self.half_over_h
 
-    def faces(self, x):
-        """Face shear g = 1/2 du/dy, stress sigma_xy and its derivative ds/dg."""
-        g = 0.5 * np.diff(self.full(x)) / self.h
-        s, ds = self.law.stress(g, self.p_face)
-        return g, s, ds
+    def stress(self, x):
+        """sigma_xy at the faces (any leading axes)."""
+        return self.law.stress(self.shear(x), self.p_face, derivative=False)
 
     def rate(self, x):
-        _, s, _ = self.faces(x)
-        f = np.empty_like(x)
-        f[1:] = s[1:] - s[:-1] + self.scene.body_force * self.mass[1:] / self.rho_b
-        f[0] = self.tau_w + s[0] + self.scene.body_force * self.h[0] / 2 if self.imposed == "stress" else x[0] - self.u_w
+        s = self.stress(x)
+        f = self.body.copy()
+        f[1:] += s[1:] - s[:-1]
+        if self.imposed == "stress":
+            f[0] += self.tau_w + s[0]
+        else:
+            f[0] = x[0] - self.u_w
         return f
 
     def jacobian(self, x):
-        _, _, ds = self.faces(x)
-        k = 0.5 * ds / self.h  # d s_j / d u_{j+1} = k_j, d s_j / d u_j = -k_j
+        _, ds = self.law.stress(self.shear(x), self.p_face)
+        k = ds * self.half_over_h  # d s_j / d u_{j+1} = k_j, d s_j / d u_j = -k_j
         diag = np.empty_like(x)
         diag[1:] = -k[1:] - k[:-1]
         sub = k[:-1].copy()          # dF_i/du_{i-1} = k_{i-1}, rows 1..N-1
-        sup = k[1:-1].copy()         # dF_i/du_{i+1} = k_i, rows 1..N-2
+        sup = k[:-1].copy()          # dF_i/du_{i+1} = k_i, rows 0..N-2
         if self.imposed == "stress":
-            diag[0], sup0 = -k[0], k[0]
+            diag[0] = -k[0]
         else:
-            diag[0], sup0 = 1.0, 0.0
-        return sub, diag, np.concatenate(([sup0], sup)), None
+            diag[0], sup[0] = 1.0, 0.0
+        return sub, diag, sup, None
 
     def project(self, x):
         if self.imposed == "speed":
@@ -152,33 +160,44 @@ class VelocitySolution:
     def u_w(self) -> np.ndarray:
         return self.u[:, 0]
 
+    @property
+    def mu_w(self) -> np.ndarray:
+        """tau_w/p_w at the requested times: imposed, or the stress the bed exerts on the plate."""
+        tau = -self.s[:, 0] if self.imposed == "speed" else np.full(len(self.t), self.series.tau_w.iloc[0])
+        return tau / self.scene.p_w
 
-def _yield_front(mu, y_face, mu_s) -> float:
-    """Deepest face where mu >= mu_s (continuum.crossing, linear in mu - mu_s)."""
+
+def _yield_front(mu, y_face, mu_s):
+    """Deepest face where mu >= mu_s (continuum.crossing, linear in mu - mu_s), per row of ``mu``."""
     return crossing_depth(y_face, mu, mu_s, first=False)
 
 
-def _layer_thickness(mu, y_face, mu_s, mu_wall) -> float:
+def _layer_thickness(mu, y_face, mu_s, mu_wall):
     """Depth where (mu - mu_s) falls to DELTA_THRESHOLD of (mu_wall - mu_s), linear (continuum.crossing);
-    the bed bottom when it never does."""
-    d = crossing_depth(y_face, (mu - mu_s) / (mu_wall - mu_s), DELTA_THRESHOLD)
-    return float(y_face[-1]) if np.isnan(d) else d
+    the bed bottom where it never does.  Per row of ``mu`` (``mu_wall`` one per row)."""
+    d = crossing_depth(y_face, (mu - mu_s) / (mu_wall - mu_s)[:, None], DELTA_THRESHOLD)
+    return np.where(np.isnan(d), y_face[-1], d)
+
+
+#: bisections of the creep rate at yield: the bracket [0, hi] shrinks to 2^-64 hi (below rounding)
+YIELD_BISECTIONS = 64
 
 
 def initial_at_yield(problem: VelocityProblem) -> np.ndarray:
     """The paper's initial state tau = mu_s p (eq. InitStokesEqn) as a velocity field: on each
     face the creep rate g < 0 with |s(g)| = mu_s p (exists for the regularised law: |s| rises
-    from 0 to mu(I) p >= mu_s p), integrated up from u(H) = 0.  Tends to u = 0 as eps -> 0."""
-    mu_s = problem.scene.material.mu_s
-    g = np.empty(len(problem.h))
-    for j, p in enumerate(problem.p_face):
-        target = mu_s * p
-        f = lambda a: -problem.law.stress(np.array([-a]), np.array([p]))[0][0] - target
-        hi = problem.rule.eps
-        while f(hi) < 0:
-            hi *= 10
-        g[j] = -brentq(f, 0.0, hi, xtol=1e-300, rtol=1e-14)
-    du = 2 * g * problem.h
+    from 0 to mu(I) p >= mu_s p), integrated up from u(H) = 0.  Tends to u = 0 as eps -> 0.
+    All faces at once: |s| is increasing in |g|, bracketed from eps up by decades, then bisected."""
+    p = problem.p_face
+    excess = lambda a: -problem.law.stress(-a, p, derivative=False) - problem.scene.material.mu_s * p
+    lo, hi = np.zeros_like(p), np.full_like(p, problem.rule.eps)
+    while np.any(short := excess(hi) < 0):
+        lo, hi = np.where(short, hi, lo), np.where(short, 10 * hi, hi)
+    for _ in range(YIELD_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        up = excess(mid) < 0
+        lo, hi = np.where(up, mid, lo), np.where(up, hi, mid)
+    du = -2 * (0.5 * (lo + hi)) * problem.h
     return -np.cumsum(du[::-1])[::-1]
 
 
@@ -211,19 +230,22 @@ def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRu
         if u_w is not None:
             problem.u0[0] = u_w
     y_face = problem.y[:-1] + problem.h / 2
-    rows = []
+    steps_t, steps_x = [], []
 
     def observe(time, x):
-        _, s, _ = problem.faces(x)
-        mu = np.abs(s) / problem.p_face
-        tau_plate = tau_w if tau_w is not None else -s[0]
-        mu_wall = tau_plate / scene.p_w
-        rows.append((time, x[0], tau_plate, mu_wall, _layer_thickness(mu, y_face, m.mu_s, max(mu_wall, mu[0])),
-                     _yield_front(mu, y_face, m.mu_s)))
+        steps_t.append(time)
+        steps_x.append(x)
 
     states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
                               h0=1e-9 * scales.t_s, fixed_times=fixed_times, observer=observe)
-    s = np.array([problem.faces(x)[1] for x in states])
+    s = problem.stress(states)
     u = np.column_stack([states, np.zeros(len(t))])
-    series = pd.DataFrame(rows, columns=["t", "u_w", "tau_w", "mu_w", "delta", "yield_front"])
+    x = np.array(steps_x)
+    s_steps = problem.stress(x)
+    mu = np.abs(s_steps) / problem.p_face
+    tau_plate = np.full(len(x), tau_w) if tau_w is not None else -s_steps[:, 0]
+    mu_wall = tau_plate / scene.p_w
+    series = pd.DataFrame({"t": steps_t, "u_w": x[:, 0], "tau_w": tau_plate, "mu_w": mu_wall,
+                           "delta": _layer_thickness(mu, y_face, m.mu_s, np.maximum(mu_wall, mu[:, 0])),
+                           "yield_front": _yield_front(mu, y_face, m.mu_s)})
     return VelocitySolution(scene, rule, problem.imposed, problem.y, y_face, t, u, s, series, stats, scales)

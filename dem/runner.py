@@ -33,11 +33,8 @@ from granstokes.validate import require
 
 from . import lammps_env, layout, outputs, scene
 from .config import Config, parse
+from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .sizing import DrivePlan, Plan, plan
-
-#: 2D beds of a few hundred to a few thousand grains: one rank per bed and two beds side by side beat
-#: two ranks per bed on 2 cores (bench/RESULTS.md, bench/dem_concurrency.py)
-DEFAULT_NP, DEFAULT_JOBS = 1, 2
 
 _THERMO = re.compile(r"^\s*(\d+)\s+(\S+)")
 _NONFINITE = re.compile(r"(?<![A-Za-z_])-?(nan|inf)\b", re.IGNORECASE)
