@@ -5,7 +5,7 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
 * the grains are the config's own ``[grains]`` table with the contact law and stiffness derived as
   for the Stokes scene (dem.contact, k_n from kappa and p_w), sheared at the normal stress p = p_w
   (so that the rigidity number is the scene's kappa) with the scene's time step;
-* ``points`` inertial numbers log-spaced in [I_min, I_max]; I in the DEM convention,
+* ``points`` inertial numbers log-spaced in [I_min, I_max] (or the list ``I``); I in the DEM convention,
   I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy| (d = rho_p = 1);
 * each point and seed: an independent cell (insertion with that seed), sheared ``strain_start``
   (discarded), then at least ``strain`` more, sampled every ``sample`` of strain; above
@@ -108,7 +108,7 @@ def plan_calibration(cfg: Config) -> CalibrationPlan:
     n = round(PACKING[dim] * cal.width**2 * lz / mean_grain_volume(cfg))
     points = []
     strain_max = cal.strain if cal.strain_max is None else cal.strain_max
-    for I in np.geomspace(cal.I_min, cal.I_max, cal.points):
+    for I in cal.inertial_numbers:
         strain = min(strain_max, max(cal.strain, cal.strain * I / STRAIN_REFERENCE_I))
         rate = float(I) * math.sqrt(cfg.p_w)  # d = rho_p = 1
         per_strain = 1.0 / (rate * dt)
