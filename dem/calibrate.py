@@ -256,14 +256,15 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
         else:
             excluded.append(f"I-{k}/seed-{seed}")
     cal = fitting.fit_blocks(pd.concat(blocks, ignore_index=True), str(out / layout.CALIBRATION_JSON))
-    points = pd.DataFrame(rows).sort_values(["point", "seed"])[list(layout.POINT_COLUMNS)]
+    passed = pd.DataFrame(rows).sort_values(["point", "seed"])
+    points = passed[list(layout.POINT_COLUMNS)]
     points.to_csv(out / layout.POINTS_CSV, index=False)
     wall = sum(e.get("wall_time", 0.0) for e in state["points"].values())
     doc = {**cal.contract(), "grains": plan.config.as_dict()["grains"],
            "provenance": {**state["provenance"], "seeds": list(plan.seeds),
                           "analysed_and_fitted_by": provenance()["git"]},
            "p": plan.config.p_w, "rms_mu": cal.rms_mu,
-           "points": cal.points.assign(n_seeds=[len(plan.seeds)] * len(cal.points)).to_dict("list"),
+           "points": cal.points.assign(n_seeds=passed.groupby("point").size().to_numpy()).to_dict("list"),
            "excluded": excluded, "protocol": plan.as_dict(),
            "cost": {"lammps_cpu_seconds": wall, "grain_steps": plan.n_grains * plan.as_dict()["total_steps"]},
            "law": cal.as_dict()["law"]}
