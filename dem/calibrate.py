@@ -5,7 +5,7 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
 * the grains are the config's own ``[grains]`` table with the contact law and stiffness derived as
   for the Stokes scene (dem.contact, k_n from kappa and p_w), sheared at the normal stress p = p_w
   (so that the rigidity number is the scene's kappa) with the scene's time step;
-* ``points`` inertial numbers log-spaced in [I_min, I_max]; I in the DEM convention,
+* ``points`` inertial numbers log-spaced in [I_min, I_max] (or the list ``I``); I in the DEM convention,
   I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy| (d = rho_p = 1);
 * each point and seed: an independent cell (insertion with that seed), sheared ``strain_start``
   (discarded), then at least ``strain`` more, sampled every ``sample`` of strain; above
@@ -108,7 +108,7 @@ def plan_calibration(cfg: Config) -> CalibrationPlan:
     n = round(PACKING[dim] * cal.width**2 * lz / mean_grain_volume(cfg))
     points = []
     strain_max = cal.strain if cal.strain_max is None else cal.strain_max
-    for I in np.geomspace(cal.I_min, cal.I_max, cal.points):
+    for I in cal.inertial_numbers:
         strain = min(strain_max, max(cal.strain, cal.strain * I / STRAIN_REFERENCE_I))
         rate = float(I) * math.sqrt(cfg.p_w)  # d = rho_p = 1
         per_strain = 1.0 / (rate * dt)
@@ -256,14 +256,15 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
         else:
             excluded.append(f"I-{k}/seed-{seed}")
     cal = fitting.fit_blocks(pd.concat(blocks, ignore_index=True), str(out / layout.CALIBRATION_JSON))
-    points = pd.DataFrame(rows).sort_values(["point", "seed"])[list(layout.POINT_COLUMNS)]
+    passed = pd.DataFrame(rows).sort_values(["point", "seed"])
+    points = passed[list(layout.POINT_COLUMNS)]
     points.to_csv(out / layout.POINTS_CSV, index=False)
     wall = sum(e.get("wall_time", 0.0) for e in state["points"].values())
     doc = {**cal.contract(), "grains": plan.config.as_dict()["grains"],
            "provenance": {**state["provenance"], "seeds": list(plan.seeds),
                           "analysed_and_fitted_by": provenance()["git"]},
            "p": plan.config.p_w, "rms_mu": cal.rms_mu,
-           "points": cal.points.assign(n_seeds=[len(plan.seeds)] * len(cal.points)).to_dict("list"),
+           "points": cal.points.assign(n_seeds=passed.groupby("point").size().to_numpy()).to_dict("list"),
            "excluded": excluded, "protocol": plan.as_dict(),
            "cost": {"lammps_cpu_seconds": wall, "grain_steps": plan.n_grains * plan.as_dict()["total_steps"]},
            "law": cal.as_dict()["law"]}

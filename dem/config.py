@@ -29,6 +29,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from granstokes.validate import finite, require
 from continuum.scales import Material
 
@@ -164,8 +166,9 @@ class Prepare:
 class Calibration:
     """Plane-shear calibration of the config's grains (dem.calibrate) at the normal stress p = p_w, so
     that the rigidity is the Stokes scene's kappa: ``points`` inertial numbers log-spaced in [I_min,
-    I_max] (DEM convention), each seed an independent cell of width ``width`` d (square in 2D, cubic in
-    3D), sheared ``strain_start`` (discarded) then ``strain`` (measured), sampled every ``sample``."""
+    I_max] (DEM convention), or the increasing list ``I`` (then I_min, I_max and points follow from it),
+    each seed an independent cell of width ``width`` d (square in 2D, cubic in 3D), sheared
+    ``strain_start`` (discarded) then ``strain`` (measured), sampled every ``sample``."""
 
     I_min: float = 1e-2
     I_max: float = 0.3
@@ -177,8 +180,15 @@ class Calibration:
     strain_max: float | None = None
     sample: float = 0.02
     profile: float = 0.25
+    I: tuple[float, ...] | None = None
 
     def __post_init__(self):
+        if self.I is not None:
+            require(len(self.I) >= 3 and all(finite(v) and 0 < v <= 1.0 for v in self.I)
+                    and all(a < b for a, b in zip(self.I, self.I[1:])), "calibration.I",
+                    "an increasing list of >= 3 inertial numbers in (0, 1]", list(self.I))
+            for name, value in (("I_min", self.I[0]), ("I_max", self.I[-1]), ("points", len(self.I))):
+                object.__setattr__(self, name, value)
         _positive("calibration.I_min", self.I_min)
         require(finite(self.I_max) and self.I_min < self.I_max <= 1.0, "calibration.I_max",
                 f"in (I_min = {self.I_min:g}, 1] (dense flow)", self.I_max)
@@ -196,6 +206,11 @@ class Calibration:
         _positive("calibration.sample", self.sample)
         require(finite(self.profile) and self.sample <= self.profile <= self.strain, "calibration.profile",
                 f"in [sample = {self.sample:g}, strain = {self.strain:g}]", self.profile)
+
+    @property
+    def inertial_numbers(self) -> tuple[float, ...]:
+        """The points' inertial numbers: the list ``I``, else log-spaced in [I_min, I_max]."""
+        return self.I if self.I is not None else tuple(map(float, np.geomspace(self.I_min, self.I_max, self.points)))
 
 
 @dataclass(frozen=True)
@@ -264,6 +279,11 @@ def _build(cls, table, where):
     if "seeds" in table:  # TOML arrays -> the frozen dataclasses' tuples
         require(isinstance(table["seeds"], list), f"{where}.seeds", "a list of integers", table["seeds"])
         table = {**table, "seeds": tuple(table["seeds"])}
+    if "I" in table:  # the calibration's explicit inertial numbers replace the log-spaced range
+        require(isinstance(table["I"], list), f"{where}.I", "a list of inertial numbers", table["I"])
+        both = sorted({"I_min", "I_max", "points"} & set(table))
+        require(not both, f"{where}.I", f"given without {both} (they follow from the list)", table["I"])
+        table = {**table, "I": tuple(table["I"])}
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(table) - known)
     require(not unknown, f"[{where}] keys", f"among {sorted(known)}", unknown)

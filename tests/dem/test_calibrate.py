@@ -19,20 +19,31 @@ def test_calibration_table_is_validated_before_anything_runs():
         config.parse(text.replace("I_max = 0.3", "I_max = 0.01"))
     with pytest.raises(ValueError, match=r"^\[calibration\] keys must be"):
         config.parse(text.replace("width = 10.0\n", "width = 10.0\nwalls = 2\n"))
+    listed = text.replace("I_min = 0.02\nI_max = 0.3\npoints = 4\n", "I = [0.02, 0.05, 0.3]\n")
+    assert config.parse(listed).calibration.inertial_numbers == (0.02, 0.05, 0.3)
+    for bad in ("[0.02, 0.3]", "[0.05, 0.02, 0.3]", "[0.02, 0.05, 1.5]", "[0.02, 0.05, \"a\"]", "0.1"):
+        with pytest.raises(ValueError, match="^calibration.I must be"):
+            config.parse(listed.replace("[0.02, 0.05, 0.3]", bad))
+    with pytest.raises(ValueError, match=r"^calibration.I must be given without \['points'\]"):
+        config.parse(listed.replace("I = [", "points = 3\nI = ["))
 
 
-def test_plan_is_log_spaced_and_measures_at_least_the_strain():
+def test_plan_follows_the_table_and_measures_at_least_the_strain():
+    smoke, _ = config.preset("smoke")
+    I = np.array([p.I for p in plan_calibration(smoke).points])
+    assert I[0] == pytest.approx(0.02) and I[-1] == pytest.approx(0.3) and len(I) == 4
+    assert np.allclose(np.diff(np.log(I)), np.log(I[1] / I[0]))  # log-spaced in [I_min, I_max]
     cfg, _ = config.preset("quick")
     plan = plan_calibration(cfg)
-    I = np.array([p.I for p in plan.points])
-    assert I[0] == pytest.approx(1e-3) and I[-1] == pytest.approx(1.0) and len(I) == 10
-    assert np.allclose(np.diff(np.log(I)), np.log(I[1] / I[0]))
+    I = np.array([p.I for p in plan.points])  # the listed I: >= 8 points over >= 2.5 decades (issue 10)
+    assert list(I) == list(cfg.calibration.I) and len(I) >= 8 and np.log10(I[-1] / I[0]) >= 2.5
     for p in plan.points:
         assert p.rate == pytest.approx(p.I * np.sqrt(cfg.p_w))  # I_dem = gamma_dot d / sqrt(p / rho_p)
         assert p.measure_steps * p.rate * p.dt >= cfg.calibration.strain
         assert p.dt == cfg.time_step and p.measure_steps % p.profile == 0 and p.profile % p.sample == 0
     # longest (smallest I) first, each seed of a point together
-    assert plan.tasks()[0][0] == 0 and [s for _, s in plan.tasks()[:2]] == list(cfg.calibration.seeds)
+    seeds = list(cfg.calibration.seeds)
+    assert plan.tasks()[0][0] == 0 and [s for _, s in plan.tasks()[:len(seeds)]] == seeds
 
 
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys):
