@@ -8,13 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.integrate import quad
-from scipy.special import erfc, erfcinv
+from scipy.special import erfc
 
 from .rheology import Friction
-from .steady import DELTA_THRESHOLD
+from .steady import DELTA_THRESHOLD, SELF_SIMILAR_DELTA  # noqa: F401 (re-exported)
 
-#: delta/(Dmu sqrt(t~)) of the erfc solution: 2 erfc^-1(1e-3) = 4.653 (the paper prints 4.66)
-SELF_SIMILAR_DELTA = 2.0 * float(erfcinv(DELTA_THRESHOLD))
 
 
 def self_similar_mu(fr: Friction, mu_w: float, y, t):

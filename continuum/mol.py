@@ -1,20 +1,19 @@
 """Baseline: the same spatial discretisation integrated by scipy's solve_ivp (method of lines).
 
 Imposed stress only (the imposed-speed problem is a DAE, which solve_ivp does not take).  The
-Jacobian is the exact tridiagonal one, passed as a sparse matrix so BDF/Radau factorise it as banded.
+Jacobian is the exact banded one, passed as a sparse matrix so BDF/Radau factorise it as sparse.
 """
 from __future__ import annotations
 
 import time
 
 import numpy as np
-import pandas as pd
 import scipy.sparse as sp
 from scipy.integrate import solve_ivp
 
 from .problems import ImposedStress
 from .rheology import Friction
-from .solver import Numerics, Solution, check_times
+from .solver import Numerics, Solution, check_times, stretch_for
 from .stepper import StepStats
 
 
@@ -22,7 +21,7 @@ def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics 
                      method: str = "BDF") -> Solution:
     """Imposed wall stress by solve_ivp(method) on the interior nodes, tau~(0) = 1 for t~ > 0."""
     t = check_times(times)
-    problem = ImposedStress(friction, mu_w, numerics.mesh())
+    problem = ImposedStress(friction, mu_w, numerics.mesh(stretch_for(friction, mu_w, t[0])), numerics.order)
     x0 = problem.initial()
     x0[0] = 1.0
 
@@ -30,8 +29,9 @@ def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics 
         return problem.rate(np.concatenate(([1.0], z)))[1:]
 
     def jac(_, z):
-        sub, diag, sup, _ = problem.jacobian(np.concatenate(([1.0], z)))
-        return sp.diags([sub[1:], diag[1:], sup[1:]], [-1, 0, 1], format="csc")
+        j = problem.jacobian(np.concatenate(([1.0], z)))  # the band of rows/columns 1..N-1
+        offsets = j.ku - np.arange(j.kl + j.ku + 1)
+        return sp.dia_matrix((j.bands[:, 1:], offsets), shape=(len(z), len(z))).tocsc()
 
     start = time.process_time()
     sol = solve_ivp(rhs, (0.0, t[-1]), x0[1:], method=method, t_eval=t, jac=jac,
@@ -40,5 +40,4 @@ def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics 
         raise RuntimeError(f"solve_ivp({method}) failed: {sol.message}")
     stats = StepStats(steps=int(sol.t.size), newton_iterations=int(sol.nfev), cpu_seconds=time.process_time() - start)
     tau = np.column_stack([np.ones(len(t)), sol.y.T, np.ones(len(t))])
-    series = pd.DataFrame(columns=["t", "u_w", "mu_w", "delta"])
-    return Solution("stress", friction, problem.mu_w, None, problem.mesh, t, tau, series, stats, numerics)
+    return Solution("stress", friction, problem.mu_w, None, problem.mesh, t, tau, np.empty((0, 4)), stats, numerics)

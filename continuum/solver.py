@@ -7,17 +7,15 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from granstokes.provenance import provenance
 
 from . import observables as obs
-from .closed_forms import SELF_SIMILAR_DELTA
 from .mesh import MAX_STRETCH, ORDERS, Mesh
 from .problems import ImposedSpeed, ImposedStress
 from .rheology import Friction, finite, require
 from .scales import UNITS
-from .steady import mu_w_for_speed, steady_delta, steady_wall_speed
+from .steady import SELF_SIMILAR_DELTA, mu_w_for_speed, steady_delta, steady_wall_speed
 from .stepper import TABLEAUX, StepStats, integrate
 
 
@@ -110,11 +108,18 @@ class Solution:
     mesh: Mesh
     t: np.ndarray
     tau: np.ndarray             # (len(t), N+1)
-    series: pd.DataFrame        # columns t, u_w, mu_w, delta at every accepted step
+    steps: np.ndarray           # rows (t, u_w, mu_w, delta) at every accepted step (``series``)
     stats: StepStats
     numerics: Numerics
     errors: dict = field(default_factory=dict)  # u_w, mu_w, delta -> absolute error estimates (aligned with t)
     accuracy: float | None = None               # the relative accuracy asked for (None: one solve)
+
+    @cached_property
+    def series(self):
+        """The per-step series as a DataFrame: columns t, u_w, mu_w, delta."""
+        import pandas as pd
+
+        return pd.DataFrame(self.steps, columns=["t", "u_w", "mu_w", "delta"])
 
     @property
     def beta_w(self) -> float:
@@ -167,8 +172,10 @@ class Solution:
                 "delta_definition": "depth where mu - mu_s falls to 1e-3 of mu_w(t) - mu_s",
                 "provenance": provenance()}
 
-    def profiles(self) -> pd.DataFrame:
-        """Long table: one row per (t, y~) with tau~, mu, mu~, u~."""
+    def profiles(self):
+        """Long table (DataFrame): one row per (t, y~) with tau~, mu, mu~, u~."""
+        import pandas as pd
+
         nt, ny = self.tau.shape
         return pd.DataFrame({"t": np.repeat(self.t, ny), "y": np.tile(self.mesh.y, nt),
                              "tau": self.tau.ravel(), "mu": self.mu.ravel(),
@@ -197,9 +204,9 @@ def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solut
     states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
                               h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder)
     tau = np.array([problem.full(x) for x in states])
-    series = pd.DataFrame(recorder.table() if record else np.empty((0, 4)), columns=["t", "u_w", "mu_w", "delta"])
+    steps = recorder.table() if record else np.empty((0, 4))
     return Solution(problem.imposed, problem.friction, problem.mu_w,
-                    getattr(problem, "u_w", None), problem.mesh, t, tau, series, stats, numerics)
+                    getattr(problem, "u_w", None), problem.mesh, t, tau, steps, stats, numerics)
 
 
 def _estimate(fine: Solution, coarse: Solution) -> dict:

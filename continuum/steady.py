@@ -9,12 +9,15 @@ s = sqrt(1 + beta_w y~) the integrand is rational in s and integrates in closed 
 from __future__ import annotations
 
 import numpy as np
+from scipy.special import erfcinv
 
 from .rheology import Friction, finite, require
 
 #: delta is where (mu - mu_s) has fallen to this fraction of (mu_w - mu_s); the paper's
 #: 0.999 criterion, since erfc(2.327) = 1e-3.
 DELTA_THRESHOLD = 1e-3
+#: delta/(Dmu sqrt(t~)) of the erfc solution (eq. SolutionSS): 2 erfc^-1(1e-3) = 4.653 (the paper prints 4.66)
+SELF_SIMILAR_DELTA = 2.0 * float(erfcinv(DELTA_THRESHOLD))
 
 
 def steady_mu(fr: Friction, mu_w: float, y):

@@ -104,8 +104,6 @@ class NewtonMatrix:
 
     def __init__(self, problem, x, dh):
         jac = problem.jacobian(x)
-        if isinstance(jac, tuple):
-            jac = Jacobian.tridiagonal(*jac)
         mass = problem.mass
         kl, ku = jac.kl, jac.ku
         self.dh, self.dense, self.kl, self.ku = dh, jac.row0 is not None, kl, ku

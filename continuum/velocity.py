@@ -23,7 +23,7 @@ from .rules import ShearLaw, YieldRule
 from .scales import Material, Scales
 from .solver import Numerics, check_times
 from .steady import DELTA_THRESHOLD
-from .stepper import StepStats, integrate
+from .stepper import Jacobian, StepStats, integrate
 
 
 @dataclass(frozen=True)
@@ -123,7 +123,7 @@ class VelocityProblem:
             diag[0] = -k[0]
         else:
             diag[0], sup[0] = 1.0, 0.0
-        return sub, diag, sup, None
+        return Jacobian.tridiagonal(sub, diag, sup)
 
     def project(self, x):
         if self.imposed == "speed":
