@@ -8,16 +8,30 @@ s = sqrt(1 + beta_w y~) the integrand is rational in s and integrates in closed 
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from scipy.special import erfcinv
 
 from .rheology import Friction, finite, require
 
 #: delta is where (mu - mu_s) has fallen to this fraction of (mu_w - mu_s); the paper's
 #: 0.999 criterion, since erfc(2.327) = 1e-3.
 DELTA_THRESHOLD = 1e-3
+
+
+def _erfc_inverse(q: float) -> float:
+    """x with erfc(x) = q, by Newton from x = 1 (math.erfc: no scipy.special import at start-up)."""
+    x = 1.0
+    for _ in range(50):
+        step = (math.erfc(x) - q) / (-2.0 / math.sqrt(math.pi) * math.exp(-x * x))
+        x -= step
+        if abs(step) < 1e-15:
+            break
+    return x
+
+
 #: delta/(Dmu sqrt(t~)) of the erfc solution (eq. SolutionSS): 2 erfc^-1(1e-3) = 4.653 (the paper prints 4.66)
-SELF_SIMILAR_DELTA = 2.0 * float(erfcinv(DELTA_THRESHOLD))
+SELF_SIMILAR_DELTA = 2.0 * _erfc_inverse(DELTA_THRESHOLD)
 
 
 def steady_mu(fr: Friction, mu_w: float, y):

@@ -30,9 +30,13 @@ def test_json_contract_imposed_stress(capsys, paper_friction):
     code, out, err = run(capsys, "--mu-w-tilde", "0.5", "--times", "1e-4", "1e-2", "1", "--json")
     assert code == 0 and err == ""
     data = json.loads(out)
-    assert set(data) == {"imposed", "mu_s", "mu_d", "mu_w_inf", "beta_w", "t", "u_w", "mu_w", "delta", "steady"}
-    assert data["imposed"] == "stress" and data["t"] == [1e-4, 1e-2, 1.0]
-    assert len(data["u_w"]) == len(data["mu_w"]) == len(data["delta"]) == 3
+    assert set(data) == {"imposed", "mu_s", "mu_d", "mu_w_inf", "beta_w", "t", "u_w", "mu_w", "delta", "steady",
+                         "u_w_err", "mu_w_err", "delta_err", "accuracy"}
+    assert data["imposed"] == "stress" and data["t"] == [1e-4, 1e-2, 1.0] and data["accuracy"] == 1e-6
+    assert len(data["u_w"]) == len(data["mu_w"]) == len(data["delta"]) == len(data["delta_err"]) == 3
+    for q in ("u_w", "delta"):  # the default accuracy is reached: every estimate below 1e-6 of its value
+        assert np.all(np.array(data[f"{q}_err"]) <= 1e-6 * np.array(data[q]))
+    assert data["mu_w_err"] == [0.0, 0.0, 0.0]  # imposed
     assert data["mu_w_inf"] == pytest.approx(paper_friction.mu_w_from_tilde(0.5), rel=1e-12)
     assert data["steady"]["u_w"] == pytest.approx(1.34039, abs=2e-5)
     assert data["mu_w"] == pytest.approx([data["mu_w_inf"]] * 3)
