@@ -106,7 +106,7 @@ def main() -> dict:
     # 2D vs 3D at the same depth
     base = config.preset_text("smoke").replace("atoms = 1.0", "atoms = 100.0").replace("contacts = 1.0",
                                                                                    "contacts = 100.0")
-    base = base.replace("width = 40.0", "width = 12.0").replace("duration = 10.0", "duration = 0.5")
+    base = base.replace("width = 40.0", "width = 12.0").replace("duration = 7.0", "duration = 0.5")
     three = base.replace("dimension = 2", "dimension = 3").replace("width = 12.0", "width = 12.0\nwidth_z = 6.0")
     dims = {}
     for dim, text, time_units in ((2, base, 4.0), (3, three, 1.0)):

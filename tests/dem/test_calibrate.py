@@ -143,3 +143,12 @@ def test_killed_calibration_resumes_without_redoing_finished_points(tmp_path):
     for key, wall in done.items():
         assert state["points"][key]["wall_time"] == wall
     assert len(pd.read_csv(out / layout.POINTS_CSV)) >= 3 and (out / layout.CALIBRATION_JSON).exists()
+
+
+def test_demo_protocol_replaces_the_presets_listed_inertial_numbers():
+    """make demo's reduced protocol overrides quick's list I (and its seeds), keeping the cell."""
+    from granstokes.demo import demo_calibration_text
+    cal = config.parse(demo_calibration_text("quick")).calibration
+    assert cal.I is None and cal.seeds == (1,)
+    assert cal.inertial_numbers == pytest.approx(tuple(np.geomspace(0.005, 0.5, 5)))
+    assert cal.width == config.preset("quick")[0].calibration.width

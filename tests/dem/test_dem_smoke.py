@@ -10,6 +10,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from compare.plate import PlateRecord
+from compare.plate import slip as plate_slip
 from dem import config, lammps_env, layout, outputs
 from granstokes.cli import main as granstokes_main  # the `granstokes` console script
 
@@ -68,7 +70,7 @@ def test_plate_held_at_speed_with_interval_averaged_forces(smoke):
     """The speed drive holds u_x (interval averages of a held speed: exact) and the distance follows;
     every sample averages the force over its whole interval, so its scatter is well below that of the
     single-step force (std ~ 0.7 of the mean, the plate resting on a few grains at any instant); the
-    grains touching the plate move with it (few % slip, compare.plate.slip)."""
+    grains touching the plate move with it (slip <= 5 %, compare.plate.slip)."""
     out, _ = smoke
     meta = json.loads((out / "run.json").read_text())
     u_w, t_end = meta["sizing"]["drives"][0]["u_w"], meta["sizing"]["drives"][0]["duration"]
@@ -77,8 +79,12 @@ def test_plate_held_at_speed_with_interval_averaged_forces(smoke):
     assert np.allclose(moving["u_x"], u_w, rtol=1e-6)
     assert plate["x"].iloc[-1] - plate["x"].iloc[0] == pytest.approx(u_w * t_end, rel=0.01)
     assert moving["f_y"].std() < 0.35 * moving["f_y"].mean()
-    late = moving[moving["t"] > t_end / 2]
-    assert 0.8 < (late["u_c"] * late["n_c"]).sum() / late["n_c"].sum() / u_w <= 1.0
+    slip = plate_slip(PlateRecord.read(out / "seed-1" / "speed"))
+    # issue 9: slip <= 5 %.  This bed slips 2.2 %; the preset's beds 1-4 slip 3.7 % on average with a
+    # bed-to-bed spread of 1.4 % (bench/RESULTS.md), larger than this bed's block error (~0.9 %), so the
+    # limit is asserted without a tolerance: it sits two spreads above this bed.  At p_w = 10 (the
+    # preset before) the beds slipped 5.9 +- 0.5 % and this assertion fails.
+    assert -0.01 < slip["value"] <= 0.05, slip
     assert meta["sizing"]["elastic_start"]["transit_time"] == pytest.approx(
         meta["sizing"]["depth"] / meta["sizing"]["elastic_start"]["shear_wave_speed"])
 
@@ -86,7 +92,7 @@ def test_plate_held_at_speed_with_interval_averaged_forces(smoke):
 def test_killed_run_resumes_with_continuous_output(tmp_path):
     """SIGKILL the whole run (runner and LAMMPS) mid-drive, resume, and find every output step once
     (the smoke scene, narrower and longer so that the kill lands mid-drive)."""
-    text = config.preset_text("smoke").replace("duration = 10.0", "duration = 20.0").replace("width = 40.0",
+    text = config.preset_text("smoke").replace("duration = 7.0", "duration = 14.0").replace("width = 40.0",
                                                                                          "width = 16.0")
     cfg_path = tmp_path / "smoke-long.toml"
     cfg_path.write_text(text)
@@ -162,7 +168,7 @@ def test_seeds_run_side_by_side_under_a_launcher_template(tmp_path):
     launcher template (the mpich wheel's mpirun standing in for srun): both complete, and they are
     different beds (different random packings, so different plate records)."""
     text = (config.preset_text("smoke").replace("seeds = [1]", "seeds = [1, 2]").replace("width = 40.0", "width = 8.0")
-            .replace("depth = 12.0", "depth = 6.0").replace("duration = 10.0", "duration = 0.5"))
+            .replace("depth = 12.0", "depth = 6.0").replace("duration = 7.0", "duration = 0.35"))
     cfg_path = tmp_path / "pair.toml"
     cfg_path.write_text(text)
     out = tmp_path / "run"

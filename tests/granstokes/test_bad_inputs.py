@@ -20,7 +20,7 @@ def _case(tmp_path, monkeypatch, capsys, argv, name):
     (tmp_path / "lacks_keys.json").write_text(json.dumps({"mu_s": 0.3}))
     (tmp_path / "not_a_run").mkdir()
     from dem import config
-    (tmp_path / "forever.toml").write_text(config.preset_text("smoke").replace("duration = 10.0", "duration = 1e9"))
+    (tmp_path / "forever.toml").write_text(config.preset_text("smoke").replace("duration = 7.0", "duration = 1e9"))
     monkeypatch.chdir(tmp_path)
     before = _files(tmp_path)
     try:
