@@ -110,3 +110,42 @@ def test_wellposedness_of_the_steady_layer():
 def test_bad_inputs_are_refused(make, name):
     with pytest.raises(ValueError, match=f"^{name} must be"):
         make()
+
+
+# --- accuracy of the defaults on the quick preset's stress drive (bench/velocity_form.py) -------------
+QUICK = Material(mu_s=0.2786, mu_d=0.7656, I0=0.3577, I_convention="dem", phi=0.8086)  # results/quick-calibration
+QUICK_SCENE = BedScene(QUICK, 20.0, 24.0, plate_mass=0.4663)
+QUICK_MU_W, QUICK_END = 8.6 / 20.0, 28.88
+#: issue 11's target for the velocity-form prediction of a quick drive
+TARGET = 1e-4
+
+
+@pytest.fixture(scope="module")
+def quick_stress():
+    """u_w at 5 of compare's times on 200 (default), 400, 800 cells (rtol 1e-8) and the default run."""
+    from dataclasses import replace
+    from continuum.rules import YieldRule
+    from continuum.velocity import VELOCITY_NUMERICS
+    times = np.geomspace(QUICK_END / 300, QUICK_END, 5)
+    rule = YieldRule.for_layer(Scales(QUICK, QUICK_SCENE.p_w, QUICK_MU_W))
+    run = lambda num: solve_velocity(QUICK_SCENE, times, mu_w=QUICK_MU_W, rule=rule, compare_steady=False,
+                                     numerics=num).u_w
+    tight = [run(replace(VELOCITY_NUMERICS, n_cells=n, rtol=1e-8, atol=1e-11)) for n in (200, 400, 800)]
+    return tight, run(VELOCITY_NUMERICS)
+
+
+def test_velocity_form_mesh_order_is_two_and_default_error_as_measured(quick_stress):
+    """Second order in the mesh; the default (200 cells, rtol 1e-5) is within 3e-4 of the
+    Richardson-extrapolated u_w (measured 2.7e-4 at the earliest time, bench/RESULTS.md)."""
+    (a, b, c), default = quick_stress
+    order = np.log2(np.abs(b - a) / np.abs(c - b))
+    assert order == pytest.approx(2.0, abs=0.1)
+    ref = c + (c - b) / 3
+    assert np.max(np.abs(default / ref - 1)) < 3 * TARGET
+
+
+@pytest.mark.xfail(strict=True, reason="issue 11: 1e-4 needs ~400 cells at the default grading (~2x the CPU); "
+                                       "not reached within 50 ms (bench/RESULTS.md)")
+def test_velocity_form_default_reaches_the_target(quick_stress):
+    (a, b, c), default = quick_stress
+    assert np.max(np.abs(default / (c + (c - b) / 3) - 1)) < TARGET

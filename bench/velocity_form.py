@@ -1,0 +1,116 @@
+"""Velocity form (continuum.velocity) on the quick preset's two drives, as compare predicts them:
+CPU time and error of u_w(t), mu_w(t), delta_u(t) (compare.models) and the velocity profiles, at the
+comparison's output times, against a converged reference.  Writes bench/velocity_form.csv and prints
+the table for bench/RESULTS.md.
+
+    .venv/bin/python bench/velocity_form.py
+
+Scene: dem/presets/quick.toml sized by dem.sizing (bed depth, drive values, durations), the plate's
+mass per area from dem.scene; material from results/quick-calibration/calibration.json; times: the
+comparison's log grid (compare.comparison) over the drive's duration.  Reference: stretch-2 meshes of
+REFINE cells at rtol 1e-8, the order measured from the three, Richardson-extrapolated.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from compare import calibrate
+from compare.comparison import PREDICTION_SPAN, PREDICTION_TIMES
+from compare.models import Drive, _series
+from continuum.rules import YieldRule
+from continuum.solver import Numerics
+from continuum.velocity import VELOCITY_NUMERICS, solve_velocity
+from dem.config import preset
+from dem.scene import plate_geometry
+from dem.sizing import plan
+
+HERE = Path(__file__).parent
+ROOT = HERE.parent
+TARGET = 1e-4
+REFINE = (400, 800, 1600)
+REFERENCE_TOL = dict(stretch=2.0, rtol=1e-8, atol=1e-11)
+CANDIDATES = {"default": VELOCITY_NUMERICS,
+              "100 cells, rtol 1e-4": Numerics(n_cells=100, stretch=2.0, rtol=1e-4, atol=1e-8),
+              "400 cells, rtol 1e-5": Numerics(n_cells=400, stretch=2.0, rtol=1e-5, atol=1e-9),
+              "200 cells, stretch 4": Numerics(n_cells=200, stretch=4.0, rtol=1e-5, atol=1e-9)}
+REPEATS = 3
+
+
+def quick_drives():
+    """(material, [(name, Drive, times)]) of the quick preset."""
+    cfg, _ = preset("quick")
+    p = plan(cfg)
+    mass = plate_geometry(p)["mass_per_area"]
+    material = calibrate.load(ROOT / "results/quick-calibration/calibration.json").material()
+    drives = [(d.drive.name, Drive(d.drive.kind, d.tau_w if d.drive.kind == "stress" else d.u_w, cfg.p_w, p.depth, mass),
+               np.geomspace(d.duration / PREDICTION_SPAN, d.duration, PREDICTION_TIMES)) for d in p.drives]
+    return material, drives
+
+
+def predict(material, drive, times, numerics):
+    """What compare.models' local transient computes: the series (u_w, mu_w, delta_u) and u(y)."""
+    vel = solve_velocity(drive.scene(material), times, rule=YieldRule.for_layer(drive.scales(material)),
+                         initial="rest", numerics=numerics, compare_steady=False, **drive.load)
+    s = _series(times, vel.y, vel.u, vel.mu_w)
+    return {"u_w": s.u_w.to_numpy(), "mu_w": s.mu_w.to_numpy(), "delta_u": s.delta_u.to_numpy(),
+            "y": vel.y, "u": vel.u}
+
+
+def reference(material, drive, times):
+    """Richardson extrapolation over REFINE (order p measured per quantity, median over times) and
+    the finest profile; returns (reference, orders, estimated error of the finest solve)."""
+    runs = [predict(material, drive, times, Numerics(n_cells=n, **REFERENCE_TOL)) for n in REFINE]
+    ref, orders, err = {"y": runs[-1]["y"], "u": runs[-1]["u"]}, {}, {}
+    for q in ("u_w", "mu_w", "delta_u"):
+        a, b, c = (r[q] for r in runs)
+        d1, d2 = np.abs(b - a), np.abs(c - b)
+        ok = (d2 > 1e-14 * np.abs(c)) & (d1 > d2)
+        p = float(np.median(np.log2(d1[ok] / d2[ok]))) if ok.any() else np.inf
+        corr = (c - b) / (2**p - 1) if np.isfinite(p) else 0.0
+        ref[q], orders[q] = c + corr, p
+        err[q] = float(np.max(np.abs(corr) / np.abs(c)))
+    return ref, orders, err
+
+
+def errors(run, ref) -> dict:
+    out = {q: float(np.nanmax(np.abs(run[q] / ref[q] - 1))) for q in ("u_w", "mu_w", "delta_u")}
+    u_ref = np.array([np.interp(run["y"], ref["y"], u) for u in ref["u"]])
+    out["u_profile"] = float(np.max(np.abs(run["u"] - u_ref) / np.abs(ref["u_w"])[:, None]))
+    return out
+
+
+def timed(run):
+    best = np.inf
+    for _ in range(REPEATS):
+        start = time.process_time()
+        value = run()
+        best = min(best, time.process_time() - start)
+    return best, value
+
+
+def main() -> None:
+    material, drives = quick_drives()
+    rows = []
+    for name, drive, times in drives:
+        ref, orders, ref_err = reference(material, drive, times)
+        print(f"{name}: measured orders {orders}; reference error estimate {ref_err}")
+        for label, num in CANDIDATES.items():
+            cpu, run = timed(lambda: predict(material, drive, times, num))
+            rows.append({"drive": name, "numerics": label, "n_cells": num.n_cells, "stretch": num.stretch,
+                         "rtol": num.rtol, "cpu_ms": 1e3 * cpu, **errors(run, ref)})
+    table = pd.DataFrame(rows)
+    table.to_csv(HERE / "velocity_form.csv", index=False)
+    base = table[table.numerics == "default"].set_index("drive").cpu_ms
+    print("| drive | numerics | CPU [ms] | / default | u_w | mu_w | delta_u | u(y)/u_w |\n|---|---|---|---|---|---|---|---|")
+    for r in table.itertuples():
+        print(f"| {r.drive} | {r.numerics} | {r.cpu_ms:.0f} | {r.cpu_ms / base[r.drive]:.2f} | {r.u_w:.1e} | "
+              f"{r.mu_w:.1e} | {r.delta_u:.1e} | {r.u_profile:.1e} |")
+    print(f"target: every error <= {TARGET:g} in <= 50 ms per drive")
+
+
+if __name__ == "__main__":
+    main()
