@@ -91,16 +91,6 @@ class Mesh:
         y[-1] = 1.0
         return cls(y, float(stretch))
 
-    @classmethod
-    def for_first_cell(cls, n_cells: int, first_cell: float) -> "Mesh":
-        """The graded mesh whose first cell is ``first_cell`` (uniform if that is 1/N or more)."""
-        if first_cell * n_cells >= 1.0:
-            return cls.graded(n_cells, 0.0)
-        a = 1.0
-        for _ in range(100):  # a = log(1 + (a/N)/first_cell): first cell = (exp(a/N) - 1)/(exp(a) - 1)
-            a = np.log1p(np.expm1(a / n_cells) / first_cell)
-        return cls.graded(n_cells, float(a))
-
     @property
     def n_cells(self) -> int:
         return len(self.y) - 1
@@ -184,14 +174,6 @@ class Mesh:
     def quadrature_from_node1(self, order: int) -> np.ndarray:
         """Weights q (q[0] = 0) with int_y1^1 f dy ~ q @ f."""
         cells = self.cell_integrals_from_node1(order)
-        q = np.zeros_like(self.y)
-        np.add.at(q, cells.cols, cells.weights)
-        return q
-
-    @_per_order
-    def quadrature(self, order: int) -> np.ndarray:
-        """Weights q with integral_0^1 f dy ~ q @ f, of the given order."""
-        cells = self.cell_integrals(order)
         q = np.zeros_like(self.y)
         np.add.at(q, cells.cols, cells.weights)
         return q
