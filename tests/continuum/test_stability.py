@@ -56,19 +56,23 @@ def test_explicit_euler_blows_up_far_above_the_bound():
 
 
 def test_classification_and_maps(tmp_path):
-    """A small map: SDIRK4 on the fourth-order scheme converges at order ~4 already from 25 cells;
-    explicit Euler blows up at 2 dt* and is stable at dt*/2, with the first-order error of ~1e-3
-    that its time step (dt* ~ h^2/(2 Dmu^2)) leaves after the singular start."""
-    sdirk4, euler = (replace(m, params=(0.5,), values=v, refine=r) for m, v, r in
-                     ((METHODS[0], (25, 100), (50, 200)), (METHODS[2], (2.0, 0.5), (1.0, 0.25))))
-    methods = (sdirk4, euler)
-    table = stability_table(FR, methods)
-    sdirk = table[table.method.str.startswith("stress SDIRK4")].set_index("axis_value")
-    assert sdirk.loc[25, "class"] == "converged" and sdirk.loc[100, "class"] == "converged"
-    assert sdirk.loc[100, "order"] == pytest.approx(4.0, abs=0.5)
+    """A small map: SDIRK4 on the fourth-order scheme converges at order ~4 already from 25 cells, and
+    at 200 cells its refined run (400 cells) is at the reference's own accuracy: no order, "ref"; the
+    second-order BDF baseline converges at order ~2; explicit Euler blows up at 2 dt* and is stable
+    at dt*/2, with the first-order error of ~1e-3 that its time step (dt* ~ h^2/(2 Dmu^2)) leaves
+    after the singular start."""
+    sdirk4, bdf, euler = (replace(m, params=(0.5,), values=v, refine=r) for m, v, r in
+                          ((METHODS[0], (25, 100, 200), (50, 200, 400)), (METHODS[3], (50,), (100,)),
+                           (METHODS[2], (2.0, 0.5), (1.0, 0.25))))
+    table = stability_table(FR, (sdirk4, bdf, euler))
+    sdirk = table[table.method == sdirk4.name].set_index("axis_value")
+    assert (sdirk["class"] == "converged").all()
+    assert sdirk.loc[100, "order"] == pytest.approx(4.0, abs=0.5) and not sdirk.loc[100, "at_reference"]
     assert sdirk.loc[25, "rel_error"] > 4**3 * sdirk.loc[100, "rel_error"]
-    euler = table[table.method.str.startswith("stress explicit")].set_index("axis_value")
+    assert sdirk.loc[200, "at_reference"] and math.isnan(sdirk.loc[200, "order"])
+    assert table[table.method == bdf.name].order.item() == pytest.approx(2.0, abs=0.3)
+    euler = table[table.method == euler.name].set_index("axis_value")
     assert euler.loc[2.0, "class"] == "blown up" and euler.loc[0.5, "class"] in ("converged", "inaccurate")
     assert euler.loc[0.5, "rel_error"] < 2e-3 and euler.loc[0.5, "order"] > 0.5
     paths = plot_maps(table, tmp_path)
-    assert len(paths) == 2 and all(p.stat().st_size > 5000 for p in paths)
+    assert len(paths) == 3 and all(p.stat().st_size > 5000 for p in paths)
