@@ -114,5 +114,6 @@ def register(sub) -> None:
                         "imposed stress; an imposed speed: one solve with its error estimates)")
     p.add_argument("--n-cells", type=int, default=DEFAULT_CELLS, help="(starting) mesh cells (default %(default)s)")
     p.add_argument("--rtol", type=float, help="time-step tolerance (default: matched to the mesh's space error)")
-    p.add_argument("--method", default="sdirk4", help="time stepper: sdirk4 or tr-bdf2")
+    p.add_argument("--method", help="time stepper: sdirk4, tr-bdf2 or bdf (default: sdirk4 for an imposed "
+                                    "stress, bdf for an imposed speed)")
     p.set_defaults(func=run_continuum)

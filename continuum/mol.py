@@ -21,6 +21,7 @@ def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics 
                      method: str = "BDF") -> Solution:
     """Imposed wall stress by solve_ivp(method) on the interior nodes, tau~(0) = 1 for t~ > 0."""
     t = check_times(times)
+    numerics = numerics.for_drive("stress")
     problem = ImposedStress(friction, mu_w, numerics.mesh(stretch_for(friction, mu_w, t[0])), numerics.order)
     x0 = problem.initial()
     x0[0] = 1.0

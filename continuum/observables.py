@@ -22,7 +22,8 @@ def friction_profile(fr: Friction, mu_w: float, mesh: Mesh, tau):
 def shear_rate(fr: Friction, mu_w: float, mesh: Mesh, tau):
     """-du~/dy~ = sqrt(p~)/Dmu (1/mu~ - 1) (eq. IreWrittenNonDim)."""
     mt = fr.tilde(friction_profile(fr, mu_w, mesh, tau))
-    return np.sqrt(1.0 + fr.beta(mu_w) * mesh.y) / fr.dmu * (1.0 / mt - 1.0)
+    with np.errstate(divide="ignore"):  # mu = mu_d at an imposed speed's wall before t~_mud: infinite
+        return np.sqrt(1.0 + fr.beta(mu_w) * mesh.y) / fr.dmu * (1.0 / mt - 1.0)
 
 
 def velocity(fr: Friction, mu_w: float, mesh: Mesh, tau, order: int = 4, wall_speed: float | None = None):
@@ -33,6 +34,7 @@ def velocity(fr: Friction, mu_w: float, mesh: Mesh, tau, order: int = 4, wall_sp
     rate = shear_rate(fr, mu_w, mesh, tau)
     if wall_speed is None:
         return mesh.integral_from_bottom(rate, order)
+    rate[..., 0] = 0.0  # not used (and possibly infinite)
     pieces = mesh.cell_integrals_from_node1(order)(rate)
     up = np.cumsum(pieces[..., ::-1], axis=-1)[..., ::-1]
     return np.concatenate([np.full_like(up[..., :1], wall_speed), up, np.zeros_like(up[..., :1])], axis=-1)

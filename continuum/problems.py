@@ -106,20 +106,17 @@ class ImposedStress(ShearStressDiffusion):
 
 class ImposedSpeed(ShearStressDiffusion):
     """Imposed wall speed u~_w: the wall stress is the extra unknown fixed by
-    eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~, with the first cell
-    by the trapezoidal rule and the others by the mesh's rule of the problem's order on nodes 1..N
-    (the quadrature that gives the velocity profile, so the constraint holds to round-off).
+    eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~: the first cell by
+    product integration, exact for mu~ linear in the cell (``_first_cell``), the others by the mesh's
+    rule of the problem's order on nodes 1..N (the quadrature that gives the velocity profile, so the
+    constraint holds to round-off).
 
-    The wall unknown is v = 1/mu~(0) (the wall shear rate, up to a factor), in which the
-    constraint is linear: it is solved exactly after each Newton solve.
-
-    Singular start: the initial state mu~ = 1 carries no velocity, so at t~ = 0+ the whole jump
-    u~_w sits in a wall sub-layer where mu~ -> 0 (mu -> mu_d).  In the continuum that sub-layer is
-    exponentially thin for t~ << t_mud ~ u~_w^2 (the velocity form du/dt ~ d/dy(-1/u_y) is a heat
-    equation for y(u) in the hodograph plane); on the mesh it is carried by the first cell, where
-    the constraint gives mu~_w ~ h_0/(2 Dmu u~_w), i.e. mu_w = mu_d - O(h_0): the wall friction is
-    as close to mu_d as the mesh can show (first order in h_0 until t~ ~ t_mud).  Newton updates are
-    limited to keep mu~ > 0.
+    The wall unknown is q = ln(1/mu~(0)).  Singular start: the initial state mu~ = 1 carries no
+    velocity, so at t~ = 0+ the whole jump u~_w sits in a wall sub-layer where mu~ -> 0 (mu -> mu_d).
+    With mu~ = a + (b - a) y/h_0 in the first cell, its share of u~_w is h_0 ln(b/a)/(b - a): the
+    constraint then gives a ~ b exp(-b u~_w Dmu/h_0), exponentially small for t~ << t_mud ~ u~_w^2
+    (the sub-layer of the continuum), and q stays of moderate size where mu~_w itself underflows.
+    ``project`` solves the constraint for q (Newton: it is increasing in q) after every stage.
     """
 
     imposed = "speed"
@@ -129,54 +126,99 @@ class ImposedSpeed(ShearStressDiffusion):
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
         self.u_w = float(u_w)
         super().__init__(friction, mu_w_for_speed(friction, u_w), mesh, order)
-        q = mesh.quadrature_from_node1(order).copy()
-        q[:2] += mesh.h[0] / 2
-        self._wq = q[:-1] * np.sqrt(self.p[:-1]) / friction.dmu
+        self._wq = mesh.quadrature_from_node1(order)[:-1] * np.sqrt(self.p[:-1]) / friction.dmu
+        self._w_first = mesh.h[0] * np.sqrt(1.0 + self.beta * mesh.h[0] / 2) / friction.dmu
+        self.lift_off_end = LIFT_OFF_SPAN * self.u_w**2
 
     def initial(self) -> np.ndarray:
         x = super().initial()
-        x[0] = 1.0  # v = 1/mu~ = 1: mu = mu_s at the wall
+        x[0] = 0.0  # q = ln(1/mu~) = 0: mu = mu_s at the wall
         return x
 
-    def full(self, x: np.ndarray) -> np.ndarray:
+    def _tau0(self, q: float) -> float:
         fr = self.friction
-        tau0 = (fr.mu_d - fr.dmu / x[0]) * self.p[0] / self.mu_w
-        return np.concatenate(([tau0], x[1:], [1.0]))
+        return (fr.mu_d - fr.dmu * np.exp(-q)) * self.p[0] / self.mu_w
+
+    def full(self, x: np.ndarray) -> np.ndarray:
+        return np.concatenate(([self._tau0(x[0])], x[1:], [1.0]))
 
     def jacobian(self, x: np.ndarray) -> Jacobian:
         jac = super().jacobian(x)
         k = np.arange(1, min(self.kl, len(x) - 1) + 1)
-        jac.bands[self.ku + k, 0] *= self.friction.dmu * self.p[0] / (self.mu_w * x[0] ** 2)  # d tau~_0 / d v
+        jac.bands[self.ku + k, 0] *= self.friction.dmu * np.exp(-x[0]) * self.p[0] / self.mu_w  # d tau~_0/d q
         return jac
 
     def mu_tilde(self, x: np.ndarray) -> np.ndarray:
         """mu~ at nodes 0..N-1."""
         mt = (self.friction.mu_d - self.mu_w * x / self.p[:-1]) / self.friction.dmu
-        mt[0] = 1.0 / x[0]
+        mt[0] = np.exp(-x[0])
         return mt
+
+    def _first_cell(self, q: float, b: float):
+        """L = int_0^1 ds/(a + (b - a) s) = ln(b/a)/(b - a) with a = exp(-q), and dL/dq, dL/db."""
+        a = np.exp(-q)
+        d = b - a
+        r = d / (b + a)
+        if abs(r) < SERIES_BELOW:  # atanh(r)/r and the derivatives' limits, to O(r^4)
+            lam = 2.0 / (a + b) * (1.0 + r * r / 3.0)
+            return lam, 1.0 / (2 * a) - d / (3 * a * a), -1.0 / (2 * a * a) + 2 * d / (3 * a**3)
+        lam = (np.log(b) + q) / d
+        return lam, (1.0 - a * lam) / d, (1.0 / b - lam) / d
 
     def wall_residual(self, x: np.ndarray) -> float:
         mt = self.mu_tilde(x)
-        return self._wq[0] * (x[0] - 1.0) + self._wq[1:] @ (1.0 / mt[1:] - 1.0) - self.u_w
+        lam = self._first_cell(x[0], mt[1])[0]
+        return self._w_first * (lam - 1.0) + self._wq[1:] @ (1.0 / mt[1:] - 1.0) - self.u_w
 
     def wall_gradient(self, x: np.ndarray) -> np.ndarray:
-        grad = self._wq / self.mu_tilde(x) ** 2 * self.mu_w / (self.p[:-1] * self.friction.dmu)
-        grad[0] = self._wq[0]
+        mt = self.mu_tilde(x)
+        dmt_dx = -self.mu_w / (self.p[:-1] * self.friction.dmu)
+        _, dq, db = self._first_cell(x[0], mt[1])
+        grad = np.empty(len(x))
+        grad[1:] = -self._wq[1:] / mt[1:] ** 2 * dmt_dx[1:]
+        grad[0] = self._w_first * dq
+        grad[1] += self._w_first * db * dmt_dx[1]
         return grad
 
     def project(self, x: np.ndarray) -> np.ndarray:
-        """Satisfy the constraint exactly: it is linear in v = x[0]."""
-        x[0] -= self.wall_residual(x) / self._wq[0]
+        """Satisfy the constraint exactly: solve L(q) = target for q (L increases with q) by Newton
+        kept inside the bracket of the iterates so far (bisection when it leaves it); NaN where the
+        interior is inadmissible (mu~ <= 0 at a node) or Newton fails."""
+        mt = self.mu_tilde(x)
+        b = mt[1]
+        target = (self.u_w + self._w_first - self._wq[1:] @ (1.0 / mt[1:] - 1.0)) / self._w_first
+        if not (np.all(mt[1:] > 0) and target > 0):
+            x[0] = np.nan
+            return x
+        q = max(target * b - np.log(b), np.log(target))  # L's limits for a << b and a >> b
+        lo, hi = -np.inf, np.inf
+        for _ in range(PROJECTION_ITERATIONS):
+            lam, dq, _ = self._first_cell(q, b)
+            if lam > target:
+                hi = q
+            else:
+                lo = q
+            new = q - (lam - target) / dq
+            if not lo < new < hi:
+                new = 0.5 * (lo + hi) if np.isfinite(lo + hi) else q + np.sign(target - lam) * max(1.0, abs(q))
+            if abs(new - q) <= PROJECTION_TOL * max(1.0, abs(q)):
+                x[0] = new
+                return x
+            q = new
+        x[0] = np.nan
         return x
 
     def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
-        """At most halve mu~ at an interior node, or v at the wall, in one Newton update."""
+        """At most halve mu~ at an interior node in one Newton update (q is unbounded)."""
         mt = self.mu_tilde(x)[1:]
         dmt = -self.mu_w / (self.p[1:-1] * self.friction.dmu) * dx[1:]
-        limits = [1.0]
-        if dx[0] < 0:
-            limits.append(-0.5 * x[0] / dx[0])
         falling = dmt < 0
-        if falling.any():
-            limits.append(np.min(-0.5 * mt[falling] / dmt[falling]))
-        return float(min(limits))
+        return float(min(1.0, np.min(-0.5 * mt[falling] / dmt[falling]))) if falling.any() else 1.0
+
+
+#: ImposedSpeed._first_cell switches to its series below this |b - a|/(b + a)
+SERIES_BELOW = 1e-4
+#: the projection's Newton on q: most iterations, relative step tolerance
+PROJECTION_ITERATIONS, PROJECTION_TOL = 100, 1e-13
+#: the lift-off of mu_w from mu_d is over by this many t_mud = u~_w^2 (continuum.closed_forms)
+LIFT_OFF_SPAN = 10.0

@@ -16,22 +16,35 @@ from .problems import ImposedSpeed, ImposedStress
 from .rheology import Friction, finite, require
 from .scales import UNITS
 from .steady import SELF_SIMILAR_DELTA, mu_w_for_speed, steady_delta, steady_wall_speed
-from .stepper import TABLEAUX, StepStats, integrate
+from .stepper import METHODS, TABLEAUX, StepStats, integrate
 
-
-#: the first output time's layer is given this fraction of the mesh (the map's xi at delta(t_min))
-LAYER_SHARE = 0.3
-#: default time tolerance: MATCHED_RTOL on MATCHED_CELLS cells, scaled as n_cells^-4 (measured: the
-#: time error of u~_w then stays below the fourth-order space error of the mesh, bench/work_precision.py)
-MATCHED_RTOL, MATCHED_CELLS = 1e-8, 256
+DRIVES = ("stress", "speed")
+#: the default time stepper of each drive (continuum.stepper: BDF keeps its order on the speed's DAE,
+#: the DIRKs' stage order 1 does not)
+DEFAULT_METHOD = {"stress": "sdirk4", "speed": "bdf"}
+#: the order in space of each drive (measured, tests/continuum): 4 for a stress; 2 for a speed, whose wall
+#: diffusivity (Dmu mu~_w)^2 vanishes until t~_mud (a degenerate wall layer the mesh cannot follow)
+CONVERGENCE_ORDER = {"stress": 4, "speed": 2}
+#: the first output time's layer is given this fraction of the mesh (the map's xi at delta(t_min)); the
+#: speed's degenerate wall layer needs more of it
+LAYER_SHARE = {"stress": 0.3, "speed": 0.45}
+#: default time tolerance: MATCHED_RTOL[method] on MATCHED_CELLS cells, scaled as n_cells^-order (measured:
+#: the time error then stays below the space error of the mesh, bench/work_precision.py)
+MATCHED_RTOL, MATCHED_CELLS = {**dict.fromkeys(TABLEAUX, 1e-8), "bdf": 1e-10}, 256
 #: atol = ATOL_PER_RTOL rtol (tau~ is O(1))
 ATOL_PER_RTOL = 1e-2
 #: the first time step, as a fraction of the first output time
 INITIAL_STEP = 1e-5
-#: the two solves of an error estimate: the coarse one has half the cells and this times the tolerance
-#: (every error 2^4 = 16 times larger: fourth order in space, tolerance-proportional in time)
+#: the two solves of an error estimate: the coarse one has half the cells and gain(drive) times the
+#: tolerance (every error gain times larger: of the drive's order in space, tolerance-proportional in time)
 REFINEMENT = 2
-ORDER_GAIN = REFINEMENT**4
+ORDER_GAIN = REFINEMENT ** CONVERGENCE_ORDER["stress"]
+
+
+def gain(imposed: str) -> int:
+    """The factor by which every error grows from a solve to its coarser companion."""
+    return REFINEMENT ** CONVERGENCE_ORDER[imposed]
+
 #: the Richardson estimate times this bounds the true error (measured: the bare estimate is within a
 #: factor 2 of it either way, tests/continuum/test_accuracy.py)
 SAFETY = 3.0
@@ -40,50 +53,55 @@ SAFETY = 3.0
 @dataclass(frozen=True)
 class Numerics:
     """Resolution and tolerances of one solve.  ``stretch=None``: the map follows the first output
-    time (``stretch_for``); ``order``: of the spatial discretisation (continuum.mesh)."""
+    time (``stretch_for``); ``order``: of the spatial discretisation (continuum.mesh); ``method``,
+    ``rtol``, ``atol`` = None: the drive's defaults (``for_drive``)."""
 
     n_cells: int = 64
     stretch: float | None = None
     rtol: float | None = None
     atol: float | None = None
-    method: str = "sdirk4"
+    method: str | None = None
     order: int = 4
 
     def __post_init__(self):
         Mesh.graded(self.n_cells, 0.0 if self.stretch is None else self.stretch)  # validates both
         require(self.order in ORDERS, "order", f"one of {ORDERS}", self.order)
-        require(self.method in TABLEAUX, "method", f"one of {sorted(TABLEAUX)}", self.method)
-        if self.rtol is None:  # time error matched to the fourth-order space error of this mesh
-            object.__setattr__(self, "rtol", min(MATCHED_RTOL * (MATCHED_CELLS / self.n_cells) ** 4, 1e-3))
-        if self.atol is None:
-            object.__setattr__(self, "atol", self.rtol * ATOL_PER_RTOL)
-        require(finite(self.rtol) and 0 < self.rtol < 1, "rtol", "in (0, 1)", self.rtol)
-        require(finite(self.atol) and 0 < self.atol < 1, "atol", "in (0, 1)", self.atol)
+        require(self.method is None or self.method in METHODS, "method", f"one of {list(METHODS)}", self.method)
+        for name in ("rtol", "atol"):
+            value = getattr(self, name)
+            require(value is None or (finite(value) and 0 < value < 1), name, "in (0, 1)", value)
+
+    def for_drive(self, imposed: str) -> "Numerics":
+        """These numerics with the drive's defaults filled in: its method, and a time tolerance matched
+        to the space error of this mesh (MATCHED_RTOL, scaled as n_cells^-order)."""
+        method = self.method or DEFAULT_METHOD[imposed]
+        scale = (MATCHED_CELLS / self.n_cells) ** CONVERGENCE_ORDER[imposed]
+        rtol = self.rtol if self.rtol is not None else min(MATCHED_RTOL[method] * scale, 1e-3)
+        return replace(self, method=method, rtol=rtol, atol=self.atol if self.atol is not None else rtol * ATOL_PER_RTOL)
 
     def mesh(self, stretch: float | None = None) -> Mesh:
         """The mesh of ``n_cells`` with this stretch, else ``stretch`` (else uniform)."""
         return Mesh.graded(self.n_cells, self.stretch if self.stretch is not None else (stretch or 0.0))
 
-    def coarser(self) -> "Numerics":
-        """The estimate's companion: half the cells, ORDER_GAIN times the tolerances."""
-        return replace(self, n_cells=self.n_cells // REFINEMENT, rtol=min(self.rtol * ORDER_GAIN, 0.1),
-                       atol=min(self.atol * ORDER_GAIN, 0.1))
+    def coarser(self, factor: float) -> "Numerics":
+        """The estimate's companion: half the cells, ``factor`` times the tolerances (resolved numerics)."""
+        return replace(self, n_cells=self.n_cells // REFINEMENT, rtol=min(self.rtol * factor, 0.1),
+                       atol=min(self.atol * factor, 0.1))
 
-    def finer(self) -> "Numerics":
-        return replace(self, n_cells=self.n_cells * REFINEMENT, rtol=self.rtol / ORDER_GAIN,
-                       atol=self.atol / ORDER_GAIN)
+    def finer(self, factor: float) -> "Numerics":
+        return replace(self, n_cells=self.n_cells * REFINEMENT, rtol=self.rtol / factor, atol=self.atol / factor)
 
 
-def stretch_for(fr: Friction, mu_w: float, t_min: float) -> float:
-    """The map's stretch a that puts LAYER_SHARE of the xi-grid inside the layer at t_min:
-    ln(1 + delta (e^a - 1)) = LAYER_SHARE a, with the short-time thickness
+def stretch_for(fr: Friction, mu_w: float, t_min: float, share: float = LAYER_SHARE["stress"]) -> float:
+    """The map's stretch a that puts ``share`` of the xi-grid inside the layer at t_min:
+    ln(1 + delta (e^a - 1)) = share a, with the short-time thickness
     delta ~ SELF_SIMILAR_DELTA Dmu mu~_w sqrt(t~) (the wall diffusivity is (Dmu mu~_w)^2)."""
     delta = SELF_SIMILAR_DELTA * fr.dmu * max(fr.tilde(mu_w), 0.05) * np.sqrt(t_min)
-    if delta >= LAYER_SHARE:
+    if delta >= share:
         return 0.0
     a = 1.0
     for _ in range(200):
-        a = np.log1p(np.expm1(LAYER_SHARE * a) / delta)
+        a = np.log1p(np.expm1(share * a) / delta)
     return float(min(a, MAX_STRETCH))
 
 
@@ -195,8 +213,9 @@ QUANTITIES = ("u_w", "mu_w", "delta")
 #: default relative accuracy of every number returned, and the range that can be asked for
 DEFAULT_ACCURACY = 1e-6
 ACCURACY_RANGE = (1e-10, 1e-2)
-#: refinement stops here (a request that needs more is refused with the accuracy reached)
-MAX_CELLS = 2048
+#: refinement stops here (a request that needs more is refused with the accuracy reached): the speed's
+#: second order would need ~10^4 cells for 1e-6 at t~ = 1e-4
+MAX_CELLS = {"stress": 2048, "speed": 1024}
 
 
 def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
@@ -210,14 +229,16 @@ def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solut
 
 
 def _estimate(fine: Solution, coarse: Solution) -> dict:
-    """Absolute error estimates of ``fine`` from its companion: SAFETY |fine - coarse|/(ORDER_GAIN - 1)."""
-    return {q: SAFETY * np.abs(getattr(fine, q) - getattr(coarse, q)) / (ORDER_GAIN - 1) for q in QUANTITIES}
+    """Absolute error estimates of ``fine`` from its companion: SAFETY |fine - coarse|/(gain - 1)."""
+    g = gain(fine.imposed)
+    return {q: SAFETY * np.abs(getattr(fine, q) - getattr(coarse, q)) / (g - 1) for q in QUANTITIES}
 
 
-def _solve(make_problem, mu_w, friction, times, numerics, accuracy, estimate, fixed_times) -> Solution:
+def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, estimate, fixed_times) -> Solution:
     t = check_times(times)
-    numerics = numerics or Numerics()
-    stretch = stretch_for(friction, mu_w, t[0])
+    numerics = (numerics or Numerics()).for_drive(imposed)
+    stretch = stretch_for(friction, mu_w, t[0], LAYER_SHARE[imposed])
+    order, factor, most = CONVERGENCE_ORDER[imposed], gain(imposed), MAX_CELLS[imposed]
 
     def run(num, record=True):
         return _run(make_problem(num.mesh(stretch), num.order), t, num, fixed_times, record)
@@ -227,18 +248,18 @@ def _solve(make_problem, mu_w, friction, times, numerics, accuracy, estimate, fi
     if accuracy is not None:
         require(finite(accuracy) and ACCURACY_RANGE[0] <= accuracy <= ACCURACY_RANGE[1], "accuracy",
                 f"in [{ACCURACY_RANGE[0]:g}, {ACCURACY_RANGE[1]:g}]", accuracy)
-    coarse = run(numerics.coarser(), record=False)
+    coarse = run(numerics.coarser(factor), record=False)
     while True:
         fine = run(numerics)
         errors = _estimate(fine, coarse)
         worst = max(float(np.max(errors[q] / np.abs(getattr(fine, q)))) for q in QUANTITIES)
         if accuracy is None or worst <= accuracy:
             return replace(fine, errors=errors, accuracy=accuracy)
-        needed = numerics.n_cells * (worst / accuracy) ** 0.25  # fourth order in space
-        require(needed <= MAX_CELLS and numerics.n_cells * REFINEMENT <= MAX_CELLS, "accuracy",
-                f">= {worst * (numerics.n_cells / MAX_CELLS) ** 4:.1e} for this request "
-                f"(reachable with at most {MAX_CELLS} cells)", accuracy)
-        numerics, coarse = numerics.finer(), fine
+        needed = numerics.n_cells * (worst / accuracy) ** (1 / order)
+        require(needed <= most and numerics.n_cells * REFINEMENT <= most, "accuracy",
+                f">= {worst * (numerics.n_cells / most) ** order:.1e} for this request "
+                f"(reachable with at most {most} cells)", accuracy)
+        numerics, coarse = numerics.finer(factor), fine
 
 
 def solve_stress(friction: Friction, mu_w: float, times, numerics: Numerics | None = None, *,
@@ -247,7 +268,7 @@ def solve_stress(friction: Friction, mu_w: float, times, numerics: Numerics | No
     (from ``numerics``) until every estimated relative error is below it; None: one solve as given,
     with error estimates (from the coarser companion solve) if ``estimate``."""
     mu_w = friction.check_mu_w(mu_w)
-    return _solve(lambda mesh, order: ImposedStress(friction, mu_w, mesh, order), mu_w, friction, times,
+    return _solve(lambda mesh, order: ImposedStress(friction, mu_w, mesh, order), "stress", mu_w, friction, times,
                   numerics, accuracy, estimate, fixed_times)
 
 
@@ -256,5 +277,5 @@ def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics | None
     """Imposed wall speed: eq. GranularStokesEqn_muBIS with the integral condition
     eq. GranularStokesEqn_muBIS_BCs (``accuracy``, ``estimate`` as for solve_stress)."""
     mu_w = mu_w_for_speed(friction, u_w)
-    return _solve(lambda mesh, order: ImposedSpeed(friction, u_w, mesh, order), mu_w, friction, times,
+    return _solve(lambda mesh, order: ImposedSpeed(friction, u_w, mesh, order), "speed", mu_w, friction, times,
                   numerics, accuracy, estimate, fixed_times)

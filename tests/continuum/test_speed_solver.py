@@ -13,9 +13,9 @@ SPEEDS = (0.198, 1.334, 4.629)
 
 @pytest.mark.parametrize("u_w", SPEEDS)
 def test_constraint_and_bounds_hold_at_every_step(paper_friction, u_w):
-    """At every accepted step the integral condition holds to 1e-8 and mu_s <= mu < mu_d: the
-    comparison principle of the second-order scheme (an M-matrix; the fourth-order stencils are not
-    monotone and undershoot at an unresolved front)."""
+    """At every accepted step the integral condition holds to 1e-8 and mu_s <= mu <= mu_d (mu_w = mu_d
+    to round-off before t~_mud, as in the continuum): the comparison principle of the second-order
+    scheme (an M-matrix; the fourth-order stencils are not monotone and undershoot at an unresolved front)."""
     fr = paper_friction
     pb = ImposedSpeed(fr, u_w, Mesh.graded(200), order=2)
     rows = []
@@ -27,7 +27,7 @@ def test_constraint_and_bounds_hold_at_every_step(paper_friction, u_w):
     integrate(pb, [1e-4, 1.0, 100.0], observer=check)
     residual, lo, hi = np.array(rows).T
     assert residual.max() < 1e-8
-    assert lo.min() > -1e-12 and hi.max() < 0
+    assert lo.min() > -1e-12 and hi.max() <= 0
 
 
 @pytest.mark.parametrize("u_w", SPEEDS[:2])
