@@ -118,34 +118,38 @@ QUICK_SCENE = BedScene(QUICK, 20.0, 24.0, plate_mass=0.4663)
 QUICK_MU_W, QUICK_END = 8.6 / 20.0, 28.88
 #: issue 11's target for the velocity-form prediction of a quick drive
 TARGET = 1e-4
+#: the tight references: SDIRK4 (order 4 in time) at rtol 1e-8, so that their time error is negligible
+TIGHT = dict(method="sdirk4", rtol=1e-8, atol=1e-11)
 
 
 @pytest.fixture(scope="module")
 def quick_stress():
-    """u_w at 5 of compare's times on 200 (default), 400, 800 cells (rtol 1e-8) and the default run."""
+    """u_w at 5 of compare's times on 1/2, 1, 2 times the default cells (tight) and the default run."""
     from dataclasses import replace
-    from continuum.rules import YieldRule
     from continuum.velocity import VELOCITY_NUMERICS
     times = np.geomspace(QUICK_END / 300, QUICK_END, 5)
     rule = YieldRule.for_layer(Scales(QUICK, QUICK_SCENE.p_w, QUICK_MU_W))
     run = lambda num: solve_velocity(QUICK_SCENE, times, mu_w=QUICK_MU_W, rule=rule, compare_steady=False,
                                      numerics=num).u_w
-    tight = [run(replace(VELOCITY_NUMERICS, n_cells=n, rtol=1e-8, atol=1e-11)) for n in (200, 400, 800)]
+    n = VELOCITY_NUMERICS.n_cells
+    tight = [run(replace(VELOCITY_NUMERICS, n_cells=k, **TIGHT)) for k in (n // 2, n, 2 * n)]
     return tight, run(VELOCITY_NUMERICS)
 
 
-def test_velocity_form_mesh_order_is_two_and_default_error_as_measured(quick_stress):
-    """Second order in the mesh; the default (200 cells, rtol 1e-5) is within 3e-4 of the
-    Richardson-extrapolated u_w (measured 2.7e-4 at the earliest time, bench/RESULTS.md)."""
-    (a, b, c), default = quick_stress
+def test_velocity_form_mesh_order_is_two(quick_stress):
+    (a, b, c), _ = quick_stress
     order = np.log2(np.abs(b - a) / np.abs(c - b))
     assert order == pytest.approx(2.0, abs=0.1)
-    ref = c + (c - b) / 3
-    assert np.max(np.abs(default / ref - 1)) < 3 * TARGET
 
 
-@pytest.mark.xfail(strict=True, reason="issue 11: 1e-4 needs ~400 cells at the default grading (~2x the CPU); "
-                                       "not reached within 50 ms (bench/RESULTS.md)")
 def test_velocity_form_default_reaches_the_target(quick_stress):
+    """The default's u_w is within TARGET of the Richardson-extrapolated reference, and so is each
+    part of its error: the mesh's (the tight run on the same mesh against the reference, measured
+    1.1e-5) and the time stepping's (the default against that tight run, measured 2.8e-5 = 2.8 rtol);
+    each is held to TARGET/2, about twice the measured value."""
     (a, b, c), default = quick_stress
-    assert np.max(np.abs(default / (c + (c - b) / 3) - 1)) < TARGET
+    ref = c + (c - b) / 3
+    mesh_error = np.max(np.abs(b / ref - 1))
+    time_error = np.max(np.abs(default / b - 1))
+    assert mesh_error < TARGET / 2 and time_error < TARGET / 2
+    assert np.max(np.abs(default / ref - 1)) < TARGET
