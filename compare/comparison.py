@@ -203,8 +203,14 @@ def _predict(a: DriveAnalysis, material: Material, models) -> DriveComparison:
                                             "this drive: the plate would accelerate forever)", dm)
     t_end = float(a.series.t.iloc[-1])
     times = np.union1d(np.geomspace(t_end / PREDICTION_SPAN, t_end, PREDICTION_TIMES), snapshot_times(a))
-    preds = tuple(model.predict(material, s.drive, times) for model in models)
-    return DriveComparison(a, scales, preds, "", dm)
+    preds = []
+    for model in models:
+        try:
+            preds.append(model.predict(material, s.drive, times))
+        except RuntimeError as err:  # a solver that gave up (continuum.stepper): said, not hidden
+            return DriveComparison(a, None, (), f"no continuum prediction: the {model.key} model's solver failed "
+                                                f"({err}) at this calibration", dm)
+    return DriveComparison(a, scales, tuple(preds), "", dm)
 
 
 def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.DataFrame:

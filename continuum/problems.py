@@ -162,7 +162,8 @@ class ImposedSpeed(ShearStressDiffusion):
         if abs(r) < SERIES_BELOW:  # atanh(r)/r and the derivatives' limits, to O(r^4)
             lam = 2.0 / (a + b) * (1.0 + r * r / 3.0)
             return lam, 1.0 / (2 * a) - d / (3 * a * a), -1.0 / (2 * a * a) + 2 * d / (3 * a**3)
-        lam = (np.log(b) + q) / d
+        # ln(b/a) = 2 atanh(r) has no cancellation for a ~ b; ln b + q none for a << b
+        lam = 2 * np.arctanh(r) / d if abs(r) < ATANH_BELOW else (np.log(b) + q) / d
         return lam, (1.0 - a * lam) / d, (1.0 / b - lam) / d
 
     def wall_residual(self, x: np.ndarray) -> float:
@@ -218,6 +219,8 @@ class ImposedSpeed(ShearStressDiffusion):
 
 #: ImposedSpeed._first_cell switches to its series below this |b - a|/(b + a)
 SERIES_BELOW = 1e-4
+#: ... and to the atanh form of ln(b/a) below this |r| (the plain logarithms above it)
+ATANH_BELOW = 0.5
 #: the projection's Newton on q: most iterations, relative step tolerance
 PROJECTION_ITERATIONS, PROJECTION_TOL = 100, 1e-13
 #: the lift-off of mu_w from mu_d is over by this many t_mud = u~_w^2 (continuum.closed_forms)

@@ -68,6 +68,8 @@ TABLEAUX = {
 }
 #: every method of ``integrate``
 METHODS = (*TABLEAUX, "bdf")
+#: bdf hands over to HANDOVER when its step falls below BDF_STALL t (``_integrate_bdf``)
+BDF_STALL, HANDOVER = 1e-3, "sdirk4"
 
 
 @dataclass
@@ -212,8 +214,9 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats):
 
 
 def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=0.03,
-              fixed_times=None, observer=None, max_steps=200_000):
-    """Integrate ``problem`` from t = 0, returning the state at each time of the sorted ``t_out``.
+              fixed_times=None, observer=None, max_steps=200_000, resume=None):
+    """Integrate ``problem`` from t = 0 (or from ``resume`` = (t0, x0)), returning the state at each time
+    of the sorted ``t_out``.
 
     Adaptive steps keep the RMS local error over the differential rows, weighted by
     atol + rtol |x|, below 1; with ``fixed_times`` (an increasing array containing every t_out) the
@@ -233,13 +236,13 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
     differential = problem.mass > 0
     stats = StepStats()
     start = time.process_time()
-    x = problem.initial()
+    t, x = resume if resume is not None else (0.0, problem.initial())
     f = problem.rate(x)
-    t, h = 0.0, h0
+    h = h0
     states = np.empty((len(t_out), len(x)))
     k = 0
     schedule = None if fixed_times is None else iter(np.asarray(fixed_times, dtype=float))
-    if observer is not None:
+    if observer is not None and resume is None:
         observer(t, x)
     while k < len(t_out):
         if stats.steps + stats.rejected >= max_steps:
@@ -298,7 +301,12 @@ def _reduced_jacobian(problem, x):
 
 
 def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps):
-    """``integrate`` with scipy's BDF on z = x[1:], x[0] from ``problem.project`` (unit mass rows)."""
+    """``integrate`` with scipy's BDF on z = x[1:], x[0] from ``problem.project`` (unit mass rows).
+
+    Near a steady state at tight tolerances the round-off of the rate (|tau~|/h^2 eps) stops scipy's
+    Newton from converging and the steps shrink without end: once the step falls below BDF_STALL t,
+    after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is needed), the rest goes
+    to HANDOVER (whose Newton accepts an update at round-off)."""
     from scipy.integrate import BDF
 
     if not np.all(problem.mass[1:] == 1.0) or problem.mass[0] != 0.0:
@@ -344,7 +352,14 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps):
             for t in done:
                 states[k] = x if t == solver.t else state(dense(t))
                 k += 1
-    stats.newton_iterations = solver.nfev
+        if k < len(t_out) and solver.t > getattr(problem, "lift_off_end", 0.0) and solver.step_size < BDF_STALL * solver.t:
+            states[k:], rest = integrate(problem, t_out[k:], method=HANDOVER, rtol=rtol, atol=atol,
+                                         h0=solver.step_size, observer=observer, max_steps=max_steps - stats.steps,
+                                         resume=(solver.t, x))
+            stats.steps += rest.steps
+            stats.newton_iterations += rest.newton_iterations
+            break
+    stats.newton_iterations += solver.nfev
     stats.cpu_seconds = time.process_time() - start
     return states, stats
 

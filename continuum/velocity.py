@@ -63,6 +63,8 @@ class BedScene:
 #: stages a step to SDIRK4's 5 (bench/velocity_form.py: 400 cells at stretch 4 put the quick stress drive
 #: within 1e-4 at about half the CPU of the former 200-cell, stretch-2 SDIRK4 default, which was at 2-4e-4)
 VELOCITY_NUMERICS = Numerics(n_cells=400, stretch=4.0, rtol=1e-5, atol=1e-9, method="tr-bdf2")
+#: the stepper of a Numerics that names none (the references of tests and bench: SDIRK4, fourth order in time)
+VELOCITY_METHOD = "sdirk4"
 
 
 class VelocityProblem:
@@ -240,7 +242,8 @@ def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRu
         steps_t.append(time)
         steps_x.append(x)
 
-    states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
+    states, stats = integrate(problem, t, method=numerics.method or VELOCITY_METHOD,
+                              rtol=numerics.rtol or VELOCITY_NUMERICS.rtol, atol=numerics.atol or VELOCITY_NUMERICS.atol,
                               h0=1e-9 * scales.t_s, fixed_times=fixed_times, observer=observe)
     s = problem.stress(states)
     u = np.column_stack([states, np.zeros(len(t))])

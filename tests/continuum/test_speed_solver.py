@@ -33,7 +33,7 @@ def test_constraint_and_bounds_hold_at_every_step(paper_friction, u_w):
 @pytest.mark.parametrize("u_w", SPEEDS[:2])
 def test_steady_wall_friction_matches_the_imposed_stress_case(paper_friction, u_w):
     """mu_w(t~ -> inf) equals mu_w^inf of the matching imposed-stress case, to the mesh's O(h^3)
-    (the trapezoidal first cell of the constraint; fourth order elsewhere): the gap shrinks
+    (the first cell's weight sqrt(p~) taken at its midpoint; fourth order elsewhere): the gap shrinks
     eight-fold per mesh halving; and that stress case's steady speed is u~_w."""
     fr = paper_friction
     gaps = []
@@ -47,17 +47,31 @@ def test_steady_wall_friction_matches_the_imposed_stress_case(paper_friction, u_
     assert sol.delta[-1] == pytest.approx(stress.delta[-1], abs=1e-6)
 
 
-def test_singular_start_is_carried_by_the_wall_cell(paper_friction):
-    """For t~ << t_mud the continuum has mu_w -> mu_d (exponentially); the mesh shows
-    mu~_w = h_0/(2 Dmu u~_w) within 20 %, halving with each mesh halving."""
+def test_wall_friction_is_mu_d_before_t_mud_on_any_mesh(paper_friction):
+    """For t~ << t_mud = u~_w^2 the continuum has mu_w -> mu_d exponentially: the first cell, exact for
+    a linear mu~, shows it on every mesh (the former trapezoidal cell gave mu~_w = h_0/(2 Dmu u~_w),
+    1e-5 here), and mu_w has left mu_d by t~ = t_mud."""
     fr, u_w = paper_friction, 1.334
-    mts = []
-    for n in (100, 200):
-        sol = solve_speed(fr, u_w, [1e-4], Numerics(n_cells=n))
-        mt = fr.tilde(sol.mu_w[0])
-        assert mt == pytest.approx(sol.mesh.h[0] / (2 * fr.dmu * u_w), rel=0.2)
-        mts.append(mt)
-    assert mts[0] / mts[1] == pytest.approx(2.0, rel=0.05)
+    for n in (64, 128):
+        sol = solve_speed(fr, u_w, [1e-4, u_w**2], Numerics(n_cells=n))
+        assert fr.tilde(sol.mu_w[0]) < 1e-12 < 1e-2 < fr.tilde(sol.mu_w[1])
+
+
+@pytest.mark.parametrize("q, b", [(3.0, 0.5), (0.7, 0.5), (np.log(2.0) + 1e-7, 0.5), (np.log(2.0) + 1e-3, 0.5),
+                                  (0.1, 0.9), (40.0, 0.2), (-2.0, 0.3)])
+def test_first_cell_integral_and_derivatives(paper_friction, q, b):
+    """The first cell's int_0^1 ds/(a + (b - a) s), a = exp(-q), against adaptive quadrature (to 1e-13) in
+    each of its three forms (series, atanh, logarithms), and its derivatives against central differences."""
+    from scipy.integrate import quad
+
+    pb = ImposedSpeed(paper_friction, 1.0, Mesh.graded(16))
+    a = np.exp(-q)
+    ref = quad(lambda s: 1 / (a + (b - a) * s), 0, 1, epsabs=0, epsrel=1e-13, limit=200)[0]
+    lam, dq, db = pb._first_cell(q, b)
+    assert lam == pytest.approx(ref, rel=2e-13)
+    e = 1e-6
+    assert dq == pytest.approx((pb._first_cell(q + e, b)[0] - pb._first_cell(q - e, b)[0]) / (2 * e), rel=1e-7)
+    assert db == pytest.approx((pb._first_cell(q, b + e)[0] - pb._first_cell(q, b - e)[0]) / (2 * e), rel=1e-7)
 
 
 @pytest.mark.parametrize("u_w", SPEEDS)
