@@ -156,6 +156,8 @@ class ImposedSpeed(ShearStressDiffusion):
 
     def _first_cell(self, q: float, b: float):
         """L = int_0^1 ds/(a + (b - a) s) = ln(b/a)/(b - a) with a = exp(-q), and dL/dq, dL/db."""
+        if not b > 0:  # an inadmissible Newton iterate
+            return np.nan, np.nan, np.nan
         a = np.exp(-q)
         d = b - a
         r = d / (b + a)
