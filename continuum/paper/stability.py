@@ -107,7 +107,7 @@ def _explicit(fr, mu_w, n, factor) -> Outcome:
 def _speed(fr, u_w, n) -> Outcome:
     sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=n, **SPEED_ADAPTIVE))
     pb = ImposedSpeed(fr, u_w, sol.mesh)
-    x = np.concatenate(([1.0 / fr.tilde(sol.mu_w[-1])], sol.tau[-1, 1:-1]))
+    x = np.concatenate(([-np.log(fr.tilde(sol.mu_w[-1]))], sol.tau[-1, 1:-1]))  # q = ln(1/mu~_w)
     out = _stress_outcome(sol)
     out.u_w = float(sol.mu_w[-1])  # the speed is imposed: the wall friction is the result
     out.constraint = abs(pb.wall_residual(x))

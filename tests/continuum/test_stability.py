@@ -76,3 +76,12 @@ def test_classification_and_maps(tmp_path):
     assert euler.loc[0.5, "rel_error"] < 2e-3 and euler.loc[0.5, "order"] > 0.5
     paths = plot_maps(table, tmp_path)
     assert len(paths) == 3 and all(p.stat().st_size > 5000 for p in paths)
+
+
+def test_speed_map_holds_the_constraint():
+    """The imposed-speed map's cell: the integral condition holds at the end (it is re-evaluated from the
+    returned wall friction in the wall unknown q = ln(1/mu~_w)), and mu_w converges towards the reference
+    (this map's classes: "constraint-violating" when the condition is off by more than 1e-8)."""
+    speed = next(m for m in METHODS if m.name.startswith("speed"))
+    row = stability_table(FR, (replace(speed, params=(1.334,), values=(50,), refine=(100,)),)).iloc[0]
+    assert row["class"] == "converged" and row["rel_error"] < 1e-3
