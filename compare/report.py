@@ -343,6 +343,8 @@ def conclusions(c: Comparison) -> list[str]:
     if "blind" not in c.calibration_source:
         out.append(f"The calibration is an {html.escape(c.calibration_source)}: the predictions share data with what "
                    "they are compared with, so agreement here is weaker evidence than a blind test.")
+    if rows.empty:  # every drive's prediction was refused or failed: each drive's note says why
+        return out + ["No drive has a scored continuum prediction (each drive's section says why)."]
     for model, g in rows.groupby("model", sort=False):
         ok = g[g.verdict == "consistent"]
         bad = g[g.verdict != "consistent"]

@@ -20,10 +20,11 @@ def friction_profile(fr: Friction, mu_w: float, mesh: Mesh, tau):
 
 
 def shear_rate(fr: Friction, mu_w: float, mesh: Mesh, tau):
-    """-du~/dy~ = sqrt(p~)/Dmu (1/mu~ - 1) (eq. IreWrittenNonDim)."""
-    mt = fr.tilde(friction_profile(fr, mu_w, mesh, tau))
+    """-du~/dy~ = sqrt(p~)/Dmu (1/mu~ - 1) (eq. IreWrittenNonDim), as (mu - mu_s)/(mu_d - mu): no
+    cancellation where mu ~ mu_s."""
+    mu = friction_profile(fr, mu_w, mesh, tau)
     with np.errstate(divide="ignore"):  # mu = mu_d at an imposed speed's wall before t~_mud: infinite
-        return np.sqrt(1.0 + fr.beta(mu_w) * mesh.y) / fr.dmu * (1.0 / mt - 1.0)
+        return np.sqrt(1.0 + fr.beta(mu_w) * mesh.y) / fr.dmu * (mu - fr.mu_s) / (fr.mu_d - mu)
 
 
 def velocity(fr: Friction, mu_w: float, mesh: Mesh, tau, order: int = 4, wall_speed: float | None = None):

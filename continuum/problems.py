@@ -154,6 +154,13 @@ class ImposedSpeed(ShearStressDiffusion):
         mt[0] = np.exp(-x[0])
         return mt
 
+    def _rate_factor(self, x: np.ndarray) -> np.ndarray:
+        """1/mu~ - 1 = (mu - mu_s)/(mu_d - mu) at nodes 1..N-1, without the cancellation of 1/mu~ - 1 where
+        mu ~ mu_s: its round-off there (eps/Dmu), times the weights sqrt(p~) of a deep bed, can swamp a
+        small u~_w (a calibration with mu_s ~ 0 and beta_w ~ 1e9: noise of 1e-2 u~_w)."""
+        mu = self.mu_w * x[1:] / self.p[1:-1]
+        return (mu - self.friction.mu_s) / (self.friction.mu_d - mu)
+
     def _first_cell(self, q: float, b: float):
         """L = int_0^1 ds/(a + (b - a) s) = ln(b/a)/(b - a) with a = exp(-q), and dL/dq, dL/db."""
         if not b > 0:  # an inadmissible Newton iterate
@@ -171,7 +178,7 @@ class ImposedSpeed(ShearStressDiffusion):
     def wall_residual(self, x: np.ndarray) -> float:
         mt = self.mu_tilde(x)
         lam = self._first_cell(x[0], mt[1])[0]
-        return self._w_first * (lam - 1.0) + self._wq[1:] @ (1.0 / mt[1:] - 1.0) - self.u_w
+        return self._w_first * (lam - 1.0) + self._wq[1:] @ self._rate_factor(x) - self.u_w
 
     def wall_gradient(self, x: np.ndarray) -> np.ndarray:
         mt = self.mu_tilde(x)
@@ -189,7 +196,7 @@ class ImposedSpeed(ShearStressDiffusion):
         interior is inadmissible (mu~ <= 0 at a node) or Newton fails."""
         mt = self.mu_tilde(x)
         b = mt[1]
-        target = (self.u_w + self._w_first - self._wq[1:] @ (1.0 / mt[1:] - 1.0)) / self._w_first
+        target = (self.u_w + self._w_first - self._wq[1:] @ self._rate_factor(x)) / self._w_first
         if not (np.all(mt[1:] > 0) and target > 0):
             x[0] = np.nan
             return x

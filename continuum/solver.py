@@ -93,16 +93,28 @@ class Numerics:
         return replace(self, n_cells=self.n_cells * REFINEMENT, rtol=self.rtol / factor, atol=self.atol / factor)
 
 
+#: the map's wall slope y'(0) = a/(e^a - 1) (the first cell is y'(0)/N) is kept above this fraction of
+#: delta(t_min): a finer wall cell adds nothing, and an imposed speed's wall unknown, fixed by u~_w less the
+#: interior's share, loses the digits of the first cell's share (measured: 8 digits, and BDF failing, at
+#: h_0/delta ~ 1e-8, a calibration with mu_s ~ 0 where delta(t_min) ~ 4e-10); active only for delta <~ 1e-5
+WALL_SLOPE_FLOOR = 1e-2
+
+
 def stretch_for(fr: Friction, mu_w: float, t_min: float, share: float = LAYER_SHARE["stress"]) -> float:
     """The map's stretch a that puts ``share`` of the xi-grid inside the layer at t_min:
     ln(1 + delta (e^a - 1)) = share a, with the short-time thickness
-    delta ~ SELF_SIMILAR_DELTA Dmu mu~_w sqrt(t~) (the wall diffusivity is (Dmu mu~_w)^2)."""
+    delta ~ SELF_SIMILAR_DELTA Dmu mu~_w sqrt(t~) (the wall diffusivity is (Dmu mu~_w)^2), unless its wall
+    slope falls below WALL_SLOPE_FLOOR delta: then the a with a/(e^a - 1) = WALL_SLOPE_FLOOR delta."""
     delta = SELF_SIMILAR_DELTA * fr.dmu * max(fr.tilde(mu_w), 0.05) * np.sqrt(t_min)
     if delta >= share:
         return 0.0
     a = 1.0
     for _ in range(200):
         a = np.log1p(np.expm1(share * a) / delta)
+    floor = WALL_SLOPE_FLOOR * delta
+    if a / np.expm1(a) < floor:  # the wall slope y'(0) = a/(e^a - 1) of this map is below the floor
+        for _ in range(200):
+            a = np.log1p(a / floor)
     return float(min(a, MAX_STRETCH))
 
 
