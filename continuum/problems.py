@@ -34,9 +34,14 @@ class ShearStressDiffusion:
         self.mesh, self.order = mesh, order
         self.p = 1.0 + self.beta * mesh.y
         self._p32 = self.p[1:-1] ** 1.5
+        self._mud_p = friction.mu_d * self.p[1:-1]
         self.mass = np.ones(mesh.n_cells)
         self.mass[0] = 0.0
         self.lap = mesh.second_derivative(order)
+        # the Laplacian on the unknowns and its column on the fixed node tau~_N = 1
+        lap, dense = self.lap.matrix, isinstance(self.lap.matrix, np.ndarray)
+        self._lap_x = lap[:, :-1].copy() if dense else lap[:, :-1]
+        self._lap_fixed = lap[:, -1].copy() if dense else lap[:, [-1]].toarray().ravel()
         # band positions of the Laplacian's entries on the unknowns (node N is fixed)
         n = mesh.n_cells
         rows = np.broadcast_to(np.arange(1, n)[:, None], self.lap.cols.shape)
@@ -52,16 +57,24 @@ class ShearStressDiffusion:
         """tau~ at all nodes 0..N."""
         return np.append(x, 1.0)
 
+    def nodal(self, x: np.ndarray) -> np.ndarray:
+        """tau~ at nodes 0..N-1 (the unknowns themselves here)."""
+        return x
+
     def _terms(self, x: np.ndarray):
-        tau = self.full(x)
-        lap = self.lap.matrix @ tau
-        s = self.friction.mu_d * self.p[1:-1] - self.mu_w * tau[1:-1]
+        tau = self.nodal(x)
+        lap = self._lap_x @ tau
+        lap += self._lap_fixed
+        s = self._mud_p - self.mu_w * tau[1:]
         return lap, s, s * s / self._p32
 
     def rate(self, x: np.ndarray) -> np.ndarray:
         """F(x): the wall residual in row 0, d tau~/d t~ at the interior nodes."""
         lap, _, diff = self._terms(x)
-        return np.concatenate(([self.wall_residual(x)], diff * lap))
+        out = np.empty(len(x))
+        out[0] = self.wall_residual(x)
+        np.multiply(diff, lap, out=out[1:])
+        return out
 
     def jacobian(self, x: np.ndarray) -> Jacobian:
         """dF/dx: the Laplacian's band times the diffusivity, its derivative on the diagonal; row 0
@@ -141,6 +154,11 @@ class ImposedSpeed(ShearStressDiffusion):
 
     def full(self, x: np.ndarray) -> np.ndarray:
         return np.concatenate(([self._tau0(x[0])], x[1:], [1.0]))
+
+    def nodal(self, x: np.ndarray) -> np.ndarray:
+        tau = x.copy()
+        tau[0] = self._tau0(x[0])
+        return tau
 
     def jacobian(self, x: np.ndarray) -> Jacobian:
         jac = super().jacobian(x)
