@@ -45,9 +45,13 @@ class ShearStressDiffusion:
         # band positions of the Laplacian's entries on the unknowns (node N is fixed)
         n = mesh.n_cells
         rows = np.broadcast_to(np.arange(1, n)[:, None], self.lap.cols.shape)
-        self._on_unknowns = self.lap.cols < n
+        on_unknowns = self.lap.cols < n
         self.kl = self.ku = int(np.max(np.abs(self.lap.cols - rows)))
-        self._band_at = (self.ku + rows - self.lap.cols)[self._on_unknowns], self.lap.cols[self._on_unknowns]
+        self._band_at = np.ravel_multi_index(((self.ku + rows - self.lap.cols)[on_unknowns], self.lap.cols[on_unknowns]),
+                                             (self.kl + self.ku + 1, n))
+        self._band_row, self._band_weights = np.nonzero(on_unknowns)[0], self.lap.weights[on_unknowns]
+        wall = np.arange(min(self.ku + 1, n))
+        self._wall_at = self.ku - wall, wall
 
     def initial(self) -> np.ndarray:
         """tau~(y~, 0) = mu_s p~/mu_w at nodes 0..N-1 (eq. InitStokesEqn)."""
@@ -63,7 +67,7 @@ class ShearStressDiffusion:
 
     def _terms(self, x: np.ndarray):
         tau = self.nodal(x)
-        lap = self._lap_x @ tau
+        lap = self._lap_x.dot(tau)
         lap += self._lap_fixed
         s = self._mud_p - self.mu_w * tau[1:]
         return lap, s, s * s / self._p32
@@ -81,11 +85,10 @@ class ShearStressDiffusion:
         is the wall (dense for the imposed speed)."""
         lap, s, diff = self._terms(x)
         bands = np.zeros((self.kl + self.ku + 1, len(x)))
-        bands[self._band_at] = (diff[:, None] * self.lap.weights)[self._on_unknowns]
+        bands.put(self._band_at, diff[self._band_row] * self._band_weights)
         bands[self.ku, 1:] -= 2 * self.mu_w * s / self._p32 * lap
         row0 = self.wall_gradient(x)
-        j = np.arange(min(self.ku + 1, len(x)))
-        bands[self.ku - j, j] = row0[j]
+        bands[self._wall_at] = row0[self._wall_at[1]]
         return Jacobian(bands, self.kl, self.ku, row0 if self.dense_wall else None)
 
     def mu(self, x: np.ndarray) -> np.ndarray:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -93,6 +94,10 @@ class Numerics:
         return replace(self, n_cells=self.n_cells * REFINEMENT, rtol=self.rtol / factor, atol=self.atol / factor)
 
 
+#: most fixed-point iterations of ``stretch_for``
+STRETCH_ITERATIONS = 200
+
+
 def stretch_for(fr: Friction, mu_w: float, t_min: float, share: float = LAYER_SHARE["stress"]) -> float:
     """The map's stretch a that puts ``share`` of the xi-grid inside the layer at t_min:
     ln(1 + delta (e^a - 1)) = share a, with the short-time thickness
@@ -101,8 +106,10 @@ def stretch_for(fr: Friction, mu_w: float, t_min: float, share: float = LAYER_SH
     if delta >= share:
         return 0.0
     a = 1.0
-    for _ in range(200):
-        a = np.log1p(np.expm1(share * a) / delta)
+    for _ in range(STRETCH_ITERATIONS):
+        a, previous = math.log1p(math.expm1(share * a) / delta), a
+        if a == previous:  # the fixed point: every further iterate is the same
+            break
     return float(min(a, MAX_STRETCH))
 
 

@@ -57,11 +57,12 @@ class Tableau:
 
     @cached_property
     def predictor(self) -> np.ndarray:
-        """P with the Newton guess of stage i  M X_i = M x_n + h P[i] @ K, K = (F(x_n), F_1, ..., F_s):
-        the stage sum plus a_ii times a predicted F_i.  Implicit first stage: F_i extrapolated in c
-        through the PREDICTOR_POINTS latest of (0, F(x_n)), (c_j, F_j).  Explicit first stage (F_1 =
-        F(x_n)): F_i ~ F_{i-1}, and no prediction for stage 2 (after CN steps F(x_n) carries the
-        undamped stiff modes and would make a wild guess)."""
+        """P: the Newton guess of stage i is  M X_i = M x_n + h P[i] @ K,  K = (F(x_n), F_1, ..., F_s),
+        the stage sum plus a_ii times a predicted F_i.  Implicit first stage: F_i interpolated in c
+        through the PREDICTOR_POINTS known (0, F(x_n)), (c_j, F_j) nearest to c_i (the least
+        amplification of their errors; three points made wild guesses at large steps).  Explicit
+        first stage (F_1 = F(x_n)): F_i ~ F_{i-1}, and no prediction for stage 2 (after CN steps
+        F(x_n) carries the undamped stiff modes and would make a wild guess)."""
         A = self.matrix
         s = len(A)
         P = np.zeros((s, s + 1))
@@ -74,7 +75,7 @@ class Tableau:
             return P
         nodes = np.concatenate(([0.0], A.sum(axis=1)))
         for i in range(s):
-            known = np.arange(max(0, i + 1 - PREDICTOR_POINTS), i + 1)
+            known = np.argsort(np.abs(nodes[:i + 1] - nodes[i + 1]), kind="stable")[:PREDICTOR_POINTS]
             for j in known:
                 others = nodes[known[known != j]]
                 P[i, j] += A[i, i] * np.prod((nodes[i + 1] - others) / (nodes[j] - others))
@@ -107,8 +108,8 @@ METHODS = (*TABLEAUX, "bdf")
 #: the first Newton iterate of a stage is judged with the previous stage's contraction estimate,
 #: eta_0 = max(eta, ETA_FLOOR)^ETA_DECAY (Hairer & Wanner 1996, IV.8)
 ETA_FLOOR, ETA_DECAY = 1e-16, 0.8
-#: the stage predictor extrapolates the stage derivatives through this many points (Tableau.predictor)
-PREDICTOR_POINTS = 3
+#: the stage predictor interpolates the stage derivatives through this many points (Tableau.predictor)
+PREDICTOR_POINTS = 2
 #: a step ends on an output time within this relative distance of it
 OUTPUT_RTOL = 1e-13
 #: bdf hands over to HANDOVER when its step falls below BDF_STALL t (``_integrate_bdf``)
@@ -192,10 +193,11 @@ class NewtonMatrix:
 def solve_stage(problem, matrix, x, rhs, weights, tol, stats, eta=1.0, max_iter=8, full=False):
     """Solve M X - dh F(X) = rhs by simplified Newton from the guess x.
 
-    Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta), 1 at
-    the first iterate) is below ``tol`` (Hairer & Wanner 1996, IV.8), then applies the problem's
-    exact projection onto its algebraic constraints (if any); returns (X, F(X)).  ``full``: refactorise at every iterate (full
-    Newton, the fallback when the frozen matrix does not contract)."""
+    Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta); at the
+    first iterate the given ``eta``, carried from the previous stage) is below ``tol`` (Hairer & Wanner
+    1996, IV.8), then applies the problem's exact projection onto its algebraic constraints (if any);
+    returns (X, F(X), eta).  ``full``: refactorise at every iterate (full Newton, the fallback when the
+    frozen matrix does not contract)."""
     x = x.copy()
     mass, dh = problem.mass, matrix.dh
     rate = problem.rate(x)
@@ -233,8 +235,9 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, eta=1.0, max_iter=
 
 
 def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.0):
-    """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}) and the local error
-    estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996), or None."""
+    """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}), the local error
+    estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) or None, and the Newton
+    contraction estimate ``eta`` to carry to the next step."""
     matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
     mass, A, P = problem.mass, tab.matrix, tab.predictor
     algebraic = mass == 0
