@@ -65,9 +65,12 @@ class Stencil:
         import scipy.sparse as sp
 
         rows = np.broadcast_to(np.arange(len(self.cols))[:, None], self.cols.shape)
-        m = sp.csr_matrix((self.weights.ravel(), (rows.ravel(), self.cols.ravel())),
-                          shape=(len(self.cols), int(self.cols.max()) + 1))
-        return m.toarray() if m.shape[1] <= DENSE_UP_TO else m
+        shape = (len(self.cols), int(self.cols.max()) + 1)
+        if shape[1] > DENSE_UP_TO:
+            return sp.csr_matrix((self.weights.ravel(), (rows.ravel(), self.cols.ravel())), shape=shape)
+        m = np.zeros(shape)
+        m[rows, self.cols] = self.weights  # the columns of a row are distinct
+        return m
 
     def __call__(self, f):
         f = np.asarray(f)

@@ -134,11 +134,17 @@ class Solution:
     mesh: Mesh
     t: np.ndarray
     tau: np.ndarray             # (len(t), N+1)
-    steps: np.ndarray           # rows (t, u_w, mu_w, delta) at every accepted step (``series``)
+    recorded: np.ndarray | obs.SeriesRecorder  # the per-step rows, or the recorder that derives them (``steps``)
     stats: StepStats
     numerics: Numerics
     errors: dict = field(default_factory=dict)  # u_w, mu_w, delta -> absolute error estimates (aligned with t)
     accuracy: float | None = None               # the relative accuracy asked for (None: one solve)
+
+    @cached_property
+    def steps(self) -> np.ndarray:
+        """Rows (t, u_w, mu_w, delta) at every accepted step, derived on first use (``series``)."""
+        r = self.recorded
+        return r.table() if isinstance(r, obs.SeriesRecorder) else r
 
     @cached_property
     def series(self):
@@ -231,7 +237,7 @@ def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solut
     states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
                               h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder)
     tau = np.array([problem.full(x) for x in states])
-    steps = recorder.table() if record else np.empty((0, 4))
+    steps = recorder if record else np.empty((0, 4))
     return Solution(problem.imposed, problem.friction, problem.mu_w,
                     getattr(problem, "u_w", None), problem.mesh, t, tau, steps, stats, numerics)
 

@@ -56,9 +56,10 @@ class Tableau:
         return np.array(self.err)
 
     @cached_property
-    def predictor(self) -> np.ndarray:
-        """P: the Newton guess of stage i is  M X_i = M x_n + h P[i] @ K,  K = (F(x_n), F_1, ..., F_s),
-        the stage sum plus a_ii times a predicted F_i.  Implicit first stage: F_i interpolated in c
+    def stage_weights(self) -> np.ndarray:
+        """W[i] = (S_i, P_i) on K = (F(x_n), F_1, ..., F_s): the right-hand side of stage i is
+        M x_n + h S_i @ K (the explicit stage sum), its Newton guess  M X_i = M x_n + h P_i @ K: the
+        stage sum plus a_ii times a predicted F_i.  Implicit first stage: F_i interpolated in c
         through the PREDICTOR_POINTS known (0, F(x_n)), (c_j, F_j) nearest to c_i (the least
         amplification of their errors; three points made wild guesses at large steps).  Explicit
         first stage (F_1 = F(x_n)): F_i ~ F_{i-1}, and no prediction for stage 2 (after CN steps
@@ -68,18 +69,19 @@ class Tableau:
         P = np.zeros((s, s + 1))
         P[:, 1:] = A
         P[:, 1:] -= np.diag(np.diag(A))
+        stage_sums = P.copy()
         if self.explicit_first:
             for i in range(2, s):
                 P[i, i] += A[i, i]
             P[1] = 0.0
-            return P
+            return np.stack([stage_sums, P], axis=1)
         nodes = np.concatenate(([0.0], A.sum(axis=1)))
         for i in range(s):
             known = np.argsort(np.abs(nodes[:i + 1] - nodes[i + 1]), kind="stable")[:PREDICTOR_POINTS]
             for j in known:
                 others = nodes[known[known != j]]
                 P[i, j] += A[i, i] * np.prod((nodes[i + 1] - others) / (nodes[j] - others))
-        return P
+        return np.stack([stage_sums, P], axis=1)
 
 
 _G = 2.0 - np.sqrt(2.0)
@@ -239,7 +241,7 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
     estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) or None, and the Newton
     contraction estimate ``eta`` to carry to the next step."""
     matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
-    mass, A, P = problem.mass, tab.matrix, tab.predictor
+    mass, A, W = problem.mass, tab.matrix, tab.stage_weights
     algebraic = mass == 0
     differential = ~algebraic
     rates = np.empty((len(A) + 1, len(x)))  # F(x_n), then the stages' F_i
@@ -250,10 +252,12 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
     base = mass * x
     X = x
     for i in range(first, len(A)):
-        rhs = base + h * (A[i, :i] @ rates[1:i + 1])
+        rhs, guess = h * (W[i, :, :i + 1] @ rates[:i + 1])
+        rhs += base
         rhs[algebraic] = 0.0
-        guess = X.copy()  # the algebraic rows from the last stage
-        np.divide(base + h * (P[i, :i + 1] @ rates[:i + 1]), mass, out=guess, where=differential)
+        guess += base
+        np.divide(guess, mass, out=guess, where=differential)
+        guess[algebraic] = X[algebraic]  # from the last stage
         try:
             X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
                                                max(eta, ETA_FLOOR) ** ETA_DECAY)
