@@ -88,7 +88,7 @@ def main():
     print("| method | cheapest run reaching 1e-6 | CPU [ms] | error |")
     print("|---|---|---|---|")
     for name, r in best.sort_values("cpu_s").iterrows():
-        print(f"| {name} | n_cells={r.n_cells}, rtol={r.rtol:g} | {1e3 * r.cpu_s:.1f} | {r.rel_error:.1e} |")
+        print(f"| {name} | n_cells={int(r.n_cells)}, rtol={r.rtol:g} | {1e3 * r.cpu_s:.1f} | {r.rel_error:.1e} |")
     ours = best.loc["sdirk4, fourth order (granstokes)", "cpu_s"]
     for other in ("solve_ivp BDF, second order (baseline)", "solve_ivp Radau, second order (baseline)",
                   "solve_ivp BDF, fourth order"):

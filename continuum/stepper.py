@@ -242,8 +242,8 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
     contraction estimate ``eta`` to carry to the next step."""
     matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
     mass, A, W = problem.mass, tab.matrix, tab.stage_weights
-    algebraic = mass == 0
-    differential = ~algebraic
+    algebraic = np.flatnonzero(mass == 0)
+    inverse_mass = np.divide(1.0, mass, out=np.zeros(len(mass)), where=mass != 0)
     rates = np.empty((len(A) + 1, len(x)))  # F(x_n), then the stages' F_i
     rates[0] = f
     first = 1 if tab.explicit_first else 0
@@ -256,7 +256,7 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
         rhs += base
         rhs[algebraic] = 0.0
         guess += base
-        np.divide(guess, mass, out=guess, where=differential)
+        guess *= inverse_mass
         guess[algebraic] = X[algebraic]  # from the last stage
         try:
             X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
