@@ -85,7 +85,7 @@ class ShearStressDiffusion:
         is the wall (dense for the imposed speed)."""
         lap, s, diff = self._terms(x)
         bands = np.zeros((self.kl + self.ku + 1, len(x)))
-        bands.put(self._band_at, diff[self._band_row] * self._band_weights)
+        bands.reshape(-1)[self._band_at] = diff[self._band_row] * self._band_weights
         bands[self.ku, 1:] -= 2 * self.mu_w * s / self._p32 * lap
         row0 = self.wall_gradient(x)
         bands[self._wall_at] = row0[self._wall_at[1]]

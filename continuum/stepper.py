@@ -236,14 +236,18 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, eta=1.0, max_iter=
     raise NewtonFailure("Newton did not converge")
 
 
-def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.0):
+def mass_rows(mass):
+    """The algebraic rows (indices) and 1/M on the differential rows (0 on the algebraic ones)."""
+    return np.flatnonzero(mass == 0), np.divide(1.0, mass, out=np.zeros(len(mass)), where=mass != 0)
+
+
+def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.0, rows=None):
     """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}), the local error
     estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) or None, and the Newton
-    contraction estimate ``eta`` to carry to the next step."""
+    contraction estimate ``eta`` to carry to the next step.  ``rows``: ``mass_rows(problem.mass)``."""
     matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
-    mass, A, W = problem.mass, tab.matrix, tab.stage_weights
-    algebraic = np.flatnonzero(mass == 0)
-    inverse_mass = np.divide(1.0, mass, out=np.zeros(len(mass)), where=mass != 0)
+    mass, A, hW = problem.mass, tab.matrix, h * tab.stage_weights
+    algebraic, inverse_mass = rows if rows is not None else mass_rows(mass)
     rates = np.empty((len(A) + 1, len(x)))  # F(x_n), then the stages' F_i
     rates[0] = f
     first = 1 if tab.explicit_first else 0
@@ -252,7 +256,7 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
     base = mass * x
     X = x
     for i in range(first, len(A)):
-        rhs, guess = h * (W[i, :, :i + 1] @ rates[:i + 1])
+        rhs, guess = hW[i, :, :i + 1] @ rates[:i + 1]
         rhs += base
         rhs[algebraic] = 0.0
         guess += base
@@ -292,6 +296,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
         raise ValueError(f"method {method!r} has no error estimate: give fixed_times")
     t_out = np.asarray(t_out, dtype=float)
     differential = problem.mass > 0
+    rows = mass_rows(problem.mass)
     stats = StepStats()
     start = time.process_time()
     t, x = resume if resume is not None else (0.0, problem.initial())
@@ -313,7 +318,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
                 h_try = t_out[k] - t
         weights = atol + rtol * np.abs(x)
         try:
-            x1, f1, err_vec, eta = dirk_step(problem, tab, x, f, h_try, weights, newton_tol, stats, eta)
+            x1, f1, err_vec, eta = dirk_step(problem, tab, x, f, h_try, weights, newton_tol, stats, eta, rows)
         except NewtonFailure:
             if schedule is not None:
                 raise
