@@ -110,7 +110,7 @@ METHODS = (*TABLEAUX, "bdf")
 #: the first Newton iterate of a stage is judged with the previous stage's contraction estimate,
 #: eta_0 = max(eta, ETA_FLOOR)^ETA_DECAY (Hairer & Wanner 1996, IV.8)
 ETA_FLOOR, ETA_DECAY = 1e-16, 0.8
-#: the stage predictor interpolates the stage derivatives through this many points (Tableau.predictor)
+#: the stage predictor interpolates the stage derivatives through this many points (Tableau.stage_weights)
 PREDICTOR_POINTS = 2
 #: a step ends on an output time within this relative distance of it
 OUTPUT_RTOL = 1e-13
