@@ -65,9 +65,12 @@ class Stencil:
         import scipy.sparse as sp
 
         rows = np.broadcast_to(np.arange(len(self.cols))[:, None], self.cols.shape)
-        m = sp.csr_matrix((self.weights.ravel(), (rows.ravel(), self.cols.ravel())),
-                          shape=(len(self.cols), int(self.cols.max()) + 1))
-        return m.toarray() if m.shape[1] <= DENSE_UP_TO else m
+        shape = (len(self.cols), int(self.cols.max()) + 1)
+        if shape[1] > DENSE_UP_TO:
+            return sp.csr_matrix((self.weights.ravel(), (rows.ravel(), self.cols.ravel())), shape=shape)
+        m = np.zeros(shape)
+        m[rows, self.cols] = self.weights  # the columns of a row are distinct
+        return m
 
     def __call__(self, f):
         f = np.asarray(f)
@@ -132,15 +135,12 @@ class Mesh:
         start = np.clip(rows - 2, 0, n - 5)            # six consecutive nodes holding each row's stencil
         cols = start[:, None] + np.arange(6)
         d2, d1 = np.zeros((n - 1, 6)), np.zeros((n - 1, 6))
-        for r, i in enumerate(rows):
-            off = i - start[r]  # position of node i in its window
-            if i == 1:            # one-sided rows: d2 on all six nodes, d1 on five
-                d2[r], d1[r, :5] = fd_weights(tuple(range(-1, 5)), 2), fd_weights(tuple(range(-1, 4)), 1)
-            elif i == n - 1:
-                d2[r], d1[r, 1:] = fd_weights(tuple(range(-4, 2)), 2), fd_weights(tuple(range(-3, 2)), 1)
-            else:
-                d2[r, off - 2:off + 3] = fd_weights(CENTRED, 2)
-                d1[r, off - 2:off + 3] = fd_weights(CENTRED, 1)
+        # one-sided rows next to the ends: d2 on all six nodes, d1 on five
+        d2[0], d1[0, :5] = fd_weights(tuple(range(-1, 5)), 2), fd_weights(tuple(range(-1, 4)), 1)
+        d2[-1], d1[-1, 1:] = fd_weights(tuple(range(-4, 2)), 2), fd_weights(tuple(range(-3, 2)), 1)
+        inner = np.arange(1, n - 2)[:, None]
+        window = (rows - start)[inner] + np.arange(-2, 3)  # node i sits at rows - start in its window
+        d2[inner, window], d1[inner, window] = fd_weights(CENTRED, 2), fd_weights(CENTRED, 1)
         dxi = 1.0 / n
         yp = self.dy_dxi[rows]
         return Stencil(cols, (d2 / dxi**2 - self.stretch * d1 / dxi) / yp[:, None] ** 2)

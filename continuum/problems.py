@@ -34,15 +34,24 @@ class ShearStressDiffusion:
         self.mesh, self.order = mesh, order
         self.p = 1.0 + self.beta * mesh.y
         self._p32 = self.p[1:-1] ** 1.5
+        self._mud_p = friction.mu_d * self.p[1:-1]
         self.mass = np.ones(mesh.n_cells)
         self.mass[0] = 0.0
         self.lap = mesh.second_derivative(order)
+        # the Laplacian on the unknowns and its column on the fixed node tau~_N = 1
+        lap, dense = self.lap.matrix, isinstance(self.lap.matrix, np.ndarray)
+        self._lap_x = lap[:, :-1].copy() if dense else lap[:, :-1]
+        self._lap_fixed = lap[:, -1].copy() if dense else lap[:, [-1]].toarray().ravel()
         # band positions of the Laplacian's entries on the unknowns (node N is fixed)
         n = mesh.n_cells
         rows = np.broadcast_to(np.arange(1, n)[:, None], self.lap.cols.shape)
-        self._on_unknowns = self.lap.cols < n
+        on_unknowns = self.lap.cols < n
         self.kl = self.ku = int(np.max(np.abs(self.lap.cols - rows)))
-        self._band_at = (self.ku + rows - self.lap.cols)[self._on_unknowns], self.lap.cols[self._on_unknowns]
+        self._band_at = np.ravel_multi_index(((self.ku + rows - self.lap.cols)[on_unknowns], self.lap.cols[on_unknowns]),
+                                             (self.kl + self.ku + 1, n))
+        self._band_row, self._band_weights = np.nonzero(on_unknowns)[0], self.lap.weights[on_unknowns]
+        wall = np.arange(min(self.ku + 1, n))
+        self._wall_at = self.ku - wall, wall
 
     def initial(self) -> np.ndarray:
         """tau~(y~, 0) = mu_s p~/mu_w at nodes 0..N-1 (eq. InitStokesEqn)."""
@@ -52,27 +61,34 @@ class ShearStressDiffusion:
         """tau~ at all nodes 0..N."""
         return np.append(x, 1.0)
 
+    def nodal(self, x: np.ndarray) -> np.ndarray:
+        """tau~ at nodes 0..N-1 (the unknowns themselves here)."""
+        return x
+
     def _terms(self, x: np.ndarray):
-        tau = self.full(x)
-        lap = self.lap.matrix @ tau
-        s = self.friction.mu_d * self.p[1:-1] - self.mu_w * tau[1:-1]
+        tau = self.nodal(x)
+        lap = self._lap_x.dot(tau)
+        lap += self._lap_fixed
+        s = self._mud_p - self.mu_w * tau[1:]
         return lap, s, s * s / self._p32
 
     def rate(self, x: np.ndarray) -> np.ndarray:
         """F(x): the wall residual in row 0, d tau~/d t~ at the interior nodes."""
         lap, _, diff = self._terms(x)
-        return np.concatenate(([self.wall_residual(x)], diff * lap))
+        out = np.empty(len(x))
+        out[0] = self.wall_residual(x)
+        np.multiply(diff, lap, out=out[1:])
+        return out
 
     def jacobian(self, x: np.ndarray) -> Jacobian:
         """dF/dx: the Laplacian's band times the diffusivity, its derivative on the diagonal; row 0
         is the wall (dense for the imposed speed)."""
         lap, s, diff = self._terms(x)
         bands = np.zeros((self.kl + self.ku + 1, len(x)))
-        bands[self._band_at] = (diff[:, None] * self.lap.weights)[self._on_unknowns]
+        bands.reshape(-1)[self._band_at] = diff[self._band_row] * self._band_weights
         bands[self.ku, 1:] -= 2 * self.mu_w * s / self._p32 * lap
         row0 = self.wall_gradient(x)
-        j = np.arange(min(self.ku + 1, len(x)))
-        bands[self.ku - j, j] = row0[j]
+        bands[self._wall_at] = row0[self._wall_at[1]]
         return Jacobian(bands, self.kl, self.ku, row0 if self.dense_wall else None)
 
     def mu(self, x: np.ndarray) -> np.ndarray:
@@ -141,6 +157,11 @@ class ImposedSpeed(ShearStressDiffusion):
 
     def full(self, x: np.ndarray) -> np.ndarray:
         return np.concatenate(([self._tau0(x[0])], x[1:], [1.0]))
+
+    def nodal(self, x: np.ndarray) -> np.ndarray:
+        tau = x.copy()
+        tau[0] = self._tau0(x[0])
+        return tau
 
     def jacobian(self, x: np.ndarray) -> Jacobian:
         jac = super().jacobian(x)

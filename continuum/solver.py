@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -98,6 +99,17 @@ class Numerics:
 #: interior's share, loses the digits of the first cell's share (measured: 8 digits, and BDF failing, at
 #: h_0/delta ~ 1e-8, a calibration with mu_s ~ 0 where delta(t_min) ~ 4e-10); active only for delta <~ 1e-5
 WALL_SLOPE_FLOOR = 1e-2
+#: most fixed-point iterations of ``stretch_for``
+STRETCH_ITERATIONS = 200
+
+
+def _fixed_point(step, a: float) -> float:
+    """Iterate a = step(a) until it settles (at most STRETCH_ITERATIONS times)."""
+    for _ in range(STRETCH_ITERATIONS):
+        a, previous = step(a), a
+        if a == previous:
+            break
+    return a
 
 
 def stretch_for(fr: Friction, mu_w: float, t_min: float, share: float = LAYER_SHARE["stress"]) -> float:
@@ -108,13 +120,10 @@ def stretch_for(fr: Friction, mu_w: float, t_min: float, share: float = LAYER_SH
     delta = SELF_SIMILAR_DELTA * fr.dmu * max(fr.tilde(mu_w), 0.05) * np.sqrt(t_min)
     if delta >= share:
         return 0.0
-    a = 1.0
-    for _ in range(200):
-        a = np.log1p(np.expm1(share * a) / delta)
+    a = _fixed_point(lambda a: math.log1p(math.expm1(share * a) / delta), 1.0)
     floor = WALL_SLOPE_FLOOR * delta
-    if a / np.expm1(a) < floor:  # the wall slope y'(0) = a/(e^a - 1) of this map is below the floor
-        for _ in range(200):
-            a = np.log1p(a / floor)
+    if a / math.expm1(a) < floor:  # the wall slope y'(0) = a/(e^a - 1) of this map is below the floor
+        a = _fixed_point(lambda a: math.log1p(a / floor), a)
     return float(min(a, MAX_STRETCH))
 
 
@@ -139,11 +148,17 @@ class Solution:
     mesh: Mesh
     t: np.ndarray
     tau: np.ndarray             # (len(t), N+1)
-    steps: np.ndarray           # rows (t, u_w, mu_w, delta) at every accepted step (``series``)
+    recorded: np.ndarray | obs.SeriesRecorder  # the per-step rows, or the recorder that derives them (``steps``)
     stats: StepStats
     numerics: Numerics
     errors: dict = field(default_factory=dict)  # u_w, mu_w, delta -> absolute error estimates (aligned with t)
     accuracy: float | None = None               # the relative accuracy asked for (None: one solve)
+
+    @cached_property
+    def steps(self) -> np.ndarray:
+        """Rows (t, u_w, mu_w, delta) at every accepted step, derived on first use (``series``)."""
+        r = self.recorded
+        return r.table() if isinstance(r, obs.SeriesRecorder) else r
 
     @cached_property
     def series(self):
@@ -236,7 +251,7 @@ def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solut
     states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
                               h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder)
     tau = np.array([problem.full(x) for x in states])
-    steps = recorder.table() if record else np.empty((0, 4))
+    steps = recorder if record else np.empty((0, 4))
     return Solution(problem.imposed, problem.friction, problem.mu_w,
                     getattr(problem, "u_w", None), problem.mesh, t, tau, steps, stats, numerics)
 

@@ -23,8 +23,10 @@ lift-off of mu_w); BDF has no stages and keeps its order: the imposed speed's de
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.linalg.lapack import dgbtrf, dgbtrs
@@ -43,6 +45,43 @@ class Tableau:
     @property
     def explicit_first(self) -> bool:
         return self.A[0][0] == 0.0
+
+    @cached_property
+    def matrix(self) -> np.ndarray:
+        """A as an array (the stage sums are products with its rows)."""
+        return np.array(self.A)
+
+    @cached_property
+    def error_weights(self) -> np.ndarray:
+        return np.array(self.err)
+
+    @cached_property
+    def stage_weights(self) -> np.ndarray:
+        """W[i] = (S_i, P_i) on K = (F(x_n), F_1, ..., F_s): the right-hand side of stage i is
+        M x_n + h S_i @ K (the explicit stage sum), its Newton guess  M X_i = M x_n + h P_i @ K: the
+        stage sum plus a_ii times a predicted F_i.  Implicit first stage: F_i interpolated in c
+        through the PREDICTOR_POINTS known (0, F(x_n)), (c_j, F_j) nearest to c_i (the least
+        amplification of their errors; three points made wild guesses at large steps).  Explicit
+        first stage (F_1 = F(x_n)): F_i ~ F_{i-1}, and no prediction for stage 2 (after CN steps
+        F(x_n) carries the undamped stiff modes and would make a wild guess)."""
+        A = self.matrix
+        s = len(A)
+        P = np.zeros((s, s + 1))
+        P[:, 1:] = A
+        P[:, 1:] -= np.diag(np.diag(A))
+        stage_sums = P.copy()
+        if self.explicit_first:
+            for i in range(2, s):
+                P[i, i] += A[i, i]
+            P[1] = 0.0
+            return np.stack([stage_sums, P], axis=1)
+        nodes = np.concatenate(([0.0], A.sum(axis=1)))
+        for i in range(s):
+            known = np.argsort(np.abs(nodes[:i + 1] - nodes[i + 1]), kind="stable")[:PREDICTOR_POINTS]
+            for j in known:
+                others = nodes[known[known != j]]
+                P[i, j] += A[i, i] * np.prod((nodes[i + 1] - others) / (nodes[j] - others))
+        return np.stack([stage_sums, P], axis=1)
 
 
 _G = 2.0 - np.sqrt(2.0)
@@ -68,6 +107,13 @@ TABLEAUX = {
 }
 #: every method of ``integrate``
 METHODS = (*TABLEAUX, "bdf")
+#: the first Newton iterate of a stage is judged with the previous stage's contraction estimate,
+#: eta_0 = max(eta, ETA_FLOOR)^ETA_DECAY (Hairer & Wanner 1996, IV.8)
+ETA_FLOOR, ETA_DECAY = 1e-16, 0.8
+#: the stage predictor interpolates the stage derivatives through this many points (Tableau.stage_weights)
+PREDICTOR_POINTS = 2
+#: a step ends on an output time within this relative distance of it
+OUTPUT_RTOL = 1e-13
 #: bdf hands over to HANDOVER when its step falls below BDF_STALL t (``_integrate_bdf``)
 BDF_STALL, HANDOVER = 1e-3, "sdirk4"
 
@@ -146,29 +192,36 @@ class NewtonMatrix:
         return np.concatenate(([x0], zr - x0 * self.zb))
 
 
-def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8, full=False):
+def solve_stage(problem, matrix, x, rhs, weights, tol, stats, eta=1.0, max_iter=8, full=False):
     """Solve M X - dh F(X) = rhs by simplified Newton from the guess x.
 
-    Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta), 1 at
-    the first iterate) is below ``tol`` (Hairer & Wanner 1996, IV.8), then applies the problem's
-    exact projection onto its algebraic constraints (if any); returns (X, F(X)).  ``full``: refactorise at every iterate (full
-    Newton, the fallback when the frozen matrix does not contract)."""
+    Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta); at the
+    first iterate the given ``eta``, carried from the previous stage) is below ``tol`` (Hairer & Wanner
+    1996, IV.8), then applies the problem's exact projection onto its algebraic constraints (if any);
+    returns (X, F(X), eta).  ``full``: refactorise at every iterate (full Newton, the fallback when the
+    frozen matrix does not contract)."""
     x = x.copy()
     mass, dh = problem.mass, matrix.dh
     rate = problem.rate(x)
-    previous, eta = None, 1.0
+    previous = None
     for _ in range(max_iter):
         stats.newton_iterations += 1
         if full:
             matrix = NewtonMatrix(problem, x, dh)
         elif problem.dense_wall:  # the integral condition's row changes fast: keep it current
             matrix.refresh_row0(mass[0], problem.wall_gradient(x))
-        dx = matrix.solve(rhs - mass * x + dh * rate)
-        if not np.all(np.isfinite(dx)):
-            break
-        x += problem.step_fraction(x, dx) * dx
+        residual = rhs - mass * x
+        residual += dh * rate
+        dx = matrix.solve(residual)
         scaled = dx / weights
-        size = np.sqrt(scaled @ scaled / len(scaled))
+        size = math.sqrt(scaled @ scaled / len(scaled))
+        if not math.isfinite(size):
+            break
+        fraction = problem.step_fraction(x, dx)
+        if fraction == 1.0:
+            x += dx
+        else:
+            x += fraction * dx
         if previous is not None:
             theta = size / previous
             if theta >= (0.99 if full else 1.0):  # no contraction: give up (the caller tries full Newton)
@@ -176,41 +229,50 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, max_iter=8, full=F
             eta = theta / (1.0 - theta)
         if eta * size < tol or size < 1e-3 * tol:
             x = problem.project(x)
-            return x, problem.rate(x)
+            return x, problem.rate(x), eta
         rate = problem.rate(x)
         previous = size
     stats.newton_failures += 1
     raise NewtonFailure("Newton did not converge")
 
 
-def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats):
-    """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}) and the local error
-    estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996), or None."""
+def mass_rows(mass):
+    """The algebraic rows (indices) and 1/M on the differential rows (0 on the algebraic ones)."""
+    return np.flatnonzero(mass == 0), np.divide(1.0, mass, out=np.zeros(len(mass)), where=mass != 0)
+
+
+def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.0, rows=None):
+    """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}), the local error
+    estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) or None, and the Newton
+    contraction estimate ``eta`` to carry to the next step.  ``rows``: ``mass_rows(problem.mass)``."""
     matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
-    mass = problem.mass
-    algebraic = mass == 0
-    rates = [f] if tab.explicit_first else []
+    mass, A, hW = problem.mass, tab.matrix, h * tab.stage_weights
+    algebraic, inverse_mass = rows if rows is not None else mass_rows(mass)
+    rates = np.empty((len(A) + 1, len(x)))  # F(x_n), then the stages' F_i
+    rates[0] = f
+    first = 1 if tab.explicit_first else 0
+    if first:
+        rates[1] = f
+    base = mass * x
     X = x
-    for i in range(len(rates), len(tab.A)):
-        rhs = mass * x + h * sum(a * r for a, r in zip(tab.A[i][:i], rates) if a != 0.0)
+    for i in range(first, len(A)):
+        rhs, guess = hW[i, :, :i + 1] @ rates[:i + 1]
+        rhs += base
         rhs[algebraic] = 0.0
-        # predictor: the explicit part plus the last implicit stage's rate for the implicit part
-        # (F(x_n) of an explicit first stage is not used: after CN steps it carries the
-        # undamped stiff modes and would make a wild guess)
-        guess = X.copy()
-        if len(rates) > int(tab.explicit_first):
-            differential = ~algebraic
-            guess[differential] = (rhs[differential] + matrix.dh * rates[-1][differential]) / mass[differential]
+        guess += base
+        guess *= inverse_mass
+        guess[algebraic] = X[algebraic]  # from the last stage
         try:
-            X, r = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats)
+            X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
+                                               max(eta, ETA_FLOOR) ** ETA_DECAY)
         except NewtonFailure:
-            X, r = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats, max_iter=15, full=True)
-        rates.append(r)
+            X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
+                                               max_iter=15, full=True)
     if tab.err is None:
-        return X, rates[-1], None
-    est = h * sum(e * r for e, r in zip(tab.err, rates) if e != 0.0)
+        return X, rates[-1], None, eta
+    est = h * (tab.error_weights @ rates[1:])
     est[algebraic] = 0.0
-    return X, rates[-1], matrix.solve(est)
+    return X, rates[-1], matrix.solve(est), eta
 
 
 def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=0.03,
@@ -234,11 +296,12 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
         raise ValueError(f"method {method!r} has no error estimate: give fixed_times")
     t_out = np.asarray(t_out, dtype=float)
     differential = problem.mass > 0
+    rows = mass_rows(problem.mass)
     stats = StepStats()
     start = time.process_time()
     t, x = resume if resume is not None else (0.0, problem.initial())
     f = problem.rate(x)
-    h = h0
+    h, eta = h0, 1.0
     states = np.empty((len(t_out), len(x)))
     k = 0
     schedule = None if fixed_times is None else iter(np.asarray(fixed_times, dtype=float))
@@ -255,10 +318,11 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
                 h_try = t_out[k] - t
         weights = atol + rtol * np.abs(x)
         try:
-            x1, f1, err_vec = dirk_step(problem, tab, x, f, h_try, weights, newton_tol, stats)
+            x1, f1, err_vec, eta = dirk_step(problem, tab, x, f, h_try, weights, newton_tol, stats, eta, rows)
         except NewtonFailure:
             if schedule is not None:
                 raise
+            eta = 1.0
             stats.rejected += 1
             h = 0.25 * h_try
             continue
@@ -275,7 +339,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
         x, f, t = x1, f1, t + h_try
         if observer is not None:
             observer(t, x)
-        while k < len(t_out) and np.isclose(t, t_out[k], rtol=1e-13, atol=0.0):
+        while k < len(t_out) and abs(t - t_out[k]) <= OUTPUT_RTOL * abs(t_out[k]):
             states[k] = x
             k += 1
         if schedule is not None and k < len(t_out) and t > t_out[k]:
