@@ -8,7 +8,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.integrate import solve_ivp
 
 from .problems import ImposedStress
@@ -30,9 +29,7 @@ def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics 
         return problem.rate(np.concatenate(([1.0], z)))[1:]
 
     def jac(_, z):
-        j = problem.jacobian(np.concatenate(([1.0], z)))  # the band of rows/columns 1..N-1
-        offsets = j.ku - np.arange(j.kl + j.ku + 1)
-        return sp.dia_matrix((j.bands[:, 1:], offsets), shape=(len(z), len(z))).tocsc()
+        return problem.jacobian(np.concatenate(([1.0], z))).interior()
 
     start = time.process_time()
     sol = solve_ivp(rhs, (0.0, t[-1]), x0[1:], method=method, t_eval=t, jac=jac,

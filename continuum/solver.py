@@ -19,7 +19,6 @@ from .scales import UNITS
 from .steady import SELF_SIMILAR_DELTA, mu_w_for_speed, steady_delta, steady_wall_speed
 from .stepper import METHODS, TABLEAUX, StepStats, integrate
 
-DRIVES = ("stress", "speed")
 #: the default time stepper of each drive (continuum.stepper: BDF keeps its order on the speed's DAE,
 #: the DIRKs' stage order 1 does not)
 DEFAULT_METHOD = {"stress": "sdirk4", "speed": "bdf"}
@@ -242,7 +241,7 @@ QUANTITIES = ("u_w", "mu_w", "delta")
 DEFAULT_ACCURACY = 1e-6
 ACCURACY_RANGE = (1e-10, 1e-2)
 #: refinement stops here (a request that needs more is refused with the accuracy reached): the speed's
-#: second order would need ~10^4 cells for 1e-6 at t~ = 1e-4
+#: first order could not reach 1e-6 on any affordable mesh
 MAX_CELLS = {"stress": 2048, "speed": 1024}
 
 

@@ -141,6 +141,13 @@ class Jacobian:
     ku: int
     row0: np.ndarray | None = None
 
+    def interior(self):
+        """The band's rows and columns 1..n-1 as a sparse matrix (CSC)."""
+        import scipy.sparse as sp
+
+        n = self.bands.shape[1] - 1
+        return sp.dia_matrix((self.bands[:, 1:], self.ku - np.arange(self.kl + self.ku + 1)), shape=(n, n)).tocsc()
+
     @classmethod
     def tridiagonal(cls, sub, diag, sup, row0=None) -> "Jacobian":
         """From the sub-, main and super-diagonal (lengths n-1, n, n-1)."""
@@ -355,13 +362,12 @@ def _reduced_jacobian(problem, x):
 
     jac = problem.jacobian(x)
     n = len(x) - 1
-    band = sp.dia_matrix((jac.bands[:, 1:], jac.ku - np.arange(jac.kl + jac.ku + 1)), shape=(n, n))
     grad = problem.wall_gradient(x)
     coupling = jac.bands[jac.ku + 1:, 0][:n]  # J[1..kl, 0]
     dense = -coupling[:, None] * (grad[1:] / grad[0])[None, :]
     rows = np.repeat(np.arange(len(coupling)), n)
     cols = np.tile(np.arange(n), len(coupling))
-    return (band + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()
+    return (jac.interior() + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()
 
 
 def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps):
