@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.linalg.lapack import dgbtrf, dgbtrs
+from scipy.linalg.lapack import dgbtrf, dgbtrs, dpttrf, dpttrs
 
 
 @dataclass(frozen=True)
@@ -134,12 +134,14 @@ class NewtonFailure(RuntimeError):
 @dataclass
 class Jacobian:
     """dF/dx as a band, ``bands[ku + i - j, j] = J[i, j]`` (scipy's solve_banded layout), and
-    optionally a dense row 0 that replaces the band's row 0."""
+    optionally a dense row 0 that replaces the band's row 0.  ``dissipative``: symmetric tridiagonal
+    with M - dh J positive definite for dh > 0, factorised as L D L^T (LAPACK pttrf, no pivoting)."""
 
     bands: np.ndarray
     kl: int
     ku: int
     row0: np.ndarray | None = None
+    dissipative: bool = False
 
     def interior(self):
         """The band's rows and columns 1..n-1 as a sparse matrix (CSC)."""
@@ -155,6 +157,13 @@ class Jacobian:
         bands[0, 1:], bands[1], bands[2, :-1] = sup, diag, sub
         return cls(bands, 1, 1, row0)
 
+    @classmethod
+    def dissipative_tridiagonal(cls, diag, off) -> "Jacobian":
+        """A symmetric tridiagonal J with -J positive semidefinite (a discrete diffusion)."""
+        bands = np.zeros((3, len(diag)))
+        bands[0, 1:], bands[1], bands[2, :-1] = off, diag, off
+        return cls(bands, 1, 1, dissipative=True)
+
 
 class NewtonMatrix:
     """LU factors of A = M - dh J(x), reused for every Newton iteration and stage of a step.
@@ -169,6 +178,12 @@ class NewtonMatrix:
         mass = problem.mass
         kl, ku = jac.kl, jac.ku
         self.dh, self.dense, self.kl, self.ku = dh, jac.row0 is not None, kl, ku
+        self.dissipative = jac.dissipative
+        if self.dissipative:
+            self.d, self.e, info = dpttrf(mass - dh * jac.bands[1], -dh * jac.bands[0, 1:])
+            if info != 0:
+                raise NewtonFailure("Newton matrix not positive definite")
+            return
         first = 1 if self.dense else 0
         ab = np.zeros((2 * kl + ku + 1, len(mass) - first))
         ab[kl:] = -dh * jac.bands[:, first:]
@@ -183,6 +198,8 @@ class NewtonMatrix:
             self.refresh_row0(mass[0], jac.row0)
 
     def _solve(self, r):
+        if self.dissipative:
+            return dpttrs(self.d, self.e, r)[0]
         return dgbtrs(self.lu, self.kl, self.ku, r, self.piv)[0]
 
     def refresh_row0(self, mass0, row0):
@@ -251,10 +268,13 @@ def mass_rows(mass):
 def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.0, rows=None):
     """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}), the local error
     estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) or None, and the Newton
-    contraction estimate ``eta`` to carry to the next step.  ``rows``: ``mass_rows(problem.mass)``."""
+    contraction estimate ``eta`` to carry to the next step.  ``rows``: ``mass_rows(problem.mass)``.
+    A problem with ``carries_contraction = False`` (its Newton contracts unevenly from one stage to the
+    next) judges every stage's first iterate with eta = 1 instead."""
     matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
     mass, A, hW = problem.mass, tab.matrix, h * tab.stage_weights
     algebraic, inverse_mass = rows if rows is not None else mass_rows(mass)
+    carry = getattr(problem, "carries_contraction", True)
     rates = np.empty((len(A) + 1, len(x)))  # F(x_n), then the stages' F_i
     rates[0] = f
     first = 1 if tab.explicit_first else 0
@@ -271,7 +291,7 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
         guess[algebraic] = X[algebraic]  # from the last stage
         try:
             X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
-                                               max(eta, ETA_FLOOR) ** ETA_DECAY)
+                                               max(eta, ETA_FLOOR) ** ETA_DECAY if carry else 1.0)
         except NewtonFailure:
             X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
                                                max_iter=15, full=True)
