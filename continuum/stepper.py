@@ -116,6 +116,10 @@ PREDICTOR_POINTS = 2
 OUTPUT_RTOL = 1e-13
 #: bdf hands over to HANDOVER when its step falls below BDF_STALL t (``_integrate_bdf``)
 BDF_STALL, HANDOVER = 1e-3, "sdirk4"
+#: bdf's reduced Jacobian is dense up to this many unknowns: scipy's dense LU path costs less than
+#: SuperLU with its sparse bookkeeping there (measured, u~_w = 1.334: 64 cells 1.4x, 128 cells 1.4x less CPU;
+#: 256 cells 4x more), bench/RESULTS.md "The paper's figure set"
+DENSE_BDF_MAX = 128
 
 
 @dataclass
@@ -377,14 +381,22 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
 
 def _reduced_jacobian(problem, x):
     """d/dz of the rate of the differential rows z = x[1:] with the wall x[0] = x0(z) eliminated by
-    the constraint g(x0, z) = 0: J_zz - J_z0 (dg/dz)/(dg/dx0), a band plus kl dense rows (CSC)."""
-    import scipy.sparse as sp
-
+    the constraint g(x0, z) = 0: J_zz - J_z0 (dg/dz)/(dg/dx0), a band plus kl dense rows; a dense
+    array up to DENSE_BDF_MAX rows (scipy's BDF then factorises it by LAPACK getrf), else CSC (SuperLU)."""
     jac = problem.jacobian(x)
     n = len(x) - 1
     grad = problem.wall_gradient(x)
     coupling = jac.bands[jac.ku + 1:, 0][:n]  # J[1..kl, 0]
     dense = -coupling[:, None] * (grad[1:] / grad[0])[None, :]
+    if n <= DENSE_BDF_MAX:
+        out = np.zeros((n, n))
+        for k in range(-jac.kl, jac.ku + 1):  # diagonal k = column - row, band row ku - k
+            values = jac.bands[jac.ku - k, 1:]
+            np.fill_diagonal(out[:, k:] if k >= 0 else out[-k:, :], values[k:] if k >= 0 else values[:n + k])
+        out[:len(coupling)] += dense
+        return out
+    import scipy.sparse as sp
+
     rows = np.repeat(np.arange(len(coupling)), n)
     cols = np.tile(np.arange(n), len(coupling))
     return (jac.interior() + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()
