@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.linalg.lapack import dgbtrf, dgbtrs, dpttrf, dpttrs
+from .lapack import dgbtrf, dgbtrs, dpttrf, dpttrs
 
 
 @dataclass(frozen=True)
