@@ -45,7 +45,6 @@ def self_similar_wall_speed(fr: Friction, mu_w: float, t: float) -> float:
 GAUSS_NODES_PER_MODE = 3
 
 
-
 @lru_cache(maxsize=None)
 def _gauss_legendre(n: int):
     """Nodes and weights on [-1, 1] (numpy computes them by an n x n eigenproblem: cached)."""

@@ -110,6 +110,7 @@ class ShearLaw:
         return self.fr.mu_of_I(I, self.I0)
 
     def on_faces(self, p) -> "FaceLaw":
+        """This law on faces of fixed pressures p."""
         return FaceLaw(self, np.asarray(p, dtype=float))
 
 

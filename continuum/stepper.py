@@ -175,6 +175,7 @@ class NewtonMatrix:
     A is banded (LAPACK gbtrf/gbtrs, partial pivoting), except that row 0 may be dense (the
     imposed-speed integral condition); then it is eliminated by bordering:
     [[a, c], [b, T]] [x0; z] = [r0; r]  =>  x0 = (r0 - c.T^-1 r)/(a - c.T^-1 b).
+    A dissipative Jacobian makes A symmetric positive definite: L D L^T (LAPACK pttrf/pttrs).
     """
 
     def __init__(self, problem, x, dh):

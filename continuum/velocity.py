@@ -88,7 +88,7 @@ class VelocityProblem:
         self.half_over_h = 0.5 / self.h
         self.p_face = scene.p_w + scene.weight_gradient * (self.y[:-1] + self.h / 2)
         self.law = ShearLaw(rule, m.friction, m.I0_paper, m.d, m.rho_p).on_faces(self.p_face)
-        self.rho_b = rho_b = m.phi * m.rho_p
+        rho_b = m.phi * m.rho_p
         self.tau_w, self.u_w = tau_w, u_w
         self.imposed = "stress" if tau_w is not None else "speed"
         self.first = 0 if tau_w is not None else 1  # the first unknown node
