@@ -37,11 +37,13 @@ REFERENCE_TOL = dict(stretch=2.0, rtol=1e-8, atol=1e-11)
 #: the former default (200 cells, stretch 2, SDIRK4): the CPU ratios are against it, in the same run
 OLD_DEFAULT = Numerics(n_cells=200, stretch=2.0, rtol=1e-5, atol=1e-9)
 CANDIDATES = {"old default (200 cells, stretch 2, sdirk4)": OLD_DEFAULT,
-              "default (400 cells, stretch 4, tr-bdf2)": VELOCITY_NUMERICS,
+              "default (400 cells, stretch 4, tr-bdf2, atol 1e-8)": VELOCITY_NUMERICS,
+              "former default (as above, atol 1e-9)": replace(VELOCITY_NUMERICS, atol=1e-9),
+              "as default, atol 1e-7": replace(VELOCITY_NUMERICS, atol=1e-7),
               "400 cells, stretch 4, sdirk4": replace(VELOCITY_NUMERICS, method="sdirk4"),
               "300 cells, stretch 4, tr-bdf2": replace(VELOCITY_NUMERICS, n_cells=300),
               "200 cells, stretch 3, tr-bdf2": replace(VELOCITY_NUMERICS, n_cells=200, stretch=3.0),
-              "400 cells, stretch 4, tr-bdf2, rtol 1e-4": replace(VELOCITY_NUMERICS, rtol=1e-4, atol=1e-8),
+              "400 cells, stretch 4, tr-bdf2, rtol 2e-5": replace(VELOCITY_NUMERICS, rtol=2e-5),
               "400 cells, stretch 6, tr-bdf2": replace(VELOCITY_NUMERICS, stretch=6.0)}
 REPEATS = 3
 

@@ -6,6 +6,8 @@ Short time (eq. SolutionSS), long time (eq. SolutionLONG), steady wall-speed app
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from scipy.integrate import quad
 from scipy.special import erfc
@@ -38,6 +40,17 @@ def self_similar_wall_speed(fr: Friction, mu_w: float, t: float) -> float:
     return wall_speed_of_profile(fr, mu_w, lambda y: self_similar_mu(fr, mu_w, y, t))
 
 
+#: Gauss-Legendre nodes per WKB mode: the rule is exact to degree 2 x 3 n - 1 against the ~e pi n / 2
+#: that sin(n pi z) needs (measured: 100 nodes for 40 modes already match adaptive quadrature to 2e-15)
+GAUSS_NODES_PER_MODE = 3
+
+
+@lru_cache(maxsize=None)
+def _gauss_legendre(n: int):
+    """Nodes and weights on [-1, 1] (numpy computes them by an n x n eigenproblem: cached)."""
+    return np.polynomial.legendre.leggauss(n)
+
+
 class WKB:
     """Long-time series (eq. SolutionLONG): linearise eq. GranularStokesEqn_muLINlong with
     (mu_d - mu) ~ Dmu, in y^ = 1 + beta_w y~ in [1, R], R = mu_w/mu_s:
@@ -60,20 +73,19 @@ class WKB:
         self.amplitude = -0.125 if printed else 0.125
         m = np.arange(1, n_modes + 1)
         self.lam = 0.75 * m * np.pi * self.beta * fr.dmu / self.span
-        if printed:
-            self.coef = np.array([2 * quad(self._printed_integrand, 1.0, self.R, args=(k,), limit=400)[0] for k in m])
-        else:
-            self.coef = np.array([2 * quad(self._projection_integrand, 0.0, 1.0, args=(k,), limit=400)[0] for k in m])
+        # the projections by Gauss-Legendre on GAUSS_NODES_PER_MODE n_modes nodes, all modes at once
+        nodes, weights = _gauss_legendre(GAUSS_NODES_PER_MODE * n_modes)
+        s = 0.5 * (nodes + 1.0)
+        if printed:  # in y^ over [1, R]
+            yh = 1.0 + (self.R - 1.0) * s
+            f, z, w = yh**0.125 * (fr.mu_s * yh / mu_w - 1.0), self._z(yh), 0.5 * (self.R - 1.0) * weights
+        else:  # in z over [0, 1]
+            yh = (1.0 + self.span * s) ** (4.0 / 3.0)
+            f, z, w = (fr.mu_s * yh / mu_w - 1.0) * yh ** (-0.125), s, 0.5 * weights
+        self.coef = 2.0 * np.sin(np.pi * np.outer(m, z)) @ (f * w)
 
     def _z(self, yh):
         return (yh**0.75 - 1.0) / self.span
-
-    def _projection_integrand(self, z, m):
-        yh = (1.0 + self.span * z) ** (4.0 / 3.0)
-        return (self.fr.mu_s * yh / self.mu_w - 1.0) * yh ** (-0.125) * np.sin(m * np.pi * z)
-
-    def _printed_integrand(self, yh, m):
-        return yh**0.125 * (self.fr.mu_s * yh / self.mu_w - 1.0) * np.sin(m * np.pi * self._z(yh))
 
     def tau(self, y, t):
         """tau~(y~, t~) from the series."""

@@ -32,8 +32,12 @@ def jop_law(I, mu_s, mu_d, I0):
     """mu(I) = mu_s + (mu_d - mu_s)/(1 + I0/I) (eq. MuI, Jop et al. 2006) and its slope dmu/dI;
     I and I0 in the same convention.  The package's one implementation of the law."""
     I = np.asarray(I, dtype=float)
-    dmu = mu_d - mu_s
-    return mu_s + dmu * I / (I + I0), dmu * I0 / (I + I0) ** 2
+    return jop_mu(I, mu_s, mu_d, I0), (mu_d - mu_s) * I0 / (I + I0) ** 2
+
+
+def jop_mu(I, mu_s, mu_d, I0):
+    """The value of ``jop_law`` alone."""
+    return mu_s + (mu_d - mu_s) * I / (I + I0)
 
 
 @dataclass(frozen=True)
@@ -76,7 +80,7 @@ class Friction:
         return jop_law(I, self.mu_s, self.mu_d, I0)
 
     def mu_of_I(self, I, I0: float):
-        return self.mu_and_slope(I, I0)[0]
+        return jop_mu(I, self.mu_s, self.mu_d, I0)
 
     def I_of_mu(self, mu, I0: float):
         """Inverse of eq. MuI: I = I0 (mu - mu_s)/(mu_d - mu) for mu_s <= mu < mu_d."""

@@ -103,16 +103,40 @@ class ShearLaw:
             slope[low] = mu_low**3 / (2 * alpha * Il)
         return mu, slope
 
-    def stress(self, g, p, derivative: bool = True):
-        """s = mu(I) p g / sqrt(g^2 + eps^2) and ds/dg (``derivative``; else s alone), with
-        I = |g| d sqrt(rho_p/p)."""
-        eps = self.rule.eps
+    def mu(self, I):
+        """mu(I) alone (the rate needs no slope)."""
+        if self.rule.kind == "barker-gray":
+            return self.mu_and_slope(I)[0]
+        return self.fr.mu_of_I(I, self.I0)
+
+    def on_faces(self, p) -> "FaceLaw":
+        """This law on faces of fixed pressures p."""
+        return FaceLaw(self, np.asarray(p, dtype=float))
+
+
+class FaceLaw:
+    """s(g) = mu(I) p g / sqrt(g^2 + eps^2) with I = |g| d sqrt(rho_p/p), and ds/dg, on faces of fixed
+    pressure p (the factor d sqrt(rho_p/p) computed once)."""
+
+    def __init__(self, law: ShearLaw, p: np.ndarray):
+        self.law, self.p = law, p
+        self.inertial = law.d * np.sqrt(law.rho / p)  # I/|g|
+        self.eps2 = law.rule.eps**2
+
+    def stress(self, g):
+        """s at the faces (g: the faces on the last axis)."""
+        root = g * g
+        root += self.eps2
+        np.sqrt(root, out=root)
+        s = self.law.mu(np.abs(g) * self.inertial)
+        s *= self.p
+        s *= g
+        s /= root
+        return s
+
+    def slope(self, g):
+        """ds/dg at the faces."""
         ag = np.abs(g)
-        root = np.sqrt(g * g + eps * eps)
-        dI = self.d * np.sqrt(self.rho / p)
-        mu, slope = self.mu_and_slope(ag * dI)
-        s = mu * p * g / root
-        if not derivative:
-            return s
-        ds = p * (slope * dI * ag / root + mu * eps * eps / root**3)
-        return s, ds
+        root = np.sqrt(g * g + self.eps2)
+        mu, slope = self.law.mu_and_slope(ag * self.inertial)
+        return self.p * (slope * self.inertial * ag / root + mu * self.eps2 / root**3)

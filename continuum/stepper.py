@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.linalg.lapack import dgbtrf, dgbtrs
+from .lapack import dgbtrf, dgbtrs, dpttrf, dpttrs
 
 
 @dataclass(frozen=True)
@@ -116,6 +116,10 @@ PREDICTOR_POINTS = 2
 OUTPUT_RTOL = 1e-13
 #: bdf hands over to HANDOVER when its step falls below BDF_STALL t (``_integrate_bdf``)
 BDF_STALL, HANDOVER = 1e-3, "sdirk4"
+#: bdf's reduced Jacobian is dense up to this many unknowns: scipy's dense LU path costs less than
+#: SuperLU with its sparse bookkeeping there (measured, u~_w = 1.334: 64 cells 1.4x, 128 cells 1.4x less CPU;
+#: 256 cells 4x more), bench/RESULTS.md "The paper's figure set"
+DENSE_BDF_MAX = 128
 
 
 @dataclass
@@ -134,12 +138,14 @@ class NewtonFailure(RuntimeError):
 @dataclass
 class Jacobian:
     """dF/dx as a band, ``bands[ku + i - j, j] = J[i, j]`` (scipy's solve_banded layout), and
-    optionally a dense row 0 that replaces the band's row 0."""
+    optionally a dense row 0 that replaces the band's row 0.  ``dissipative``: symmetric tridiagonal
+    with M - dh J positive definite for dh > 0, factorised as L D L^T (LAPACK pttrf, no pivoting)."""
 
     bands: np.ndarray
     kl: int
     ku: int
     row0: np.ndarray | None = None
+    dissipative: bool = False
 
     def interior(self):
         """The band's rows and columns 1..n-1 as a sparse matrix (CSC)."""
@@ -155,6 +161,13 @@ class Jacobian:
         bands[0, 1:], bands[1], bands[2, :-1] = sup, diag, sub
         return cls(bands, 1, 1, row0)
 
+    @classmethod
+    def dissipative_tridiagonal(cls, diag, off) -> "Jacobian":
+        """A symmetric tridiagonal J with -J positive semidefinite (a discrete diffusion)."""
+        bands = np.zeros((3, len(diag)))
+        bands[0, 1:], bands[1], bands[2, :-1] = off, diag, off
+        return cls(bands, 1, 1, dissipative=True)
+
 
 class NewtonMatrix:
     """LU factors of A = M - dh J(x), reused for every Newton iteration and stage of a step.
@@ -162,6 +175,7 @@ class NewtonMatrix:
     A is banded (LAPACK gbtrf/gbtrs, partial pivoting), except that row 0 may be dense (the
     imposed-speed integral condition); then it is eliminated by bordering:
     [[a, c], [b, T]] [x0; z] = [r0; r]  =>  x0 = (r0 - c.T^-1 r)/(a - c.T^-1 b).
+    A dissipative Jacobian makes A symmetric positive definite: L D L^T (LAPACK pttrf/pttrs).
     """
 
     def __init__(self, problem, x, dh):
@@ -169,6 +183,12 @@ class NewtonMatrix:
         mass = problem.mass
         kl, ku = jac.kl, jac.ku
         self.dh, self.dense, self.kl, self.ku = dh, jac.row0 is not None, kl, ku
+        self.dissipative = jac.dissipative
+        if self.dissipative:
+            self.d, self.e, info = dpttrf(mass - dh * jac.bands[1], -dh * jac.bands[0, 1:])
+            if info != 0:
+                raise NewtonFailure("Newton matrix not positive definite")
+            return
         first = 1 if self.dense else 0
         ab = np.zeros((2 * kl + ku + 1, len(mass) - first))
         ab[kl:] = -dh * jac.bands[:, first:]
@@ -183,6 +203,8 @@ class NewtonMatrix:
             self.refresh_row0(mass[0], jac.row0)
 
     def _solve(self, r):
+        if self.dissipative:
+            return dpttrs(self.d, self.e, r)[0]
         return dgbtrs(self.lu, self.kl, self.ku, r, self.piv)[0]
 
     def refresh_row0(self, mass0, row0):
@@ -251,10 +273,13 @@ def mass_rows(mass):
 def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.0, rows=None):
     """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}), the local error
     estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) or None, and the Newton
-    contraction estimate ``eta`` to carry to the next step.  ``rows``: ``mass_rows(problem.mass)``."""
+    contraction estimate ``eta`` to carry to the next step.  ``rows``: ``mass_rows(problem.mass)``.
+    A problem with ``carries_contraction = False`` (its Newton contracts unevenly from one stage to the
+    next) judges every stage's first iterate with eta = 1 instead."""
     matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
     mass, A, hW = problem.mass, tab.matrix, h * tab.stage_weights
     algebraic, inverse_mass = rows if rows is not None else mass_rows(mass)
+    carry = getattr(problem, "carries_contraction", True)
     rates = np.empty((len(A) + 1, len(x)))  # F(x_n), then the stages' F_i
     rates[0] = f
     first = 1 if tab.explicit_first else 0
@@ -271,7 +296,7 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
         guess[algebraic] = X[algebraic]  # from the last stage
         try:
             X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
-                                               max(eta, ETA_FLOOR) ** ETA_DECAY)
+                                               max(eta, ETA_FLOOR) ** ETA_DECAY if carry else 1.0)
         except NewtonFailure:
             X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
                                                max_iter=15, full=True)
@@ -357,14 +382,22 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
 
 def _reduced_jacobian(problem, x):
     """d/dz of the rate of the differential rows z = x[1:] with the wall x[0] = x0(z) eliminated by
-    the constraint g(x0, z) = 0: J_zz - J_z0 (dg/dz)/(dg/dx0), a band plus kl dense rows (CSC)."""
-    import scipy.sparse as sp
-
+    the constraint g(x0, z) = 0: J_zz - J_z0 (dg/dz)/(dg/dx0), a band plus kl dense rows; a dense
+    array up to DENSE_BDF_MAX rows (scipy's BDF then factorises it by LAPACK getrf), else CSC (SuperLU)."""
     jac = problem.jacobian(x)
     n = len(x) - 1
     grad = problem.wall_gradient(x)
     coupling = jac.bands[jac.ku + 1:, 0][:n]  # J[1..kl, 0]
     dense = -coupling[:, None] * (grad[1:] / grad[0])[None, :]
+    if n <= DENSE_BDF_MAX:
+        out = np.zeros((n, n))
+        for k in range(-jac.kl, jac.ku + 1):  # diagonal k = column - row, band row ku - k
+            values = jac.bands[jac.ku - k, 1:]
+            np.fill_diagonal(out[:, k:] if k >= 0 else out[-k:, :], values[k:] if k >= 0 else values[:n + k])
+        out[:len(coupling)] += dense
+        return out
+    import scipy.sparse as sp
+
     rows = np.repeat(np.arange(len(coupling)), n)
     cols = np.tile(np.arange(n), len(coupling))
     return (jac.interior() + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()

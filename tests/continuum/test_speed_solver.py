@@ -138,3 +138,17 @@ def test_speed_estimate_bounds_the_lift_off_peak(paper_friction):
     ref = solve_speed(paper_friction, 0.198, times, Numerics(n_cells=256, stretch=12.0, rtol=1e-10, atol=1e-12))
     sol = solve_speed(paper_friction, 0.198, times, Numerics(n_cells=64), estimate=True)
     assert np.all(np.abs(sol.mu_w - ref.mu_w) <= sol.errors["mu_w"])
+
+
+def test_reduced_jacobian_dense_equals_sparse(paper_friction, monkeypatch):
+    """The BDF path's reduced Jacobian (wall eliminated) is the same matrix whether built dense (up to
+    DENSE_BDF_MAX unknowns) or sparse: entry by entry, to rounding."""
+    import continuum.stepper as stepper
+
+    pb = ImposedSpeed(paper_friction, 1.334, Mesh.graded(64, 8.0), order=4)
+    x = integrate(pb, [1e-2], method="bdf", rtol=1e-6, atol=1e-8)[0][0]
+    dense = stepper._reduced_jacobian(pb, x)
+    monkeypatch.setattr(stepper, "DENSE_BDF_MAX", 0)
+    sparse = stepper._reduced_jacobian(pb, x).toarray()
+    assert isinstance(dense, np.ndarray) and dense.shape == sparse.shape == (63, 63)  # nodes 1..63 (tau~_64 = 1 fixed)
+    assert np.max(np.abs(dense - sparse)) <= 1e-15 * np.max(np.abs(sparse))

@@ -132,3 +132,25 @@ def test_printed_wkb_form_is_further_from_the_numerics(solutions, paper_friction
         ours, printed = WKB(paper_friction, sol.mu_w_inf), WKB(paper_friction, sol.mu_w_inf, printed=True)
         for t, tau in zip(sol.t[sol.t >= 1.0], sol.tau[sol.t >= 1.0]):
             assert np.max(np.abs(ours.tau(sol.mesh.y, t) - tau)) < np.max(np.abs(printed.tau(sol.mesh.y, t) - tau))
+
+
+@pytest.mark.parametrize("printed", [False, True])
+def test_wkb_projections_are_the_sine_coefficients(paper_friction, printed):
+    """Lambda_m (Gauss-Legendre, all 40 modes at once) equal adaptive quadrature of their defining
+    integrals (in z of (mu_s y^/mu_w - 1) y^(-1/8); the printed form in y^ of (mu_s y^/mu_w - 1) y^(1/8))
+    to rounding, relative to the largest."""
+    from scipy.integrate import quad
+
+    fr = paper_friction
+    mu_w = fr.mu_w_from_tilde(0.1)
+    wkb = WKB(fr, mu_w, printed=printed)
+    if printed:
+        f = lambda yh, m: yh**0.125 * (fr.mu_s * yh / mu_w - 1.0) * np.sin(m * np.pi * wkb._z(yh))  # noqa: E731
+        span = (1.0, wkb.R)
+    else:
+        def f(z, m):
+            yh = (1.0 + wkb.span * z) ** (4.0 / 3.0)
+            return (fr.mu_s * yh / mu_w - 1.0) * yh ** (-0.125) * np.sin(m * np.pi * z)
+        span = (0.0, 1.0)
+    ref = np.array([2 * quad(f, *span, args=(m,), limit=400, epsabs=1e-15)[0] for m in (1, 2, 7, 20, 40)])
+    assert np.max(np.abs(wkb.coef[[0, 1, 6, 19, 39]] - ref)) < 1e-13 * np.max(np.abs(ref))
