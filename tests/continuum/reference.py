@@ -241,6 +241,17 @@ def load():
     return pd.read_csv(DATA)
 
 
+def cached(case: str, degree: int | None = None, times=TIMES) -> dict:
+    """u~_w, mu_w and delta (arrays at ``times``) of one cached case, at the reference degree (default) or
+    ``degree``."""
+    table = load()
+    degree = degree or (SPEED_DEGREE if case.startswith("speed") else DEGREE)
+    rows = table[(table.case == case) & (table.degree == degree)]
+    if not np.array_equal(rows.t, times):
+        raise KeyError(f"{case} at degree {degree} is not cached at t~ = {list(times)}")
+    return {q: rows[q].to_numpy() for q in QUANTITIES}
+
+
 def speed_case(u_w: float, degree: int = SPEED_DEGREE) -> Reference:
     """The reference of one of the speeds of SPEED_TIMES (paper friction)."""
     return speed_reference(PAPER, u_w, SPEED_TIMES[u_w], degree)
