@@ -10,37 +10,23 @@ import pytest
 from continuum.closed_forms import SmallTimeLimit
 from continuum.rheology import Friction
 from continuum.solver import Numerics, solve_stress
+from tests.continuum import reference
 
-TIMES = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]
+TIMES = list(reference.TIMES)
 #: the paper's three cases and a second friction law (mu_p ~ 0.5 disks: mu_s 0.28, mu_d 0.77)
 CASES = [("paper", 0.9), ("paper", 0.5), ("paper", 0.1), ("disks", 0.3)]
-#: reference cells: mu~_w = 0.1 needs 1024 for delta at t~ = 1 (its map is the most stretched: cells near
-#: the bottom are the largest)
-REFERENCE_CELLS = {("paper", 0.1): 1024}
-#: the reference's own estimated relative error is below this (asserted), the floor of the comparisons
-REF_FLOOR = 3e-7
+#: the reference's relative accuracy (tests/continuum/test_reference.py), the floor of the comparisons
+REF_FLOOR = reference.CONVERGED
 
 
 def friction(name, paper_friction):
-    return paper_friction if name == "paper" else Friction(0.28, 0.77)
-
-
-def reference(fr, mu_w, times, n_cells=512):
-    """512 cells (or more) and rtol 1e-12 (8 times the default's cells, tolerance 1e4 times tighter); its own companion
-    estimate (asserted below REF_FLOOR) is a third of the accuracy tested (delta, whose tail needs the most cells, sets it)."""
-    ref = solve_stress(fr, mu_w, times, Numerics(n_cells=n_cells, rtol=1e-12, atol=1e-14), estimate=True)
-    for q in ("u_w", "delta"):
-        assert np.all(ref.errors[q] <= REF_FLOOR * np.abs(getattr(ref, q)))
-    return ref
+    return paper_friction if name == "paper" else reference.DISKS
 
 
 @pytest.fixture(scope="module")
-def references(paper_friction):
-    out = {}
-    for name, mt in CASES:
-        fr = friction(name, paper_friction)
-        out[name, mt] = reference(fr, fr.mu_w_from_tilde(mt), TIMES, REFERENCE_CELLS.get((name, mt), 512))
-    return out
+def references():
+    """The independent reference (Chebyshev collocation, converged to 1e-9: tests/continuum/reference.py)."""
+    return {(name, mt): reference.cached(f"{name}-{mt}") for name, mt in CASES}
 
 
 def test_space_convergence_is_fourth_order(paper_friction):
@@ -67,9 +53,9 @@ def test_cli_default_is_accurate_to_1e6(references, paper_friction, case):
                          capture_output=True, text=True, check=True)
     got, ref = json.loads(out.stdout), references[case]
     for q in ("u_w", "mu_w", "delta"):
-        true = np.abs(np.array(got[q]) - getattr(ref, q))
-        assert np.all(true <= 1e-6 * np.abs(getattr(ref, q))), q
-        assert np.all(true <= np.array(got[f"{q}_err"]) + REF_FLOOR * np.abs(getattr(ref, q))), q
+        true = np.abs(np.array(got[q]) - ref[q])
+        assert np.all(true <= 1e-6 * np.abs(ref[q])), q
+        assert np.all(true <= np.array(got[f"{q}_err"]) + REF_FLOOR * np.abs(ref[q])), q
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -81,8 +67,8 @@ def test_estimates_bound_the_true_error_and_are_not_too_pessimistic(references, 
     sol = solve_stress(fr, fr.mu_w_from_tilde(mt), TIMES, accuracy=1e-4)
     ref = references[case]
     for q in ("u_w", "delta"):
-        true = np.abs(getattr(sol, q) - getattr(ref, q))
-        floor = REF_FLOOR * np.abs(getattr(ref, q))
+        true = np.abs(getattr(sol, q) - ref[q])
+        floor = REF_FLOOR * np.abs(ref[q])
         assert np.all(true <= sol.errors[q] + floor), q
         assert sol.errors[q].max() <= 10 * true.max(), q
 

@@ -1,0 +1,277 @@
+"""Independent converged reference for the continuum solver (issue 11): test-only code.
+
+Imposed stress: eq. GranularStokesEqn_mu (the paper's equation for mu, not the solver's tau~ form)
+for v = (mu - mu_s)/(mu_w - mu_s), the quantity that defines delta,
+
+    dv/dt~ = (Dmu - (mu_w - mu_s) v)^2 (2 beta_w/sqrt(p~) dv/dy~ + sqrt(p~) d2v/dy~2),   p~ = 1 + beta_w y~,
+
+v(0) = 1, v(1) = 0, v(y~ > 0, 0) = 0 (eqs. InitStokesEqn, BCStokesEqn).  Space: Chebyshev collocation
+of degree n in s in [0, 1] under y~ = (e^(a s) - 1)/(e^a - 1), whose stretch a puts the wall diffusion
+length Dmu mu~_w sqrt(t~_min) at s = WALL_SHARE; time: scipy's Radau IIA (order 5) with the analytic
+Jacobian from t~ = 0.  Observables with the solver's definitions (continuum.observables):
+u~_w = int_0^1 sqrt(p~)/Dmu (mu - mu_s)/(mu_d - mu) dy~ (eq. IreWrittenNonDim) by Clenshaw-Curtis,
+mu_w = mu(0), delta = the first depth where v = DELTA_THRESHOLD, a root of the interpolant.
+
+Converged means: the degree-COARSE_DEGREE, rtol-COARSE_RTOL companion differs by less than CONVERGED
+(relative) in every quantity at every time.  Imposed speed (``speed_reference``): the same collocation
+of eq. GranularStokesEqn_muBIS, converged only after the lift-off of mu_w from mu_d (see there).  The
+values of both, at both resolutions, are cached in data/reference.csv, written by
+``python -m tests.continuum.reference`` (tests/continuum/test_reference.py checks the cache).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+from threadpoolctl import threadpool_limits
+
+from continuum.rheology import Friction
+from continuum.steady import DELTA_THRESHOLD, mu_w_for_speed
+
+#: reference degree and time tolerance, and those of its refinement companion
+DEGREE, RTOL = 160, 1e-12
+COARSE_DEGREE, COARSE_RTOL = 128, 1e-11
+#: atol = ATOL_PER_RTOL rtol (v is in [0, 1]; delta is read where v = 1e-3)
+ATOL_PER_RTOL = 1e-2
+#: the reference's relative accuracy: the companion's largest change is asserted below it
+CONVERGED = 1e-9
+#: the map's s at the wall diffusion length Dmu mu~_w sqrt(t~_min) (tuned: mu~_w = 0.1 needs the wall
+#: sub-layer resolved, mu~_w = 0.9 the erfc tail where delta is read)
+WALL_SHARE = 0.036
+#: the stretch of a map that is uniform to 0.1 % (a layer already thick at t~_min)
+UNIFORM_STRETCH = 1e-3
+#: Radau's first step (t~ = 0 is an incompatible start: v jumps from 0 to 1 at the wall)
+FIRST_STEP = 1e-14
+#: the paper's times (section 3) and the cases of issue 11: (name, mu_s, mu_d, mu~_w)
+TIMES = (1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0)
+PAPER = Friction(math.tan(math.radians(21.0)), math.tan(math.radians(33.0)))
+DISKS = Friction(0.28, 0.77)
+STRESS_CASES = {"paper-0.9": (PAPER, 0.9), "paper-0.5": (PAPER, 0.5), "paper-0.1": (PAPER, 0.1),
+                "disks-0.3": (DISKS, 0.3)}
+#: imposed speed (the paper's three wall speeds, section 3.4, in SPEED_TIMES): the map's stretch
+#: (geometric clustering at the wall down to e^-8, for the wall sub-layer) and the degrees of the
+#: reference and its companion (10-40 s of CPU per solve)
+SPEED_STRETCH = 8.0
+SPEED_DEGREE, SPEED_COARSE_DEGREE = 96, 64
+#: the output times of each speed: 0.198 stops at t~ = 1 (near its steady state, mu~_w ~ 0.9, the wall
+#: unknown, stiff through the wall node's weight ~ 1e-8, stalls Radau between t~ = 1 and 10)
+SPEED_TIMES = {0.198: TIMES[:-1], 1.334: TIMES, 4.629: TIMES}
+DATA = Path(__file__).parent / "data" / "reference.csv"
+QUANTITIES = ("u_w", "mu_w", "delta")
+
+
+@dataclass(frozen=True)
+class Reference:
+    """u~_w, mu_w and delta/delta_s at the times t~, from one solve of ``degree`` and ``rtol``."""
+
+    t: np.ndarray
+    u_w: np.ndarray
+    mu_w: np.ndarray
+    delta: np.ndarray
+    degree: int
+    rtol: float
+    cpu: float  # seconds of CPU time of the solve
+
+
+class ChebyshevMap:
+    """Chebyshev points s_j = (1 - cos(pi j/n))/2 (s_0 = 0 at the wall) mapped to
+    y~ = (e^(a s) - 1)/(e^a - 1); d/dy~, d2/dy~2 (y~'' = a y~') and Clenshaw-Curtis weights in y~."""
+
+    def __init__(self, degree: int, stretch: float):
+        n, a = degree, stretch
+        theta = np.pi * np.arange(n + 1) / n
+        x = np.cos(theta)
+        self.s = (1 - x) / 2
+        self.y = np.expm1(a * self.s) / np.expm1(a)
+        dy_ds = a * np.exp(a * self.s) / np.expm1(a)
+        c = np.r_[2.0, np.ones(n - 1), 2.0] * (-1.0) ** np.arange(n + 1)
+        dx = x[:, None] - x[None, :] + np.eye(n + 1)
+        d = np.outer(c, 1 / c) / dx
+        d -= np.diag(d.sum(axis=1))  # d/dx (Trefethen, Spectral Methods in MATLAB, cheb)
+        d_ds = -2.0 * d
+        self.d1 = d_ds / dy_ds[:, None]
+        self.d2 = (d_ds @ d_ds - a * d_ds) / dy_ds[:, None] ** 2
+        self.weights = _clenshaw_curtis(theta) / 2 * dy_ds
+        self.bary = (-1.0) ** np.arange(n + 1) * np.r_[0.5, np.ones(n - 1), 0.5]  # barycentric, Chebyshev points
+        self.stretch = a
+
+    def interpolate(self, f: np.ndarray, s: float) -> float:
+        """The degree-n interpolant of nodal values ``f`` at s (barycentric formula)."""
+        diff = s - self.s
+        hit = diff == 0
+        if hit.any():
+            return float(f[hit][0])
+        w = self.bary / diff
+        return float(w @ f / w.sum())
+
+    def crossing(self, f: np.ndarray, level: float) -> float:
+        """First depth y~ where the interpolant of ``f`` falls to ``level``."""
+        j = int(np.argmax(f < level))
+        s = brentq(lambda s: self.interpolate(f, s) - level, self.s[j - 1], self.s[j], xtol=1e-16, rtol=1e-15)
+        return math.expm1(self.stretch * s) / math.expm1(self.stretch)
+
+
+def _clenshaw_curtis(theta: np.ndarray) -> np.ndarray:
+    """Clenshaw-Curtis weights on [-1, 1] at the points cos(theta_j), theta_j = pi j/n (Waldvogel 2006)."""
+    n = len(theta) - 1
+    v = np.ones(n - 1)
+    for k in range(1, n // 2 + 1):
+        v -= (1.0 if 2 * k < n else 0.5) * 2 * np.cos(2 * k * theta[1:-1]) / (4 * k * k - 1)
+    end = 1.0 / (n * n - 1) if n % 2 == 0 else 1.0 / (n * n)
+    return np.r_[end, 2 * v / n, end]
+
+
+def wall_stretch(fr: Friction, mu_w: float, t_min: float) -> float:
+    """The a with s(l) = WALL_SHARE for l = Dmu mu~_w sqrt(t~_min), i.e. ln(1 + l (e^a - 1)) = WALL_SHARE a
+    (a root below 2 ln(1/l)/(1 - WALL_SHARE)); UNIFORM_STRETCH where l is not below WALL_SHARE."""
+    length = fr.dmu * fr.tilde(mu_w) * math.sqrt(t_min)
+    if length >= WALL_SHARE:
+        return UNIFORM_STRETCH
+    return brentq(lambda a: math.log1p(length * math.expm1(a)) - WALL_SHARE * a, UNIFORM_STRETCH,
+                  2 * math.log(1 / length) / (1 - WALL_SHARE))
+
+
+def stress_reference(fr: Friction, mu_w: float, times=TIMES, degree: int = DEGREE, rtol: float = RTOL) -> Reference:
+    """u~_w(t~), mu_w(t~) = mu_w and delta(t~) for an imposed wall stress (eq. GranularStokesEqn_mu)."""
+    t = np.asarray(times, dtype=float)
+    beta, excess = fr.beta(mu_w), mu_w - fr.mu_s
+    grid = ChebyshevMap(degree, wall_stretch(fr, mu_w, t[0]))
+    p = 1 + beta * grid.y
+    op = ((2 * beta / np.sqrt(p))[:, None] * grid.d1 + np.sqrt(p)[:, None] * grid.d2)[1:-1]
+    op_in, op_wall = op[:, 1:-1], op[:, 0]  # v(0) = 1, v(1) = 0
+
+    def rate(_, v):
+        return (fr.dmu - excess * v) ** 2 * (op_in @ v + op_wall)
+
+    def jacobian(_, v):
+        g = fr.dmu - excess * v
+        jac = (g * g)[:, None] * op_in
+        jac[np.diag_indices_from(jac)] -= 2 * excess * g * (op_in @ v + op_wall)
+        return jac
+
+    start = time.process_time()
+    with threadpool_limits(1):  # dense LU of ~160 unknowns: threads only contend on a shared machine
+        sol = solve_ivp(rate, (0.0, t[-1]), np.zeros(degree - 1), method="Radau", t_eval=t, rtol=rtol,
+                        atol=ATOL_PER_RTOL * rtol, jac=jacobian, first_step=FIRST_STEP)
+    cpu = time.process_time() - start
+    if not sol.success:
+        raise RuntimeError(sol.message)
+    v = np.column_stack([np.ones(len(t)), sol.y.T, np.zeros(len(t))])
+    mu = fr.mu_s + excess * v
+    u_w = (np.sqrt(p) / fr.dmu * (mu - fr.mu_s) / (fr.mu_d - mu)) @ grid.weights
+    delta = np.array([grid.crossing(row, DELTA_THRESHOLD) for row in v])
+    return Reference(t, u_w, mu[:, 0], delta, degree, rtol, cpu)
+
+
+def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_DEGREE, rtol: float = RTOL) -> Reference:
+    """u~_w(t~), mu_w(t~) and delta(t~) for an imposed wall speed: eq. GranularStokesEqn_muBIS for mu~ at the
+    interior nodes (mu~(1) = 1, mu~(y~, 0) = 1, beta_w from the steady mu_w^inf) and q = ln(1/mu~_w) at the
+    wall, from eq. GranularStokesEqn_muBIS_BCs (Clenshaw-Curtis weights w_j) differentiated in time,
+
+        w_0 sqrt(p~_0) e^q dq/dt~ = sum_j>0 w_j sqrt(p~_j) (dmu~_j/dt~)/mu~_j^2,
+
+    from the q that puts all of u~_w in the wall node's weight at t~ = 0 (the discrete form of the
+    singular start); the returned u~_w is the quadrature, so shows the drift.  Before t~_mud ~ u~_w^2 the
+    continuum's mu~_w is exponentially small (below e^-700 at t~ = 1e-4 for the larger speeds) in a wall
+    sub-layer no grid resolves: there the discrete mu~_w is set by the wall node's weight and the
+    reference converges slowly (measured, test_reference.py)."""
+    t = np.asarray(times, dtype=float)
+    beta, dmu = fr.beta(mu_w_for_speed(fr, u_w)), fr.dmu
+    grid = ChebyshevMap(degree, SPEED_STRETCH)
+    p = 1 + beta * grid.y
+    op = ((2 * beta / np.sqrt(p))[:, None] * grid.d1 + np.sqrt(p)[:, None] * grid.d2)[1:-1]
+    op_wall, op_in, op_bottom = op[:, 0], op[:, 1:-1], op[:, -1]
+    weights = grid.weights * np.sqrt(p)
+    gain, inner = dmu**2 / weights[0], weights[1:-1]
+
+    def rate(_, x):
+        wall, m = math.exp(-x[0]), x[1:]
+        lap = op_wall * wall + op_in @ m + op_bottom
+        return np.r_[gain * wall * (inner @ lap), dmu**2 * m * m * lap]
+
+    def jacobian(_, x):
+        wall, m = math.exp(-x[0]), x[1:]
+        lap = op_wall * wall + op_in @ m + op_bottom
+        jac = np.empty((degree, degree))
+        jac[0, 0] = -gain * wall * (inner @ lap + wall * (inner @ op_wall))
+        jac[0, 1:] = gain * wall * (inner @ op_in)
+        jac[1:, 0] = -dmu**2 * m * m * op_wall * wall
+        jac[1:, 1:] = dmu**2 * (m * m)[:, None] * op_in
+        jac[1:, 1:][np.diag_indices(degree - 1)] += 2 * dmu**2 * m * lap
+        return jac
+
+    start = time.process_time()
+    with threadpool_limits(1):
+        sol = solve_ivp(rate, (0.0, t[-1]), np.r_[math.log1p(u_w * dmu / weights[0]), np.ones(degree - 1)],
+                        method="Radau", t_eval=t, rtol=rtol, atol=ATOL_PER_RTOL * rtol, jac=jacobian,
+                        first_step=FIRST_STEP)
+    cpu = time.process_time() - start
+    if not sol.success:
+        raise RuntimeError(sol.message)
+    mt = np.column_stack([np.exp(-sol.y[0]), sol.y[1:].T, np.ones(len(t))])
+    v = (1 - mt) / (1 - mt[:, :1])  # (mu - mu_s)/(mu_w - mu_s)
+    delta = np.array([grid.crossing(row, DELTA_THRESHOLD) for row in v])
+    return Reference(t, (np.sqrt(p) / dmu * (1 / mt - 1)) @ grid.weights, fr.mu_d - dmu * mt[:, 0], delta,
+                     degree, rtol, cpu)
+
+
+def stress_case(name: str, degree: int = DEGREE, rtol: float = RTOL) -> Reference:
+    """The reference of one of STRESS_CASES at TIMES."""
+    fr, mu_w_tilde = STRESS_CASES[name]
+    return stress_reference(fr, fr.mu_w_from_tilde(mu_w_tilde), TIMES, degree, rtol)
+
+
+def tabulate(name: str, ref: Reference):
+    """Rows of the cache for one solve."""
+    import pandas as pd
+
+    return pd.DataFrame({"case": name, "degree": ref.degree, "rtol": ref.rtol, "t": ref.t, "u_w": ref.u_w,
+                         "mu_w": ref.mu_w, "delta": ref.delta, "cpu_s": ref.cpu})
+
+
+def load():
+    """The cache (data/reference.csv) as a DataFrame: one row per case, resolution and time."""
+    import pandas as pd
+
+    return pd.read_csv(DATA)
+
+
+def cached(case: str, degree: int | None = None, times=TIMES) -> dict:
+    """u~_w, mu_w and delta (arrays at ``times``) of one cached case, at the reference degree (default) or
+    ``degree``."""
+    table = load()
+    degree = degree or (SPEED_DEGREE if case.startswith("speed") else DEGREE)
+    rows = table[(table.case == case) & (table.degree == degree)]
+    if not np.array_equal(rows.t, times):
+        raise KeyError(f"{case} at degree {degree} is not cached at t~ = {list(times)}")
+    return {q: rows[q].to_numpy() for q in QUANTITIES}
+
+
+def speed_case(u_w: float, degree: int = SPEED_DEGREE) -> Reference:
+    """The reference of one of the speeds of SPEED_TIMES (paper friction)."""
+    return speed_reference(PAPER, u_w, SPEED_TIMES[u_w], degree)
+
+
+def main() -> None:
+    """Recompute every case at both resolutions and write the cache."""
+    import pandas as pd
+
+    solves = [(name, degree, lambda name=name, degree=degree, rtol=rtol: stress_case(name, degree, rtol))
+              for name in STRESS_CASES for degree, rtol in ((COARSE_DEGREE, COARSE_RTOL), (DEGREE, RTOL))]
+    solves += [(f"speed-{u_w}", degree, lambda u_w=u_w, degree=degree: speed_case(u_w, degree))
+               for u_w in SPEED_TIMES for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
+    frames = []
+    for name, degree, solve in solves:
+        frames.append(tabulate(name, solve()))
+        print(f"{name} degree {degree}: {frames[-1].cpu_s.iloc[0]:.1f} s", flush=True)
+    DATA.parent.mkdir(exist_ok=True)
+    pd.concat(frames).to_csv(DATA, index=False)  # floats as repr: round-trip exact
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,69 @@
+"""Issue 11: the independent reference (tests/continuum/reference.py: Chebyshev collocation of
+eq. GranularStokesEqn_mu, Radau in time) is converged to 1e-9 and the solver agrees with it; the
+imposed speed's (eq. GranularStokesEqn_muBIS) only after the lift-off of mu_w from mu_d."""
+import numpy as np
+import pytest
+
+from continuum.solver import Numerics, solve_stress
+from tests.continuum import reference as ref
+
+#: the recomputation of a cached case matches it to this (relative): a tenth of the claimed accuracy
+#: (only round-off and the step sequence it perturbs may differ between machines)
+REPRODUCED = ref.CONVERGED / 10
+#: the solver's high-resolution run (as test_accuracy's reference)
+SOLVER = Numerics(n_cells=512, rtol=1e-12, atol=1e-14)
+
+
+@pytest.fixture(scope="module")
+def cache():
+    return ref.load()
+
+
+def values(_table, case, degree, times=ref.TIMES):
+    return ref.cached(case, degree, times)
+
+
+@pytest.mark.parametrize("case", ref.STRESS_CASES)
+def test_reference_is_converged(cache, case):
+    """Refinement in space and time (degree 128 -> 160, rtol 1e-11 -> 1e-12) changes u~_w, mu_w and
+    delta by less than 1e-9 relative at every t~ in [1e-4, 10]."""
+    fine, coarse = values(cache, case, ref.DEGREE), values(cache, case, ref.COARSE_DEGREE)
+    for q in ref.QUANTITIES:
+        assert np.all(np.abs(coarse[q] - fine[q]) <= ref.CONVERGED * np.abs(fine[q])), q
+
+
+def test_cache_is_what_the_reference_computes(cache):
+    """One case recomputed at the reference resolution reproduces the cached values."""
+    case = "paper-0.5"
+    cached, new = values(cache, case, ref.DEGREE), ref.stress_case(case)
+    for q in ref.QUANTITIES:
+        assert getattr(new, q) == pytest.approx(cached[q], rel=REPRODUCED, abs=0), q
+
+
+@pytest.mark.parametrize("case", ref.STRESS_CASES)
+def test_solver_agrees_with_the_reference_within_its_estimate(cache, case):
+    """The solver at 512 cells (fourth-order differences in tau~, SDIRK4) is within its own error
+    estimate (plus the reference's 1e-9) of the reference, for every quantity and time."""
+    fr, mu_w_tilde = ref.STRESS_CASES[case]
+    sol = solve_stress(fr, fr.mu_w_from_tilde(mu_w_tilde), ref.TIMES, SOLVER, estimate=True)
+    exact = values(cache, case, ref.DEGREE)
+    for q in ref.QUANTITIES:
+        true = np.abs(getattr(sol, q) - exact[q])
+        assert np.all(true <= sol.errors[q] + ref.CONVERGED * np.abs(exact[q])), q
+
+
+#: imposed speed: the reference is converged to CONVERGED from this time on, once mu_w has lifted off from
+#: mu_d (t~_mud ~ u~_w^2; measured: 2e-9 at t~ = 0.1 for 0.198, 3e-8 at t~ = 1 for 4.629)
+SPEED_CONVERGED_FROM = {0.198: 1.0, 1.334: 1.0, 4.629: 10.0}
+
+
+@pytest.mark.parametrize("u_w", SPEED_CONVERGED_FROM)
+def test_speed_reference_is_converged_after_lift_off(cache, u_w):
+    """Degree 64 -> 96 changes u~_w, mu_w and delta by less than 1e-9 once mu_w has left mu_d (before, the
+    unresolved wall sub-layer leaves changes of 1e-7..2e-5: measured, reference.speed_reference)."""
+    times = ref.SPEED_TIMES[u_w]
+    fine = values(cache, f"speed-{u_w}", ref.SPEED_DEGREE, times)
+    coarse = values(cache, f"speed-{u_w}", ref.SPEED_COARSE_DEGREE, times)
+    late = np.asarray(times) >= SPEED_CONVERGED_FROM[u_w]
+    for q in ref.QUANTITIES:
+        assert np.all(np.abs(coarse[q] - fine[q])[late] <= ref.CONVERGED * np.abs(fine[q][late])), q
