@@ -21,15 +21,23 @@ WRAPPERS = "scipy.linalg._flapack"
 
 
 def _wrappers():
+    """The wrapper module, loaded from its file; scipy.linalg.lapack itself (the slow, public way) if this
+    scipy lays its files out otherwise."""
     if WRAPPERS in sys.modules:
         return sys.modules[WRAPPERS]
     folder = Path(scipy.__file__).parent / "linalg"
-    path = next(p for suffix in importlib.machinery.EXTENSION_SUFFIXES if (p := folder / f"_flapack{suffix}").exists())
-    spec = importlib.util.spec_from_file_location(WRAPPERS, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[WRAPPERS] = module
-    spec.loader.exec_module(module)
-    return module
+    paths = [p for suffix in importlib.machinery.EXTENSION_SUFFIXES if (p := folder / f"_flapack{suffix}").exists()]
+    try:
+        spec = importlib.util.spec_from_file_location(WRAPPERS, paths[0])
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[WRAPPERS] = module
+        spec.loader.exec_module(module)
+        return module
+    except (IndexError, ImportError, OSError):
+        sys.modules.pop(WRAPPERS, None)
+        import scipy.linalg.lapack as public
+
+        return public
 
 
 _flapack = _wrappers()

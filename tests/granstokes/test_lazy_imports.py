@@ -59,3 +59,18 @@ def test_the_lapack_routines_are_scipy_linalg_lapacks_in_either_import_order():
 import continuum.stepper as s, scipy.linalg.lapack as L
 print(all(getattr(s, f) is getattr(L, f) for f in ('dgbtrf', 'dgbtrs', 'dpttrf', 'dpttrs')))"""
         assert _run(code).strip() == "True"
+
+
+def test_lapack_falls_back_to_scipy_linalg_when_the_wrapper_file_is_not_found(monkeypatch):
+    """A scipy that lays out its files otherwise still gives the same routines (through scipy.linalg)."""
+    import importlib.machinery
+    import sys
+
+    import scipy.linalg.lapack
+
+    from continuum import lapack
+
+    monkeypatch.delitem(sys.modules, lapack.WRAPPERS, raising=False)
+    monkeypatch.setattr(importlib.machinery, "EXTENSION_SUFFIXES", [".no-such-suffix"])
+    module = lapack._wrappers()
+    assert module.dgbtrf is scipy.linalg.lapack.dgbtrf and module.dpttrs is scipy.linalg.lapack.dpttrs
