@@ -235,8 +235,9 @@ class Solution:
         (out / f"{stem}.json").write_text(json.dumps(self.metadata(), indent=2))
 
 
-#: the quantities whose accuracy is estimated and controlled
+#: the quantities whose accuracy is estimated and controlled, and the one each drive imposes (exact)
 QUANTITIES = ("u_w", "mu_w", "delta")
+IMPOSED = {"stress": "mu_w", "speed": "u_w"}
 #: default relative accuracy of every number returned, and the range that can be asked for
 DEFAULT_ACCURACY = 1e-6
 ACCURACY_RANGE = (1e-10, 1e-2)
@@ -258,13 +259,12 @@ def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solut
 def _estimate(fine: Solution, coarse: Solution) -> dict:
     """Absolute error estimates of ``fine`` from its companion: SAFETY |fine - coarse|/(gain - 1), plus the
     time stepper's rtol |fine| (the difference cannot resolve errors below the step tolerance: measured, a
-    1.2x underestimate of the stress's u~_w at 5e-9 relative against the independent reference); an
-    imposed speed's u~_w is exact (its constraint holds to round-off)."""
+    1.2x underestimate of the stress's u~_w at 5e-9 relative against the independent reference); the
+    imposed quantity (IMPOSED) is exact (a speed's constraint holds to round-off)."""
     g = gain(fine.imposed)
     out = {q: SAFETY * np.abs(getattr(fine, q) - getattr(coarse, q)) / (g - 1)
            + fine.numerics.rtol * np.abs(getattr(fine, q)) for q in QUANTITIES}
-    if fine.imposed == "speed":
-        out["u_w"] = np.zeros(len(fine.t))
+    out[IMPOSED[fine.imposed]] = np.zeros(len(fine.t))
     return out
 
 
