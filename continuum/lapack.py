@@ -18,6 +18,7 @@ from pathlib import Path
 import scipy
 
 WRAPPERS = "scipy.linalg._flapack"
+ROUTINES = ("dgbtrf", "dgbtrs", "dpttrf", "dpttrs")
 
 
 def _wrappers():
@@ -41,4 +42,6 @@ def _wrappers():
 
 
 _flapack = _wrappers()
-dgbtrf, dgbtrs, dpttrf, dpttrs = _flapack.dgbtrf, _flapack.dgbtrs, _flapack.dpttrf, _flapack.dpttrs
+if not all(hasattr(_flapack, name) for name in ROUTINES):  # a wrapper module without them: the public way
+    import scipy.linalg.lapack as _flapack
+dgbtrf, dgbtrs, dpttrf, dpttrs = (getattr(_flapack, name) for name in ROUTINES)

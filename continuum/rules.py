@@ -73,7 +73,8 @@ class YieldRule:
 
 
 class ShearLaw:
-    """s(g, p) and ds/dg for a yield rule, a friction law and I0 (paper convention)."""
+    """mu(I) and dmu/dI for a yield rule, a friction law and I0 (paper convention); the stress s(g) and
+    ds/dg on faces of fixed pressure are a ``FaceLaw`` (``on_faces``)."""
 
     def __init__(self, rule: YieldRule, fr: Friction, I0: float, d: float, rho_p: float):
         self.rule, self.fr, self.I0 = rule, fr, I0

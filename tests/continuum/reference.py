@@ -17,6 +17,10 @@ Converged means: the degree-COARSE_DEGREE, rtol-COARSE_RTOL companion differs by
 of eq. GranularStokesEqn_muBIS, converged only after the lift-off of mu_w from mu_d (see there).  The
 values of both, at both resolutions, are cached in data/reference.csv, written by
 ``python -m tests.continuum.reference`` (tests/continuum/test_reference.py checks the cache).
+
+Shared with the solver (so not checked by this reference): continuum.rheology.Friction (beta_w, mu~ and
+mu_w from mu~_w), DELTA_THRESHOLD and the steady mu_w^inf of a speed (continuum.steady, tested against
+its closed forms in tests/continuum/test_steady_and_scales.py).
 """
 from __future__ import annotations
 
@@ -241,10 +245,10 @@ def load():
     return pd.read_csv(DATA)
 
 
-def cached(case: str, degree: int | None = None, times=TIMES) -> dict:
+def cached(case: str, degree: int | None = None, times=TIMES, table=None) -> dict:
     """u~_w, mu_w and delta (arrays at ``times``) of one cached case, at the reference degree (default) or
-    ``degree``."""
-    table = load()
+    ``degree``, from ``table`` (default: ``load()``)."""
+    table = load() if table is None else table
     degree = degree or (SPEED_DEGREE if case.startswith("speed") else DEGREE)
     rows = table[(table.case == case) & (table.degree == degree)]
     if not np.array_equal(rows.t, times):

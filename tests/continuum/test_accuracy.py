@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from continuum.closed_forms import SmallTimeLimit
-from continuum.rheology import Friction
 from continuum.solver import Numerics, solve_stress
 from tests.continuum import reference
 

@@ -51,6 +51,7 @@ def test_json_contract_imposed_speed(capsys, paper_friction):
     assert data["u_w"] == pytest.approx([1.334, 1.334], rel=1e-10)
     assert data["steady"]["u_w"] == pytest.approx(1.334, rel=1e-12)
     assert data["mu_w"][0] > data["mu_w"][1] > data["mu_w_inf"] - 1e-4
+    assert data["u_w_err"] == [0.0, 0.0]  # imposed (the constraint holds to round-off)
 
 
 def test_mu_w_and_mu_w_tilde_agree(capsys, paper_friction):
