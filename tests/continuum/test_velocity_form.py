@@ -193,3 +193,24 @@ def test_velocity_form_default_reaches_the_target(quick_stress):
     time_error = np.max(np.abs(default / b - 1))
     assert mesh_error < TARGET / 2 and time_error < TARGET / 2
     assert np.max(np.abs(default / ref - 1)) < TARGET
+
+
+# --- the imposed speed's wall treatment (bench/RESULTS.md "Velocity form: speed at 1e-4") -------------
+QUICK_U_W = 6.154
+#: times after the impulsive start's wall jump is resolved (the first cell's share of the velocity drop falls
+#: from 39 % at t = 0.1 to 0.4 % at t = 1, 400 cells)
+RESOLVED_TIMES = [1.0, 3.0]
+
+
+def test_imposed_speed_mu_w_is_second_order_once_the_wall_jump_is_resolved():
+    """With the wall half-cell's mass on node 1, mu_w converges at second order after the start's jump
+    (measured orders 1.65 at t = 1 and 1.85 at t = 3 from 200/400/800 cells, the residue of the start's
+    first-order error still decaying); with that mass on the wall node (the plate) they were 0.96 and 0.78,
+    first order.  Held to 2 - 0.45, above anything first order."""
+    from dataclasses import replace
+    from continuum.velocity import VELOCITY_NUMERICS
+    rule = YieldRule.for_layer(Scales.for_speed(QUICK, QUICK_SCENE.p_w, QUICK_U_W))
+    a, b, c = (solve_velocity(QUICK_SCENE, RESOLVED_TIMES, u_w=QUICK_U_W, rule=rule, compare_steady=False,
+                              numerics=replace(VELOCITY_NUMERICS, n_cells=k, **TIGHT)).mu_w for k in (200, 400, 800))
+    order = np.log2(np.abs(b - a) / np.abs(c - b))
+    assert np.all(order > 2 - 0.45)
