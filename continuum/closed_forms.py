@@ -47,8 +47,10 @@ GAUSS_NODES_PER_MODE = 3
 
 @lru_cache(maxsize=None)
 def _gauss_legendre(n: int):
-    """Nodes and weights on [-1, 1] (numpy computes them by an n x n eigenproblem: cached)."""
-    return np.polynomial.legendre.leggauss(n)
+    """Nodes and weights on [-1, 1] (numpy computes them by an n x n eigenproblem: cached, read-only)."""
+    nodes, weights = np.polynomial.legendre.leggauss(n)
+    nodes.flags.writeable = weights.flags.writeable = False
+    return nodes, weights
 
 
 class WKB:

@@ -26,6 +26,8 @@ class ShearStressDiffusion:
 
     imposed: str
     dense_wall: bool
+    #: the stepper may judge a stage's first Newton iterate by the previous stage's contraction (stepper.dirk_step)
+    carries_contraction = True
 
     def __init__(self, friction: Friction, mu_w: float, mesh: Mesh, order: int = 4):
         self.friction = friction
