@@ -178,6 +178,24 @@ class Mesh:
         np.add.at(q, cells.cols, cells.weights)
         return q
 
+    def xi(self, y) -> np.ndarray:
+        """The map's inverse: the uniform coordinate xi in [0, 1] of the depths y."""
+        a = self.stretch
+        return np.log1p(np.asarray(y) * np.expm1(a)) / a if a > 0 else np.asarray(y, dtype=float)
+
+    def interpolate(self, f, y) -> np.ndarray:
+        """Nodal values f (last axis) at the depths y: the polynomial of degree INTERPOLATION_DEGREE in
+        xi through the nearest nodes (error O(h^(degree + 1)) for smooth f, beyond the order-4 solve's)."""
+        n, deg = self.n_cells, INTERPOLATION_DEGREE
+        s = self.xi(y) * n
+        start = np.clip(np.floor(s).astype(int) - deg // 2, 0, n - deg)
+        f = np.asarray(f)
+        out = np.zeros(f.shape[:-1] + np.shape(s))
+        for j in range(deg + 1):
+            basis = np.prod([(s - start - k) / (j - k) for k in range(deg + 1) if k != j], axis=0)
+            out += basis * f[..., start + j]
+        return out
+
     def integral_from_bottom(self, f, order: int):
         """int_y^1 f dy at every node (last axis), of the given order."""
         pieces = self.cell_integrals(order)(f)
@@ -185,5 +203,7 @@ class Mesh:
         return np.concatenate([up, np.zeros_like(up[..., :1])], axis=-1)
 
 
+#: degree of Mesh.interpolate (a remeshed state keeps the order-4 solve's accuracy)
+INTERPOLATION_DEGREE = 5
 #: the map's largest stretch: exp(40) ~ 2e17 between the largest and the smallest cell
 MAX_STRETCH = 40.0

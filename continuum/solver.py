@@ -22,16 +22,21 @@ from .stepper import METHODS, TABLEAUX, StepStats, integrate
 #: the default time stepper of each drive (continuum.stepper: BDF keeps its order on the speed's DAE,
 #: the DIRKs' stage order 1 does not)
 DEFAULT_METHOD = {"stress": "sdirk4", "speed": "bdf"}
-#: the order in space of each drive (measured, tests/continuum): 4 for a stress; 1 for a speed (mu_w during
-#: its lift-off from mu_d; delta converges at 1.4-2): the wall diffusivity (Dmu mu~_w)^2 vanishes until
-#: t~_mud, a degenerate wall layer that the fourth-order stencils cannot follow)
-CONVERGENCE_ORDER = {"stress": 4, "speed": 1}
+#: the order in space of each drive (measured, tests/continuum): 4 for both; a speed's only with the
+#: wall-graded map through the lift-off of mu_w from mu_d (``phases``): on one map that does not grade the
+#: wall (a fixed ``Numerics.stretch`` below WALL_STRETCH) mu_w converges at UNGRADED_SPEED_ORDER
+CONVERGENCE_ORDER = {"stress": 4, "speed": 4}
+UNGRADED_SPEED_ORDER = 1
 #: the first output time's layer is given this fraction of the mesh (the map's xi at delta(t_min)); the
 #: speed's degenerate wall layer needs more of it
 LAYER_SHARE = {"stress": 0.3, "speed": 0.45}
 #: default time tolerance: MATCHED_RTOL[method] on MATCHED_CELLS cells, scaled as n_cells^-order (measured:
 #: the time error then stays below the space error of the mesh, bench/work_precision.py, bench/speed_solver.py)
-MATCHED_RTOL, MATCHED_CELLS = {**dict.fromkeys(TABLEAUX, 1e-8), "bdf": 2.5e-9}, 256
+MATCHED_RTOL, MATCHED_CELLS = dict.fromkeys(METHODS, 1e-8), 256
+#: the loosest time tolerance of each method: scipy's BDF on the speed takes more steps, not fewer, above
+#: it (measured: u~_w = 4.629 on 64 cells 894 steps at rtol 1e-8, 4389 at 1e-7; 1.334 on 256 cells 1432
+#: and 8431); its time error there is ~1-20 rtol (landing on every output time: stepper)
+MAX_RTOL = {**dict.fromkeys(TABLEAUX, 1e-3), "bdf": 1e-8}
 #: atol = ATOL_PER_RTOL rtol (tau~ is O(1))
 ATOL_PER_RTOL = 1e-2
 #: the first time step, as a fraction of the first output time
@@ -42,9 +47,16 @@ REFINEMENT = 2
 ORDER_GAIN = REFINEMENT ** CONVERGENCE_ORDER["stress"]
 
 
-def gain(imposed: str) -> int:
+def convergence_order(imposed: str, numerics: "Numerics") -> int:
+    """The order in space of a drive solved with these numerics (CONVERGENCE_ORDER, UNGRADED_SPEED_ORDER)."""
+    if imposed == "speed" and numerics.stretch is not None and numerics.stretch < WALL_STRETCH:
+        return UNGRADED_SPEED_ORDER
+    return CONVERGENCE_ORDER[imposed]
+
+
+def gain(imposed: str, numerics: "Numerics") -> int:
     """The factor by which every error grows from a solve to its coarser companion."""
-    return REFINEMENT ** CONVERGENCE_ORDER[imposed]
+    return REFINEMENT ** convergence_order(imposed, numerics)
 
 #: the Richardson estimate times this bounds the true error (measured: the bare estimate is within a
 #: factor 2 of it either way, tests/continuum/test_accuracy.py)
@@ -76,8 +88,8 @@ class Numerics:
         """These numerics with the drive's defaults filled in: its method, and a time tolerance matched
         to the space error of this mesh (MATCHED_RTOL, scaled as n_cells^-order)."""
         method = self.method or DEFAULT_METHOD[imposed]
-        scale = (MATCHED_CELLS / self.n_cells) ** CONVERGENCE_ORDER[imposed]
-        rtol = self.rtol if self.rtol is not None else min(MATCHED_RTOL[method] * scale, 1e-3)
+        scale = (MATCHED_CELLS / self.n_cells) ** convergence_order(imposed, self)
+        rtol = self.rtol if self.rtol is not None else min(MATCHED_RTOL[method] * scale, MAX_RTOL[method])
         return replace(self, method=method, rtol=rtol, atol=self.atol if self.atol is not None else rtol * ATOL_PER_RTOL)
 
     def mesh(self, stretch: float | None = None) -> Mesh:
@@ -86,8 +98,8 @@ class Numerics:
 
     def coarser(self, factor: float) -> "Numerics":
         """The estimate's companion: half the cells, ``factor`` times the tolerances (resolved numerics)."""
-        return replace(self, n_cells=self.n_cells // REFINEMENT, rtol=min(self.rtol * factor, 0.1),
-                       atol=min(self.atol * factor, 0.1))
+        rtol = min(self.rtol * factor, max(MAX_RTOL[self.method], self.rtol))
+        return replace(self, n_cells=self.n_cells // REFINEMENT, rtol=rtol, atol=rtol * self.atol / self.rtol)
 
     def finer(self, factor: float) -> "Numerics":
         return replace(self, n_cells=self.n_cells * REFINEMENT, rtol=self.rtol / factor, atol=self.atol / factor)
@@ -144,10 +156,10 @@ class Solution:
     friction: Friction
     mu_w_inf: float             # imposed mu_w, or the steady mu_w^inf of the imposed speed
     u_w_imposed: float | None
-    mesh: Mesh
+    meshes: tuple[Mesh, ...]   # the mesh of each output time (a speed is remeshed in time: ``phases``)
     t: np.ndarray
     tau: np.ndarray             # (len(t), N+1)
-    recorded: np.ndarray | obs.SeriesRecorder  # the per-step rows, or the recorder that derives them (``steps``)
+    recorded: tuple             # per phase: the per-step rows, or the recorder that derives them (``steps``)
     stats: StepStats
     numerics: Numerics
     errors: dict = field(default_factory=dict)  # u_w, mu_w, delta -> absolute error estimates (aligned with t)
@@ -156,8 +168,29 @@ class Solution:
     @cached_property
     def steps(self) -> np.ndarray:
         """Rows (t, u_w, mu_w, delta) at every accepted step, derived on first use (``series``)."""
-        r = self.recorded
-        return r.table() if isinstance(r, obs.SeriesRecorder) else r
+        return np.concatenate([r.table() if isinstance(r, obs.SeriesRecorder) else r for r in self.recorded])
+
+    @property
+    def mesh(self) -> Mesh:
+        """The one mesh of every output time (a ValueError if the solve was remeshed: use ``y``)."""
+        if any(m is not self.meshes[0] for m in self.meshes):
+            raise ValueError("this solution was remeshed in time: its nodes are y[k] at each time")
+        return self.meshes[0]
+
+    @cached_property
+    def y(self) -> np.ndarray:
+        """The nodes y~ at each output time, (len(t), N+1)."""
+        return np.array([m.y for m in self.meshes]).reshape(len(self.t), -1)
+
+    def _per_mesh(self, derive) -> np.ndarray:
+        """derive(mesh, tau rows) evaluated on the rows of each mesh (remeshing: one call per phase)."""
+        groups = [(mesh, [k for k, m in enumerate(self.meshes) if m is mesh])
+                  for mesh in {id(m): m for m in self.meshes}.values()]
+        parts = [derive(mesh, self.tau[rows]) for mesh, rows in groups]
+        out = np.empty((len(self.t), *parts[0].shape[1:]))
+        for (_, rows), part in zip(groups, parts):
+            out[rows] = part
+        return out
 
     @cached_property
     def series(self):
@@ -172,7 +205,7 @@ class Solution:
 
     @cached_property
     def mu(self) -> np.ndarray:
-        return obs.friction_profile(self.friction, self.mu_w_inf, self.mesh, self.tau)
+        return self._per_mesh(lambda mesh, tau: obs.friction_profile(self.friction, self.mu_w_inf, mesh, tau))
 
     @property
     def mu_tilde(self) -> np.ndarray:
@@ -180,8 +213,8 @@ class Solution:
 
     @cached_property
     def velocity(self) -> np.ndarray:
-        return obs.velocity(self.friction, self.mu_w_inf, self.mesh, self.tau, self.numerics.order,
-                            wall_speed=self.u_w_imposed)
+        return self._per_mesh(lambda mesh, tau: obs.velocity(self.friction, self.mu_w_inf, mesh, tau, self.numerics.order,
+                                                             wall_speed=self.u_w_imposed))
 
     @property
     def u_w(self) -> np.ndarray:
@@ -193,7 +226,8 @@ class Solution:
 
     @cached_property
     def delta(self) -> np.ndarray:
-        return obs.layer_thickness(self.friction, self.mu_w_inf, self.mesh, self.tau, self.numerics.order)
+        return self._per_mesh(lambda mesh, tau: obs.layer_thickness(self.friction, self.mu_w_inf, mesh, tau,
+                                                                    self.numerics.order))
 
     @property
     def steady(self) -> dict:
@@ -222,7 +256,7 @@ class Solution:
         import pandas as pd
 
         nt, ny = self.tau.shape
-        return pd.DataFrame({"t": np.repeat(self.t, ny), "y": np.tile(self.mesh.y, nt),
+        return pd.DataFrame({"t": np.repeat(self.t, ny), "y": self.y.ravel(),
                              "tau": self.tau.ravel(), "mu": self.mu.ravel(),
                              "mu_tilde": self.mu_tilde.ravel(), "u": self.velocity.ravel()})
 
@@ -241,42 +275,113 @@ IMPOSED = {"stress": "mu_w", "speed": "u_w"}
 #: default relative accuracy of every number returned, and the range that can be asked for
 DEFAULT_ACCURACY = 1e-6
 ACCURACY_RANGE = (1e-10, 1e-2)
-#: refinement stops here (a request that needs more is refused with the accuracy reached): the speed's
-#: first order could not reach 1e-6 on any affordable mesh
-MAX_CELLS = {"stress": 2048, "speed": 1024}
+#: refinement stops here (a request that needs more is refused with the accuracy reached): a speed on
+#: 512 cells takes ~5-10 s (bench/RESULTS.md "Remeshing the speed in time"); finer was not measured
+MAX_CELLS = {"stress": 2048, "speed": 512}
+#: an estimated solve has at least this many cells: the companion of a speed on 64 cells (32) is
+#: pre-asymptotic through the lift-off (measured: mu_w at u~_w = 1.334, t~ = 1 underestimated 1.5x)
+MIN_ESTIMATED_CELLS = {"stress": 8, "speed": 128}
 
 
-def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
-    recorder = obs.SeriesRecorder(problem) if record else None
-    states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
-                              h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder)
-    tau = np.array([problem.full(x) for x in states])
-    steps = recorder if record else np.empty((0, 4))
-    return Solution(problem.imposed, problem.friction, problem.mu_w,
-                    getattr(problem, "u_w", None), problem.mesh, t, tau, steps, stats, numerics)
+#: an imposed speed is remeshed once in time (``phases``): until SWITCH_SPAN t~_mud (t~_mud = u~_w^2, eq.
+#: TimeScaleMuD, the lift-off of mu_w from mu_d) on a map of stretch >= WALL_STRETCH, whose wall cells
+#: resolve the sub-layer mu~ ~ a + b y + c y ln y of the lift-off (on the layer's map the first cell misses
+#: the y ln y below a/b and mu_w converges at first order; measured: fourth order from stretch 11), then on
+#: the map that follows the layer at the switch (on the wall-graded map the round-off eps tau~/h_0^2 of its
+#: wall cells stalls the steps near the steady state); bench/RESULTS.md "Remeshing the speed in time"
+WALL_STRETCH = 12.0
+SWITCH_SPAN = 1.0
+
+
+@dataclass(frozen=True)
+class Phase:
+    """Integrate on the map of this stretch from t~ = ``start`` to ``end`` (the next phase's start)."""
+
+    start: float
+    end: float
+    stretch: float
+
+
+def phases(friction: Friction, mu_w: float, imposed: str, t: np.ndarray, numerics: Numerics,
+           switch: float | None = None) -> list[Phase]:
+    """The meshes of a solve in time: one map following the layer at t[0] (``stretch_for``), or the
+    given ``numerics.stretch``; with a ``switch`` time below t[-1] (an imposed speed), a wall-graded map
+    (WALL_STRETCH) until ``switch``, then the map following the layer at ``switch``."""
+    def layer(t0):
+        return stretch_for(friction, mu_w, t0, LAYER_SHARE[imposed])
+
+    if numerics.stretch is not None:
+        return [Phase(0.0, math.inf, numerics.stretch)]
+    if switch is None:
+        return [Phase(0.0, math.inf, layer(t[0]))]
+    graded = max(layer(t[0]), WALL_STRETCH)
+    if switch >= t[-1]:
+        return [Phase(0.0, math.inf, graded)]
+    return [Phase(0.0, switch, graded), Phase(switch, math.inf, layer(switch))]
+
+
+def _run(make_problem, t, numerics: Numerics, plan: list[Phase], fixed_times=None, record=True) -> Solution:
+    """Integrate through the phases of ``plan``: each phase's final tau~ is carried to the next mesh by
+    Mesh.interpolate, the wall row then projected (the constraint of an imposed speed holds again)."""
+    tau, meshes, recorded, total = [], [], [], StepStats()
+    problem = resume = None
+    for phase in plan:
+        previous, problem = problem, make_problem(numerics.mesh(phase.stretch), numerics.order)
+        if previous is not None:
+            carried = previous.mesh.interpolate(previous.full(resume[1]), problem.mesh.y)[:-1]
+            resume = (phase.start, problem.project(carried))
+        out = t[t > phase.start]
+        out = out[out <= phase.end]
+        target = out if phase.end == math.inf or (len(out) and out[-1] == phase.end) else np.append(out, phase.end)
+        recorder = obs.SeriesRecorder(problem) if record else np.empty((0, 4))
+        states, stats = integrate(problem, target, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
+                                  h0=INITIAL_STEP * (phase.start or target[0]), fixed_times=fixed_times,
+                                  observer=recorder if record else None, resume=resume)
+        resume = (target[-1], states[-1])
+        tau += [problem.full(x) for x in states[:len(out)]]
+        meshes += [problem.mesh] * len(out)
+        recorded.append(recorder)
+        total = total.add(stats)
+    return Solution(problem.imposed, problem.friction, problem.mu_w, getattr(problem, "u_w", None), tuple(meshes),
+                    t, np.array(tau), tuple(recorded), total, numerics)
+
+
+#: the global time error per unit rtol of each method, the floor of an estimate (measured: SDIRK4 on a
+#: stress <= 1, against the independent reference; bdf on a speed up to ~30 in delta, ~6 in mu_w, against
+#: rtol 1e-11 on the same mesh; bench/RESULTS.md)
+TIME_ERROR_PER_RTOL = {**dict.fromkeys(TABLEAUX, 1.0), "bdf": 30.0}
+#: after a remeshing (``phases``) the state carries the new mesh's error of the old state, which converges at
+#: this order (measured: the jump of mu_w at the switch, u~_w = 0.198: 3.1e-4, 8.0e-5, 2.0e-5 on 64, 128, 256 cells)
+REMESHED_ORDER = 2
 
 
 def _estimate(fine: Solution, coarse: Solution) -> dict:
-    """Absolute error estimates of ``fine`` from its companion: SAFETY |fine - coarse|/(gain - 1), plus a
-    floor at the step tolerance, rtol |fine| (a heuristic: below the tolerance the two solves' difference no
-    longer measures the error; measured against the independent reference, u~_w at t~ = 0.1 for
-    mu~_w = 0.5 on 128 cells, error 1.6e-8 relative where rtol = 1.6e-7, was underestimated 1.2x without
-    it); the imposed quantity (IMPOSED) is exact (a speed's constraint holds to round-off)."""
-    g = gain(fine.imposed)
-    out = {q: SAFETY * np.abs(getattr(fine, q) - getattr(coarse, q)) / (g - 1)
-           + fine.numerics.rtol * np.abs(getattr(fine, q)) for q in QUANTITIES}
+    """Absolute error estimates of ``fine`` from its companion: SAFETY |fine - coarse|/(gain - 1), the gain
+    of REMESHED_ORDER at the times after a remeshing, plus a floor at the time error,
+    TIME_ERROR_PER_RTOL rtol |fine| (below it the two solves' difference no longer measures the error;
+    measured against the independent reference, u~_w at t~ = 0.1 for mu~_w = 0.5 on 128 cells, error
+    1.6e-8 relative where rtol = 1.6e-7, was underestimated 1.2x without it); the imposed quantity
+    (IMPOSED) is exact (a speed's constraint holds to round-off)."""
+    remeshed = np.array([m is not fine.meshes[0] for m in fine.meshes])
+    g = np.where(remeshed, REFINEMENT ** REMESHED_ORDER, gain(fine.imposed, fine.numerics))
+    floor = TIME_ERROR_PER_RTOL[fine.numerics.method] * fine.numerics.rtol
+    out = {q: SAFETY * np.abs(getattr(fine, q) - getattr(coarse, q)) / (g - 1) + floor * np.abs(getattr(fine, q))
+           for q in QUANTITIES}
     out[IMPOSED[fine.imposed]] = np.zeros(len(fine.t))
     return out
 
 
-def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, estimate, fixed_times) -> Solution:
+def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, estimate, fixed_times,
+           switch=None) -> Solution:
     t = check_times(times)
-    numerics = (numerics or Numerics()).for_drive(imposed)
-    stretch = stretch_for(friction, mu_w, t[0], LAYER_SHARE[imposed])
-    order, factor, most = CONVERGENCE_ORDER[imposed], gain(imposed), MAX_CELLS[imposed]
+    numerics = numerics or Numerics()
+    if accuracy is not None or estimate:
+        numerics = replace(numerics, n_cells=max(numerics.n_cells, MIN_ESTIMATED_CELLS[imposed]))
+    numerics = numerics.for_drive(imposed)
+    order, factor, most = convergence_order(imposed, numerics), gain(imposed, numerics), MAX_CELLS[imposed]
 
     def run(num, record=True):
-        return _run(make_problem(num.mesh(stretch), num.order), t, num, fixed_times, record)
+        return _run(make_problem, t, num, phases(friction, mu_w, imposed, t, num, switch), fixed_times, record)
 
     if accuracy is None and not estimate:
         return run(numerics)
@@ -313,4 +418,4 @@ def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics | None
     eq. GranularStokesEqn_muBIS_BCs (``accuracy``, ``estimate`` as for solve_stress)."""
     mu_w = mu_w_for_speed(friction, u_w)
     return _solve(lambda mesh, order: ImposedSpeed(friction, u_w, mesh, order), "speed", mu_w, friction, times,
-                  numerics, accuracy, estimate, fixed_times)
+                  numerics, accuracy, estimate, fixed_times, None if fixed_times is not None else SWITCH_SPAN * u_w**2)

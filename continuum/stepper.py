@@ -130,6 +130,12 @@ class StepStats:
     newton_failures: int = 0
     cpu_seconds: float = 0.0
 
+    def add(self, other: "StepStats") -> "StepStats":
+        """The counts of two consecutive integrations (rejected None if either did not report it)."""
+        rejected = None if None in (self.rejected, other.rejected) else self.rejected + other.rejected
+        return StepStats(self.steps + other.steps, rejected, self.newton_iterations + other.newton_iterations,
+                         self.newton_failures + other.newton_failures, self.cpu_seconds + other.cpu_seconds)
+
 
 class NewtonFailure(RuntimeError):
     pass
@@ -322,7 +328,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
         if fixed_times is not None:
             raise ValueError("method 'bdf' chooses its own steps: fixed_times needs a DIRK method")
         return _integrate_bdf(problem, t_out, rtol=rtol, atol=atol, h0=h0, observer=observer,
-                              max_steps=max_steps)
+                              max_steps=max_steps, resume=resume)
     tab = TABLEAUX[method]
     if fixed_times is None and tab.err is None:
         raise ValueError(f"method {method!r} has no error estimate: give fixed_times")
@@ -403,7 +409,7 @@ def _reduced_jacobian(problem, x):
     return (jac.interior() + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()
 
 
-def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps):
+def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resume=None):
     """``integrate`` with scipy's BDF on z = x[1:], x[0] from ``problem.project`` (unit mass rows).
 
     Near a steady state at tight tolerances the round-off of the rate (|tau~|/h^2 eps) stops scipy's
@@ -425,7 +431,8 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps):
         x = state(z)
         return problem.rate(x)[1:] if np.isfinite(x[0]) else np.full(len(z), np.nan)
 
-    admissible = [state(problem.initial()[1:])]
+    t0, x0 = resume if resume is not None else (0.0, problem.initial())
+    admissible = [state(x0[1:])]
 
     def jacobian(t, z):
         x = state(z)
@@ -434,10 +441,10 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps):
         return _reduced_jacobian(problem, admissible[0])
 
     x = admissible[0]
-    solver = BDF(rate, 0.0, x[1:], t_out[-1], rtol=rtol, atol=atol, jac=jacobian, first_step=h0)
+    solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, jac=jacobian, first_step=h0)
     states = np.empty((len(t_out), len(x)))
-    if observer is not None:
-        observer(0.0, x)
+    if observer is not None and resume is None:
+        observer(t0, x)
     k = 0
     while k < len(t_out):
         if stats.steps >= max_steps:
@@ -449,13 +456,12 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps):
         x = state(solver.y)
         if observer is not None:
             observer(solver.t, x)
-        done = t_out[k:][t_out[k:] <= solver.t]
-        if len(done):
-            dense = solver.dense_output()
-            for t in done:
-                states[k] = x if t == solver.t else state(dense(t))
-                k += 1
-        if k < len(t_out) and solver.t > getattr(problem, "lift_off_end", 0.0) and solver.step_size < BDF_STALL * solver.t:
+        if solver.status == "finished":  # the step was cut to land on t_out[k]: the next bound, no restart
+            states[k] = x
+            k += 1
+            if k < len(t_out):
+                solver.t_bound, solver.status = t_out[k], "running"
+        elif solver.t > getattr(problem, "lift_off_end", 0.0) and solver.step_size < BDF_STALL * solver.t:
             states[k:], rest = integrate(problem, t_out[k:], method=HANDOVER, rtol=rtol, atol=atol,
                                          h0=solver.step_size, observer=observer, max_steps=max_steps - stats.steps,
                                          resume=(solver.t, x))

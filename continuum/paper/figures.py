@@ -51,13 +51,11 @@ STEADY = dict(color="k", ls="--", lw=2.5, alpha=0.6, label="steady")
 
 @dataclass(frozen=True)
 class FigureNumerics:
-    """The figures' numerics, chosen for plotting accuracy (a line is ~1e-3 of a panel): the imposed
-    stresses at the solver's defaults; the imposed speeds by BDF at rtol 3e-7 instead of the matched 1e-8
-    (their 64-cell error, ~1e-2 in delta and 4e-3 in u~ against 256 cells, is the first-order wall
-    layer's, not the time stepping's: bench/RESULTS.md "The paper's figure set")."""
+    """The figures' numerics, chosen for plotting accuracy (a line is ~1e-3 of a panel): both drives at the
+    solver's defaults on 64 cells (bench/RESULTS.md "The paper's figure set")."""
 
     stress: Numerics = Numerics()
-    speed: Numerics = Numerics(rtol=3e-7)
+    speed: Numerics = Numerics()
 
 
 FIGURE_NUMERICS = FigureNumerics()
@@ -151,8 +149,8 @@ def late(sol: Solution) -> pd.DataFrame:
     return sol.series[sol.series.t >= T_MIN * (1 - 1e-9)]
 
 
-def eta(sol: Solution, t) -> np.ndarray:
-    return sol.mesh.y / (2.0 * FRICTION.dmu * np.sqrt(t))
+def eta(y, t) -> np.ndarray:
+    return y / (2.0 * FRICTION.dmu * np.sqrt(t))
 
 
 def self_similar_velocity(mu_w: float, eta_out):
@@ -254,10 +252,10 @@ def fig5_velocity_profiles(sh: Sheet, runs: Runs):
         sh.frame(mid, f"{'abc'[j]}_middle", "eta", "u/u_w", case=case)
         sh.frame(bottom, f"{'abc'[j]}_bottom", "eta", "u/(u_w_inf*sqrt(t))", case=case)
         for t, u in zip(sol.t[1:], sol.velocity[1:]):
-            keep = eta(sol, t) <= ETA_MAX
+            keep = eta(y, t) <= ETA_MAX
             sh.curve(top, y, u, curve="numerics", t=t, **at(t))
-            sh.curve(mid, eta(sol, t)[keep], u[keep] / u[0], curve="numerics", t=t, **at(t))
-            sh.curve(bottom, eta(sol, t)[keep], u[keep] / (u_inf * np.sqrt(t)), curve="numerics", t=t, **at(t))
+            sh.curve(mid, eta(y, t)[keep], u[keep] / u[0], curve="numerics", t=t, **at(t))
+            sh.curve(bottom, eta(y, t)[keep], u[keep] / (u_inf * np.sqrt(t)), curve="numerics", t=t, **at(t))
         sh.curve(top, y, steady_velocity(FRICTION, sol.mu_w_inf, y), curve="steady", **STEADY)
         for ax, norm in ((mid, f[0]), (bottom, u_inf)):
             sh.curve(ax, e, f / norm, curve="eq. SolutionSS", color="C3", ls="--", lw=2, label="eq. SolutionSS")
@@ -267,13 +265,14 @@ def fig5_velocity_profiles(sh: Sheet, runs: Runs):
 def fig6_speed_profiles(sh: Sheet, runs: Runs):
     """Fig. 6: imposed u~_w, eqs. GranularStokesEqn_muBIS(_BCs); thick dashed: steady eq. MuSteadyState"""
     for j, (uw, sol) in enumerate(runs.speed.items()):
-        y, (top, bottom), case = sol.mesh.y, sh.axes[:, j], f"u_w={uw}"
+        (top, bottom), case = sh.axes[:, j], f"u_w={uw}"
         title = panel_title(j, "u_w", uw) + rf", $\tilde\mu_w^\infty$ = {FRICTION.tilde(sol.mu_w_inf):.3f}"
         sh.frame(top, f"{'abc'[j]}_top", "y", "u", title, case=case, xlim=(0, 1))
         sh.frame(bottom, f"{'abc'[j]}_bottom", "y", "mu_tilde", case=case, xlim=(0, 1), ylim=(-0.02, 1.02))
-        for t, u, mt in zip(sol.t, sol.velocity, sol.mu_tilde):
+        for t, y, u, mt in zip(sol.t, sol.y, sol.velocity, sol.mu_tilde):  # the mesh of each time (remeshed)
             sh.curve(top, y, u, curve="numerics", t=t, **at(t))
             sh.curve(bottom, y, mt, curve="numerics", t=t, **at(t))
+        y = sol.y[-1]
         sh.curve(top, y, steady_velocity(FRICTION, sol.mu_w_inf, y), curve="steady", **STEADY)
         sh.curve(bottom, y, FRICTION.tilde(steady_mu(FRICTION, sol.mu_w_inf, y)), curve="steady", **STEADY)
 
@@ -326,11 +325,11 @@ def fig9_speed_self_similar(sh: Sheet, runs: Runs):
         ax = sh.axes[0, j]
         sh.frame(ax, "abc"[j], "eta", "mu_tilde", panel_title(j, "u_w", uw), case=f"u_w={uw}", xlim=(0, ETA_MAX),
                  ylim=(-0.02, 1.02))
-        for t, mu_w, mt in zip(sol.t, sol.mu_w, sol.mu_tilde):
-            keep = eta(sol, t) <= ETA_MAX
-            approx = FRICTION.tilde(speed_short_time_mu(FRICTION, mu_w, sol.mesh.y, t))
-            sh.curve(ax, eta(sol, t)[keep], mt[keep], curve="numerics", t=t, **at(t))
-            sh.curve(ax, eta(sol, t)[keep], approx[keep], curve="eq. muShortTime_VelocityImposed", t=t, ls="--",
+        for t, y, mu_w, mt in zip(sol.t, sol.y, sol.mu_w, sol.mu_tilde):
+            keep = eta(y, t) <= ETA_MAX
+            approx = FRICTION.tilde(speed_short_time_mu(FRICTION, mu_w, y, t))
+            sh.curve(ax, eta(y, t)[keep], mt[keep], curve="numerics", t=t, **at(t))
+            sh.curve(ax, eta(y, t)[keep], approx[keep], curve="eq. muShortTime_VelocityImposed", t=t, ls="--",
                      lw=2, **at(t, label=False))
         key(ax, "eq. muShortTime_VelocityImposed", ls="--", lw=2)
 

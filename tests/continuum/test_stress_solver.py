@@ -41,10 +41,12 @@ def test_second_order_scheme_converges_at_order_2(paper_friction):
 
 @pytest.mark.parametrize("method, order", [("sdirk4", 4), ("tr-bdf2", 2), ("crank-nicolson", 2)])
 def test_time_convergence_matches_design_order(paper_friction, method, order):
-    """Fixed log-graded steps from t~ = 1e-8 (k per decade, k doubled): error ratio 2^order."""
+    """Fixed log-graded steps from t~ = 1e-8 (k per decade, k doubled): error ratio 2^order.  rtol sets
+    only Newton's stopping test here: at the default (4e-7 on 100 cells) its error, ~1e-9 in u~_w, is
+    that of SDIRK4 at 40 steps per decade (measured order 3.35 there, 3.93 at rtol 1e-10)."""
     mu_w = paper_friction.mu_w_from_tilde(0.5)
     out = [1e-2, 1.0]
-    uw = [solve_stress(paper_friction, mu_w, out, Numerics(n_cells=100, method=method),
+    uw = [solve_stress(paper_friction, mu_w, out, Numerics(n_cells=100, method=method, rtol=1e-10),
                        fixed_times=np.logspace(-8, 0, 8 * k + 1)).u_w for k in (5, 10, 20, 40)]
     assert observed_orders(uw) == pytest.approx([order, order], abs=0.3)
 
