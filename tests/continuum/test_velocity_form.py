@@ -1,12 +1,18 @@
 """Velocity-form solver (continuum/velocity.py) and yield rules (continuum/rules.py)."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from compare import calibrate
 from continuum.rules import ShearLaw, YieldRule, well_posed_range, wellposedness
 from continuum.scales import Material, Scales
 from continuum.solver import Numerics, solve_stress
 from continuum.steady import steady_mu, steady_velocity
 from continuum.velocity import BedScene, solve_velocity
+from dem.config import preset
+from dem.scene import plate_geometry
+from dem.sizing import plan
 
 M = Material()
 P_W = 10.0
@@ -118,15 +124,22 @@ def _dense(jac):
 
 
 def test_jacobian_is_the_derivative_of_the_rate(mid_run):
-    """J v against the central difference of F along v, h = 1e-9 of |x|: its truncation is largest at the
-    law's kink, relative (dg/eps)^2 ~ 1e-8 there (dg ~ 1e-7 the shear-rate step), its rounding
-    (machine eps |F|/h) ~ 1e-9 of |J v|."""
+    """J v against the central difference of F along v (F_i = s_i - s_{i-1}, g_v the largest face shear rate
+    of v), held to the difference's error bound at the step h that minimises it: truncation
+    2 (h^2/6) max|d3s/dg3| g_v^3 with |d3s/dg3| <= 3 mu_d p/eps^3 (the regularisation's kink, g = 0),
+    rounding 2 * 2 (3 eps_m max|s|) / (2h) (s carries ~3 eps_m, F is a difference of two).  x +- h v are
+    rounded, so J is applied to the step actually taken.  Measured: 1/5 (stress), 1/6 (speed) of the bound,
+    3e-9 of max|J v|; J scaled by 1 + 3e-8 fails."""
     problem, x = mid_run
     v = np.random.default_rng(1).standard_normal(len(x))
-    h = 1e-9 * np.max(np.abs(x)) / np.max(np.abs(v))
-    jv = _dense(problem.jacobian(x)) @ v
-    fd = (problem.rate(x + h * v) - problem.rate(x - h * v)) / (2 * h)
-    assert np.max(np.abs(fd - jv)) < 1e-6 * np.max(np.abs(jv))
+    g_v = np.max(np.abs(problem.shear(x + v) - problem.shear(x)))
+    truncation = problem.scene.material.friction.mu_d * np.max(problem.p_face) * g_v**3 / problem.rule.eps**3  # x h^2
+    rounding = 6 * np.finfo(float).eps * np.max(np.abs(problem.stress(x)))  # / h
+    h = (rounding / (2 * truncation)) ** (1 / 3)
+    xp, xm = x + h * v, x - h * v
+    jv = _dense(problem.jacobian(x)) @ ((xp - xm) / (2 * h))
+    fd = (problem.rate(xp) - problem.rate(xm)) / (2 * h)
+    assert np.max(np.abs(fd - jv)) < truncation * h**2 + rounding / h
 
 
 def test_dissipative_newton_matrix_solves_the_newton_system(mid_run):
@@ -153,9 +166,13 @@ def test_bad_inputs_are_refused(make, name):
 
 
 # --- accuracy of the defaults on the quick preset's stress drive (bench/velocity_form.py) -------------
-QUICK = Material(mu_s=0.2786, mu_d=0.7656, I0=0.3577, I_convention="dem", phi=0.8086)  # results/quick-calibration
-QUICK_SCENE = BedScene(QUICK, 20.0, 24.0, plate_mass=0.4663)
-QUICK_MU_W, QUICK_END = 8.6 / 20.0, 28.88
+#: the quick preset's scene and drives as dem.sizing plans them, the material of results/quick-calibration
+QUICK_PLAN = plan(preset("quick")[0])
+QUICK_DRIVES = {d.drive.kind: d for d in QUICK_PLAN.drives}
+QUICK = calibrate.load(Path(__file__).resolve().parents[2] / "results/quick-calibration/calibration.json").material()
+QUICK_SCENE = BedScene(QUICK, QUICK_PLAN.config.p_w, QUICK_PLAN.depth,
+                       plate_mass=plate_geometry(QUICK_PLAN)["mass_per_area"])
+QUICK_MU_W, QUICK_END = QUICK_DRIVES["stress"].tau_w / QUICK_SCENE.p_w, QUICK_DRIVES["stress"].duration
 #: issue 11's target for the velocity-form prediction of a quick drive
 TARGET = 1e-4
 #: the tight references: SDIRK4 (order 4 in time) at rtol 1e-8, so that their time error is negligible
@@ -185,7 +202,7 @@ def test_velocity_form_mesh_order_is_two(quick_stress):
 def test_velocity_form_default_reaches_the_target(quick_stress):
     """The default's u_w is within TARGET of the Richardson-extrapolated reference, and so is each
     part of its error: the mesh's (the tight run on the same mesh against the reference, measured
-    1.1e-5) and the time stepping's (the default against that tight run, measured 2.9e-5 = 2.9 rtol);
+    1.1e-5) and the time stepping's (the default against that tight run, measured 2.6e-5 = 2.6 rtol);
     each is held to TARGET/2, about twice the measured value."""
     (a, b, c), default = quick_stress
     ref = c + (c - b) / 3
@@ -196,7 +213,9 @@ def test_velocity_form_default_reaches_the_target(quick_stress):
 
 
 # --- the imposed speed's wall treatment (bench/RESULTS.md "Velocity form: speed at 1e-4") -------------
-QUICK_U_W = 6.154
+#: the quick preset's speed drive: the steady u_w of mu~_w = 0.5 in the preset's nominal material, as dem.sizing
+#: sets the DEM plate's speed
+QUICK_U_W = QUICK_DRIVES["speed"].u_w
 #: times after the impulsive start's wall jump is resolved (the first cell's share of the velocity drop falls
 #: from 39 % at t = 0.1 to 0.4 % at t = 1, 400 cells)
 RESOLVED_TIMES = [1.0, 3.0]
@@ -204,7 +223,7 @@ RESOLVED_TIMES = [1.0, 3.0]
 
 def test_imposed_speed_mu_w_is_second_order_once_the_wall_jump_is_resolved():
     """With the wall half-cell's mass on node 1, mu_w converges at second order after the start's jump
-    (measured orders 1.65 at t = 1 and 1.85 at t = 3 from 200/400/800 cells, the residue of the start's
+    (measured orders 1.62 at t = 1 and 1.80 at t = 3 from 200/400/800 cells, the residue of the start's
     first-order error still decaying); with that mass on the wall node (the plate) they were 0.96 and 0.78,
     first order.  Held to 2 - 0.45, above anything first order."""
     from dataclasses import replace
