@@ -9,9 +9,9 @@ from pathlib import Path
 
 from granstokes.validate import finite, output_dir, output_file, require
 
-#: the CLI's accuracy for an imposed stress (an imposed speed gets one solve with its error estimates:
-#: its wall layer converges at first order before t~_mud, so 1e-6 costs minutes; bench/RESULTS.md)
-STRESS_ACCURACY = 1e-6
+#: the CLI's default relative accuracy of each drive: an imposed speed reaches 1e-4 in ~1-3 s CPU (256 cells),
+#: 1e-5 on 512 cells (~6-12 s); 1e-6 would need 1024 (over 5 min: bench/RESULTS.md "Remeshing the speed in time")
+ACCURACY = {"stress": 1e-6, "speed": 1e-4}
 DEFAULT_CELLS = 64
 
 
@@ -33,12 +33,11 @@ def run_continuum(args) -> int:
     fr, imposed, value = _friction_and_case(args)
     times = check_times(args.times)
     numerics = Numerics(n_cells=args.n_cells, rtol=args.rtol, method=args.method)
-    accuracy = args.accuracy if args.accuracy is not None else (STRESS_ACCURACY if imposed == "stress" else None)
-    if accuracy is not None:
-        from .solver import ACCURACY_RANGE
+    accuracy = args.accuracy if args.accuracy is not None else ACCURACY[imposed]
+    from .solver import ACCURACY_RANGE
 
-        require(finite(accuracy) and ACCURACY_RANGE[0] <= accuracy <= ACCURACY_RANGE[1], "--accuracy",
-                f"in [{ACCURACY_RANGE[0]:g}, {ACCURACY_RANGE[1]:g}]", accuracy)
+    require(finite(accuracy) and ACCURACY_RANGE[0] <= accuracy <= ACCURACY_RANGE[1], "--accuracy",
+            f"in [{ACCURACY_RANGE[0]:g}, {ACCURACY_RANGE[1]:g}]", accuracy)
     if args.plot is not None:
         output_file(args.plot, "--plot", ".png")
     if args.save is not None:
@@ -110,8 +109,8 @@ def register(sub) -> None:
     p.add_argument("--save", type=Path, metavar="DIR",
                    help="write continuum_profiles.csv, continuum_series.csv (every step) and continuum.json")
     p.add_argument("--accuracy", type=float, metavar="TOL",
-                   help=f"refine until every estimated relative error is below TOL (default {STRESS_ACCURACY:g} for an "
-                        "imposed stress; an imposed speed: one solve with its error estimates)")
+                   help=f"refine until every estimated relative error is below TOL (default {ACCURACY['stress']:g} for an "
+                        f"imposed stress, {ACCURACY['speed']:g} for an imposed speed)")
     p.add_argument("--n-cells", type=int, default=DEFAULT_CELLS, help="(starting) mesh cells (default %(default)s)")
     p.add_argument("--rtol", type=float, help="time-step tolerance (default: matched to the mesh's space error)")
     p.add_argument("--method", help="time stepper: sdirk4, tr-bdf2 or bdf (default: sdirk4 for an imposed "
