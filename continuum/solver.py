@@ -24,7 +24,7 @@ from .stepper import METHODS, TABLEAUX, StepStats, integrate
 DEFAULT_METHOD = {"stress": "sdirk4", "speed": "bdf"}
 #: the order in space of each drive (measured, tests/continuum): 4 for both; a speed's only with the
 #: wall-graded map through the lift-off of mu_w from mu_d (``phases``): on one map that does not grade the
-#: wall (a fixed ``Numerics.stretch`` below WALL_STRETCH) mu_w converges at UNGRADED_SPEED_ORDER
+#: wall (``Numerics.remesh`` False, or a fixed stretch below WALL_STRETCH) mu_w converges at UNGRADED_SPEED_ORDER
 CONVERGENCE_ORDER = {"stress": 4, "speed": 4}
 UNGRADED_SPEED_ORDER = 1
 #: the first output time's layer is given this fraction of the mesh (the map's xi at delta(t_min)); the
@@ -49,7 +49,7 @@ ORDER_GAIN = REFINEMENT ** CONVERGENCE_ORDER["stress"]
 
 def convergence_order(imposed: str, numerics: "Numerics") -> int:
     """The order in space of a drive solved with these numerics (CONVERGENCE_ORDER, UNGRADED_SPEED_ORDER)."""
-    if imposed == "speed" and numerics.stretch is not None and numerics.stretch < WALL_STRETCH:
+    if imposed == "speed" and (not numerics.remesh if numerics.stretch is None else numerics.stretch < WALL_STRETCH):
         return UNGRADED_SPEED_ORDER
     return CONVERGENCE_ORDER[imposed]
 
@@ -66,8 +66,9 @@ SAFETY = 3.0
 @dataclass(frozen=True)
 class Numerics:
     """Resolution and tolerances of one solve.  ``stretch=None``: the map follows the first output
-    time (``stretch_for``); ``order``: of the spatial discretisation (continuum.mesh); ``method``,
-    ``rtol``, ``atol`` = None: the drive's defaults (``for_drive``)."""
+    time (``stretch_for``), and an imposed speed is remeshed in time unless ``remesh`` is False
+    (``phases``); ``order``: of the spatial discretisation (continuum.mesh); ``method``, ``rtol``,
+    ``atol`` = None: the drive's defaults (``for_drive``)."""
 
     n_cells: int = 64
     stretch: float | None = None
@@ -75,6 +76,7 @@ class Numerics:
     atol: float | None = None
     method: str | None = None
     order: int = 4
+    remesh: bool = True
 
     def __post_init__(self):
         Mesh.graded(self.n_cells, 0.0 if self.stretch is None else self.stretch)  # validates both
@@ -305,14 +307,14 @@ class Phase:
 def phases(friction: Friction, mu_w: float, imposed: str, t: np.ndarray, numerics: Numerics,
            switch: float | None = None) -> list[Phase]:
     """The meshes of a solve in time: one map following the layer at t[0] (``stretch_for``), or the
-    given ``numerics.stretch``; with a ``switch`` time below t[-1] (an imposed speed), a wall-graded map
-    (WALL_STRETCH) until ``switch``, then the map following the layer at ``switch``."""
+    given ``numerics.stretch``; with a ``switch`` time (an imposed speed, ``numerics.remesh``) a wall-graded
+    map (WALL_STRETCH) until ``switch``, then, if t[-1] is later, the map following the layer at ``switch``."""
     def layer(t0):
         return stretch_for(friction, mu_w, t0, LAYER_SHARE[imposed])
 
     if numerics.stretch is not None:
         return [Phase(0.0, math.inf, numerics.stretch)]
-    if switch is None:
+    if switch is None or not numerics.remesh:
         return [Phase(0.0, math.inf, layer(t[0]))]
     graded = max(layer(t[0]), WALL_STRETCH)
     if switch >= t[-1]:

@@ -38,8 +38,8 @@ from ..problems import ImposedSpeed, ImposedStress
 from ..rheology import Friction
 from ..rules import YieldRule, wellposedness
 from ..scales import Material, Scales
-from ..solver import LAYER_SHARE, ORDER_GAIN, REFINEMENT, SAFETY, Numerics, solve_speed, solve_stress, stretch_for
-from ..steady import mu_w_for_speed, steady_mu
+from ..solver import ORDER_GAIN, REFINEMENT, SAFETY, Numerics, solve_speed, solve_stress
+from ..steady import steady_mu
 from ..stepper import explicit_euler
 from ..velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
@@ -105,7 +105,7 @@ def _explicit(fr, mu_w, n, factor) -> Outcome:
 
 
 def _speed(fr, u_w, n) -> Outcome:
-    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=n, stretch=_speed_stretch(fr, u_w), **SPEED_ADAPTIVE))
+    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=n, **SPEED_ADAPTIVE))
     pb = ImposedSpeed(fr, u_w, sol.mesh)
     implied = pb.mu(pb.project(np.concatenate(([0.0], sol.tau[-1, 1:-1]))))[0]  # the condition's mu_w
     out = _stress_outcome(sol)
@@ -125,15 +125,13 @@ def _velocity(fr, mu_w, rule, n, t_tilde=VELOCITY_T_TILDE) -> Outcome:
 
 
 TIGHT = dict(rtol=1e-8, atol=1e-10)
+#: the speed maps keep one mesh, the map of the layer at T_END (the solver's remeshing in time, whose
+#: wall-graded first phase stalls the reference's tight steps on REFERENCE_CELLS cells, is not what they chart)
+ONE_MAP = dict(remesh=False)
 #: the imposed-speed maps: SDIRK4 (the time-step map of the DIRK the stress maps use; the default bdf is
 #: charted in bench/speed_solver.py) at a tolerance whose steps (~rtol^-0.55) stay affordable on 400 cells
-SPEED_ADAPTIVE = dict(rtol=1e-6, atol=1e-8, method="sdirk4")
+SPEED_ADAPTIVE = dict(rtol=1e-6, atol=1e-8, method="sdirk4", **ONE_MAP)
 
-
-def _speed_stretch(fr, u_w) -> float:
-    """The speed maps' one mesh: the map of the layer at T_END (the solver's remeshing in time, whose
-    wall-graded first phase stalls the reference's tight steps on REFERENCE_CELLS cells, is not what they chart)."""
-    return stretch_for(fr, mu_w_for_speed(fr, u_w), T_END, LAYER_SHARE["speed"])
 REFERENCE_CELLS = 400
 
 
@@ -174,10 +172,8 @@ def _same_mesh_reference(numerics: Numerics):
 def _speed_reference(fr, u_w):
     """The imposed-speed solution at rtol 1e-8 on REFERENCE_CELLS cells with the solver's estimate of
     mu_w, raised to the runs' own time error (SPEED_ADAPTIVE on this mesh), which no refinement removes."""
-    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, stretch=_speed_stretch(fr, u_w), **TIGHT),
-                      estimate=True)
-    runs = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, stretch=_speed_stretch(fr, u_w),
-                                                  **SPEED_ADAPTIVE))
+    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, **TIGHT, **ONE_MAP), estimate=True)
+    runs = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, **SPEED_ADAPTIVE))
     mu_w = float(sol.mu_w[-1])
     return Outcome(mu_w, sol.tau[-1], estimate=max(float(sol.errors["mu_w"][-1]), abs(runs.mu_w[-1] - mu_w)) / mu_w)
 

@@ -167,6 +167,25 @@ def test_speed_error_estimates_bound_the_true_error(u_w):
         assert np.all(sol.errors[q][resolved] <= SPEED_PESSIMISM * true[resolved]), q
 
 
+@pytest.mark.parametrize("u_w", SPEEDS)
+def test_speed_default_accuracy_against_the_independent_reference(u_w):
+    """The CLI's default for a speed (accuracy ACCURACY["speed"]) against the independent Chebyshev
+    reference where that is converged to 1e-9 (after the lift-off: tests/continuum/test_reference.py):
+    mu_w and delta within the accuracy, and within their estimates."""
+    from continuum.cli import ACCURACY
+    from tests.continuum.reference import SPEED_TIMES, cached
+    from tests.continuum.test_reference import SPEED_CONVERGED_FROM
+
+    times = SPEED_TIMES[u_w]
+    ref = cached(f"speed-{u_w:g}", times=times)
+    sol = solve_speed(FR, u_w, times, accuracy=ACCURACY["speed"])
+    late = np.asarray(times) >= SPEED_CONVERGED_FROM[u_w]
+    for q in ("mu_w", "delta"):
+        true = np.abs(getattr(sol, q) - ref[q])[late]
+        assert np.all(true <= ACCURACY["speed"] * np.abs(ref[q][late])), q
+        assert np.all(true <= sol.errors[q][late]), q
+
+
 def test_speed_estimate_bounds_the_lift_off_peak(paper_friction):
     """Between the decades, at t~ = 2-3e-3 (u~_w = 0.198, t_mud = 0.039) the sub-layer lifts off the wall:
     against a strongly graded reference (256 cells, stretch 12, rtol 1e-10: good to ~1e-7 there) the
