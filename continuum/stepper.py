@@ -412,6 +412,9 @@ def _reduced_jacobian(problem, x):
 def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resume=None):
     """``integrate`` with scipy's BDF on z = x[1:], x[0] from ``problem.project`` (unit mass rows).
 
+    BDF steps onto every output time (its bound moved on to the next one, no restart: scipy cuts the
+    last step to the bound): its dense output had been ~1e4 rtol off through an imposed speed's lift-off,
+    where the landed steps are within ~1-20 rtol (bench/RESULTS.md "Remeshing the speed in time").
     Near a steady state at tight tolerances the round-off of the rate (|tau~|/h^2 eps) stops scipy's
     Newton from converging and the steps shrink without end: once the step falls below BDF_STALL t,
     after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is needed), the rest goes
