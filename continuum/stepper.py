@@ -125,6 +125,11 @@ BDF_STALL, HANDOVER = 1e-3, "sdirk4"
 #: SuperLU with its sparse bookkeeping there (measured, u~_w = 1.334: 64 cells 1.4x, 128 cells 1.4x less CPU;
 #: 256 cells 4x more), bench/RESULTS.md "The paper's figure set"
 DENSE_BDF_MAX = 128
+#: bdf solves its Newton systems I - c J by the bordered band of NewtonMatrix (the unreduced M - c J)
+#: instead of scipy's own LU of the reduced J (dense LAPACK or SuperLU, whose fill-in from the wall's dense
+#: rows dominated: 2.1 s of 7 s at 256 cells): measured 1.1-2x at 64-256 cells, 2.8x at 512 (False: the
+#: baseline of bench/speed_solver.py)
+BORDERED_BDF = True
 
 
 @dataclass
@@ -446,14 +451,26 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     t0, x0 = resume if resume is not None else (0.0, problem.initial())
     admissible = [state(x0[1:])]
 
+    jacobians = [None, None]  # the state of the last Jacobian and the Jacobian
+
     def jacobian(t, z):
         x = state(z)
         if np.isfinite(x[0]):
             admissible[0] = x
-        return _reduced_jacobian(problem, admissible[0])
+        jacobians[:] = admissible[0], _reduced_jacobian(problem, admissible[0])
+        return jacobians[1]
 
     x = admissible[0]
     solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, jac=jacobian, first_step=h0)
+    if BORDERED_BDF:
+        def lu(a):
+            """I - c J by the bordered band (NewtonMatrix) of the unreduced M - c J, c read off a's last diagonal."""
+            solver.nlu += 1
+            j = jacobians[1]
+            c = (1.0 - a[-1, -1]) / j[-1, -1]
+            return NewtonMatrix(problem, jacobians[0], c)
+
+        solver.lu, solver.solve_lu = lu, lambda factors, b: factors.solve(np.concatenate(([0.0], b)))[1:]
     states = np.empty((len(t_out), len(x)))
     if observer is not None and resume is None:
         observer(t0, x)
