@@ -1,6 +1,7 @@
 """Imposed-speed solves (issue 11): CPU and error of the remeshed solver (``continuum.solver.phases``:
 wall-graded map through the lift-off, then the layer's map) against one map that follows the layer
-(the previous default), in one run; then the cost of an accuracy request.  Prints the tables for
+(the previous default), in one run; then the cost of an accuracy request with bdf's Newton systems by
+scipy's own LU (stepper.BORDERED_BDF False) and by the bordered band.  Prints the tables for
 bench/RESULTS.md.
 
     .venv/bin/python bench/speed_solver.py
@@ -14,6 +15,7 @@ import time
 
 import numpy as np
 
+from continuum import stepper
 from continuum.rheology import Friction
 from continuum.solver import Numerics, solve_speed
 
@@ -46,21 +48,28 @@ def main():
                 err = {q: np.max(np.abs(getattr(sol, q) / getattr(ref, q) - 1)) for q in ("mu_w", "delta")}
                 print(f"| {u_w} | {name} | {n} | {sol.stats.steps} | {1e3 * cpu:.0f} | {cpu / base:.2f} | "
                       f"{err['mu_w']:.1e} | {err['delta']:.1e} |", flush=True)
-    print("\n| u~_w | accuracy asked | cells reached | CPU [s] (all solves) | worst estimate | worst error against 512 |")
-    print("|---|---|---|---|---|---|")
+    print("\n| u~_w | accuracy asked | cells reached | CPU [s], scipy's LU | CPU [s], bordered band | ratio "
+          "| worst estimate | worst error against 512 |")
+    print("|---|---|---|---|---|---|---|---|")
     for u_w in SPEEDS:
         ref = solve_speed(FR, u_w, TIMES, Numerics(n_cells=REFERENCE_CELLS))
         for accuracy in ACCURACIES:
-            start = time.process_time()
-            try:
-                sol = solve_speed(FR, u_w, TIMES, accuracy=accuracy)
-            except ValueError as refused:
-                print(f"| {u_w} | {accuracy:g} | refused: {refused} | {time.process_time() - start:.1f} | | |")
+            cpu = {}
+            for bordered in (False, True):
+                stepper.BORDERED_BDF = bordered
+                start = time.process_time()
+                try:
+                    sol = solve_speed(FR, u_w, TIMES, accuracy=accuracy)
+                except ValueError as refused:
+                    sol = refused
+                cpu[bordered] = time.process_time() - start
+            if isinstance(sol, ValueError):
+                print(f"| {u_w} | {accuracy:g} | refused: {sol} | {cpu[False]:.1f} | {cpu[True]:.1f} | | | |")
                 continue
-            cpu = time.process_time() - start
             est = max(np.max(sol.errors[q] / np.abs(getattr(sol, q))) for q in ("mu_w", "delta"))
             true = max(np.max(np.abs(getattr(sol, q) / getattr(ref, q) - 1)) for q in ("mu_w", "delta"))
-            print(f"| {u_w} | {accuracy:g} | {sol.numerics.n_cells} | {cpu:.1f} | {est:.1e} | {true:.1e} |", flush=True)
+            print(f"| {u_w} | {accuracy:g} | {sol.numerics.n_cells} | {cpu[False]:.1f} | {cpu[True]:.1f} | "
+                  f"{cpu[False] / cpu[True]:.1f} | {est:.1e} | {true:.1e} |", flush=True)
 
 
 if __name__ == "__main__":

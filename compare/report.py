@@ -164,7 +164,7 @@ def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
     axes[2].set(xscale="log", xlim=(1e-5, 2))
     axes[0].set(ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
     axes[0].legend(fontsize=7, title="solid DEM, dashed local mu(I)", title_fontsize=7)
-    fig.suptitle(f"{g.label}: transient profiles at snapshot times [sqrt(d/g)] (DEM units, I in the DEM convention); "
+    fig.suptitle(f"{g.label}: transient profiles at snapshot times [sqrt(d/g)] (DEM units, I in the DEM convention)\n"
                  f"shear-wave transit {spec.transit_time:.3g}, compared from {spec.compared_from:.3g}")
     path = out / f"transient_{slug(g.label)}.png"
     fig.savefig(path, dpi=100)
