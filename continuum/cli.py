@@ -9,8 +9,9 @@ from pathlib import Path
 
 from granstokes.validate import finite, output_dir, output_file, require
 
-#: the CLI's default relative accuracy of each drive: an imposed speed reaches 1e-4 in ~1-3 s CPU (256 cells),
-#: 1e-5 on 512 cells (~6-12 s); 1e-6 would need 1024 (over 5 min: bench/RESULTS.md "Remeshing the speed in time")
+#: the CLI's default relative accuracy of each drive: an imposed speed reaches 1e-4 in ~2 s CPU (256 cells),
+#: 1e-5 on 512 cells (3-6 s); 1e-6 would need 1024, whose wall cells stall BDF (bench/RESULTS.md "Remeshing the
+#: speed in time")
 ACCURACY = {"stress": 1e-6, "speed": 1e-4}
 DEFAULT_CELLS = 64
 

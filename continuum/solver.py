@@ -278,7 +278,8 @@ IMPOSED = {"stress": "mu_w", "speed": "u_w"}
 DEFAULT_ACCURACY = 1e-6
 ACCURACY_RANGE = (1e-10, 1e-2)
 #: refinement stops here (a request that needs more is refused with the accuracy reached): a speed on
-#: 512 cells takes ~5-10 s (bench/RESULTS.md "Remeshing the speed in time"); finer was not measured
+#: 512 cells takes 3-6 s; on 1024 its wall cells (7e-8) stall BDF by round-off (bench/RESULTS.md
+#: "Remeshing the speed in time")
 MAX_CELLS = {"stress": 2048, "speed": 512}
 #: an estimated solve has at least this many cells: the companion of a speed on 64 cells (32) is
 #: pre-asymptotic through the lift-off (measured: mu_w at u~_w = 1.334, t~ = 1 underestimated 1.5x)
