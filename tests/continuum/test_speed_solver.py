@@ -251,3 +251,12 @@ def test_reduced_jacobian_dense_equals_sparse(paper_friction, monkeypatch):
     sparse = stepper._reduced_jacobian(pb, x).toarray()
     assert isinstance(dense, np.ndarray) and dense.shape == sparse.shape == (63, 63)  # nodes 1..63 (tau~_64 = 1 fixed)
     assert np.max(np.abs(dense - sparse)) <= 1e-15 * np.max(np.abs(sparse))
+
+
+def test_unreachable_speed_accuracy_is_refused_with_what_can_be_reached():
+    """1e-6 for a speed would need more than MAX_CELLS (its 1024-cell wall cells stall BDF): refused after the
+    first estimate, naming the accuracy that 512 cells reach (measured ~2e-6 at u~_w = 1.334)."""
+    from continuum.solver import MAX_CELLS
+
+    with pytest.raises(ValueError, match=rf"accuracy must be >= \d\.\de-06 .*at most {MAX_CELLS['speed']} cells"):
+        solve_speed(FR, 1.334, DECADES, accuracy=1e-6)
