@@ -464,10 +464,10 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, jac=jacobian, first_step=h0)
     if BORDERED_BDF:
         def lu(a):
-            """I - c J by the bordered band (NewtonMatrix) of the unreduced M - c J, c read off a's last diagonal."""
+            """I - c J by the bordered band (NewtonMatrix) of the unreduced M - c J, c read off an entry of a
+            below the diagonal (on it, 1 - c J_nn loses c J_nn below round-off: c ~ 1e-25 at t~ ~ 1e-20)."""
             solver.nlu += 1
-            j = jacobians[1]
-            c = (1.0 - a[-1, -1]) / j[-1, -1]
+            c = -a[-1, -2] / jacobians[1][-1, -2]
             return NewtonMatrix(problem, jacobians[0], c)
 
         solver.lu, solver.solve_lu = lu, lambda factors, b: factors.solve(np.concatenate(([0.0], b)))[1:]
