@@ -60,10 +60,11 @@ def format_table(sol) -> str:
     from .scales import UNITS
 
     asked = f"accuracy {sol.accuracy:g} reached" if sol.accuracy else "one solve, no accuracy asked"
+    stretches = " then ".join(f"{m.stretch:.3g}" for m in {id(m): m for m in sol.meshes}.values())  # remeshed
     lines = [f"imposed {sol.imposed}: mu_s = {sol.friction.mu_s:.6g}, mu_d = {sol.friction.mu_d:.6g}, "
              f"mu_w_inf = {sol.mu_w_inf:.6g}, beta_w = {sol.beta_w:.6g}",
              f"units: {UNITS['tilde_variables']}",
-             f"numerics: {sol.numerics.n_cells} cells, order {sol.numerics.order}, stretch {sol.mesh.stretch:.3g}, "
+             f"numerics: {sol.numerics.n_cells} cells, order {sol.numerics.order}, stretch {stretches}, "
              f"rtol {sol.numerics.rtol:.2g}; {asked}; +- are estimated absolute errors",
              f"{'t~':>12} {'u~_w':>24} {'mu_w':>24} {'delta/delta_s':>24}"]
     err = sol.errors
@@ -84,7 +85,7 @@ def plot_profiles(sol, path: Path) -> None:
     axes = fig.subplots(1, 3, sharey=True)
     for k, t in enumerate(sol.t):
         for ax, field in zip(axes, (sol.tau, sol.mu_tilde, sol.velocity)):
-            ax.plot(field[k], sol.mesh.y, label=f"t~ = {t:.3g}")
+            ax.plot(field[k], sol.y[k], label=f"t~ = {t:.3g}")  # the nodes of that time (a speed is remeshed)
     for ax, name in zip(axes, ("tau~ = tau/tau_w", "mu~ = (mu_d - mu)/Dmu", "u~ = u/U")):
         ax.set_xlabel(name)
     axes[0].set_ylabel("y~ = y/delta_s")

@@ -149,3 +149,17 @@ def test_layering_no_package_imports_the_one_above():
     for package, pattern in rules.items():
         offenders = [str(p) for p in (root / package).rglob("*.py") if re.search(pattern, p.read_text(), re.M)]
         assert offenders == []
+
+
+def test_table_and_plot_of_a_remeshed_speed(capsys, tmp_path):
+    """An imposed speed asked past t~_mud = u~_w^2 is remeshed in time: the table names both maps'
+    stretches and its u~_w column is the imposed speed; the plot draws each time on its own nodes."""
+    from continuum.solver import WALL_STRETCH
+
+    code, out, _ = run(capsys, "--u-w", "1.334", "--times", "1e-3", "3", "--plot", str(tmp_path / "p.png"))
+    assert code == 0
+    numerics = next(line for line in out.splitlines() if line.startswith("numerics:"))
+    assert f"stretch {WALL_STRETCH:.3g} then " in numerics
+    rows = [line.split() for line in out.splitlines() if line.strip()[:1].isdigit()]
+    assert [float(r[1]) for r in rows] == [1.334, 1.334]
+    assert (tmp_path / "p.png").stat().st_size > 20_000
