@@ -60,7 +60,7 @@ def format_table(sol) -> str:
     from .scales import UNITS
 
     asked = f"accuracy {sol.accuracy:g} reached" if sol.accuracy else "one solve, no accuracy asked"
-    stretches = " then ".join(f"{m.stretch:.3g}" for m in {id(m): m for m in sol.meshes}.values())  # remeshed
+    stretches = " then ".join(f"{m.stretch:.3g}" for m in sol.phase_meshes)  # a speed is remeshed in time
     lines = [f"imposed {sol.imposed}: mu_s = {sol.friction.mu_s:.6g}, mu_d = {sol.friction.mu_d:.6g}, "
              f"mu_w_inf = {sol.mu_w_inf:.6g}, beta_w = {sol.beta_w:.6g}",
              f"units: {UNITS['tilde_variables']}",

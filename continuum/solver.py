@@ -175,7 +175,7 @@ class Solution:
     @property
     def mesh(self) -> Mesh:
         """The one mesh of every output time (a ValueError if the solve was remeshed: use ``y``)."""
-        if any(m is not self.meshes[0] for m in self.meshes):
+        if len(self.phase_meshes) > 1:
             raise ValueError("this solution was remeshed in time: its nodes are y[k] at each time")
         return self.meshes[0]
 
@@ -184,10 +184,14 @@ class Solution:
         """The nodes y~ at each output time, (len(t), N+1)."""
         return np.array([m.y for m in self.meshes]).reshape(len(self.t), -1)
 
+    @property
+    def phase_meshes(self) -> list[Mesh]:
+        """The solve's meshes in time order, one per phase (``phases``)."""
+        return list({id(m): m for m in self.meshes}.values())
+
     def _per_mesh(self, derive) -> np.ndarray:
         """derive(mesh, tau rows) evaluated on the rows of each mesh (remeshing: one call per phase)."""
-        groups = [(mesh, [k for k, m in enumerate(self.meshes) if m is mesh])
-                  for mesh in {id(m): m for m in self.meshes}.values()]
+        groups = [(mesh, [k for k, m in enumerate(self.meshes) if m is mesh]) for mesh in self.phase_meshes]
         parts = [derive(mesh, self.tau[rows]) for mesh, rows in groups]
         out = np.empty((len(self.t), *parts[0].shape[1:]))
         for (_, rows), part in zip(groups, parts):
