@@ -148,7 +148,9 @@ def test_speed_converges_at_fourth_order(u_w):
         resolved = fine > 3e-7 * np.abs(values[2])
         orders = np.log2(coarse / np.where(resolved, fine, 1.0))
         graded = resolved & before & (runs[-1].delta < 0.5 if q == "delta" else True)
-        assert graded.sum() >= (3 if q == "delta" else 0), q
+        # delta: its early decades; mu_w: the lift-off of 1.334 at t~ = 1 (the others' mu_w differences are
+        # below the time error there: 0.198 lifts off between the decades, 4.629 after t~ = 10)
+        assert graded.sum() >= (3 if q == "delta" else int(u_w == 1.334)), q
         assert np.all((orders[graded] >= FOURTH[0]) & (orders[graded] <= FOURTH[1])), (q, orders)
         assert np.all(orders[resolved & ~before] >= AFTER_SWITCH), (q, orders)
 
