@@ -93,14 +93,13 @@ class Prediction:
 
 
 def _series(t, depth, u, mu_w) -> pd.DataFrame:
-    """depth: the nodes, one row for all times or one per time (a remeshed solve)."""
-    d = [depth_at_fraction(yi, ui, ui[0]) for yi, ui in zip(np.broadcast_to(depth, u.shape), u)]
+    d = [depth_at_fraction(depth, ui, ui[0]) for ui in u]
     return pd.DataFrame({"t": t, "u_w": u[:, 0], "mu_w": mu_w, "delta_u": d})
 
 
 def _profiles(times, y, u, mu) -> pd.DataFrame:
-    return pd.DataFrame({"t": np.repeat(times, u.shape[-1]), "depth": np.broadcast_to(y, u.shape).ravel(),
-                         "u": u.ravel(), "mu": np.asarray(mu).ravel()})
+    return pd.DataFrame({"t": np.repeat(times, len(y)), "depth": np.tile(y, len(times)), "u": u.ravel(),
+                         "mu": np.asarray(mu).ravel()})
 
 
 # --- local mu(I) on the DEM's scene ------------------------------------------------------------------
@@ -131,7 +130,7 @@ def _paper_transient(material: Material, drive: Drive, times) -> tuple[pd.DataFr
     t_tilde = sc.t_tilde(times)
     sol = (solve_stress(fr, sc.mu_w, t_tilde) if drive.kind == "stress"
            else solve_speed(fr, sc.u_tilde(drive.value), t_tilde))
-    y, u = sc.y(sol.y), sc.u(sol.velocity)  # the nodes of each time (a speed is remeshed)
+    y, u = sc.y(sol.mesh.y), sc.u(sol.velocity)
     return _series(times, y, u, sol.mu_w), _profiles(times, y, u, sol.mu)
 
 

@@ -9,10 +9,9 @@ from pathlib import Path
 
 from granstokes.validate import finite, output_dir, output_file, require
 
-#: the CLI's default relative accuracy of each drive: an imposed speed reaches 1e-4 in ~2 s CPU (256 cells),
-#: 1e-5 on 512 cells (3-6 s); 1e-6 would need 1024, whose wall cells stall BDF (bench/RESULTS.md "Remeshing the
-#: speed in time")
-ACCURACY = {"stress": 1e-6, "speed": 1e-4}
+#: the CLI's default relative accuracy of every number (both drives; an imposed speed reaches it on 512
+#: cells in 2-6 s CPU: bench/RESULTS.md "One map with a wall cluster")
+ACCURACY = 1e-6
 DEFAULT_CELLS = 64
 
 
@@ -34,7 +33,7 @@ def run_continuum(args) -> int:
     fr, imposed, value = _friction_and_case(args)
     times = check_times(args.times)
     numerics = Numerics(n_cells=args.n_cells, rtol=args.rtol, method=args.method)
-    accuracy = args.accuracy if args.accuracy is not None else ACCURACY[imposed]
+    accuracy = args.accuracy if args.accuracy is not None else ACCURACY
     from .solver import ACCURACY_RANGE
 
     require(finite(accuracy) and ACCURACY_RANGE[0] <= accuracy <= ACCURACY_RANGE[1], "--accuracy",
@@ -60,11 +59,10 @@ def format_table(sol) -> str:
     from .scales import UNITS
 
     asked = f"accuracy {sol.accuracy:g} reached" if sol.accuracy else "one solve, no accuracy asked"
-    stretches = " then ".join(f"{m.stretch:.3g}" for m in sol.phase_meshes)  # a speed is remeshed in time
     lines = [f"imposed {sol.imposed}: mu_s = {sol.friction.mu_s:.6g}, mu_d = {sol.friction.mu_d:.6g}, "
              f"mu_w_inf = {sol.mu_w_inf:.6g}, beta_w = {sol.beta_w:.6g}",
              f"units: {UNITS['tilde_variables']}",
-             f"numerics: {sol.numerics.n_cells} cells, order {sol.numerics.order}, stretch {stretches}, "
+             f"numerics: {sol.numerics.n_cells} cells, order {sol.numerics.order}, {sol.mesh.label}, "
              f"rtol {sol.numerics.rtol:.2g}; {asked}; +- are estimated absolute errors",
              f"{'t~':>12} {'u~_w':>24} {'mu_w':>24} {'delta/delta_s':>24}"]
     err = sol.errors
@@ -85,7 +83,7 @@ def plot_profiles(sol, path: Path) -> None:
     axes = fig.subplots(1, 3, sharey=True)
     for k, t in enumerate(sol.t):
         for ax, field in zip(axes, (sol.tau, sol.mu_tilde, sol.velocity)):
-            ax.plot(field[k], sol.y[k], label=f"t~ = {t:.3g}")  # the nodes of that time (a speed is remeshed)
+            ax.plot(field[k], sol.mesh.y, label=f"t~ = {t:.3g}")
     for ax, name in zip(axes, ("tau~ = tau/tau_w", "mu~ = (mu_d - mu)/Dmu", "u~ = u/U")):
         ax.set_xlabel(name)
     axes[0].set_ylabel("y~ = y/delta_s")
@@ -111,8 +109,7 @@ def register(sub) -> None:
     p.add_argument("--save", type=Path, metavar="DIR",
                    help="write continuum_profiles.csv, continuum_series.csv (every step) and continuum.json")
     p.add_argument("--accuracy", type=float, metavar="TOL",
-                   help=f"refine until every estimated relative error is below TOL (default {ACCURACY['stress']:g} for an "
-                        f"imposed stress, {ACCURACY['speed']:g} for an imposed speed)")
+                   help=f"refine until every estimated relative error is below TOL (default {ACCURACY:g})")
     p.add_argument("--n-cells", type=int, default=DEFAULT_CELLS, help="(starting) mesh cells (default %(default)s)")
     p.add_argument("--rtol", type=float, help="time-step tolerance (default: matched to the mesh's space error)")
     p.add_argument("--method", help="time stepper: sdirk4, tr-bdf2 or bdf (default: sdirk4 for an imposed "

@@ -9,7 +9,10 @@ where f falls below ``level``, interpolated between the bracketing nodes j-1 and
   erfc-like tail of delta), linearly where the lower node is not;
 * ``cubic=True``: instead, the cubic through the nodes j-2..j+1 (in log f where those are positive and
   ``log``), solved for the level by safeguarded Newton in [y_j-1, y_j]: fourth-order accurate for a
-  smooth profile (the continuum solver's delta; the linear forms are second-order);
+  smooth profile (the continuum solver's delta; the linear forms are second-order); ``end_zero=True``
+  (a profile that vanishes linearly at y[-1], the continuum's mu = mu_s at y~ = 1): the cubic in
+  log(f/(y[-1] - y)), smooth up to that end where log f is not (measured: delta at u~_w = 1.334, t~ = 1,
+  0.989, erratic by 4e-5 between meshes whose stencil neared the end);
 * ``first=True``: j is the first node below ``level`` (nan where f never falls below it, y[0] where
   f[0] already does); ``first=False``: j - 1 is the last node at or above ``level`` (y[0] where none is,
   y[-1] where the last node is).
@@ -19,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 
-def crossing_depth(y, f, level: float, *, log: bool = False, first: bool = True, cubic: bool = False):
+def crossing_depth(y, f, level: float, *, log: bool = False, first: bool = True, cubic: bool = False,
+                   end_zero: bool = False):
     """Depth(s) where ``f`` crosses ``level`` downward; a float for a 1-D ``f``, an array otherwise."""
     y, f = np.asarray(y, dtype=float), np.asarray(f, dtype=float)
     f2 = f.reshape(-1, f.shape[-1])
@@ -44,20 +48,21 @@ def crossing_depth(y, f, level: float, *, log: bool = False, first: bool = True,
             frac = np.where((f1 > 0) & (f0 > 0), np.log(f0 / level) / np.log(f0 / f1), frac)
     out = y0 + frac * (y1 - y0)
     if cubic and n >= 4:
-        out = _cubic_crossing(y, f2, jj, level, log, out)
+        out = _cubic_crossing(y, f2, jj, level, log, out, end_zero)
     out = np.where(at_top, y[0], np.where(at_bottom, y[-1], np.where(never, np.nan, out)))
     return float(out[0]) if f.ndim == 1 else out.reshape(f.shape[:-1])
 
 
-def _cubic_crossing(y, f2, jj, level, log, guess):
+def _cubic_crossing(y, f2, jj, level, log, guess, end_zero):
     """Refine the crossing in [y_j-1, y_j] on the cubic through nodes j-2..j+1 (see the module)."""
     n = f2.shape[-1]
     cols = np.clip(jj - 2, 0, n - 4)[:, None] + np.arange(4)
     rows = np.arange(len(f2))[:, None]
     fv = f2[rows, cols]
     use_log = log & np.all(fv > 0, axis=-1)
+    gap = y[-1] - y if end_zero else np.ones_like(y)  # the log form interpolates log(f/gap)
     with np.errstate(divide="ignore", invalid="ignore"):
-        g = np.where(use_log[:, None], np.log(np.where(fv > 0, fv, 1.0)), fv) - np.where(
+        g = np.where(use_log[:, None], np.log(np.where(fv > 0, fv / gap[cols], 1.0)), fv) - np.where(
             use_log, np.log(level), level)[:, None]
     lo, hi = y[jj - 1], y[jj]
     scale = hi - lo
@@ -65,7 +70,10 @@ def _cubic_crossing(y, f2, jj, level, log, guess):
     coef = np.linalg.solve(z[..., None] ** np.arange(4), g[..., None])[..., 0]  # g(z) = sum_k coef_k z^k
     s = (guess - lo) / scale
     for _ in range(8):
-        value = ((coef[:, 3] * s + coef[:, 2]) * s + coef[:, 1]) * s + coef[:, 0]
-        slope = (3 * coef[:, 3] * s + 2 * coef[:, 2]) * s + coef[:, 1]
+        # the level is met where cubic(s) + log(gap(s)) = 0 (gap = 1 unless end_zero)
+        at = np.maximum(y[-1] - lo - s * scale, np.finfo(float).tiny) if end_zero else np.ones_like(s)
+        value = ((coef[:, 3] * s + coef[:, 2]) * s + coef[:, 1]) * s + coef[:, 0] + np.where(use_log, np.log(at), 0.0)
+        slope = ((3 * coef[:, 3] * s + 2 * coef[:, 2]) * s + coef[:, 1]
+                 - np.where(use_log & end_zero, scale / at, 0.0))
         s = np.clip(s - value / np.where(slope != 0, slope, np.inf), 0.0, 1.0)
     return np.where(np.isfinite(s), lo + s * scale, guess)

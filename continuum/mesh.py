@@ -1,14 +1,20 @@
 """Graded finite-difference mesh on y~ in [0, 1], refined at the moving wall, and its operators.
 
-At t~ = 1e-4 the layer is ~0.01 thick; at t~ = 10 it fills the domain.  A smooth exponential
-map y~(xi) = (exp(a xi) - 1)/(exp(a) - 1) of a uniform xi-grid grows the cells by the constant
-factor exp(a/N) from the wall, so that a layer of any thickness above the first cell spans about the
-same number of cells.  Two discretisations of d2/dy~2 and of the quadrature:
+At t~ = 1e-4 the layer is ~0.01 thick; at t~ = 10 it fills the domain.  A smooth map of a uniform
+xi-grid, y~ = expm1(s(xi))/expm1(s(1)) with
+
+    s(xi) = a xi + E (1 - exp(-xi/w))/(1 - exp(-1/w)),   w = WALL_CLUSTER_WIDTH,
+
+grows the cells geometrically from the wall: with E = 0 (the exponential map, stretch a) by the constant
+factor exp(a/N), so that a layer of any thickness above the first cell spans about the same number of
+cells; E > 0 packs E more e-folds of grading into the first ~w of the grid (a wall cluster: an imposed
+speed's sub-layer, continuum.solver.speed_map) and leaves the layer a's even grading.  Two
+discretisations of d2/dy~2 and of the quadrature:
 
 * order 2: the three-point second difference on the nodes (Kalnay de Rivas 1972) and the trapezoidal
   rule, the standard method of lines (the baseline, the stability maps);
 * order 4: five-point differences in xi, with the map's exact derivatives
-  (d2/dy2 = (d2/dxi2 - a d/dxi)/y'^2 since y'' = a y'), six-point one-sided rows next to the ends,
+  (d2/dy2 = (d2/dxi2 - (y''/y') d/dxi)/y'^2), six-point one-sided rows next to the ends,
   and the four-point (cubic) rule on each cell in xi for the integrals.
 """
 from __future__ import annotations
@@ -79,20 +85,38 @@ class Stencil:
 
 @dataclass(frozen=True, eq=False)
 class Mesh:
-    """Nodes y[0] = 0 (wall) < ... < y[N] = 1 (bottom of the steady layer, y = delta_s)."""
+    """Nodes y[0] = 0 (wall) < ... < y[N] = 1 (bottom of the steady layer, y = delta_s) of the map with
+    stretch a and wall cluster E (module docstring)."""
 
     y: np.ndarray
     stretch: float = 0.0
+    wall_folds: float = 0.0
 
     @classmethod
-    def graded(cls, n_cells: int = 200, stretch: float = 6.0) -> "Mesh":
-        """Exponentially graded mesh; ``stretch`` = a, largest/smallest cell = exp(a) (about)."""
+    def graded(cls, n_cells: int = 200, stretch: float = 6.0, wall_folds: float = 0.0) -> "Mesh":
+        """The map's nodes; ``stretch`` = a, ``wall_folds`` = E: largest/smallest cell = exp(a + E) (about)."""
         require(isinstance(n_cells, (int, np.integer)) and n_cells >= 8, "n_cells", "an integer >= 8", n_cells)
         require(0 <= stretch <= MAX_STRETCH, "stretch", f"in [0, {MAX_STRETCH:g}]", stretch)
-        xi = np.linspace(0.0, 1.0, n_cells + 1)
-        y = xi if stretch == 0 else np.expm1(stretch * xi) / np.expm1(stretch)
-        y[-1] = 1.0
-        return cls(y, float(stretch))
+        require(0 <= wall_folds <= MAX_STRETCH - stretch, "wall_folds", f"in [0, {MAX_STRETCH - stretch:g}]", wall_folds)
+        mesh = cls(np.empty(n_cells + 1), float(stretch), float(wall_folds))
+        s = mesh._s(0)
+        mesh.y[:] = np.linspace(0.0, 1.0, n_cells + 1) if s[-1] == 0 else np.expm1(s) / np.expm1(s[-1])
+        mesh.y[-1] = 1.0
+        return mesh
+
+    def _s(self, derivative: int) -> np.ndarray:
+        """The map's exponent s(xi) (module docstring), or its first or second derivative, at the nodes."""
+        xi = np.linspace(0.0, 1.0, len(self.y))
+        w = WALL_CLUSTER_WIDTH
+        cluster = self.wall_folds / -np.expm1(-1 / w) * np.exp(-xi / w)     # E exp(-xi/w)/(1 - exp(-1/w))
+        if derivative == 0:
+            return self.stretch * xi + self.wall_folds / -np.expm1(-1 / w) - cluster
+        return self.stretch + cluster / w if derivative == 1 else -cluster / w**2
+
+    @property
+    def label(self) -> str:
+        """The map in words (tables, figures)."""
+        return f"stretch {self.stretch:.3g}" + (f" + wall cluster {self.wall_folds:.3g}" if self.wall_folds else "")
 
     @property
     def n_cells(self) -> int:
@@ -105,10 +129,17 @@ class Mesh:
     @cached_property
     def dy_dxi(self) -> np.ndarray:
         """y'(xi) of the map at the nodes (exact)."""
-        a = self.stretch
-        if a == 0:
+        s = self._s(0)
+        if s[-1] == 0:
             return np.ones_like(self.y)
-        return a * np.exp(a * np.linspace(0.0, 1.0, len(self.y))) / np.expm1(a)
+        return np.exp(s) * self._s(1) / np.expm1(s[-1])
+
+    @cached_property
+    def curvature(self) -> np.ndarray:
+        """y''(xi)/y'(xi) of the map at the nodes (exact): s' + s''/s' (the stretch a when E = 0)."""
+        if self._s(0)[-1] == 0:
+            return np.zeros_like(self.y)
+        return self._s(1) + self._s(2) / self._s(1)
 
     @cached_property
     def weights(self) -> np.ndarray:
@@ -142,8 +173,8 @@ class Mesh:
         window = (rows - start)[inner] + np.arange(-2, 3)  # node i sits at rows - start in its window
         d2[inner, window], d1[inner, window] = fd_weights(CENTRED, 2), fd_weights(CENTRED, 1)
         dxi = 1.0 / n
-        yp = self.dy_dxi[rows]
-        return Stencil(cols, (d2 / dxi**2 - self.stretch * d1 / dxi) / yp[:, None] ** 2)
+        yp, curvature = self.dy_dxi[rows], self.curvature[rows]
+        return Stencil(cols, (d2 / dxi**2 - curvature[:, None] * d1 / dxi) / yp[:, None] ** 2)
 
     @_per_order
     def cell_integrals(self, order: int) -> Stencil:
@@ -178,24 +209,6 @@ class Mesh:
         np.add.at(q, cells.cols, cells.weights)
         return q
 
-    def xi(self, y) -> np.ndarray:
-        """The map's inverse: the uniform coordinate xi in [0, 1] of the depths y."""
-        a = self.stretch
-        return np.log1p(np.asarray(y) * np.expm1(a)) / a if a > 0 else np.asarray(y, dtype=float)
-
-    def interpolate(self, f, y) -> np.ndarray:
-        """Nodal values f (last axis) at the depths y: the polynomial of degree INTERPOLATION_DEGREE in
-        xi through the nearest nodes (error O(h^(degree + 1)) for smooth f, beyond the order-4 solve's)."""
-        n, deg = self.n_cells, INTERPOLATION_DEGREE
-        s = self.xi(y) * n
-        start = np.clip(np.floor(s).astype(int) - deg // 2, 0, n - deg)
-        f = np.asarray(f)
-        out = np.zeros(f.shape[:-1] + np.shape(s))
-        for j in range(deg + 1):
-            basis = np.prod([(s - start - k) / (j - k) for k in range(deg + 1) if k != j], axis=0)
-            out += basis * f[..., start + j]
-        return out
-
     def integral_from_bottom(self, f, order: int):
         """int_y^1 f dy at every node (last axis), of the given order."""
         pieces = self.cell_integrals(order)(f)
@@ -203,7 +216,8 @@ class Mesh:
         return np.concatenate([up, np.zeros_like(up[..., :1])], axis=-1)
 
 
-#: degree of Mesh.interpolate (a remeshed state keeps the order-4 solve's accuracy)
-INTERPOLATION_DEGREE = 5
+#: the width in xi of the map's wall cluster (module docstring; measured for an imposed speed: with E = 7.3,
+#: 0.1 gives delta fourth order through t~ = 1e-4 ... 10, bench/RESULTS.md "One map with a wall cluster")
+WALL_CLUSTER_WIDTH = 0.1
 #: the map's largest stretch: exp(40) ~ 2e17 between the largest and the smallest cell
 MAX_STRETCH = 40.0

@@ -12,7 +12,7 @@ from scipy.integrate import solve_ivp
 
 from .problems import ImposedStress
 from .rheology import Friction
-from .solver import Numerics, Solution, check_times, stretch_for
+from .solver import Numerics, Solution, check_times, map_for
 from .stepper import StepStats
 
 
@@ -21,7 +21,7 @@ def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics 
     """Imposed wall stress by solve_ivp(method) on the interior nodes, tau~(0) = 1 for t~ > 0."""
     t = check_times(times)
     numerics = numerics.for_drive("stress")
-    problem = ImposedStress(friction, mu_w, numerics.mesh(stretch_for(friction, mu_w, t[0])), numerics.order)
+    problem = ImposedStress(friction, mu_w, numerics.mesh(*map_for(friction, mu_w, "stress", t[0])), numerics.order)
     x0 = problem.initial()
     x0[0] = 1.0
 

@@ -44,9 +44,11 @@ def velocity(fr: Friction, mu_w: float, mesh: Mesh, tau, order: int = 4, wall_sp
 def layer_thickness(fr: Friction, mu_w: float, mesh: Mesh, tau, order: int = 4, threshold: float = DELTA_THRESHOLD):
     """delta(t~)/delta_s: first depth where (mu - mu_s) falls to ``threshold`` of the wall excess
     (mu(0) - mu_s), interpolated in log (mu - mu_s) between nodes (continuum.crossing): linearly for
-    order 2 (exact for an exponential tail), on a cubic for order 4."""
+    order 2 (exact for an exponential tail), on a cubic for order 4, of log((mu - mu_s)/(1 - y~)) (mu = mu_s
+    at y~ = 1, the bottom of the steady layer)."""
     mu = friction_profile(fr, mu_w, mesh, tau)
-    return crossing_depth(mesh.y, (mu - fr.mu_s) / (mu[..., :1] - fr.mu_s), threshold, log=True, cubic=order > 2)
+    return crossing_depth(mesh.y, (mu - fr.mu_s) / (mu[..., :1] - fr.mu_s), threshold, log=True, cubic=order > 2,
+                          end_zero=True)
 
 
 class SeriesRecorder:

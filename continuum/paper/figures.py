@@ -52,12 +52,11 @@ STEADY = dict(color="k", ls="--", lw=2.5, alpha=0.6, label="steady")
 @dataclass(frozen=True)
 class FigureNumerics:
     """The figures' numerics, chosen for plotting accuracy (a line is ~1e-3 of a panel): the imposed
-    stresses at the solver's defaults; the imposed speeds on one map (no remeshing in time) by BDF at
-    rtol 3e-7: their 64-cell errors, ~1e-2 in delta and 4e-3 in u~ against 256 cells, are below a line's
-    width, where the remeshed solve costs 4x more CPU (bench/RESULTS.md "The paper's figure set")."""
+    stresses at the solver's defaults; the imposed speeds by BDF at rtol 3e-7 instead of the matched 1e-8
+    (bench/RESULTS.md "The paper's figure set")."""
 
     stress: Numerics = Numerics()
-    speed: Numerics = Numerics(rtol=3e-7, remesh=False)
+    speed: Numerics = Numerics(rtol=3e-7)
 
 
 FIGURE_NUMERICS = FigureNumerics()
@@ -271,10 +270,10 @@ def fig6_speed_profiles(sh: Sheet, runs: Runs):
         title = panel_title(j, "u_w", uw) + rf", $\tilde\mu_w^\infty$ = {FRICTION.tilde(sol.mu_w_inf):.3f}"
         sh.frame(top, f"{'abc'[j]}_top", "y", "u", title, case=case, xlim=(0, 1))
         sh.frame(bottom, f"{'abc'[j]}_bottom", "y", "mu_tilde", case=case, xlim=(0, 1), ylim=(-0.02, 1.02))
-        for t, y, u, mt in zip(sol.t, sol.y, sol.velocity, sol.mu_tilde):  # the mesh of each time (remeshed)
+        y = sol.mesh.y
+        for t, u, mt in zip(sol.t, sol.velocity, sol.mu_tilde):
             sh.curve(top, y, u, curve="numerics", t=t, **at(t))
             sh.curve(bottom, y, mt, curve="numerics", t=t, **at(t))
-        y = sol.y[-1]
         sh.curve(top, y, steady_velocity(FRICTION, sol.mu_w_inf, y), curve="steady", **STEADY)
         sh.curve(bottom, y, FRICTION.tilde(steady_mu(FRICTION, sol.mu_w_inf, y)), curve="steady", **STEADY)
 
@@ -327,7 +326,8 @@ def fig9_speed_self_similar(sh: Sheet, runs: Runs):
         ax = sh.axes[0, j]
         sh.frame(ax, "abc"[j], "eta", "mu_tilde", panel_title(j, "u_w", uw), case=f"u_w={uw}", xlim=(0, ETA_MAX),
                  ylim=(-0.02, 1.02))
-        for t, y, mu_w, mt in zip(sol.t, sol.y, sol.mu_w, sol.mu_tilde):
+        y = sol.mesh.y
+        for t, mu_w, mt in zip(sol.t, sol.mu_w, sol.mu_tilde):
             keep = eta(y, t) <= ETA_MAX
             approx = FRICTION.tilde(speed_short_time_mu(FRICTION, mu_w, y, t))
             sh.curve(ax, eta(y, t)[keep], mt[keep], curve="numerics", t=t, **at(t))

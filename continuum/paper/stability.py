@@ -125,12 +125,9 @@ def _velocity(fr, mu_w, rule, n, t_tilde=VELOCITY_T_TILDE) -> Outcome:
 
 
 TIGHT = dict(rtol=1e-8, atol=1e-10)
-#: the speed maps keep one mesh, the map of the layer at T_END (the solver's remeshing in time, whose
-#: wall-graded first phase stalls the reference's tight steps on REFERENCE_CELLS cells, is not what they chart)
-ONE_MAP = dict(remesh=False)
 #: the imposed-speed maps: SDIRK4 (the time-step map of the DIRK the stress maps use; the default bdf is
 #: charted in bench/speed_solver.py) at a tolerance whose steps (~rtol^-0.55) stay affordable on 400 cells
-SPEED_ADAPTIVE = dict(rtol=1e-6, atol=1e-8, method="sdirk4", **ONE_MAP)
+SPEED_ADAPTIVE = dict(rtol=1e-6, atol=1e-8, method="sdirk4")
 
 REFERENCE_CELLS = 400
 
@@ -172,7 +169,7 @@ def _same_mesh_reference(numerics: Numerics):
 def _speed_reference(fr, u_w):
     """The imposed-speed solution at rtol 1e-8 on REFERENCE_CELLS cells with the solver's estimate of
     mu_w, raised to the runs' own time error (SPEED_ADAPTIVE on this mesh), which no refinement removes."""
-    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, **TIGHT, **ONE_MAP), estimate=True)
+    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, **TIGHT), estimate=True)
     runs = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, **SPEED_ADAPTIVE))
     mu_w = float(sol.mu_w[-1])
     return Outcome(mu_w, sol.tau[-1], estimate=max(float(sol.errors["mu_w"][-1]), abs(runs.mu_w[-1] - mu_w)) / mu_w)

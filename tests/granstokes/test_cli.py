@@ -151,15 +151,20 @@ def test_layering_no_package_imports_the_one_above():
         assert offenders == []
 
 
-def test_table_and_plot_of_a_remeshed_speed(capsys, tmp_path):
-    """An imposed speed asked past t~_mud = u~_w^2 is remeshed in time: the table names both maps'
-    stretches and its u~_w column is the imposed speed; the plot draws each time on its own nodes."""
-    from continuum.solver import WALL_STRETCH
+def test_table_and_plot_of_a_speed(capsys, tmp_path):
+    """An imposed speed at the default accuracy: the table names the wall-clustered map (solver.map_for), its
+    u~_w column is the imposed speed and its mu_w, delta carry estimates below 1e-6 relative; the plot is drawn."""
+    from continuum.solver import map_for
+    from tests.continuum.reference import PAPER
 
     code, out, _ = run(capsys, "--u-w", "1.334", "--times", "1e-3", "3", "--plot", str(tmp_path / "p.png"))
     assert code == 0
     numerics = next(line for line in out.splitlines() if line.startswith("numerics:"))
-    assert f"stretch {WALL_STRETCH:.3g} then " in numerics
+    stretch, folds = map_for(PAPER, 0.5, "speed", 1e-3)
+    assert f"stretch {stretch:.3g} + wall cluster {folds:.3g}," in numerics and "accuracy 1e-06 reached" in numerics
     rows = [line.split() for line in out.splitlines() if line.strip()[:1].isdigit()]
     assert [float(r[1]) for r in rows] == [1.334, 1.334]
+    for r in rows:
+        for value, err in ((r[4], r[6]), (r[7], r[9])):  # t, u~_w +- err, mu_w +- err, delta +- err
+            assert float(err) <= 1e-6 * float(value)
     assert (tmp_path / "p.png").stat().st_size > 20_000
