@@ -38,5 +38,4 @@ def solve_stress_mol(friction: Friction, mu_w: float, times, numerics: Numerics 
         raise RuntimeError(f"solve_ivp({method}) failed: {sol.message}")
     stats = StepStats(steps=int(sol.t.size), newton_iterations=int(sol.nfev), cpu_seconds=time.process_time() - start)
     tau = np.column_stack([np.ones(len(t)), sol.y.T, np.ones(len(t))])
-    return Solution("stress", friction, problem.mu_w, None, (problem.mesh,) * len(t), t, tau, (np.empty((0, 4)),),
-                    stats, numerics)
+    return Solution("stress", friction, problem.mu_w, None, problem.mesh, t, tau, np.empty((0, 4)), stats, numerics)

@@ -38,8 +38,8 @@ from ..problems import ImposedSpeed, ImposedStress
 from ..rheology import Friction
 from ..rules import YieldRule, wellposedness
 from ..scales import Material, Scales
-from ..solver import ORDER_GAIN, REFINEMENT, SAFETY, Numerics, solve_speed, solve_stress
-from ..steady import steady_mu
+from ..solver import ORDER_GAIN, REFINEMENT, SAFETY, Numerics, map_for, solve_speed, solve_stress
+from ..steady import mu_w_for_speed, steady_mu
 from ..stepper import explicit_euler
 from ..velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
@@ -105,7 +105,7 @@ def _explicit(fr, mu_w, n, factor) -> Outcome:
 
 
 def _speed(fr, u_w, n) -> Outcome:
-    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=n, **SPEED_ADAPTIVE))
+    sol = solve_speed(fr, u_w, [T_END], _speed_numerics(fr, u_w, n, **SPEED_ADAPTIVE))
     pb = ImposedSpeed(fr, u_w, sol.mesh)
     implied = pb.mu(pb.project(np.concatenate(([0.0], sol.tau[-1, 1:-1]))))[0]  # the condition's mu_w
     out = _stress_outcome(sol)
@@ -128,6 +128,14 @@ TIGHT = dict(rtol=1e-8, atol=1e-10)
 #: the imposed-speed maps: SDIRK4 (the time-step map of the DIRK the stress maps use; the default bdf is
 #: charted in bench/speed_solver.py) at a tolerance whose steps (~rtol^-0.55) stay affordable on 400 cells
 SPEED_ADAPTIVE = dict(rtol=1e-6, atol=1e-8, method="sdirk4")
+
+
+def _speed_numerics(fr, u_w, n, **tolerances) -> Numerics:
+    """The speed maps' mesh: the exponential map of the layer at T_END (solver.map_for), without the speed's
+    wall cluster, whose wall cells stall the reference's tight steps on REFERENCE_CELLS cells (mu_w then
+    converges at first order: solver.UNGRADED_SPEED_ORDER)."""
+    stretch, _ = map_for(fr, mu_w_for_speed(fr, u_w), "stress", T_END)
+    return Numerics(n_cells=n, stretch=stretch, **tolerances)
 
 REFERENCE_CELLS = 400
 
@@ -169,8 +177,8 @@ def _same_mesh_reference(numerics: Numerics):
 def _speed_reference(fr, u_w):
     """The imposed-speed solution at rtol 1e-8 on REFERENCE_CELLS cells with the solver's estimate of
     mu_w, raised to the runs' own time error (SPEED_ADAPTIVE on this mesh), which no refinement removes."""
-    sol = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, **TIGHT), estimate=True)
-    runs = solve_speed(fr, u_w, [T_END], Numerics(n_cells=REFERENCE_CELLS, **SPEED_ADAPTIVE))
+    sol = solve_speed(fr, u_w, [T_END], _speed_numerics(fr, u_w, REFERENCE_CELLS, **TIGHT), estimate=True)
+    runs = solve_speed(fr, u_w, [T_END], _speed_numerics(fr, u_w, REFERENCE_CELLS, **SPEED_ADAPTIVE))
     mu_w = float(sol.mu_w[-1])
     return Outcome(mu_w, sol.tau[-1], estimate=max(float(sol.errors["mu_w"][-1]), abs(runs.mu_w[-1] - mu_w)) / mu_w)
 
