@@ -16,7 +16,7 @@ Converged means: the degree-COARSE_DEGREE, rtol-COARSE_RTOL companion differs by
 (relative) in every quantity at every time.  Imposed speed (``speed_reference``): the same collocation
 of eq. GranularStokesEqn_muBIS, converged only after the lift-off of mu_w from mu_d (see there).  The
 values of both, at both resolutions, are cached in data/reference.csv, written by
-``python -m tests.continuum.reference`` (tests/continuum/test_reference.py checks the cache).
+``python -m tests.continuum.reference [CASE-PREFIX ...]`` (tests/continuum/test_reference.py checks the cache).
 
 Shared with the solver (so not checked by this reference): continuum.rheology.Friction (beta_w, mu~ and
 mu_w from mu~_w), DELTA_THRESHOLD and the steady mu_w^inf of a speed (continuum.steady, tested against
@@ -62,9 +62,18 @@ STRESS_CASES = {"paper-0.9": (PAPER, 0.9), "paper-0.5": (PAPER, 0.5), "paper-0.1
 #: reference and its companion (10-40 s of CPU per solve)
 SPEED_STRETCH = 8.0
 SPEED_DEGREE, SPEED_COARSE_DEGREE = 96, 64
+#: before the lift-off (``speed_early_case``): the map of SPEED_STRETCH plus a wall cluster of EARLY_WALL_FOLDS
+#: e-folds within CLUSTER_WIDTH of the wall (the solver's map, continuum.mesh), integrated only to the last
+#: time before the lift-off (through it, its wall node's tiny weight makes Radau's Newton fail: measured 47-87 s
+#: a solve, or failure); the degrees of the reference and its companion (5-16 s of CPU per solve).  Measured,
+#: degree 128 against 160: u~_w, mu_w, delta within 2e-10 (with 14 e-folds delta moved 1.4e-7 at t~ = 1e-4)
+EARLY_WALL_FOLDS, CLUSTER_WIDTH = 12.0, 0.1
+EARLY_DEGREE, EARLY_COARSE_DEGREE = 160, 128
 #: the output times of each speed: 0.198 stops at t~ = 1 (near its steady state, mu~_w ~ 0.9, the wall
 #: unknown, stiff through the wall node's weight ~ 1e-8, stalls Radau between t~ = 1 and 10)
 SPEED_TIMES = {0.198: TIMES[:-1], 1.334: TIMES, 4.629: TIMES}
+#: the times of each speed before its lift-off (t~_mud = u~_w^2: 0.039, 1.8, 21), where the early reference is run
+SPEED_EARLY_TIMES = {0.198: TIMES[:2], 1.334: TIMES[:3], 4.629: TIMES[:4]}
 DATA = Path(__file__).parent / "data" / "reference.csv"
 QUANTITIES = ("u_w", "mu_w", "delta")
 
@@ -83,26 +92,38 @@ class Reference:
 
 
 class ChebyshevMap:
-    """Chebyshev points s_j = (1 - cos(pi j/n))/2 (s_0 = 0 at the wall) mapped to
-    y~ = (e^(a s) - 1)/(e^a - 1); d/dy~, d2/dy~2 (y~'' = a y~') and Clenshaw-Curtis weights in y~."""
+    """Chebyshev points x_j = (1 - cos(pi j/n))/2 (x_0 = 0 at the wall) mapped to y~ = expm1(s(x))/expm1(s(1)),
+    s(x) = a x + E (1 - e^(-x/w))/(1 - e^(-1/w)) (stretch a, wall cluster of E e-folds, width w = CLUSTER_WIDTH;
+    E = 0: the exponential map); d/dy~, d2/dy~2 (y~''/y~' = s' + s''/s') and Clenshaw-Curtis weights in y~."""
 
-    def __init__(self, degree: int, stretch: float):
-        n, a = degree, stretch
+    def __init__(self, degree: int, stretch: float, wall_folds: float = 0.0):
+        n = degree
         theta = np.pi * np.arange(n + 1) / n
         x = np.cos(theta)
+        self.stretch, self.wall_folds = stretch, wall_folds
         self.s = (1 - x) / 2
-        self.y = np.expm1(a * self.s) / np.expm1(a)
-        dy_ds = a * np.exp(a * self.s) / np.expm1(a)
+        self.y = self.depth(self.s)
+        cluster = wall_folds / -math.expm1(-1 / CLUSTER_WIDTH) * np.exp(-self.s / CLUSTER_WIDTH)
+        ds, dds = stretch + cluster / CLUSTER_WIDTH, -cluster / CLUSTER_WIDTH**2
+        dy_ds = np.exp(self._exponent(self.s)) * ds / math.expm1(self._exponent(1.0))
         c = np.r_[2.0, np.ones(n - 1), 2.0] * (-1.0) ** np.arange(n + 1)
         dx = x[:, None] - x[None, :] + np.eye(n + 1)
         d = np.outer(c, 1 / c) / dx
         d -= np.diag(d.sum(axis=1))  # d/dx (Trefethen, Spectral Methods in MATLAB, cheb)
         d_ds = -2.0 * d
         self.d1 = d_ds / dy_ds[:, None]
-        self.d2 = (d_ds @ d_ds - a * d_ds) / dy_ds[:, None] ** 2
+        self.d2 = (d_ds @ d_ds - (ds + dds / ds)[:, None] * d_ds) / dy_ds[:, None] ** 2
         self.weights = _clenshaw_curtis(theta) / 2 * dy_ds
         self.bary = (-1.0) ** np.arange(n + 1) * np.r_[0.5, np.ones(n - 1), 0.5]  # barycentric, Chebyshev points
-        self.stretch = a
+
+    def _exponent(self, s):
+        """s(x) of the map (class docstring)."""
+        return self.stretch * s + self.wall_folds * np.expm1(-s / CLUSTER_WIDTH) / math.expm1(-1 / CLUSTER_WIDTH)
+
+    def depth(self, s):
+        """y~ at the map's coordinate s (x above)."""
+        total = self._exponent(1.0)
+        return np.expm1(self._exponent(s)) / math.expm1(total) if total > 0 else s
 
     def interpolate(self, f: np.ndarray, s: float) -> float:
         """The degree-n interpolant of nodal values ``f`` at s (barycentric formula)."""
@@ -117,7 +138,7 @@ class ChebyshevMap:
         """First depth y~ where the interpolant of ``f`` falls to ``level``."""
         j = int(np.argmax(f < level))
         s = brentq(lambda s: self.interpolate(f, s) - level, self.s[j - 1], self.s[j], xtol=1e-16, rtol=1e-15)
-        return math.expm1(self.stretch * s) / math.expm1(self.stretch)
+        return float(self.depth(s))
 
 
 def _clenshaw_curtis(theta: np.ndarray) -> np.ndarray:
@@ -172,7 +193,8 @@ def stress_reference(fr: Friction, mu_w: float, times=TIMES, degree: int = DEGRE
     return Reference(t, u_w, mu[:, 0], delta, degree, rtol, cpu)
 
 
-def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_DEGREE, rtol: float = RTOL) -> Reference:
+def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_DEGREE, rtol: float = RTOL,
+                    wall_folds: float = 0.0) -> Reference:
     """u~_w(t~), mu_w(t~) and delta(t~) for an imposed wall speed: eq. GranularStokesEqn_muBIS for mu~ at the
     interior nodes (mu~(1) = 1, mu~(y~, 0) = 1, beta_w from the steady mu_w^inf) and q = ln(1/mu~_w) at the
     wall, from eq. GranularStokesEqn_muBIS_BCs (Clenshaw-Curtis weights w_j) differentiated in time,
@@ -186,7 +208,7 @@ def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_D
     reference converges slowly (measured, test_reference.py)."""
     t = np.asarray(times, dtype=float)
     beta, dmu = fr.beta(mu_w_for_speed(fr, u_w)), fr.dmu
-    grid = ChebyshevMap(degree, SPEED_STRETCH)
+    grid = ChebyshevMap(degree, SPEED_STRETCH, wall_folds)
     p = 1 + beta * grid.y
     op = ((2 * beta / np.sqrt(p))[:, None] * grid.d1 + np.sqrt(p)[:, None] * grid.d2)[1:-1]
     op_wall, op_in, op_bottom = op[:, 0], op[:, 1:-1], op[:, -1]
@@ -196,7 +218,9 @@ def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_D
     def rate(_, x):
         wall, m = math.exp(-x[0]), x[1:]
         lap = op_wall * wall + op_in @ m + op_bottom
-        return np.r_[gain * wall * (inner @ lap), dmu**2 * m * m * lap]
+        out = np.empty(degree)
+        out[0], out[1:] = gain * wall * (inner @ lap), dmu**2 * m * m * lap
+        return out
 
     def jacobian(_, x):
         wall, m = math.exp(-x[0]), x[1:]
@@ -249,7 +273,8 @@ def cached(case: str, degree: int | None = None, times=TIMES, table=None) -> dic
     """u~_w, mu_w and delta (arrays at ``times``) of one cached case, at the reference degree (default) or
     ``degree``, from ``table`` (default: ``load()``)."""
     table = load() if table is None else table
-    degree = degree or (SPEED_DEGREE if case.startswith("speed") else DEGREE)
+    degree = degree or (EARLY_DEGREE if case.startswith("speed-early") else
+                        SPEED_DEGREE if case.startswith("speed") else DEGREE)
     rows = table[(table.case == case) & (table.degree == degree)]
     if not np.array_equal(rows.t, times):
         raise KeyError(f"{case} at degree {degree} is not cached at t~ = {list(times)}")
@@ -261,15 +286,24 @@ def speed_case(u_w: float, degree: int = SPEED_DEGREE) -> Reference:
     return speed_reference(PAPER, u_w, SPEED_TIMES[u_w], degree)
 
 
-def main() -> None:
-    """Recompute every case at both resolutions and write the cache."""
+def speed_early_case(u_w: float, degree: int = EARLY_DEGREE) -> Reference:
+    """The reference of one of the speeds before its lift-off (SPEED_EARLY_TIMES), on the wall-clustered map."""
+    return speed_reference(PAPER, u_w, SPEED_EARLY_TIMES[u_w], degree, wall_folds=EARLY_WALL_FOLDS)
+
+
+def main(only: list[str]) -> None:
+    """Recompute every case at both resolutions and write the cache; ``only``: the cases whose names start
+    with one of these, replaced in the cache, the others kept."""
     import pandas as pd
 
     solves = [(name, degree, lambda name=name, degree=degree, rtol=rtol: stress_case(name, degree, rtol))
               for name in STRESS_CASES for degree, rtol in ((COARSE_DEGREE, COARSE_RTOL), (DEGREE, RTOL))]
     solves += [(f"speed-{u_w}", degree, lambda u_w=u_w, degree=degree: speed_case(u_w, degree))
                for u_w in SPEED_TIMES for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
-    frames = []
+    solves += [(f"speed-early-{u_w}", degree, lambda u_w=u_w, degree=degree: speed_early_case(u_w, degree))
+               for u_w in SPEED_EARLY_TIMES for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
+    solves = [solve for solve in solves if not only or solve[0].startswith(tuple(only))]
+    frames = [] if not only else [load()[lambda table: ~table.case.str.startswith(tuple(only))]]
     for name, degree, solve in solves:
         frames.append(tabulate(name, solve()))
         print(f"{name} degree {degree}: {frames[-1].cpu_s.iloc[0]:.1f} s", flush=True)
@@ -278,4 +312,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(sys.argv[1:])

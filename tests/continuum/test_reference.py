@@ -70,6 +70,17 @@ def test_speed_reference_is_converged_after_lift_off(cache, u_w):
         assert np.all(np.abs(coarse[q] - fine[q])[late] <= ref.CONVERGED * np.abs(fine[q][late])), q
 
 
+@pytest.mark.parametrize("u_w", ref.SPEED_EARLY_TIMES)
+def test_speed_early_reference_is_converged_before_lift_off(cache, u_w):
+    """Before the lift-off, on the wall-clustered map (reference.speed_early_case), degree 128 -> 160
+    changes u~_w, mu_w and delta by less than 1e-9 (measured <= 2.1e-10)."""
+    times = ref.SPEED_EARLY_TIMES[u_w]
+    fine = values(cache, f"speed-early-{u_w}", ref.EARLY_DEGREE, times)
+    coarse = values(cache, f"speed-early-{u_w}", ref.EARLY_COARSE_DEGREE, times)
+    for q in ref.QUANTITIES:
+        assert np.all(np.abs(coarse[q] - fine[q]) <= ref.CONVERGED * np.abs(fine[q])), q
+
+
 def test_speed_reference_recomputed_is_converged_after_lift_off(cache):
     """The convergence above with the companion recomputed, not read from the cache: the cheapest speed solve
     (u~_w = 4.629 at degree 64, ~10 s; degree 96 takes ~18 s) is within CONVERGED of the cached reference after

@@ -176,30 +176,64 @@ def test_speed_error_estimates_bound_the_true_error(u_w):
         assert np.all(sol.errors[q][resolved] <= SPEED_PESSIMISM * true[resolved]), q
 
 
-@pytest.mark.parametrize("u_w", SPEEDS)
-def test_speed_default_accuracy_against_the_independent_reference(u_w):
-    """The CLI's default accuracy (ACCURACY) for a speed against the independent Chebyshev
-    reference where that is converged to 1e-9 (after the lift-off: tests/continuum/test_reference.py):
-    mu_w and delta within the accuracy, and within their estimates."""
+#: u~_w = 0.198 at t~ = 1e-3 (0.026 t~_mud) is in its early lift-off: mu~_w ~ 1e-5, a sub-layer mu~_w/b ~ 3e-7
+#: thinner than the wall cluster's first cell (1.5e-7 on 512 cells) resolves; mu_w is off by 1.35e-6 relative
+#: whatever the cells (0.6494059 on 256 and 512), and 0.64940507 with 18 e-folds, as the reference (whose map
+#: has 20), but 18 e-folds stall BDF near the steady state (bench/RESULTS.md "One map with a wall cluster")
+EARLY_LIFT_OFF_MISS = pytest.mark.xfail(strict=True, reason="the wall cluster's depth, not its cells, sets mu_w "
+                                                            "at 0.198's early lift-off (1.35e-6)")
+
+
+@pytest.fixture(scope="module")
+def default_speeds():
+    """The CLI's default accuracy for each speed at the reference's times, and the reference converged to 1e-9
+    (tests/continuum/test_reference.py) where it is: before the lift-off on its wall-clustered map, after it on
+    its exponential map (the lift-off times between, 0.198 at t~ = 1e-2 and 0.1, 1.334 at 0.1, 4.629 at 1,
+    have none: test_speed_error_estimates_bound_the_true_error covers them against 512 cells)."""
     from continuum.cli import ACCURACY
-    from tests.continuum.reference import SPEED_TIMES, cached
+    from tests.continuum.reference import SPEED_EARLY_TIMES, SPEED_TIMES, cached
     from tests.continuum.test_reference import SPEED_CONVERGED_FROM
 
-    times = SPEED_TIMES[u_w]
-    ref = cached(f"speed-{u_w:g}", times=times)
-    sol = solve_speed(FR, u_w, times, accuracy=ACCURACY)
-    late = np.asarray(times) >= SPEED_CONVERGED_FROM[u_w]
+    out = {}
+    for u_w in SPEEDS:
+        times = np.array(SPEED_TIMES[u_w])
+        early, late = np.isin(times, SPEED_EARLY_TIMES[u_w]), times >= SPEED_CONVERGED_FROM[u_w]
+        assert early.sum() + late.sum() >= len(times) - 2
+        refs = {"early": (early, cached(f"speed-early-{u_w:g}", times=times[early])),
+                "late": (late, {q: v[late] for q, v in cached(f"speed-{u_w:g}", times=times).items()})}
+        out[u_w] = solve_speed(FR, u_w, times, accuracy=ACCURACY), refs
+    return ACCURACY, out
+
+
+@pytest.mark.parametrize("u_w", [pytest.param(0.198, marks=EARLY_LIFT_OFF_MISS), 1.334, 4.629])
+def test_speed_default_accuracy_against_the_independent_reference(default_speeds, u_w):
+    """At the default accuracy mu_w and delta are within it of the independent reference, t~ = 1e-4 ... 10."""
+    accuracy, runs = default_speeds
+    sol, refs = runs[u_w]
     for q in ("mu_w", "delta"):
-        true = np.abs(getattr(sol, q) - ref[q])[late]
-        assert np.all(true <= ACCURACY * np.abs(ref[q][late])), q
-        assert np.all(true <= sol.errors[q][late]), q
+        for where, ref in refs.values():
+            true = np.abs(getattr(sol, q)[where] - ref[q])
+            assert np.all(true <= accuracy * np.abs(ref[q])), (q, true / np.abs(ref[q]))
+
+
+@pytest.mark.parametrize("when", ["late", pytest.param("early", marks=pytest.mark.xfail(
+    strict=True, reason="the wall cluster's depth sets errors the halving does not see: delta at t~ = 1e-4 "
+                        "3.2e-7 true, 2.6e-7 estimated; 0.198's mu_w at 1e-3 (EARLY_LIFT_OFF_MISS)"))])
+def test_speed_default_estimates_bound_the_independent_reference(default_speeds, when):
+    """At the default accuracy the estimates of mu_w and delta bound their errors against the reference: after
+    the lift-off they do; before it the cluster's depth leaves an error that mesh halving cannot see."""
+    _, runs = default_speeds
+    for sol, refs in runs.values():
+        where, ref = refs[when]
+        for q in ("mu_w", "delta"):
+            assert np.all(np.abs(getattr(sol, q)[where] - ref[q]) <= sol.errors[q][where]), q
 
 
 def test_speed_estimate_bounds_the_lift_off_peak(paper_friction):
     """Between the decades, at t~ = 2-3e-3 (u~_w = 0.198, t_mud = 0.039) the sub-layer lifts off the wall:
-    against a strongly graded reference (256 cells, stretch 12, rtol 1e-10: good to ~1e-7 there) the
-    estimate bounds the error of mu_w (on the layer's map alone it was first order, 1.1e-3 true against
-    2.3e-4 estimated)."""
+    against a strongly graded reference (256 cells, stretch 12, rtol 1e-10) the estimate bounds the difference
+    in mu_w (on the layer's map alone it was first order, 1.1e-3 true against 2.3e-4 estimated).  Both maps
+    miss the sub-layer thinner than their first cells alike (EARLY_LIFT_OFF_MISS): this checks the cells."""
     times = [1e-3, 2e-3, 3e-3]
     ref = solve_speed(paper_friction, 0.198, times, Numerics(n_cells=256, stretch=12.0, rtol=1e-10, atol=1e-12))
     sol = solve_speed(paper_friction, 0.198, times, estimate=True)
