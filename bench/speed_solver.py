@@ -7,8 +7,8 @@ the cost of an accuracy request.  Prints the tables for bench/RESULTS.md.
 
 Cases: the paper's three imposed speeds, t~ = 1e-4 ... 10, default tolerances (bdf).  Errors of mu_w
 and delta (max over the times, relative) against the Richardson extrapolation (order 4) of 256 and
-REFERENCE_CELLS wall-clustered cells (blind, like the solver's estimates, to the error the cluster's depth
-sets at the early lift-off: tests/continuum/test_speed_solver.py EARLY_LIFT_OFF_MISS); CPU: best of REPEATS.
+REFERENCE_CELLS wall-clustered cells (the early times on the deeper cluster from 128 cells on,
+continuum.solver.EARLY_SPAN, bench/early_times.py); CPU: best of REPEATS.
 """
 from __future__ import annotations
 

@@ -76,3 +76,15 @@ class SeriesRecorder:
         u_w = velocity(pb.friction, pb.mu_w, pb.mesh, tau, pb.order, getattr(pb, "u_w", None))[:, 0]
         return np.column_stack([t, u_w,
                                 pb.mu_w * tau[:, 0], delta]) if len(t) else np.empty((0, 4))
+
+
+class JoinedSeries:
+    """The per-step rows of two solves from t~ = 0 (SeriesRecorder or arrays): ``early``'s up to
+    ``t_split``, ``late``'s after it (continuum.solver: the early output times on a deeper map)."""
+
+    def __init__(self, early, t_split: float, late):
+        self.early, self.t_split, self.late = early, t_split, late
+
+    def table(self) -> np.ndarray:
+        rows = [r.table() if hasattr(r, "table") else r for r in (self.early, self.late)]
+        return np.vstack([rows[0][rows[0][:, 0] <= self.t_split], rows[1][rows[1][:, 0] > self.t_split]])

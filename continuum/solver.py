@@ -36,6 +36,23 @@ LAYER_SHARE = 0.3
 #: cell misses the y ln y below a/b), which costs delta: its cells near delta are stretch/N of it
 #: (bench/RESULTS.md "One map with a wall cluster")
 WALL_FOLDS, WALL_STRETCH = 14.0, 12.0
+#: ... except at an imposed speed's early output times, before EARLY_SPAN t~_mud/max(1, u~_w) (``early_until``):
+#: there the wall sub-layer is thinner than WALL_FOLDS' first cell and leaves errors that N does not change
+#: (measured: mu_w of 0.198 at 0.03 t~_mud 6e-6, 5e-6, 2e-6 on 128, 256, 512 cells, converging from 0.05
+#: t~_mud; delta at t~ = 1e-4 at order 2.3 for every speed, its estimate 10 % short), so they are solved apart,
+#: on EARLY_WALL_FOLDS (7e-9 on 256 cells; delta order 3.9), in a solve that stops at the last of them
+#: (``_run``): a cluster that deep stalls BDF later on, the sooner the faster the plate (round-off in the
+#: wall unknown; measured: 0.198 past 0.1 t~_mud, 1.334 0.07-0.1, 4.629 0.03-0.05), bench/RESULTS.md
+#: "The early times on a deeper cluster"
+EARLY_SPAN, EARLY_WALL_FOLDS = 0.04, 18.0
+#: ... on at least EARLY_MIN_CELLS cells: on 64 its first cells grow up to 9x from one to the next, and BDF's
+#: start fails (measured: t~_min = 1e-3, "step size less than spacing" at t~ = 8e-11 for every speed)
+EARLY_MIN_CELLS = 128
+
+
+def early_until(u_w: float) -> float:
+    """The imposed speed's output times below this are solved on the map of EARLY_WALL_FOLDS (EARLY_SPAN)."""
+    return EARLY_SPAN * u_w**2 / max(1.0, u_w)
 #: default time tolerance: MATCHED_RTOL[method] on MATCHED_CELLS cells, scaled as n_cells^-order (measured:
 #: the time error then stays below the space error of the mesh, bench/work_precision.py, bench/speed_solver.py)
 MATCHED_RTOL, MATCHED_CELLS = dict.fromkeys(METHODS, 1e-8), 256
@@ -183,17 +200,18 @@ class Solution:
     mesh: Mesh
     t: np.ndarray
     tau: np.ndarray             # (len(t), N+1)
-    recorded: np.ndarray | obs.SeriesRecorder  # the per-step rows, or the recorder that derives them (``steps``)
+    recorded: np.ndarray | obs.SeriesRecorder | obs.JoinedSeries  # the per-step rows, or what derives them
     stats: StepStats
     numerics: Numerics
     errors: dict = field(default_factory=dict)  # u_w, mu_w, delta -> absolute error estimates (aligned with t)
     accuracy: float | None = None               # the relative accuracy asked for (None: one solve)
+    early_mesh: Mesh | None = None              # the map of the early output times, if apart (EARLY_SPAN)
 
     @cached_property
     def steps(self) -> np.ndarray:
         """Rows (t, u_w, mu_w, delta) at every accepted step, derived on first use (``series``)."""
         r = self.recorded
-        return r.table() if isinstance(r, obs.SeriesRecorder) else r
+        return r.table() if isinstance(r, (obs.SeriesRecorder, obs.JoinedSeries)) else r
 
     @cached_property
     def series(self):
@@ -249,7 +267,9 @@ class Solution:
 
     def metadata(self) -> dict:
         return {**self.summary(), "u_w_imposed": self.u_w_imposed, "numerics": asdict(self.numerics),
-                "stats": asdict(self.stats), "units": UNITS,
+                "stats": asdict(self.stats), "units": UNITS, "map": self.mesh.label,
+                "early_map": None if self.early_mesh is None else {
+                    "label": self.early_mesh.label, "times_below": early_until(self.u_w_imposed)},
                 "delta_definition": "depth where mu - mu_s falls to 1e-3 of mu_w(t) - mu_s",
                 "provenance": provenance()}
 
@@ -285,7 +305,7 @@ MAX_CELLS = {"stress": 2048, "speed": 512}
 MIN_ESTIMATED_CELLS = {"stress": 8, "speed": 128}
 
 
-def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
+def _run_one(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
     recorder = obs.SeriesRecorder(problem) if record else None
     states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
                               h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder)
@@ -293,6 +313,24 @@ def _run(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solut
     steps = recorder if record else np.empty((0, 4))
     return Solution(problem.imposed, problem.friction, problem.mu_w,
                     getattr(problem, "u_w", None), problem.mesh, t, tau, steps, stats, numerics)
+
+
+def _run(make_problem, t, numerics: Numerics, grading, early, fixed_times=None, record=True) -> Solution:
+    """One solve on the map ``grading`` (stretch, wall_folds); the ``early`` output times (a mask) apart, on
+    the map of EARLY_WALL_FOLDS, up to the last of them: their profiles resampled onto the solve's mesh
+    (Mesh.resample: the wall node exact), their per-step rows up to it (observables.JoinedSeries)."""
+    if not early.any():
+        return _run_one(make_problem(numerics.mesh(*grading), numerics.order), t, numerics, fixed_times, record)
+    t_early, stretch = t[early], grading[0]
+    fixed_early = None if fixed_times is None else np.asarray(fixed_times)[np.asarray(fixed_times) <= t_early[-1]]
+    deep = _run_one(make_problem(numerics.mesh(stretch, EARLY_WALL_FOLDS - stretch), numerics.order), t_early,
+                    numerics, fixed_early, record)
+    if early.all():
+        return deep
+    late = _run_one(make_problem(numerics.mesh(*grading), numerics.order), t[~early], numerics, fixed_times, record)
+    return replace(late, t=t, tau=np.concatenate([deep.mesh.resample(deep.tau, late.mesh), late.tau]),
+                   recorded=obs.JoinedSeries(deep.recorded, t_early[-1], late.recorded),
+                   stats=deep.stats.add(late.stats), early_mesh=deep.mesh)
 
 
 #: the global time error per unit rtol of each method, the floor of an estimate (measured: SDIRK4 on a
@@ -316,7 +354,8 @@ def _estimate(fine: Solution, coarse: Solution) -> dict:
     return out
 
 
-def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, estimate, fixed_times) -> Solution:
+def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, estimate, fixed_times,
+           early_below=0.0) -> Solution:
     t = check_times(times)
     numerics = numerics or Numerics()
     if accuracy is not None or estimate:
@@ -324,9 +363,10 @@ def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, est
     asked, numerics = numerics, numerics.for_drive(imposed)
     order, factor, most = convergence_order(imposed, numerics), gain(imposed, numerics), MAX_CELLS[imposed]
     grading = map_for(friction, mu_w, imposed, t[0])
+    early = (t < early_below) & (asked.stretch is None) & (grading[1] > 0)  # a map with a wall cluster
 
     def run(num, record=True):
-        return _run(make_problem(num.mesh(*grading), num.order), t, num, fixed_times, record)
+        return _run(make_problem, t, num, grading, early & (num.n_cells >= EARLY_MIN_CELLS), fixed_times, record)
 
     if accuracy is None and not estimate:
         return run(numerics)
@@ -363,4 +403,4 @@ def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics | None
     eq. GranularStokesEqn_muBIS_BCs (``accuracy``, ``estimate`` as for solve_stress)."""
     mu_w = mu_w_for_speed(friction, u_w)
     return _solve(lambda mesh, order: ImposedSpeed(friction, u_w, mesh, order), "speed", mu_w, friction, times,
-                  numerics, accuracy, estimate, fixed_times)
+                  numerics, accuracy, estimate, fixed_times, early_until(u_w))

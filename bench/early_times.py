@@ -1,0 +1,55 @@
+"""An imposed speed's early output times on the deeper wall cluster (issue 11; continuum.solver.EARLY_SPAN):
+error and CPU with the early times apart (the default) against the solve's one map (EARLY_SPAN = 0), in one
+run.  Prints the table for bench/RESULTS.md "The early times on a deeper cluster".
+
+    PYTHONPATH=. .venv/bin/python bench/early_times.py
+
+Cases: the paper's three speeds at the early reference's times (tests/continuum/reference.py
+SPEED_EARLY_TIMES, t~ = 1e-4 up to before the lift-off) plus t~ = 10, default tolerances; errors (max over the
+early times, relative) of mu_w and delta against that reference (converged to 2e-10); CPU: best of REPEATS
+of the whole solve through t~ = 10.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+import continuum.solver as solver
+from continuum.solver import Numerics, early_until, solve_speed
+from tests.continuum.reference import PAPER, SPEED_EARLY_TIMES, cached
+
+CELLS, REPEATS = (64, 128, 256, 512), 2
+QUANTITIES = ("mu_w", "delta")
+
+
+def timed(solve):
+    best = np.inf
+    for _ in range(REPEATS):
+        start = time.process_time()
+        sol = solve()
+        best = min(best, time.process_time() - start)
+    return sol, best
+
+
+def main():
+    default_span = solver.EARLY_SPAN
+    print("| u~_w | early times below | cells | one map: mu_w | delta | CPU [ms] | apart: mu_w | delta | CPU [ms] | CPU ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for u_w, early in SPEED_EARLY_TIMES.items():
+        ref = cached(f"speed-early-{u_w:g}", times=np.array(early))
+        times = [*early, 10.0]
+        for n in CELLS:
+            row = []
+            for span in (0.0, default_span):
+                solver.EARLY_SPAN = span
+                sol, cpu = timed(lambda: solve_speed(PAPER, u_w, times, Numerics(n_cells=n)))
+                row += [f"{np.max(np.abs(getattr(sol, q)[:len(early)] / ref[q] - 1)):.1e}" for q in QUANTITIES]
+                row.append(cpu)
+            solver.EARLY_SPAN = default_span
+            print(f"| {u_w} | {early_until(u_w):.3g} | {n} | {row[0]} | {row[1]} | {1e3 * row[2]:.0f} | {row[3]} | "
+                  f"{row[4]} | {1e3 * row[5]:.0f} | {row[5] / row[2]:.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
