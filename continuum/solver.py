@@ -53,6 +53,11 @@ EARLY_MIN_CELLS = 128
 def early_until(u_w: float) -> float:
     """The imposed speed's output times below this are solved on the map of EARLY_WALL_FOLDS (EARLY_SPAN)."""
     return EARLY_SPAN * u_w**2 / max(1.0, u_w)
+#: the least stretch of a speed's map: the map's slope at the bottom is ~a/N (the cluster's e^(-xi/w) has
+#: died out there), so below it the cells crowd the bottom (a = 0: xi in [0.5, 1] maps onto y~ in [0.9, 1])
+#: and the layer starves (measured: 0.198 from t~_min = 0.1, a = 0: delta's estimate 3e-5 on 256 cells,
+#: 1e-6 unreachable on 512; a = 4: 4.7e-7, 1e-6 on 256 cells from t~_min = 0.01 and 0.1 for all three speeds)
+CLUSTER_MIN_STRETCH = 4.0
 #: default time tolerance: MATCHED_RTOL[method] on MATCHED_CELLS cells, scaled as n_cells^-order (measured:
 #: the time error then stays below the space error of the mesh, bench/work_precision.py, bench/speed_solver.py)
 MATCHED_RTOL, MATCHED_CELLS = dict.fromkeys(METHODS, 1e-8), 256
@@ -171,11 +176,11 @@ def map_for(fr: Friction, mu_w: float, imposed: str, t_min: float) -> tuple[floa
     """The map (stretch, wall_folds) of a solve whose first output time is t_min (continuum.mesh): the
     stretch of the layer at t_min (``stretch_for``) of the short-time thickness delta ~ SELF_SIMILAR_DELTA
     Dmu mu~_w sqrt(t~) of a stress (the wall diffusivity is (Dmu mu~_w)^2), SELF_SIMILAR_DELTA Dmu sqrt(t~)
-    of a speed (eq. muShortTime_VelocityImposed, while mu_w = mu_d); a speed's map gets a wall cluster up to
-    WALL_FOLDS e-folds in all."""
+    of a speed (eq. muShortTime_VelocityImposed, while mu_w = mu_d), at least CLUSTER_MIN_STRETCH; a speed's
+    map gets a wall cluster up to WALL_FOLDS e-folds in all."""
     if imposed == "stress":
         return stretch_for(SELF_SIMILAR_DELTA * fr.dmu * max(fr.tilde(mu_w), 0.05) * math.sqrt(t_min)), 0.0
-    a = stretch_for(SELF_SIMILAR_DELTA * fr.dmu * math.sqrt(t_min))
+    a = max(stretch_for(SELF_SIMILAR_DELTA * fr.dmu * math.sqrt(t_min)), CLUSTER_MIN_STRETCH)
     return a, max(WALL_FOLDS - a, 0.0)
 
 

@@ -301,3 +301,21 @@ def test_speed_early_times_on_the_deeper_cluster(monkeypatch):
         assert (sol.early_mesh is not None) == (span > 0)
     assert np.all(errors[0] < 1e-7) and errors[1][1] > 1e-6, errors
     assert np.all(np.diff(sol.series.t) > 0)
+
+
+@pytest.mark.parametrize("u_w", [0.198, 1.334, 4.629])
+def test_speed_from_a_late_first_time_meets_the_default_accuracy(u_w):
+    """From t~_min = 0.1 the layer's stretch would be 0 and the map's cells crowd the bottom (solver.
+    CLUSTER_MIN_STRETCH): 0.198 could not reach 1e-6 on 512 cells.  Now every speed reaches the CLI's default
+    accuracy, and is within it of the independent reference where that is converged (t~ >= 1, or 10)."""
+    from continuum.cli import ACCURACY
+    from tests.continuum.reference import SPEED_TIMES, cached
+    from tests.continuum.test_reference import SPEED_CONVERGED_FROM
+
+    times = np.array(SPEED_TIMES[u_w])
+    late = times >= SPEED_CONVERGED_FROM[u_w]
+    sol = solve_speed(FR, u_w, [0.1, *times[late]], accuracy=ACCURACY)
+    ref = {q: v[late] for q, v in cached(f"speed-{u_w:g}", times=times).items()}
+    for q in ("mu_w", "delta"):
+        assert np.all(np.abs(getattr(sol, q)[1:] - ref[q]) <= ACCURACY * np.abs(ref[q])), q
+        assert np.all(np.abs(getattr(sol, q)[1:] - ref[q]) <= sol.errors[q][1:]), q
