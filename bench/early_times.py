@@ -6,30 +6,19 @@ run.  Prints the table for bench/RESULTS.md "The early times on a deeper cluster
 
 Cases: the paper's three speeds at the early reference's times (tests/continuum/reference.py
 SPEED_EARLY_TIMES, t~ = 1e-4 up to before the lift-off) plus t~ = 10, default tolerances; errors (max over the
-early times, relative) of mu_w and delta against that reference (converged to 2e-10); CPU: best of REPEATS
-of the whole solve through t~ = 10.
+early times, relative) of mu_w and delta against that reference (converged to 2e-10); CPU: best of
+bench/speed_solver.py's REPEATS of the whole solve through t~ = 10.
 """
 from __future__ import annotations
-
-import time
 
 import numpy as np
 
 import continuum.solver as solver
+from bench.speed_solver import QUANTITIES, timed  # timed: best of its REPEATS
 from continuum.solver import Numerics, early_until, solve_speed
 from tests.continuum.reference import PAPER, SPEED_EARLY_TIMES, cached
 
-CELLS, REPEATS = (64, 128, 256, 512), 2
-QUANTITIES = ("mu_w", "delta")
-
-
-def timed(solve):
-    best = np.inf
-    for _ in range(REPEATS):
-        start = time.process_time()
-        sol = solve()
-        best = min(best, time.process_time() - start)
-    return sol, best
+CELLS = (64, 128, 256, 512)
 
 
 def main():

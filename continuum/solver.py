@@ -53,6 +53,8 @@ EARLY_MIN_CELLS = 128
 def early_until(u_w: float) -> float:
     """The imposed speed's output times below this are solved on the map of EARLY_WALL_FOLDS (EARLY_SPAN)."""
     return EARLY_SPAN * u_w**2 / max(1.0, u_w)
+
+
 #: the least stretch of a speed's map: the map's slope at the bottom is ~a/N (the cluster's e^(-xi/w) has
 #: died out there), so below it the cells crowd the bottom (a = 0: xi in [0.5, 1] maps onto y~ in [0.9, 1])
 #: and the layer starves (measured: 0.198 from t~_min = 0.1, a = 0: delta's estimate 3e-5 on 256 cells,
