@@ -119,8 +119,11 @@ PREDICTOR_POINTS = 2
 NEWTON_CUT, REPEAT_BAND, CAP_START, CAP_GROWTH = 0.25, 0.05, 0.5, 1.1
 #: a step ends on an output time within this relative distance of it
 OUTPUT_RTOL = 1e-13
-#: bdf hands over to HANDOVER when its step falls below BDF_STALL t (``_integrate_bdf``)
-BDF_STALL, HANDOVER = 1e-3, "sdirk4"
+#: bdf hands over to HANDOVER when its step has stayed below BDF_STALL t for STALL_STEPS steps in a row
+#: (``_integrate_bdf``): one small step is no stall (scipy cuts a step to land on an output time and keeps
+#: that size for order + 1 steps before it may grow; a handover there, SDIRK4 on the speed's DAE, crawled:
+#: u~_w = 0.02 on 256 cells, 199 000 steps to t~ = 1.1, where BDF goes on to t~ = 10 in 77)
+BDF_STALL, STALL_STEPS, HANDOVER = 1e-3, 50, "sdirk4"
 #: bdf's reduced Jacobian is dense up to this many unknowns: scipy's dense LU path costs less than
 #: SuperLU with its sparse bookkeeping there (measured, u~_w = 1.334: 64 cells 1.4x, 128 cells 1.4x less CPU;
 #: 256 cells 4x more), bench/RESULTS.md "The paper's figure set"
@@ -430,9 +433,9 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     last step to the bound): its dense output had been ~1e4 rtol off through an imposed speed's lift-off,
     where the landed steps are within ~1-20 rtol (bench/RESULTS.md "Remeshing the speed in time").
     Near a steady state at tight tolerances the round-off of the rate (|tau~|/h^2 eps) stops scipy's
-    Newton from converging and the steps shrink without end: once the step falls below BDF_STALL t,
-    after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is needed), the rest goes
-    to HANDOVER (whose Newton accepts an update at round-off)."""
+    Newton from converging and the steps shrink without end: once the step has stayed below BDF_STALL t
+    for STALL_STEPS steps, after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is
+    needed), the rest goes to HANDOVER (whose Newton accepts an update at round-off)."""
     from scipy.integrate import BDF
 
     if not np.all(problem.mass[1:] == 1.0) or problem.mass[0] != 0.0:
@@ -479,7 +482,7 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     states = np.empty((len(t_out), len(x)))
     if observer is not None and resume is None:
         observer(t0, x)
-    k = 0
+    k = small = 0  # the output times reached, the small steps in a row
     while k < len(t_out):
         if stats.steps >= max_steps:
             raise RuntimeError(f"max_steps = {max_steps} reached at t = {solver.t:.3e}")
@@ -495,7 +498,9 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
             k += 1
             if k < len(t_out):
                 solver.t_bound, solver.status = t_out[k], "running"
-        elif solver.t > getattr(problem, "lift_off_end", 0.0) and solver.step_size < BDF_STALL * solver.t:
+            continue
+        small = small + 1 if solver.step_size < BDF_STALL * solver.t else 0
+        if solver.t > getattr(problem, "lift_off_end", 0.0) and small >= STALL_STEPS:
             states[k:], rest = integrate(problem, t_out[k:], method=HANDOVER, rtol=rtol, atol=atol,
                                          h0=solver.step_size, observer=observer, max_steps=max_steps - stats.steps,
                                          resume=(solver.t, x))

@@ -34,3 +34,15 @@ def test_end_zero_crossing_near_a_vanishing_end(n):
     without = crossing_depth(y, f(y), LEVEL, log=True, cubic=True)
     assert abs(with_end - exact) < 1e-12
     assert abs(without - exact) > 1e-6
+
+
+def test_end_zero_crossing_in_the_last_cell_ignores_the_ends_round_off():
+    """Crossing in the last cell, the end node at round-off (5.6e-17, as mu_w/p~(1) - mu_s gives) rather than
+    0: the end is taken as 0 and the cubic through it is in f, exact for this linear end (f = 1 - y);
+    the end's round-off had put log(f/0) into the cubic (delta of u~_w = 0.02 at t~ = 10 read 0.979 for 0.999)."""
+    y = np.linspace(0.0, 1.0, 257)
+    exact = 1 - LEVEL
+    f = 1 - y
+    f[-1] = 5.6e-17
+    assert y[-2] < exact
+    assert abs(crossing_depth(y, f, LEVEL, log=True, cubic=True, end_zero=True) - exact) < 1e-12
