@@ -1,10 +1,12 @@
 """``granstokes continuum``: solve the paper's problem (imposed wall stress or speed).
 
 Bad input raises ``ValueError`` naming the parameter and its range before any work; the root parser
-(granstokes.cli) prints it as one line with exit status 2."""
+(granstokes.cli) prints it as one line with exit status 2.  A solve that fails (the stepper's
+RuntimeError) is one line on stderr, exit status 1, with nothing written."""
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 from granstokes.validate import finite, output_dir, output_file, require
@@ -43,7 +45,12 @@ def run_continuum(args) -> int:
     if args.save is not None:
         output_dir(args.save, "--save")
     solve = solve_stress if imposed == "stress" else solve_speed
-    sol = solve(fr, value, times, numerics, accuracy=accuracy, estimate=True)
+    try:
+        sol = solve(fr, value, times, numerics, accuracy=accuracy, estimate=True)
+    except RuntimeError as err:  # the time stepper's failures (continuum.stepper): no output is written
+        print(f"granstokes: continuum: the {imposed} solve failed ({err}); nothing was written. Try a looser "
+              f"--accuracy, or --n-cells/--rtol/--method to choose the numerics", file=sys.stderr)
+        return 1
     if args.json:
         print(json.dumps(sol.summary()))
     else:
