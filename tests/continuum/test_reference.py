@@ -58,25 +58,34 @@ def test_solver_agrees_with_the_reference_within_its_estimate(cache, case):
 SPEED_CONVERGED_FROM = {0.198: 1.0, 1.334: 1.0, 4.629: 10.0}
 
 
-@pytest.mark.parametrize("u_w", SPEED_CONVERGED_FROM)
-def test_speed_reference_is_converged_after_lift_off(cache, u_w):
+#: every cached speed case after the lift-off: (times, converged from), the paper's three and the disks'
+#: (u~_w = 1, t~_mud = 1: converged from t~ = 1, measured 2.6e-8 at t~ = 0.1)
+SPEED_LATE = {**{f"speed-{u_w}": (ref.SPEED_TIMES[u_w], t) for u_w, t in SPEED_CONVERGED_FROM.items()},
+              f"speed-disks-{ref.DISKS_SPEED:g}": (ref.TIMES, 1.0)}
+#: ... and before it: the times
+SPEED_EARLY = {**{f"speed-early-{u_w}": times for u_w, times in ref.SPEED_EARLY_TIMES.items()},
+               f"speed-early-disks-{ref.DISKS_SPEED:g}": ref.DISKS_SPEED_EARLY_TIMES}
+
+
+@pytest.mark.parametrize("case", SPEED_LATE)
+def test_speed_reference_is_converged_after_lift_off(cache, case):
     """Degree 64 -> 96 changes u~_w, mu_w and delta by less than 1e-9 once mu_w has left mu_d (before, the
     unresolved wall sub-layer leaves changes of 1e-7..2e-5: measured, reference.speed_reference)."""
-    times = ref.SPEED_TIMES[u_w]
-    fine = values(cache, f"speed-{u_w}", ref.SPEED_DEGREE, times)
-    coarse = values(cache, f"speed-{u_w}", ref.SPEED_COARSE_DEGREE, times)
-    late = np.asarray(times) >= SPEED_CONVERGED_FROM[u_w]
+    times, converged_from = SPEED_LATE[case]
+    fine = values(cache, case, ref.SPEED_DEGREE, times)
+    coarse = values(cache, case, ref.SPEED_COARSE_DEGREE, times)
+    late = np.asarray(times) >= converged_from
     for q in ref.QUANTITIES:
         assert np.all(np.abs(coarse[q] - fine[q])[late] <= ref.CONVERGED * np.abs(fine[q][late])), q
 
 
-@pytest.mark.parametrize("u_w", ref.SPEED_EARLY_TIMES)
-def test_speed_early_reference_is_converged_before_lift_off(cache, u_w):
+@pytest.mark.parametrize("case", SPEED_EARLY)
+def test_speed_early_reference_is_converged_before_lift_off(cache, case):
     """Before the lift-off, on the wall-clustered map (reference.speed_early_case), degree 128 -> 160
     changes u~_w, mu_w and delta by less than 1e-9 (measured <= 2.1e-10)."""
-    times = ref.SPEED_EARLY_TIMES[u_w]
-    fine = values(cache, f"speed-early-{u_w}", ref.EARLY_DEGREE, times)
-    coarse = values(cache, f"speed-early-{u_w}", ref.EARLY_COARSE_DEGREE, times)
+    times = SPEED_EARLY[case]
+    fine = values(cache, case, ref.EARLY_DEGREE, times)
+    coarse = values(cache, case, ref.EARLY_COARSE_DEGREE, times)
     for q in ref.QUANTITIES:
         assert np.all(np.abs(coarse[q] - fine[q]) <= ref.CONVERGED * np.abs(fine[q])), q
 

@@ -11,7 +11,7 @@ from continuum.rheology import Friction
 from continuum.solver import (MIN_ESTIMATED_CELLS, TIME_ERROR_PER_RTOL, WALL_STRETCH, Numerics, map_for, solve_speed,
                               solve_stress)
 from continuum.steady import mu_w_for_speed
-from tests.continuum.reference import PAPER as FR
+from tests.continuum.reference import DISKS_SPEED, PAPER as FR
 from continuum.stepper import integrate
 
 SPEEDS = (0.198, 1.334, 4.629)
@@ -201,27 +201,29 @@ def default_speeds():
     """The CLI's default accuracy for each speed at the reference's times, and the reference converged to 1e-9
     (tests/continuum/test_reference.py) where it is: before the lift-off on its wall-clustered map, after it on
     its exponential map (the lift-off times between, 0.198 at t~ = 1e-2 and 0.1, 1.334 at 0.1, 4.629 at 1,
-    have none: test_speed_error_estimates_bound_the_true_error covers them against 512 cells)."""
+    have none: test_speed_error_estimates_bound_the_true_error covers them against 512 cells).  The paper's
+    three speeds and the disks' u~_w = 1 (a second parameter set; its lift-off time t~ = 0.1 has none)."""
     from continuum.cli import ACCURACY
-    from tests.continuum.reference import SPEED_EARLY_TIMES, SPEED_TIMES, cached
-    from tests.continuum.test_reference import SPEED_CONVERGED_FROM
+    from tests.continuum.reference import DISKS, cached
+    from tests.continuum.test_reference import SPEED_EARLY, SPEED_LATE
 
     out = {}
-    for u_w in SPEEDS:
-        times = np.array(SPEED_TIMES[u_w])
-        early, late = np.isin(times, SPEED_EARLY_TIMES[u_w]), times >= SPEED_CONVERGED_FROM[u_w]
+    for label, fr, u_w in [*((f"{u_w:g}", FR, u_w) for u_w in SPEEDS), (f"disks-{DISKS_SPEED:g}", DISKS, DISKS_SPEED)]:
+        (times, converged_from), early_times = SPEED_LATE[f"speed-{label}"], SPEED_EARLY[f"speed-early-{label}"]
+        times = np.array(times)
+        early, late = np.isin(times, early_times), times >= converged_from
         assert early.sum() + late.sum() >= len(times) - 2
-        refs = {"early": (early, cached(f"speed-early-{u_w:g}", times=times[early])),
-                "late": (late, {q: v[late] for q, v in cached(f"speed-{u_w:g}", times=times).items()})}
-        out[u_w] = solve_speed(FR, u_w, times, accuracy=ACCURACY), refs
+        refs = {"early": (early, cached(f"speed-early-{label}", times=times[early])),
+                "late": (late, {q: v[late] for q, v in cached(f"speed-{label}", times=times).items()})}
+        out[label] = solve_speed(fr, u_w, times, accuracy=ACCURACY), refs
     return ACCURACY, out
 
 
-@pytest.mark.parametrize("u_w", [0.198, 1.334, 4.629])
-def test_speed_default_accuracy_against_the_independent_reference(default_speeds, u_w):
+@pytest.mark.parametrize("case", [*(f"{u_w:g}" for u_w in SPEEDS), f"disks-{DISKS_SPEED:g}"])
+def test_speed_default_accuracy_against_the_independent_reference(default_speeds, case):
     """At the default accuracy mu_w and delta are within it of the independent reference, t~ = 1e-4 ... 10."""
     accuracy, runs = default_speeds
-    sol, refs = runs[u_w]
+    sol, refs = runs[case]
     for q in ("mu_w", "delta"):
         for where, ref in refs.values():
             true = np.abs(getattr(sol, q)[where] - ref[q])
