@@ -119,10 +119,10 @@ PREDICTOR_POINTS = 2
 NEWTON_CUT, REPEAT_BAND, CAP_START, CAP_GROWTH = 0.25, 0.05, 0.5, 1.1
 #: a step ends on an output time within this relative distance of it
 OUTPUT_RTOL = 1e-13
-#: bdf hands over to HANDOVER when its step has stayed below BDF_STALL t for STALL_STEPS steps in a row
-#: (``_integrate_bdf``): one small step is no stall (scipy cuts a step to land on an output time and keeps
-#: that size for order + 1 steps before it may grow; a handover there, SDIRK4 on the speed's DAE, crawled:
-#: u~_w = 0.02 on 256 cells, 199 000 steps to t~ = 1.1, where BDF goes on to t~ = 10 in 77)
+#: bdf hands over to HANDOVER when its step has stayed below BDF_STALL t for STALL_STEPS steps in a row after
+#: the problem's lift-off (``_integrate_bdf``), counted afresh after each output time: scipy cuts the step that
+#: lands on one and keeps that size for order + 1 steps before it may grow, no stall (a handover there, SDIRK4
+#: on the speed's DAE, crawled: u~_w = 0.02 on 256 cells, 199 000 steps to t~ = 1.1; BDF goes on to 10 in 77)
 BDF_STALL, STALL_STEPS, HANDOVER = 1e-3, 50, "sdirk4"
 #: bdf's reduced Jacobian is dense up to this many unknowns: scipy's dense LU path costs less than
 #: SuperLU with its sparse bookkeeping there (measured, u~_w = 1.334: 64 cells 1.4x, 128 cells 1.4x less CPU;
@@ -150,7 +150,11 @@ class StepStats:
                          self.newton_failures + other.newton_failures, self.cpu_seconds + other.cpu_seconds)
 
 
-class NewtonFailure(RuntimeError):
+class StepperFailure(RuntimeError):
+    """A time integration that cannot go on (its step limit, or Newton's failure at the smallest step)."""
+
+
+class NewtonFailure(StepperFailure):
     pass
 
 
@@ -361,7 +365,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
         observer(t, x)
     while k < len(t_out):
         if stats.steps + stats.rejected >= max_steps:
-            raise RuntimeError(f"max_steps = {max_steps} reached at t = {t:.3e}")
+            raise StepperFailure(f"max_steps = {max_steps} reached at t = {t:.3e}")
         if schedule is not None:
             h_try = next(schedule) - t
         else:
@@ -485,7 +489,7 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     k = small = 0  # the output times reached, the small steps in a row
     while k < len(t_out):
         if stats.steps >= max_steps:
-            raise RuntimeError(f"max_steps = {max_steps} reached at t = {solver.t:.3e}")
+            raise StepperFailure(f"max_steps = {max_steps} reached at t = {solver.t:.3e}")
         message = solver.step()
         if solver.status == "failed":
             raise NewtonFailure(f"BDF failed at t = {solver.t:.3e}: {message}")
@@ -498,9 +502,11 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
             k += 1
             if k < len(t_out):
                 solver.t_bound, solver.status = t_out[k], "running"
+            small = 0  # the landing's cut steps are no stall
             continue
-        small = small + 1 if solver.step_size < BDF_STALL * solver.t else 0
-        if solver.t > getattr(problem, "lift_off_end", 0.0) and small >= STALL_STEPS:
+        after = solver.t > getattr(problem, "lift_off_end", 0.0)
+        small = small + 1 if after and solver.step_size < BDF_STALL * solver.t else 0
+        if small >= STALL_STEPS:
             states[k:], rest = integrate(problem, t_out[k:], method=HANDOVER, rtol=rtol, atol=atol,
                                          h0=solver.step_size, observer=observer, max_steps=max_steps - stats.steps,
                                          resume=(solver.t, x))

@@ -1,7 +1,8 @@
 """The ``granstokes`` command: the root parser over the three packages' subcommands.
 
 One error policy: bad input is one line on stderr naming the parameter and its valid range, exit
-status 2, raised before any computation or file is written (subcommands raise ``ValueError``)."""
+status 2, raised before any computation or file is written (subcommands raise ``ValueError``); a time
+integration that cannot go on (continuum.stepper.StepperFailure) is one line too, exit status 1."""
 from __future__ import annotations
 
 import argparse
@@ -68,6 +69,14 @@ def main(argv=None) -> int:
     except ValueError as err:
         print(f"granstokes: error: {err}", file=sys.stderr)
         return 2
+    except RuntimeError as err:
+        from continuum.stepper import StepperFailure
+
+        if not isinstance(err, StepperFailure):
+            raise
+        print(f"granstokes: error: the time integration failed ({err}); try a looser --accuracy or other "
+              f"numerics (--n-cells, --rtol, --method)", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

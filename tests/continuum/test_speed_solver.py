@@ -8,8 +8,8 @@ from continuum.closed_forms import speed_short_time_mu
 from continuum.mesh import Mesh
 from continuum.problems import ImposedSpeed
 from continuum.rheology import Friction
-from continuum.solver import (MIN_ESTIMATED_CELLS, TIME_ERROR_PER_RTOL, WALL_STRETCH, Numerics, map_for, solve_speed,
-                              solve_stress)
+from continuum.solver import (INITIAL_STEP, MIN_ESTIMATED_CELLS, TIME_ERROR_PER_RTOL, WALL_STRETCH, Numerics, map_for,
+                              solve_speed, solve_stress)
 from continuum.steady import mu_w_for_speed
 from tests.continuum.reference import DISKS_SPEED, PAPER as FR
 from continuum.stepper import integrate
@@ -162,18 +162,43 @@ def test_bdf_lands_on_every_output_time():
     assert abs(many.mu_w[DECADES.index(1.0)] / alone.mu_w[0] - 1) < TIME_ERROR_PER_RTOL["bdf"] * rtol
 
 
+def test_a_stall_after_the_lift_off_hands_over_to_sdirk4(paper_friction, monkeypatch):
+    """Where BDF's steps stay small (here every step counts as small: BDF_STALL = 1, STALL_STEPS = 5) after the
+    lift-off (u~_w = 0.198: 0.39), the rest goes to SDIRK4 from BDF's state, and the result is BDF's own to the
+    time error, TIME_ERROR_PER_RTOL rtol (measured 7.4e-9 in mu_w, 1.4e-9 in delta, at rtol 1e-8)."""
+    import continuum.stepper as stepper
+
+    times, numerics = [0.1, 1.0, 10.0], Numerics(n_cells=64)
+    alone = solve_speed(paper_friction, 0.198, times, numerics)
+    methods = []
+
+    def spy(*args, **kwargs):
+        methods.append(kwargs.get("method"))
+        return integrate(*args, **kwargs)
+
+    monkeypatch.setattr(stepper, "integrate", spy)
+    monkeypatch.setattr(stepper, "BDF_STALL", 1.0)
+    monkeypatch.setattr(stepper, "STALL_STEPS", 5)
+    handed = solve_speed(paper_friction, 0.198, times, numerics)
+    assert methods == [stepper.HANDOVER]
+    tolerance = TIME_ERROR_PER_RTOL["bdf"] * alone.numerics.rtol
+    for q in ("mu_w", "delta"):
+        assert np.all(np.abs(getattr(handed, q) / getattr(alone, q) - 1) <= tolerance), q
+
+
 def test_a_small_speed_steps_on_past_an_output_time(paper_friction):
     """BDF keeps the steps it cut to land on an output time for order + 1 steps: no stall, no handover to
-    SDIRK4 (which crawled on the speed's DAE: u~_w = 0.02 on 256 cells, 199 000 steps to t~ = 1.1). Here
-    it reaches t~ = 10 within 3000 steps (measured 942), where mu_w is the steady mu_w^inf to BDF's time
-    error (TIME_ERROR_PER_RTOL rtol; measured 4.9e-8 at rtol 1e-8, 3.9e-9 on 128 cells): the approach's
-    remainder (its slowest mode decays as e^(-2.7 t~)) and the mesh's O(h^4) are below 1e-10."""
+    SDIRK4 (which crawled on the speed's DAE). u~_w = 0.02 on 256 cells, as solve_speed runs it, reaches
+    t~ = 10 within 3000 steps (measured 961; with a single small step setting off the handover, STALL_STEPS = 1,
+    SDIRK4 reached 3000 at t~ = 1.001), where mu_w is the steady mu_w^inf to BDF's time error
+    (TIME_ERROR_PER_RTOL rtol): the approach's remainder (its slowest mode decays as e^(-2.7 t~)) and the mesh's
+    O(h^4) are below 1e-10."""
     fr, u_w = paper_friction, 0.02
     numerics = Numerics(n_cells=256).for_drive("speed")
     mu_w = mu_w_for_speed(fr, u_w)
-    pb = ImposedSpeed(fr, u_w, numerics.mesh(*map_for(fr, mu_w, "speed", 1e-4)))
-    states, _ = integrate(pb, [1e-4, 1e-2, 1.0, 10.0], method="bdf", rtol=numerics.rtol, atol=numerics.atol,
-                          h0=1e-9, max_steps=3000)
+    pb = ImposedSpeed(fr, u_w, numerics.mesh(*map_for(fr, mu_w, "speed", DECADES[0])))
+    states, _ = integrate(pb, DECADES, method="bdf", rtol=numerics.rtol, atol=numerics.atol,
+                          h0=INITIAL_STEP * DECADES[0], max_steps=3000)
     assert pb.mu(states[-1])[0] == pytest.approx(mu_w, rel=TIME_ERROR_PER_RTOL["bdf"] * numerics.rtol)
 
 

@@ -113,8 +113,8 @@ def test_console_script_exit_status(tmp_path):
 
 
 def test_a_failed_solve_is_one_line_and_writes_nothing(capsys, tmp_path, monkeypatch):
-    """The time stepper's failure (here its own step limit, cut to 5) is one stderr line naming the
-    drive and the failure, exit status 1, no table and no --save folder."""
+    """The time stepper's failure (here its own step limit, cut to 5) is one stderr line naming the failure,
+    exit status 1, no table and no --save folder."""
     import functools
 
     import continuum.solver
@@ -123,7 +123,7 @@ def test_a_failed_solve_is_one_line_and_writes_nothing(capsys, tmp_path, monkeyp
     monkeypatch.setattr(continuum.solver, "integrate", functools.partial(integrate, max_steps=5))
     code, out, err = run(capsys, "--u-w", "1.334", "--times", "1", "--save", str(tmp_path / "out"))
     assert code == 1 and out == "" and len(err.strip().splitlines()) == 1
-    assert err.startswith("granstokes: continuum: the speed solve failed (max_steps = 5 reached")
+    assert err.startswith("granstokes: error: the time integration failed (max_steps = 5 reached")
     assert not (tmp_path / "out").exists()
 
 
