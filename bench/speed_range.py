@@ -17,6 +17,7 @@ import numpy as np
 
 from bench.speed_solver import QUANTITIES, TIMES
 from continuum.cli import ACCURACY
+from continuum.scales import UNITS
 from continuum.solver import solve_speed
 from tests.continuum.reference import DISKS, PAPER
 
@@ -25,7 +26,7 @@ SPEEDS = (0.001, 0.005, 0.02, 0.05, 0.1, 0.5, 2.0, 10.0, 30.0)
 
 
 def main():
-    print(f"accuracy asked: {ACCURACY:g}; t~ = {TIMES}")
+    print(f"accuracy asked: {ACCURACY:g}; t~ = {TIMES}; the paper's dimensionless variables: {UNITS['tilde_variables']}")
     print("| friction | u~_w | t~_mud | cells | steps | CPU [s] | worst estimate | mu_w(10)/mu_w^inf - 1 |")
     print("|---|---|---|---|---|---|---|---|")
     for name, fr in FRICTIONS.items():

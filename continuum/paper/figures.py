@@ -53,7 +53,7 @@ STEADY = dict(color="k", ls="--", lw=2.5, alpha=0.6, label="steady")
 class FigureNumerics:
     """The figures' numerics, chosen for plotting accuracy (a line is ~1e-3 of a panel): the stresses at the
     solver's defaults on 64 cells; the speeds on 64 cells of the exponential map of the layer at T_MIN (the
-    speed's, solver.map_for, without its wall cluster: stretch 6.0) at rtol 1e-5: within 3e-4 in mu_w and 5e-4
+    speed's, solver.map_for, without its wall cluster: stretch 6.02) at rtol 1e-5: within 3e-4 in mu_w and 5e-4
     in delta of 256 clustered cells at the output times, in 220-250 BDF steps (~850 at the defaults, whose map
     follows the first output time, 1e-3, and left fig. 7's per-step delta 4.2 % low at t~ = 1e-4; now 0.2 %);
     bench/RESULTS.md "The paper's figure set"."""

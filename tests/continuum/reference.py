@@ -75,8 +75,9 @@ SPEED_TIMES = {0.198: TIMES[:-1], 1.334: TIMES, 4.629: TIMES}
 #: the times of each speed before its lift-off (t~_mud = u~_w^2: 0.039, 1.8, 21), where the early reference is run
 SPEED_EARLY_TIMES = {0.198: TIMES[:2], 1.334: TIMES[:3], 4.629: TIMES[:4]}
 #: a second parameter set for the imposed speed: the disks (DISKS) at u~_w = 1 (t~_mud = 1, mu~_w^inf = 0.34), the
-#: early reference at DISKS_SPEED_EARLY_TIMES, the other at TIMES ("speed-early-disks-1", "speed-disks-1")
+#: early reference at DISKS_SPEED_EARLY_TIMES, the other at TIMES, cached as speed-early-LABEL and speed-LABEL
 DISKS_SPEED, DISKS_SPEED_EARLY_TIMES = 1.0, TIMES[:3]
+DISKS_SPEED_LABEL = f"disks-{DISKS_SPEED:g}"
 DATA = Path(__file__).parent / "data" / "reference.csv"
 QUANTITIES = ("u_w", "mu_w", "delta")
 
@@ -294,16 +295,6 @@ def speed_early_case(u_w: float, degree: int = EARLY_DEGREE) -> Reference:
     return speed_reference(PAPER, u_w, SPEED_EARLY_TIMES[u_w], degree, wall_folds=EARLY_WALL_FOLDS)
 
 
-def disks_speed_case(degree: int = SPEED_DEGREE) -> Reference:
-    """The reference of the disks' speed (DISKS_SPEED) at TIMES."""
-    return speed_reference(DISKS, DISKS_SPEED, TIMES, degree)
-
-
-def disks_speed_early_case(degree: int = EARLY_DEGREE) -> Reference:
-    """The reference of the disks' speed before its lift-off (DISKS_SPEED_EARLY_TIMES), on the wall-clustered map."""
-    return speed_reference(DISKS, DISKS_SPEED, DISKS_SPEED_EARLY_TIMES, degree, wall_folds=EARLY_WALL_FOLDS)
-
-
 def main(only: list[str]) -> None:
     """Recompute every case at both resolutions and write the cache; ``only``: the cases whose names start
     with one of these, replaced in the cache, the others kept."""
@@ -315,9 +306,12 @@ def main(only: list[str]) -> None:
                for u_w in SPEED_TIMES for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
     solves += [(f"speed-early-{u_w}", degree, lambda u_w=u_w, degree=degree: speed_early_case(u_w, degree))
                for u_w in SPEED_EARLY_TIMES for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
-    solves += [(f"speed-disks-{DISKS_SPEED:g}", degree, lambda degree=degree: disks_speed_case(degree))
+    solves += [(f"speed-{DISKS_SPEED_LABEL}", degree,
+                lambda degree=degree: speed_reference(DISKS, DISKS_SPEED, TIMES, degree))
                for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
-    solves += [(f"speed-early-disks-{DISKS_SPEED:g}", degree, lambda degree=degree: disks_speed_early_case(degree))
+    solves += [(f"speed-early-{DISKS_SPEED_LABEL}", degree,
+                lambda degree=degree: speed_reference(DISKS, DISKS_SPEED, DISKS_SPEED_EARLY_TIMES, degree,
+                                                      wall_folds=EARLY_WALL_FOLDS))
                for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
     solves = [solve for solve in solves if not only or solve[0].startswith(tuple(only))]
     frames = [] if not only else [load()[lambda table: ~table.case.str.startswith(tuple(only))]]

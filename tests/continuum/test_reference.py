@@ -61,10 +61,10 @@ SPEED_CONVERGED_FROM = {0.198: 1.0, 1.334: 1.0, 4.629: 10.0}
 #: every cached speed case after the lift-off: (times, converged from), the paper's three and the disks'
 #: (u~_w = 1, t~_mud = 1: converged from t~ = 1, measured 2.6e-8 at t~ = 0.1)
 SPEED_LATE = {**{f"speed-{u_w}": (ref.SPEED_TIMES[u_w], t) for u_w, t in SPEED_CONVERGED_FROM.items()},
-              f"speed-disks-{ref.DISKS_SPEED:g}": (ref.TIMES, 1.0)}
+              f"speed-{ref.DISKS_SPEED_LABEL}": (ref.TIMES, 1.0)}
 #: ... and before it: the times
 SPEED_EARLY = {**{f"speed-early-{u_w}": times for u_w, times in ref.SPEED_EARLY_TIMES.items()},
-               f"speed-early-disks-{ref.DISKS_SPEED:g}": ref.DISKS_SPEED_EARLY_TIMES}
+               f"speed-early-{ref.DISKS_SPEED_LABEL}": ref.DISKS_SPEED_EARLY_TIMES}
 
 
 @pytest.mark.parametrize("case", SPEED_LATE)

@@ -11,7 +11,7 @@ from continuum.rheology import Friction
 from continuum.solver import (INITIAL_STEP, MIN_ESTIMATED_CELLS, TIME_ERROR_PER_RTOL, WALL_STRETCH, Numerics, map_for,
                               solve_speed, solve_stress)
 from continuum.steady import mu_w_for_speed
-from tests.continuum.reference import DISKS_SPEED, PAPER as FR
+from tests.continuum.reference import DISKS_SPEED, DISKS_SPEED_LABEL, PAPER as FR
 from continuum.stepper import integrate
 
 SPEEDS = (0.198, 1.334, 4.629)
@@ -233,7 +233,7 @@ def default_speeds():
     from tests.continuum.test_reference import SPEED_EARLY, SPEED_LATE
 
     out = {}
-    for label, fr, u_w in [*((f"{u_w:g}", FR, u_w) for u_w in SPEEDS), (f"disks-{DISKS_SPEED:g}", DISKS, DISKS_SPEED)]:
+    for label, fr, u_w in [*((f"{u_w:g}", FR, u_w) for u_w in SPEEDS), (DISKS_SPEED_LABEL, DISKS, DISKS_SPEED)]:
         (times, converged_from), early_times = SPEED_LATE[f"speed-{label}"], SPEED_EARLY[f"speed-early-{label}"]
         times = np.array(times)
         early, late = np.isin(times, early_times), times >= converged_from
@@ -244,7 +244,7 @@ def default_speeds():
     return ACCURACY, out
 
 
-@pytest.mark.parametrize("case", [*(f"{u_w:g}" for u_w in SPEEDS), f"disks-{DISKS_SPEED:g}"])
+@pytest.mark.parametrize("case", [*(f"{u_w:g}" for u_w in SPEEDS), DISKS_SPEED_LABEL])
 def test_speed_default_accuracy_against_the_independent_reference(default_speeds, case):
     """At the default accuracy mu_w and delta are within it of the independent reference, t~ = 1e-4 ... 10."""
     accuracy, runs = default_speeds
