@@ -5,7 +5,7 @@ run.  Prints the table for bench/RESULTS.md "The early times on a deeper cluster
     PYTHONPATH=. .venv/bin/python bench/early_times.py
 
 Cases: the paper's three speeds at the early reference's times (tests/continuum/reference.py
-SPEED_EARLY_TIMES, t~ = 1e-4 up to before the lift-off) plus t~ = 10, default tolerances; errors (max over the
+SPEED_CASES' early_times, t~ = 1e-4 up to before the lift-off) plus t~ = 10, default tolerances; errors (max over the
 early times, relative) of mu_w and delta against that reference (converged to 2e-10); CPU: best of
 bench/speed_solver.py's REPEATS of the whole solve through t~ = 10.
 """
@@ -16,7 +16,7 @@ import numpy as np
 import continuum.solver as solver
 from bench.speed_solver import QUANTITIES, timed  # timed: best of its REPEATS
 from continuum.solver import Numerics, early_until, solve_speed
-from tests.continuum.reference import PAPER, SPEED_EARLY_TIMES, cached
+from tests.continuum.reference import PAPER, SPEED_CASES, cached
 
 CELLS = (64, 128, 256, 512)
 
@@ -25,8 +25,11 @@ def main():
     default_span = solver.EARLY_SPAN
     print("| u~_w | early times below | cells | one map: mu_w | delta | CPU [ms] | apart: mu_w | delta | CPU [ms] | CPU ratio |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for u_w, early in SPEED_EARLY_TIMES.items():
-        ref = cached(f"speed-early-{u_w:g}", times=np.array(early))
+    for label, case in SPEED_CASES.items():
+        if case.friction != PAPER:
+            continue
+        u_w, early = case.u_w, case.early_times
+        ref = cached(f"speed-early-{label}", times=np.array(early))
         times = [*early, 10.0]
         for n in CELLS:
             row = []

@@ -13,6 +13,8 @@ eq. GranularStokesEqn_muBIS written for tau~ instead of mu~ (same scaling, same 
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .mesh import Mesh
@@ -81,6 +83,11 @@ class ShearStressDiffusion:
         out[0] = self.wall_residual(x)
         np.multiply(diff, lap, out=out[1:])
         return out
+
+    def interior_rate(self, x: np.ndarray) -> np.ndarray:
+        """F(x) without row 0: d tau~/d t~ at the interior nodes (the rows bdf integrates, stepper)."""
+        lap, _, diff = self._terms(x)
+        return diff * lap
 
     def jacobian(self, x: np.ndarray) -> Jacobian:
         """dF/dx: the Laplacian's band times the diffusivity, its derivative on the diagonal; row 0
@@ -177,31 +184,32 @@ class ImposedSpeed(ShearStressDiffusion):
         mt[0] = np.exp(-x[0])
         return mt
 
-    def _rate_factor(self, x: np.ndarray) -> np.ndarray:
-        """1/mu~ - 1 = (mu - mu_s)/(mu_d - mu) at nodes 1..N-1, without the cancellation of 1/mu~ - 1 where
-        mu ~ mu_s: its round-off there (eps/Dmu), times the weights sqrt(p~) of a deep bed, can swamp a
-        small u~_w (a calibration with mu_s ~ 0 and beta_w ~ 1e9: noise of 1e-2 u~_w)."""
+    def _interior(self, x: np.ndarray):
+        """mu_d - mu at nodes 1..N-1 (> 0 where admissible), mu~ at node 1, and the quadrature over nodes 1..N-1
+        of 1/mu~ - 1 taken as (mu - mu_s)/(mu_d - mu): no cancellation where mu ~ mu_s, whose round-off
+        (eps/Dmu), times the weights sqrt(p~) of a deep bed, can swamp a small u~_w (a calibration with mu_s ~ 0
+        and beta_w ~ 1e9: noise of 1e-2 u~_w)."""
         mu = self.mu_w * x[1:] / self.p[1:-1]
-        return (mu - self.friction.mu_s) / (self.friction.mu_d - mu)
+        gap = self.friction.mu_d - mu
+        return gap, gap[0] / self.friction.dmu, self._wq[1:].dot((mu - self.friction.mu_s) / gap)
 
     def _first_cell(self, q: float, b: float):
         """L = int_0^1 ds/(a + (b - a) s) = ln(b/a)/(b - a) with a = exp(-q), and dL/dq, dL/db."""
         if not b > 0:  # an inadmissible Newton iterate
-            return np.nan, np.nan, np.nan
-        a = np.exp(-q)
+            return math.nan, math.nan, math.nan
+        a = math.exp(min(-q, EXP_MAX))  # scalars by math: this runs a few times per rate evaluation
         d = b - a
         r = d / (b + a)
         if abs(r) < SERIES_BELOW:  # atanh(r)/r and the derivatives' limits, to O(r^4)
             lam = 2.0 / (a + b) * (1.0 + r * r / 3.0)
             return lam, 1.0 / (2 * a) - d / (3 * a * a), -1.0 / (2 * a * a) + 2 * d / (3 * a**3)
         # ln(b/a) = 2 atanh(r) has no cancellation for a ~ b; ln b + q none for a << b
-        lam = 2 * np.arctanh(r) / d if abs(r) < ATANH_BELOW else (np.log(b) + q) / d
+        lam = 2 * math.atanh(r) / d if abs(r) < ATANH_BELOW else (math.log(b) + q) / d
         return lam, (1.0 - a * lam) / d, (1.0 / b - lam) / d
 
     def wall_residual(self, x: np.ndarray) -> float:
-        mt = self.mu_tilde(x)
-        lam = self._first_cell(x[0], mt[1])[0]
-        return self._w_first * (lam - 1.0) + self._wq[1:] @ self._rate_factor(x) - self.u_w
+        _, b, integral = self._interior(x)
+        return self._w_first * (self._first_cell(x[0], b)[0] - 1.0) + integral - self.u_w
 
     def wall_gradient(self, x: np.ndarray) -> np.ndarray:
         mt = self.mu_tilde(x)
@@ -217,14 +225,13 @@ class ImposedSpeed(ShearStressDiffusion):
         """Satisfy the constraint exactly: solve L(q) = target for q (L increases with q) by Newton
         kept inside the bracket of the iterates so far (bisection when it leaves it); NaN where the
         interior is inadmissible (mu~ <= 0 at a node) or Newton fails."""
-        mt = self.mu_tilde(x)
-        b = mt[1]
-        target = (self.u_w + self._w_first - self._wq[1:] @ self._rate_factor(x)) / self._w_first
-        if not (np.all(mt[1:] > 0) and target > 0):
+        gap, b, integral = self._interior(x)
+        target = (self.u_w + self._w_first - integral) / self._w_first
+        if not (gap.min() > 0 and target > 0):
             x[0] = np.nan
             return x
-        q = max(target * b - np.log(b), np.log(target))  # L's limits for a << b and a >> b
-        lo, hi = -np.inf, np.inf
+        q = max(target * b - math.log(b), math.log(target))  # L's limits for a << b and a >> b
+        lo, hi = -math.inf, math.inf
         for _ in range(PROJECTION_ITERATIONS):
             lam, dq, _ = self._first_cell(q, b)
             if lam > target:
@@ -233,7 +240,7 @@ class ImposedSpeed(ShearStressDiffusion):
                 lo = q
             new = q - (lam - target) / dq
             if not lo < new < hi:
-                new = 0.5 * (lo + hi) if np.isfinite(lo + hi) else q + np.sign(target - lam) * max(1.0, abs(q))
+                new = 0.5 * (lo + hi) if math.isfinite(lo + hi) else q + (int(target > lam) - int(target < lam)) * max(1.0, abs(q))
             if abs(new - q) <= PROJECTION_TOL * max(1.0, abs(q)):
                 x[0] = new
                 return x
@@ -249,6 +256,8 @@ class ImposedSpeed(ShearStressDiffusion):
         return float(min(1.0, np.min(-0.5 * mt[falling] / dmt[falling]))) if falling.any() else 1.0
 
 
+#: ImposedSpeed._first_cell's exp(-q) is capped here (math.exp overflows above it, where numpy gave inf)
+EXP_MAX = 709.0
 #: ImposedSpeed._first_cell switches to its series below this |b - a|/(b + a)
 SERIES_BELOW = 1e-4
 #: ... and to the atanh form of ln(b/a) below this |r| (the plain logarithms above it)

@@ -133,6 +133,8 @@ DENSE_BDF_MAX = 128
 #: rows dominated: 2.1 s of 7 s at 256 cells): measured 1.1-2x at 64-256 cells, 2.8x at 512 (False: the
 #: baseline of bench/speed_solver.py)
 BORDERED_BDF = True
+#: what the bordered bdf hands scipy for its Jacobian (``_integrate_bdf``)
+BORDERED_MARKER = -1.0
 
 
 @dataclass
@@ -431,7 +433,8 @@ def _reduced_jacobian(problem, x):
 
 
 def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resume=None):
-    """``integrate`` with scipy's BDF on z = x[1:], x[0] from ``problem.project`` (unit mass rows).
+    """``integrate`` with scipy's BDF on z = x[1:] (``problem.interior_rate``), x[0] from ``problem.project``
+    (unit mass rows).
 
     BDF steps onto every output time (its bound moved on to the next one, no restart: scipy cuts the
     last step to the bound): its dense output had been ~1e4 rtol off through an imposed speed's lift-off,
@@ -453,12 +456,12 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
 
     def rate(t, z):
         x = state(z)
-        return problem.rate(x)[1:] if np.isfinite(x[0]) else np.full(len(z), np.nan)
+        return problem.interior_rate(x) if np.isfinite(x[0]) else np.full(len(z), np.nan)
 
     t0, x0 = resume if resume is not None else (0.0, problem.initial())
     admissible = [state(x0[1:])]
 
-    jacobians = [None, None]  # the last Jacobian, and what BDF gets of it
+    bordered = []  # the last Jacobian of the unreduced problem (BORDERED_BDF)
 
     def jacobian(t, z):
         x = state(z)
@@ -466,23 +469,25 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
             admissible[0] = x
         if not BORDERED_BDF:
             return _reduced_jacobian(problem, admissible[0])
-        # BDF forms I - c J only to hand it to lu, which reads c off J's band: the band suffices (the reduced
-        # matrix, with its dense wall rows, had cost 17 % of a 512-cell solve)
-        full = problem.jacobian(admissible[0])
-        jacobians[:] = full, full.interior()
-        return jacobians[1]
+        bordered[:] = [problem.jacobian(admissible[0])]
+        return BORDERED_MARKER
 
     x = admissible[0]
-    solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, jac=jacobian, first_step=h0)
     if BORDERED_BDF:
-        def lu(a):
-            """I - c J by the bordered band (NewtonMatrix) of the unreduced M - c J, c read off an entry of a
-            below the diagonal (on it, 1 - c J_nn loses c J_nn below round-off: c ~ 1e-25 at t~ ~ 1e-20)."""
+        # scipy's BDF uses its Jacobian J only to hand I - c J to lu. Handed J = BORDERED_MARKER = -1 and I = 0, it
+        # hands over c itself, and lu factorises the unreduced M - c J by the bordered band (NewtonMatrix): no n x n matrix is
+        # formed (sparse I - c J and its CSC bookkeeping had cost ~0.3 ms a factorisation, a quarter of a 64-cell solve)
+        solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, first_step=h0,
+                     jac=lambda t, z: np.zeros((len(z), len(z))))
+        solver.jac, solver.I, solver.J = jacobian, 0.0, jacobian(t0, x[1:])
+
+        def lu(c):
             solver.nlu += 1
-            c = -a[-1, -2] / jacobians[1][-1, -2]
-            return NewtonMatrix(problem, None, c, jac=jacobians[0])
+            return NewtonMatrix(problem, None, float(c), jac=bordered[0])
 
         solver.lu, solver.solve_lu = lu, lambda factors, b: factors.solve(np.concatenate(([0.0], b)))[1:]
+    else:
+        solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, jac=jacobian, first_step=h0)
     states = np.empty((len(t_out), len(x)))
     if observer is not None and resume is None:
         observer(t0, x)

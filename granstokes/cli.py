@@ -2,7 +2,8 @@
 
 One error policy: bad input is one line on stderr naming the parameter and its valid range, exit
 status 2, raised before any computation or file is written (subcommands raise ``ValueError``); a time
-integration that cannot go on (continuum.stepper.StepperFailure) is one line too, exit status 1."""
+integration that cannot go on (continuum.stepper.StepperFailure) or a failed linear solve (numpy's LinAlgError)
+is one line too, exit status 1."""
 from __future__ import annotations
 
 import argparse
@@ -67,6 +68,11 @@ def main(argv=None) -> int:
     try:
         return args.func(args)
     except ValueError as err:
+        linalg = sys.modules.get("numpy.linalg")  # numpy's LinAlgError is a ValueError, but no bad input
+        if linalg is not None and isinstance(err, linalg.LinAlgError):
+            print(f"granstokes: error: a linear solve failed ({err}); the input may sit at the edge of its "
+                  f"range, or other numerics may help", file=sys.stderr)
+            return 1
         print(f"granstokes: error: {err}", file=sys.stderr)
         return 2
     except RuntimeError as err:

@@ -57,7 +57,7 @@ PAPER = Friction(math.tan(math.radians(21.0)), math.tan(math.radians(33.0)))
 DISKS = Friction(0.28, 0.77)
 STRESS_CASES = {"paper-0.9": (PAPER, 0.9), "paper-0.5": (PAPER, 0.5), "paper-0.1": (PAPER, 0.1),
                 "disks-0.3": (DISKS, 0.3)}
-#: imposed speed (the paper's three wall speeds, section 3.4, in SPEED_TIMES): the map's stretch
+#: imposed speed (SPEED_CASES): the map's stretch
 #: (geometric clustering at the wall down to e^-8, for the wall sub-layer) and the degrees of the
 #: reference and its companion (10-40 s of CPU per solve)
 SPEED_STRETCH = 8.0
@@ -69,15 +69,31 @@ SPEED_DEGREE, SPEED_COARSE_DEGREE = 96, 64
 #: degree 128 against 160: u~_w, mu_w, delta within 2e-10 (with 14 e-folds delta moved 1.4e-7 at t~ = 1e-4)
 EARLY_WALL_FOLDS, CLUSTER_WIDTH = 12.0, 0.1
 EARLY_DEGREE, EARLY_COARSE_DEGREE = 160, 128
-#: the output times of each speed: 0.198 stops at t~ = 1 (near its steady state, mu~_w ~ 0.9, the wall
-#: unknown, stiff through the wall node's weight ~ 1e-8, stalls Radau between t~ = 1 and 10)
-SPEED_TIMES = {0.198: TIMES[:-1], 1.334: TIMES, 4.629: TIMES}
-#: the times of each speed before its lift-off (t~_mud = u~_w^2: 0.039, 1.8, 21), where the early reference is run
-SPEED_EARLY_TIMES = {0.198: TIMES[:2], 1.334: TIMES[:3], 4.629: TIMES[:4]}
-#: a second parameter set for the imposed speed: the disks (DISKS) at u~_w = 1 (t~_mud = 1, mu~_w^inf = 0.34), the
-#: early reference at DISKS_SPEED_EARLY_TIMES, the other at TIMES, cached as speed-early-LABEL and speed-LABEL
-DISKS_SPEED, DISKS_SPEED_EARLY_TIMES = 1.0, TIMES[:3]
-DISKS_SPEED_LABEL = f"disks-{DISKS_SPEED:g}"
+
+
+@dataclass(frozen=True)
+class SpeedCase:
+    """An imposed-speed case: its friction and u~_w, the output times of its reference, those before its lift-off
+    (t~_mud = u~_w^2), where the early reference is run, and the time from which the reference is converged to
+    CONVERGED (measured, test_reference.py); cached as speed-LABEL and speed-early-LABEL."""
+
+    friction: Friction
+    u_w: float
+    times: tuple
+    early_times: tuple
+    converged_from: float
+
+
+#: the paper's three wall speeds (section 3.4; t~_mud = 0.039, 1.8, 21) and a second parameter set, the disks
+#: (DISKS) at u~_w = 1 (t~_mud = 1, mu~_w^inf = 0.34).  0.198 stops at t~ = 1: near its steady state
+#: (mu~_w ~ 0.9) the wall unknown, stiff through the wall node's weight ~ 1e-8, stalls Radau between t~ = 1 and
+#: 10.  Converged after the lift-off: 2e-9 at t~ = 0.1 for 0.198, 3e-8 at t~ = 1 for 4.629, 2.6e-8 at 0.1 for
+#: the disks, so each from the next time on
+SPEED_CASES = {"0.198": SpeedCase(PAPER, 0.198, TIMES[:-1], TIMES[:2], 1.0),
+               "1.334": SpeedCase(PAPER, 1.334, TIMES, TIMES[:3], 1.0),
+               "4.629": SpeedCase(PAPER, 4.629, TIMES, TIMES[:4], 10.0),
+               "disks-1": SpeedCase(DISKS, 1.0, TIMES, TIMES[:3], 1.0)}
+
 DATA = Path(__file__).parent / "data" / "reference.csv"
 QUANTITIES = ("u_w", "mu_w", "delta")
 
@@ -285,14 +301,16 @@ def cached(case: str, degree: int | None = None, times=TIMES, table=None) -> dic
     return {q: rows[q].to_numpy() for q in QUANTITIES}
 
 
-def speed_case(u_w: float, degree: int = SPEED_DEGREE) -> Reference:
-    """The reference of one of the speeds of SPEED_TIMES (paper friction)."""
-    return speed_reference(PAPER, u_w, SPEED_TIMES[u_w], degree)
+def speed_case(label: str, degree: int = SPEED_DEGREE) -> Reference:
+    """The reference of one of SPEED_CASES at its times."""
+    case = SPEED_CASES[label]
+    return speed_reference(case.friction, case.u_w, case.times, degree)
 
 
-def speed_early_case(u_w: float, degree: int = EARLY_DEGREE) -> Reference:
-    """The reference of one of the speeds before its lift-off (SPEED_EARLY_TIMES), on the wall-clustered map."""
-    return speed_reference(PAPER, u_w, SPEED_EARLY_TIMES[u_w], degree, wall_folds=EARLY_WALL_FOLDS)
+def speed_early_case(label: str, degree: int = EARLY_DEGREE) -> Reference:
+    """The reference of one of SPEED_CASES before its lift-off (its early_times), on the wall-clustered map."""
+    case = SPEED_CASES[label]
+    return speed_reference(case.friction, case.u_w, case.early_times, degree, wall_folds=EARLY_WALL_FOLDS)
 
 
 def main(only: list[str]) -> None:
@@ -302,17 +320,10 @@ def main(only: list[str]) -> None:
 
     solves = [(name, degree, lambda name=name, degree=degree, rtol=rtol: stress_case(name, degree, rtol))
               for name in STRESS_CASES for degree, rtol in ((COARSE_DEGREE, COARSE_RTOL), (DEGREE, RTOL))]
-    solves += [(f"speed-{u_w}", degree, lambda u_w=u_w, degree=degree: speed_case(u_w, degree))
-               for u_w in SPEED_TIMES for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
-    solves += [(f"speed-early-{u_w}", degree, lambda u_w=u_w, degree=degree: speed_early_case(u_w, degree))
-               for u_w in SPEED_EARLY_TIMES for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
-    solves += [(f"speed-{DISKS_SPEED_LABEL}", degree,
-                lambda degree=degree: speed_reference(DISKS, DISKS_SPEED, TIMES, degree))
-               for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
-    solves += [(f"speed-early-{DISKS_SPEED_LABEL}", degree,
-                lambda degree=degree: speed_reference(DISKS, DISKS_SPEED, DISKS_SPEED_EARLY_TIMES, degree,
-                                                      wall_folds=EARLY_WALL_FOLDS))
-               for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
+    solves += [(f"speed-{label}", degree, lambda label=label, degree=degree: speed_case(label, degree))
+               for label in SPEED_CASES for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
+    solves += [(f"speed-early-{label}", degree, lambda label=label, degree=degree: speed_early_case(label, degree))
+               for label in SPEED_CASES for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
     solves = [solve for solve in solves if not only or solve[0].startswith(tuple(only))]
     frames = [] if not only else [load()[lambda table: ~table.case.str.startswith(tuple(only))]]
     for name, degree, solve in solves:

@@ -38,7 +38,8 @@ def test_paper_figures(tmp_path):
     # reference's there (tests/continuum/reference.py, converged to 2e-10) within 5e-3, scaled as sqrt(t~) over
     # the step's distance from T_MIN: the figures' speed numerics are within 5e-4 at their output times, and the
     # steps before the first one are at BDF's loosest (measured 0.18 %; on the defaults' map it was 4.2 % low)
-    u_w, times = SPEED_CASES[0], reference.SPEED_EARLY_TIMES[SPEED_CASES[0]]
+    u_w = SPEED_CASES[0]
+    times = reference.SPEED_CASES[f"{u_w:g}"].early_times
     assert times[0] == T_MIN
     early = reference.cached(f"speed-early-{u_w:g}", times=np.array(times))["delta"][0]
     first = fig7[(fig7.curve == "numerics") & (fig7.case == f"u_w={u_w:g}")]

@@ -53,39 +53,25 @@ def test_solver_agrees_with_the_reference_within_its_estimate(cache, case):
         assert np.all(true <= sol.errors[q] + ref.CONVERGED * np.abs(exact[q])), q
 
 
-#: imposed speed: the reference is converged to CONVERGED from this time on, once mu_w has lifted off from
-#: mu_d (t~_mud ~ u~_w^2; measured: 2e-9 at t~ = 0.1 for 0.198, 3e-8 at t~ = 1 for 4.629)
-SPEED_CONVERGED_FROM = {0.198: 1.0, 1.334: 1.0, 4.629: 10.0}
-
-
-#: every cached speed case after the lift-off: (times, converged from), the paper's three and the disks'
-#: (u~_w = 1, t~_mud = 1: converged from t~ = 1, measured 2.6e-8 at t~ = 0.1)
-SPEED_LATE = {**{f"speed-{u_w}": (ref.SPEED_TIMES[u_w], t) for u_w, t in SPEED_CONVERGED_FROM.items()},
-              f"speed-{ref.DISKS_SPEED_LABEL}": (ref.TIMES, 1.0)}
-#: ... and before it: the times
-SPEED_EARLY = {**{f"speed-early-{u_w}": times for u_w, times in ref.SPEED_EARLY_TIMES.items()},
-               f"speed-early-{ref.DISKS_SPEED_LABEL}": ref.DISKS_SPEED_EARLY_TIMES}
-
-
-@pytest.mark.parametrize("case", SPEED_LATE)
-def test_speed_reference_is_converged_after_lift_off(cache, case):
+@pytest.mark.parametrize("label", ref.SPEED_CASES)
+def test_speed_reference_is_converged_after_lift_off(cache, label):
     """Degree 64 -> 96 changes u~_w, mu_w and delta by less than 1e-9 once mu_w has left mu_d (before, the
     unresolved wall sub-layer leaves changes of 1e-7..2e-5: measured, reference.speed_reference)."""
-    times, converged_from = SPEED_LATE[case]
-    fine = values(cache, case, ref.SPEED_DEGREE, times)
-    coarse = values(cache, case, ref.SPEED_COARSE_DEGREE, times)
-    late = np.asarray(times) >= converged_from
+    case = ref.SPEED_CASES[label]
+    fine = values(cache, f"speed-{label}", ref.SPEED_DEGREE, case.times)
+    coarse = values(cache, f"speed-{label}", ref.SPEED_COARSE_DEGREE, case.times)
+    late = np.asarray(case.times) >= case.converged_from
     for q in ref.QUANTITIES:
         assert np.all(np.abs(coarse[q] - fine[q])[late] <= ref.CONVERGED * np.abs(fine[q][late])), q
 
 
-@pytest.mark.parametrize("case", SPEED_EARLY)
-def test_speed_early_reference_is_converged_before_lift_off(cache, case):
+@pytest.mark.parametrize("label", ref.SPEED_CASES)
+def test_speed_early_reference_is_converged_before_lift_off(cache, label):
     """Before the lift-off, on the wall-clustered map (reference.speed_early_case), degree 128 -> 160
     changes u~_w, mu_w and delta by less than 1e-9 (measured <= 2.1e-10)."""
-    times = SPEED_EARLY[case]
-    fine = values(cache, case, ref.EARLY_DEGREE, times)
-    coarse = values(cache, case, ref.EARLY_COARSE_DEGREE, times)
+    times = ref.SPEED_CASES[label].early_times
+    fine = values(cache, f"speed-early-{label}", ref.EARLY_DEGREE, times)
+    coarse = values(cache, f"speed-early-{label}", ref.EARLY_COARSE_DEGREE, times)
     for q in ref.QUANTITIES:
         assert np.all(np.abs(coarse[q] - fine[q]) <= ref.CONVERGED * np.abs(fine[q])), q
 
@@ -94,9 +80,9 @@ def test_speed_reference_recomputed_is_converged_after_lift_off(cache):
     """The convergence above with the companion recomputed, not read from the cache: the cheapest speed solve
     (u~_w = 4.629 at degree 64, ~10 s; degree 96 takes ~18 s) is within CONVERGED of the cached reference after
     lift-off (t~ = 10; measured 1.1e-10 in mu_w, 3.5e-12 in delta, 4.4e-13 in u~_w)."""
-    u_w = 4.629
-    times = ref.SPEED_TIMES[u_w]
-    fine, new = values(cache, f"speed-{u_w}", ref.SPEED_DEGREE, times), ref.speed_case(u_w, ref.SPEED_COARSE_DEGREE)
-    late = np.asarray(times) >= SPEED_CONVERGED_FROM[u_w]
+    label = "4.629"
+    times = ref.SPEED_CASES[label].times
+    fine, new = values(cache, f"speed-{label}", ref.SPEED_DEGREE, times), ref.speed_case(label, ref.SPEED_COARSE_DEGREE)
+    late = np.asarray(times) >= ref.SPEED_CASES[label].converged_from
     for q in ref.QUANTITIES:
         assert np.all(np.abs(getattr(new, q) - fine[q])[late] <= ref.CONVERGED * np.abs(fine[q][late])), q

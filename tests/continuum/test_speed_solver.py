@@ -11,7 +11,7 @@ from continuum.rheology import Friction
 from continuum.solver import (INITIAL_STEP, MIN_ESTIMATED_CELLS, TIME_ERROR_PER_RTOL, WALL_STRETCH, Numerics, map_for,
                               solve_speed, solve_stress)
 from continuum.steady import mu_w_for_speed
-from tests.continuum.reference import DISKS_SPEED, DISKS_SPEED_LABEL, PAPER as FR
+from tests.continuum.reference import PAPER as FR, SPEED_CASES
 from continuum.stepper import integrate
 
 SPEEDS = (0.198, 1.334, 4.629)
@@ -229,22 +229,20 @@ def default_speeds():
     have none: test_speed_error_estimates_bound_the_true_error covers them against 512 cells).  The paper's
     three speeds and the disks' u~_w = 1 (a second parameter set; its lift-off time t~ = 0.1 has none)."""
     from continuum.cli import ACCURACY
-    from tests.continuum.reference import DISKS, cached
-    from tests.continuum.test_reference import SPEED_EARLY, SPEED_LATE
+    from tests.continuum.reference import cached
 
     out = {}
-    for label, fr, u_w in [*((f"{u_w:g}", FR, u_w) for u_w in SPEEDS), (DISKS_SPEED_LABEL, DISKS, DISKS_SPEED)]:
-        (times, converged_from), early_times = SPEED_LATE[f"speed-{label}"], SPEED_EARLY[f"speed-early-{label}"]
-        times = np.array(times)
-        early, late = np.isin(times, early_times), times >= converged_from
+    for label, case in SPEED_CASES.items():
+        times = np.array(case.times)
+        early, late = np.isin(times, case.early_times), times >= case.converged_from
         assert early.sum() + late.sum() >= len(times) - 2
         refs = {"early": (early, cached(f"speed-early-{label}", times=times[early])),
                 "late": (late, {q: v[late] for q, v in cached(f"speed-{label}", times=times).items()})}
-        out[label] = solve_speed(fr, u_w, times, accuracy=ACCURACY), refs
+        out[label] = solve_speed(case.friction, case.u_w, times, accuracy=ACCURACY), refs
     return ACCURACY, out
 
 
-@pytest.mark.parametrize("case", [*(f"{u_w:g}" for u_w in SPEEDS), DISKS_SPEED_LABEL])
+@pytest.mark.parametrize("case", SPEED_CASES)
 def test_speed_default_accuracy_against_the_independent_reference(default_speeds, case):
     """At the default accuracy mu_w and delta are within it of the independent reference, t~ = 1e-4 ... 10."""
     accuracy, runs = default_speeds
@@ -332,10 +330,10 @@ def test_speed_early_times_on_the_deeper_cluster(monkeypatch):
     with its early times apart (solver.EARLY_SPAN, measured 8e-9); on the solve's own map (EARLY_SPAN = 0, the
     control) 1.2e-6 off, an error that N does not change.  The joined series runs on in time."""
     import continuum.solver as solver
-    from tests.continuum.reference import SPEED_EARLY_TIMES, cached
+    from tests.continuum.reference import cached
 
     times = [1e-4, 1e-3, 1e-2, 0.1]
-    ref = cached("speed-early-0.198", times=np.array(SPEED_EARLY_TIMES[0.198]))["mu_w"]
+    ref = cached("speed-early-0.198", times=np.array(SPEED_CASES["0.198"].early_times))["mu_w"]
     errors = []
     for span in (solver.EARLY_SPAN, 0.0):
         monkeypatch.setattr(solver, "EARLY_SPAN", span)
@@ -352,11 +350,11 @@ def test_speed_from_a_late_first_time_meets_the_default_accuracy(u_w):
     CLUSTER_MIN_STRETCH): 0.198 could not reach 1e-6 on 512 cells.  Now every speed reaches the CLI's default
     accuracy, and is within it of the independent reference where that is converged (t~ >= 1, or 10)."""
     from continuum.cli import ACCURACY
-    from tests.continuum.reference import SPEED_TIMES, cached
-    from tests.continuum.test_reference import SPEED_CONVERGED_FROM
+    from tests.continuum.reference import cached
 
-    times = np.array(SPEED_TIMES[u_w])
-    late = times >= SPEED_CONVERGED_FROM[u_w]
+    case = SPEED_CASES[f"{u_w:g}"]
+    times = np.array(case.times)
+    late = times >= case.converged_from
     sol = solve_speed(FR, u_w, [0.1, *times[late]], accuracy=ACCURACY)
     ref = {q: v[late] for q, v in cached(f"speed-{u_w:g}", times=times).items()}
     for q in ("mu_w", "delta"):

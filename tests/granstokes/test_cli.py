@@ -127,6 +127,20 @@ def test_a_failed_solve_is_one_line_and_writes_nothing(capsys, tmp_path, monkeyp
     assert not (tmp_path / "out").exists()
 
 
+def test_a_failed_linear_solve_is_exit_1_not_bad_input(capsys, tmp_path, monkeypatch):
+    """numpy's LinAlgError is a ValueError, the bad-input signal; it is reported as a failure (exit 1)."""
+    import continuum.solver
+
+    def singular(*args, **kwargs):
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(continuum.solver, "integrate", singular)
+    code, out, err = run(capsys, "--u-w", "1.334", "--times", "1", "--save", str(tmp_path / "out"))
+    assert code == 1 and out == "" and len(err.strip().splitlines()) == 1
+    assert err.startswith("granstokes: error: a linear solve failed (Singular matrix)")
+    assert not (tmp_path / "out").exists()
+
+
 def test_save_writes_pandas_readable_tables_and_metadata(capsys, tmp_path):
     import pandas as pd
 
