@@ -154,6 +154,9 @@ class ImposedSpeed(ShearStressDiffusion):
         self._wq = mesh.quadrature_from_node1(order)[:-1] * np.sqrt(self.p[:-1]) / friction.dmu
         self._w_first = mesh.h[0] * np.sqrt(1.0 + self.beta * mesh.h[0] / 2) / friction.dmu
         self.lift_off_end = LIFT_OFF_SPAN * self.u_w**2
+        #: the Laplacian's weights on the wall node, rows 1..kl
+        lap = self.lap.matrix
+        self._lap_wall = lap[:self.kl, 0].copy() if isinstance(lap, np.ndarray) else lap[:self.kl, [0]].toarray().ravel()
 
     def initial(self) -> np.ndarray:
         x = super().initial()
@@ -177,6 +180,14 @@ class ImposedSpeed(ShearStressDiffusion):
         k = np.arange(1, min(self.kl, len(x) - 1) + 1)
         jac.bands[self.ku + k, 0] *= self.friction.dmu * np.exp(-x[0]) * self.p[0] / self.mu_w  # d tau~_0/d q
         return jac
+
+    def wall_jacobian(self, x: np.ndarray):
+        """dF/dx's row 0 (wall_gradient) and column 0 at rows 1..kl (the first nodes' coupling to q), the parts
+        of the Jacobian the wall unknown's curvature changes fastest (stepper.BDF_WALL_NEWTON)."""
+        k = len(self._lap_wall)
+        s = self._mud_p[:k] - self.mu_w * x[1:k + 1]
+        dtau0 = self.friction.dmu * math.exp(min(-x[0], EXP_MAX)) * self.p[0] / self.mu_w
+        return self.wall_gradient(x), s * s / self._p32[:k] * self._lap_wall * dtau0
 
     def mu_tilde(self, x: np.ndarray) -> np.ndarray:
         """mu~ at nodes 0..N-1."""

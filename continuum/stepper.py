@@ -133,6 +133,13 @@ DENSE_BDF_MAX = 128
 #: rows dominated: 2.1 s of 7 s at 256 cells): measured 1.1-2x at 64-256 cells, 2.8x at 512 (False: the
 #: baseline of bench/speed_solver.py)
 BORDERED_BDF = True
+#: bdf's Newton takes the imposed speed's wall row and column (the constraint's gradient, and the first nodes'
+#: coupling to the wall unknown q) at each iterate, the band at the step's Jacobian: q(z), the wall unknown as a
+#: function of the interior, curves with a sensitivity ~1/h_0 once the first cell's share of u~_w is small, and
+#: with all of it frozen Newton contracted only 0.03-0.3 per iteration there, failed, and held BDF at order 1
+#: through the lift-off (measured: u~_w = 1.334 on 256 cells 3259 -> 1874 steps, on 512 at rtol 3.3e-9 4756 ->
+#: 2304; the row alone: 1890 and 4756), bench/RESULTS.md "Imposed speed over its range"
+BDF_WALL_NEWTON = True
 #: what the bordered bdf hands scipy for its Jacobian (``_integrate_bdf``)
 BORDERED_MARKER = -1.0
 
@@ -231,6 +238,14 @@ class NewtonMatrix:
         if self.dissipative:
             return dpttrs(self.d, self.e, r)[0]
         return dgbtrs(self.lu, self.kl, self.ku, r, self.piv)[0]
+
+    def refresh_wall(self, mass0, row0, column):
+        """Replace the dense row 0 and column 0 (rows 1..kl: ``column``) by their values at the current iterate:
+        one more band solve (T is unchanged)."""
+        column0 = np.zeros(len(self.zb))
+        column0[:len(column)] = -self.dh * column
+        self.zb = self._solve(column0)
+        self.refresh_row0(mass0, row0)
 
     def refresh_row0(self, mass0, row0):
         """Replace the dense row 0 by its value at the current iterate (cheap: T is unchanged)."""
@@ -454,8 +469,11 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     def state(z):
         return problem.project(np.concatenate(([0.0], z)))
 
+    iterate = [None]  # the state of the last rate evaluation: in scipy's Newton, the iterate the next solve is at
+
     def rate(t, z):
         x = state(z)
+        iterate[0] = x
         return problem.interior_rate(x) if np.isfinite(x[0]) else np.full(len(z), np.nan)
 
     t0, x0 = resume if resume is not None else (0.0, problem.initial())
@@ -485,7 +503,15 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
             solver.nlu += 1
             return NewtonMatrix(problem, None, float(c), jac=bordered[0])
 
-        solver.lu, solver.solve_lu = lu, lambda factors, b: factors.solve(np.concatenate(([0.0], b)))[1:]
+        def solve_lu(factors, b):
+            """Newton's correction; the wall's row and column (of an imposed speed) at the current iterate if
+            BDF_WALL_NEWTON."""
+            x = iterate[0]
+            if BDF_WALL_NEWTON and factors.dense and np.isfinite(x[0]):
+                factors.refresh_wall(problem.mass[0], *problem.wall_jacobian(x))
+            return factors.solve(np.concatenate(([0.0], b)))[1:]
+
+        solver.lu, solver.solve_lu = lu, solve_lu
     else:
         solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, jac=jacobian, first_step=h0)
     states = np.empty((len(t_out), len(x)))
