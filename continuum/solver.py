@@ -304,17 +304,25 @@ IMPOSED = {"stress": "mu_w", "speed": "u_w"}
 #: the range of relative accuracies that can be asked for
 ACCURACY_RANGE = (1e-10, 1e-2)
 #: refinement stops here (a request that needs more is refused with the accuracy reached): a speed on
-#: 512 cells takes 3-4 s (its companion on 256 included); on 1024 its wall cells (7.6e-8) stall BDF by round-off near the steady state
+#: 512 cells takes 1.5-4 s (its companion on 256 included); on 1024 its wall cells (7.6e-8) stall BDF by round-off near the steady state
 #: (measured: u~_w = 0.198 not at t~ = 10 after 400 s; bench/RESULTS.md "One map with a wall cluster")
 MAX_CELLS = {"stress": 2048, "speed": 512}
 #: an estimated solve has at least this many cells: the companion of a speed on 64 cells (32) is
 #: pre-asymptotic through the lift-off (measured: mu_w at u~_w = 1.334, t~ = 1 underestimated 1.5x)
 MIN_ESTIMATED_CELLS = {"stress": 8, "speed": 128}
-#: an accuracy request starts from the cells that the drive's error model (cells, worst relative estimate there)
-#: predicts for it (``first_cells``), not from MIN_ESTIMATED_CELLS: the speed's worst estimate on 512 cells over
-#: bench/speed_range.py's survey is 8.7e-7, so 1e-6 starts there (its companion on 256), and the 64- and
-#: 128-cell rungs that every such solve climbed through are skipped (1.2 s of 4.6 at u~_w = 1.334)
+#: an accuracy request on the drive's own map, method and order starts from the cells that its error model (cells,
+#: worst relative estimate there) predicts for it (``first_cells``), not from MIN_ESTIMATED_CELLS: the speed's worst
+#: estimate on 512 cells over bench/speed_range.py's survey is 8.3e-7 (stop 22; 6.2e-7 in stop 23), so 1e-6
+#: starts there (its companion on 256), and the 64- and 128-cell rungs that all but one of the survey's solves
+#: climbed through are skipped (1.2 s of 4.6 at u~_w = 1.334); a request beyond MAX_CELLS is then refused after
+#: the solve on them
 ERROR_MODEL = {"speed": (512, 1e-6)}
+
+
+def round_up(x: float) -> float:
+    """x > 0 rounded up to two significant digits (a bound printed at .1e stays a bound)."""
+    scale = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return math.ceil(x / scale) * scale
 
 
 def first_cells(imposed: str, accuracy: float) -> int:
@@ -386,7 +394,7 @@ def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, est
     if accuracy is not None:
         require(finite(accuracy) and ACCURACY_RANGE[0] <= accuracy <= ACCURACY_RANGE[1], "accuracy",
                 f"in [{ACCURACY_RANGE[0]:g}, {ACCURACY_RANGE[1]:g}]", accuracy)
-        if numerics.stretch is None:  # the drive's own map, which ERROR_MODEL measured
+        if numerics.stretch is None and numerics.method is None and numerics.order == Numerics.order:  # as measured
             numerics = replace(numerics, n_cells=max(numerics.n_cells, first_cells(imposed, accuracy)))
     asked, numerics = numerics, numerics.for_drive(imposed)
     order, factor, most = convergence_order(imposed, numerics), gain(imposed, numerics), MAX_CELLS[imposed]
@@ -407,7 +415,7 @@ def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, est
             return replace(fine, errors=errors, accuracy=accuracy)
         needed = numerics.n_cells * (worst / accuracy) ** (1 / order)
         require(needed <= most and numerics.n_cells * REFINEMENT <= most, "accuracy",
-                f">= {worst * (numerics.n_cells / most) ** order:.1e} for this request "
+                f">= {round_up(worst * (numerics.n_cells / most) ** order):.1e} for this request "
                 f"(reachable with at most {most} cells)", accuracy)
         numerics, coarse = numerics.finer(factor, asked, imposed), fine
 

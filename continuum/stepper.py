@@ -134,11 +134,12 @@ DENSE_BDF_MAX = 128
 #: baseline of bench/speed_solver.py)
 BORDERED_BDF = True
 #: bdf's Newton takes the imposed speed's wall row and column (the constraint's gradient, and the first nodes'
-#: coupling to the wall unknown q) at each iterate, the band at the step's Jacobian: q(z), the wall unknown as a
-#: function of the interior, curves with a sensitivity ~1/h_0 once the first cell's share of u~_w is small, and
-#: with all of it frozen Newton contracted only 0.03-0.3 per iteration there, failed, and held BDF at order 1
-#: through the lift-off (measured: u~_w = 1.334 on 256 cells 3259 -> 1874 steps, on 512 at rtol 3.3e-9 4756 ->
-#: 2304; the row alone: 1890 and 4756), bench/RESULTS.md "Imposed speed over its range"
+#: coupling to the wall unknown q) at each iterate through the lift-off (up to the problem's ``lift_off_end``), the
+#: band at the step's Jacobian: q(z), the wall unknown as a function of the interior, curves with a sensitivity
+#: ~1/h_0 once the first cell's share of u~_w is small, and with all of it frozen Newton contracted only 0.03-0.3
+#: per iteration there, failed, and held BDF at order 1 through the lift-off (measured: u~_w = 1.334 on 256 cells
+#: 3259 -> 1874 steps, on 512 at rtol 3.3e-9 4737 -> 2304; the row alone: 1890 and 4756), bench/RESULTS.md
+#: "The speed's cost and BDF's order-1 trap"
 BDF_WALL_NEWTON = True
 #: what the bordered bdf hands scipy for its Jacobian (``_integrate_bdf``)
 BORDERED_MARKER = -1.0
@@ -469,6 +470,7 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     def state(z):
         return problem.project(np.concatenate(([0.0], z)))
 
+    lift_off_end = getattr(problem, "lift_off_end", 0.0)
     iterate = [None]  # the state of the last rate evaluation: in scipy's Newton, the iterate the next solve is at
 
     def rate(t, z):
@@ -492,11 +494,14 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
 
     x = admissible[0]
     if BORDERED_BDF:
-        # scipy's BDF uses its Jacobian J only to hand I - c J to lu. Handed J = BORDERED_MARKER = -1 and I = 0, it
-        # hands over c itself, and lu factorises the unreduced M - c J by the bordered band (NewtonMatrix): no n x n matrix is
-        # formed (sparse I - c J and its CSC bookkeeping had cost ~0.3 ms a factorisation, a quarter of a 64-cell solve)
+        # scipy's BDF uses its Jacobian J only to hand I - c J to lu. Handed J = BORDERED_MARKER = -1 and I = 0 (after
+        # its set-up has seen an empty sparse n x n), it hands over c itself, and lu factorises the unreduced M - c J
+        # by the bordered band (NewtonMatrix): I - c J is never formed (sparse, with its CSC bookkeeping, it had cost
+        # ~0.3 ms a factorisation, a quarter of a 64-cell solve)
+        import scipy.sparse as sp
+
         solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, first_step=h0,
-                     jac=lambda t, z: np.zeros((len(z), len(z))))
+                     jac=lambda t, z: sp.csc_matrix((len(z), len(z))))
         solver.jac, solver.I, solver.J = jacobian, 0.0, jacobian(t0, x[1:])
 
         def lu(c):
@@ -505,9 +510,9 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
 
         def solve_lu(factors, b):
             """Newton's correction; the wall's row and column (of an imposed speed) at the current iterate if
-            BDF_WALL_NEWTON."""
+            BDF_WALL_NEWTON, through the lift-off."""
             x = iterate[0]
-            if BDF_WALL_NEWTON and factors.dense and np.isfinite(x[0]):
+            if BDF_WALL_NEWTON and factors.dense and solver.t < lift_off_end and np.isfinite(x[0]):
                 factors.refresh_wall(problem.mass[0], *problem.wall_jacobian(x))
             return factors.solve(np.concatenate(([0.0], b)))[1:]
 
@@ -535,7 +540,7 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
                 solver.t_bound, solver.status = t_out[k], "running"
             small = 0  # the landing's cut steps are no stall
             continue
-        after = solver.t > getattr(problem, "lift_off_end", 0.0)
+        after = solver.t > lift_off_end
         small = small + 1 if after and solver.step_size < BDF_STALL * solver.t else 0
         if small >= STALL_STEPS:
             states[k:], rest = integrate(problem, t_out[k:], method=HANDOVER, rtol=rtol, atol=atol,

@@ -316,11 +316,16 @@ def test_reduced_jacobian_dense_equals_sparse(paper_friction, monkeypatch):
     assert np.max(np.abs(dense - sparse)) <= 1e-15 * np.max(np.abs(sparse))
 
 
+#: the relative spread of mu_w(1) over first steps that the wall's Newton keeps (its measured 1.4e-9, x3.5; the
+#: trapped solves' 1.3e-8 is above it)
+WALL_NEWTON_SPREAD = 5e-9
+
+
 def test_bdf_wall_newton_keeps_bdf_out_of_the_order_one_trap(monkeypatch):
     """u~_w = 1.334 on 256 cells from five first steps 1e-3 apart (the trap is chaotic in the step sequence):
     each solve within 2300 steps (measured 1867-1934; with the wall's row and column frozen, stepper.
     BDF_WALL_NEWTON = False, 1910-3516, three of the five trapped at order 1 through the lift-off), and mu_w at
-    t~ = 1 the same within BDF's time error across them (measured spread 1.4e-9; frozen 1.3e-8)."""
+    t~ = 1 the same within WALL_NEWTON_SPREAD across them (measured 1.4e-9; frozen 1.3e-8)."""
     import continuum.solver as solver
 
     mu_w = []
@@ -329,7 +334,7 @@ def test_bdf_wall_newton_keeps_bdf_out_of_the_order_one_trap(monkeypatch):
         sol = solve_speed(FR, 1.334, DECADES, Numerics(n_cells=256))
         assert sol.stats.steps <= 2300, k
         mu_w.append(sol.mu_w[list(DECADES).index(1.0)])
-    assert np.ptp(mu_w) <= TIME_ERROR_PER_RTOL["bdf"] * sol.numerics.rtol * np.median(mu_w)
+    assert np.ptp(mu_w) <= WALL_NEWTON_SPREAD * np.median(mu_w)
 
 
 def test_an_accuracy_request_starts_where_the_error_model_points():
@@ -343,6 +348,14 @@ def test_an_accuracy_request_starts_where_the_error_model_points():
     assert first_cells("speed", 1e-2) == MIN_ESTIMATED_CELLS["speed"]
     assert first_cells("speed", 1e-10) == MAX_CELLS["speed"]
     assert first_cells("stress", 1e-10) == MIN_ESTIMATED_CELLS["stress"]
+
+
+def test_the_reachable_accuracy_is_printed_rounded_up():
+    """The refusal's bound, printed at two digits, is rounded up: 1.018e-6 must not read as a request of 1e-6."""
+    from continuum.solver import round_up
+
+    assert f"{round_up(1.018e-6):.1e}" == "1.1e-06" and f"{round_up(1e-6):.1e}" == "1.0e-06"
+    assert f"{round_up(3.81e-7):.1e}" == "3.9e-07" and round_up(2.5e-12) == pytest.approx(2.5e-12, rel=1e-12)
 
 
 def test_unreachable_speed_accuracy_is_refused_with_what_can_be_reached():
