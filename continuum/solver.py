@@ -67,6 +67,12 @@ MATCHED_RTOL, MATCHED_CELLS = dict.fromkeys(METHODS, 1e-8), 256
 #: it (measured: u~_w = 4.629 on 64 cells 894 steps at rtol 1e-8, 4389 at 1e-7; 1.334 on 256 cells 1432
 #: and 8431); its time error there is ~1-20 rtol (landing on every output time: stepper)
 MAX_RTOL = {**dict.fromkeys(TABLEAUX, 1e-3), "bdf": 1e-8}
+#: the loosest time tolerance of an estimate's companion (``Numerics.coarser``): its time error enters the estimate
+#: (x SAFETY/(gain - 1)), and bdf's in a small speed's delta is ~500 rtol, not TIME_ERROR_PER_RTOL's 30 (delta is
+#: read where mu - mu_s is 1e-3 of mu_w - mu_s, which is tiny: u~_w = 0.001 (beads), 256 cells at rtol 1e-8 and
+#: 1e-10 differ by 4.9e-6 in delta at t~ = 0.1), so at MAX_RTOL it alone put that speed's estimate at 1.0-1.1e-6
+#: against 1e-6 asked; at 4e-9 5.7e-7, for 7 % more CPU at u~_w = 1.334 (bench/RESULTS.md "The speed's cost ...")
+COMPANION_MAX_RTOL = {**MAX_RTOL, "bdf": 4e-9}
 #: atol = ATOL_PER_RTOL rtol (tau~ is O(1))
 ATOL_PER_RTOL = 1e-2
 #: the first time step, as a fraction of the first output time
@@ -129,8 +135,9 @@ class Numerics:
         return Mesh.graded(self.n_cells, stretch, wall_folds)
 
     def coarser(self, factor: float) -> "Numerics":
-        """The estimate's companion: half the cells, ``factor`` times the tolerances (resolved numerics)."""
-        rtol = min(self.rtol * factor, max(MAX_RTOL[self.method], self.rtol))
+        """The estimate's companion: half the cells, ``factor`` times the tolerances up to COMPANION_MAX_RTOL (resolved
+        numerics)."""
+        rtol = min(self.rtol * factor, max(COMPANION_MAX_RTOL[self.method], self.rtol))
         return replace(self, n_cells=self.n_cells // REFINEMENT, rtol=rtol, atol=rtol * self.atol / self.rtol)
 
     def finer(self, factor: float, asked: "Numerics", imposed: str) -> "Numerics":

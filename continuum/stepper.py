@@ -510,9 +510,9 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
 
         def solve_lu(factors, b):
             """Newton's correction; the wall's row and column (of an imposed speed) at the current iterate if
-            BDF_WALL_NEWTON, through the lift-off."""
+            BDF_WALL_NEWTON."""
             x = iterate[0]
-            if BDF_WALL_NEWTON and factors.dense and solver.t < lift_off_end and np.isfinite(x[0]):
+            if BDF_WALL_NEWTON and factors.dense and np.isfinite(x[0]):
                 factors.refresh_wall(problem.mass[0], *problem.wall_jacobian(x))
             return factors.solve(np.concatenate(([0.0], b)))[1:]
 

@@ -350,6 +350,18 @@ def test_an_accuracy_request_starts_where_the_error_model_points():
     assert first_cells("stress", 1e-10) == MIN_ESTIMATED_CELLS["stress"]
 
 
+def test_the_smallest_speed_tried_reaches_the_default_accuracy():
+    """u~_w = 0.001 (beads, t~_mud = 1e-6): its delta is ill-conditioned (mu_w^inf - mu_s tiny) and BDF's time error
+    there ~500 rtol; with the companion's rtol capped (COMPANION_MAX_RTOL, 4e-9 on 256 cells) the default accuracy is
+    reached (measured worst estimate 5.7e-7; at the uncapped 1e-8 the request was refused, 1.0-1.1e-6)."""
+    from continuum.cli import ACCURACY
+    from continuum.solver import COMPANION_MAX_RTOL
+
+    assert Numerics(n_cells=512, method="bdf", rtol=6.25e-10).coarser(16).rtol == COMPANION_MAX_RTOL["bdf"]
+    sol = solve_speed(FR, 0.001, DECADES, accuracy=ACCURACY)
+    assert max(np.max(sol.errors[q] / np.abs(getattr(sol, q))) for q in ("mu_w", "delta")) <= ACCURACY
+
+
 def test_the_reachable_accuracy_is_printed_rounded_up():
     """The refusal's bound, printed at two digits, is rounded up: 1.018e-6 must not read as a request of 1e-6."""
     from continuum.solver import round_up
