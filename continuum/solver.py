@@ -319,7 +319,7 @@ MAX_CELLS = {"stress": 2048, "speed": 512}
 MIN_ESTIMATED_CELLS = {"stress": 8, "speed": 128}
 #: an accuracy request on the drive's own map, method and order starts from the cells that its error model (cells,
 #: worst relative estimate there) predicts for it (``first_cells``), not from MIN_ESTIMATED_CELLS: the speed's worst
-#: estimate on 512 cells over bench/speed_range.py's survey is 8.3e-7 (stop 22; 6.2e-7 in stop 23), so 1e-6
+#: estimate on 512 cells over bench/speed_range.py's survey is 8.3e-7 (stop 22; 7.4e-7 in stop 23), so 1e-6
 #: starts there (its companion on 256), and the 64- and 128-cell rungs that all but one of the survey's solves
 #: climbed through are skipped (1.2 s of 4.6 at u~_w = 1.334); a request beyond MAX_CELLS is then refused after
 #: the solve on them
