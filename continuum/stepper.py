@@ -134,12 +134,13 @@ DENSE_BDF_MAX = 128
 #: baseline of bench/speed_solver.py)
 BORDERED_BDF = True
 #: bdf's Newton takes the imposed speed's wall row and column (the constraint's gradient, and the first nodes'
-#: coupling to the wall unknown q) at each iterate, the band at the step's Jacobian (after the lift-off as well:
-#: without it there the disks' u~_w = 0.001 on 512 cells stalled BDF and crawled in SDIRK4): q(z), the wall unknown as a function of the interior, curves with a sensitivity
-#: ~1/h_0 once the first cell's share of u~_w is small, and with all of it frozen Newton contracted only 0.03-0.3
-#: per iteration there, failed, and held BDF at order 1 through the lift-off (measured: u~_w = 1.334 on 256 cells
-#: 3259 -> 1874 steps, on 512 at rtol 3.3e-9 4737 -> 2304; the row alone: 1890 and 4756), bench/RESULTS.md
-#: "The speed's cost and BDF's order-1 trap"
+#: coupling to the wall unknown q) at each iterate, the band at the step's Jacobian: q(z), the wall unknown as a
+#: function of the interior, curves with a sensitivity ~1/h_0 once the first cell's share of u~_w is small, and
+#: with all of it frozen Newton contracted only 0.03-0.3 per iteration there, failed, and held BDF at order 1
+#: through the lift-off (measured: u~_w = 1.334 on 256 cells 3259 -> 1874 steps, on 512 at rtol 3.3e-9 4737 ->
+#: 2304; the row alone: 1890 and 4756); after the lift-off too (without it there the disks' u~_w = 0.001 on 512
+#: cells stalled BDF, which handed over to SDIRK4, which crawled), bench/RESULTS.md "The speed's cost and BDF's
+#: order-1 trap"
 BDF_WALL_NEWTON = True
 #: what the bordered bdf hands scipy for its Jacobian (``_integrate_bdf``)
 BORDERED_MARKER = -1.0
