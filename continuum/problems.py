@@ -156,7 +156,8 @@ class ImposedSpeed(ShearStressDiffusion):
         self.lift_off_end = LIFT_OFF_SPAN * self.u_w**2
         #: the Laplacian's weights on the wall node, rows 1..kl
         lap = self.lap.matrix
-        self._lap_wall = lap[:self.kl, 0].copy() if isinstance(lap, np.ndarray) else lap[:self.kl, [0]].toarray().ravel()
+        self._lap_wall = (lap[:self.kl, 0].copy() if isinstance(lap, np.ndarray)
+                          else lap[:self.kl, [0]].toarray().ravel())
 
     def initial(self) -> np.ndarray:
         x = super().initial()
@@ -178,16 +179,19 @@ class ImposedSpeed(ShearStressDiffusion):
     def jacobian(self, x: np.ndarray) -> Jacobian:
         jac = super().jacobian(x)
         k = np.arange(1, min(self.kl, len(x) - 1) + 1)
-        jac.bands[self.ku + k, 0] *= self.friction.dmu * np.exp(-x[0]) * self.p[0] / self.mu_w  # d tau~_0/d q
+        jac.bands[self.ku + k, 0] *= self._dtau0_dq(x[0])
         return jac
+
+    def _dtau0_dq(self, q: float) -> float:
+        """d tau~_0/d q (tau~_0 = (mu_d - Dmu e^-q) p~_0/mu_w)."""
+        return self.friction.dmu * math.exp(min(-q, EXP_MAX)) * self.p[0] / self.mu_w
 
     def wall_jacobian(self, x: np.ndarray):
         """dF/dx's row 0 (wall_gradient) and column 0 at rows 1..kl (the first nodes' coupling to q), the parts
         of the Jacobian the wall unknown's curvature changes fastest (stepper.BDF_WALL_NEWTON)."""
         k = len(self._lap_wall)
         s = self._mud_p[:k] - self.mu_w * x[1:k + 1]
-        dtau0 = self.friction.dmu * math.exp(min(-x[0], EXP_MAX)) * self.p[0] / self.mu_w
-        return self.wall_gradient(x), s * s / self._p32[:k] * self._lap_wall * dtau0
+        return self.wall_gradient(x), s * s / self._p32[:k] * self._lap_wall * self._dtau0_dq(x[0])
 
     def mu_tilde(self, x: np.ndarray) -> np.ndarray:
         """mu~ at nodes 0..N-1."""
@@ -251,7 +255,8 @@ class ImposedSpeed(ShearStressDiffusion):
                 lo = q
             new = q - (lam - target) / dq
             if not lo < new < hi:
-                new = 0.5 * (lo + hi) if math.isfinite(lo + hi) else q + (int(target > lam) - int(target < lam)) * max(1.0, abs(q))
+                away = (int(target > lam) - int(target < lam)) * max(1.0, abs(q))  # unbracketed: step out
+                new = 0.5 * (lo + hi) if math.isfinite(lo + hi) else q + away
             if abs(new - q) <= PROJECTION_TOL * max(1.0, abs(q)):
                 x[0] = new
                 return x
@@ -267,7 +272,7 @@ class ImposedSpeed(ShearStressDiffusion):
         return float(min(1.0, np.min(-0.5 * mt[falling] / dmt[falling]))) if falling.any() else 1.0
 
 
-#: ImposedSpeed._first_cell's exp(-q) is capped here (math.exp overflows above it, where numpy gave inf)
+#: ImposedSpeed's exp(-q) is capped here (math.exp overflows above it, where numpy gave inf)
 EXP_MAX = 709.0
 #: ImposedSpeed._first_cell switches to its series below this |b - a|/(b + a)
 SERIES_BELOW = 1e-4

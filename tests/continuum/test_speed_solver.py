@@ -357,7 +357,8 @@ def test_the_smallest_speed_tried_reaches_the_default_accuracy():
     from continuum.cli import ACCURACY
     from continuum.solver import COMPANION_MAX_RTOL
 
-    assert Numerics(n_cells=512, method="bdf", rtol=6.25e-10, atol=6.25e-12).coarser(16).rtol == COMPANION_MAX_RTOL["bdf"]
+    fine = Numerics(n_cells=512, method="bdf", rtol=6.25e-10, atol=6.25e-12)
+    assert fine.coarser(16).rtol == COMPANION_MAX_RTOL["bdf"]
     sol = solve_speed(FR, 0.001, DECADES, accuracy=ACCURACY)
     assert max(np.max(sol.errors[q] / np.abs(getattr(sol, q))) for q in ("mu_w", "delta")) <= ACCURACY
 
