@@ -132,7 +132,7 @@ class ImposedStress(ShearStressDiffusion):
 class ImposedSpeed(ShearStressDiffusion):
     """Imposed wall speed u~_w: the wall stress is the extra unknown fixed by
     eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~: the first cell by
-    product integration, exact for mu~ linear in the cell (``_first_cell``), the others by the mesh's
+    product integration, exact for mu~ linear in the cell (``first_cell``), the others by the mesh's
     rule of the problem's order on nodes 1..N (the quadrature that gives the velocity profile, so the
     constraint holds to round-off).
 
@@ -208,28 +208,14 @@ class ImposedSpeed(ShearStressDiffusion):
         gap = self.friction.mu_d - mu
         return gap, gap[0] / self.friction.dmu, self._wq[1:].dot((mu - self.friction.mu_s) / gap)
 
-    def _first_cell(self, q: float, b: float):
-        """L = int_0^1 ds/(a + (b - a) s) = ln(b/a)/(b - a) with a = exp(-q), and dL/dq, dL/db."""
-        if not b > 0:  # an inadmissible Newton iterate
-            return math.nan, math.nan, math.nan
-        a = math.exp(min(-q, EXP_MAX))  # scalars by math: this runs a few times per rate evaluation
-        d = b - a
-        r = d / (b + a)
-        if abs(r) < SERIES_BELOW:  # atanh(r)/r and the derivatives' limits, to O(r^4)
-            lam = 2.0 / (a + b) * (1.0 + r * r / 3.0)
-            return lam, 1.0 / (2 * a) - d / (3 * a * a), -1.0 / (2 * a * a) + 2 * d / (3 * a**3)
-        # ln(b/a) = 2 atanh(r) has no cancellation for a ~ b; ln b + q none for a << b
-        lam = 2 * math.atanh(r) / d if abs(r) < ATANH_BELOW else (math.log(b) + q) / d
-        return lam, (1.0 - a * lam) / d, (1.0 / b - lam) / d
-
     def wall_residual(self, x: np.ndarray) -> float:
         _, b, integral = self._interior(x)
-        return self._w_first * (self._first_cell(x[0], b)[0] - 1.0) + integral - self.u_w
+        return self._w_first * (first_cell(x[0], b)[0] - 1.0) + integral - self.u_w
 
     def wall_gradient(self, x: np.ndarray) -> np.ndarray:
         mt = self.mu_tilde(x)
         dmt_dx = -self.mu_w / (self.p[:-1] * self.friction.dmu)
-        _, dq, db = self._first_cell(x[0], mt[1])
+        _, dq, db = first_cell(x[0], mt[1])
         grad = np.empty(len(x))
         grad[1:] = -self._wq[1:] / mt[1:] ** 2 * dmt_dx[1:]
         grad[0] = self._w_first * dq
@@ -245,23 +231,7 @@ class ImposedSpeed(ShearStressDiffusion):
         if not (gap.min() > 0 and target > 0):
             x[0] = np.nan
             return x
-        q = max(target * b - math.log(b), math.log(target))  # L's limits for a << b and a >> b
-        lo, hi = -math.inf, math.inf
-        for _ in range(PROJECTION_ITERATIONS):
-            lam, dq, _ = self._first_cell(q, b)
-            if lam > target:
-                hi = q
-            else:
-                lo = q
-            new = q - (lam - target) / dq
-            if not lo < new < hi:
-                away = (int(target > lam) - int(target < lam)) * max(1.0, abs(q))  # unbracketed: step out
-                new = 0.5 * (lo + hi) if math.isfinite(lo + hi) else q + away
-            if abs(new - q) <= PROJECTION_TOL * max(1.0, abs(q)):
-                x[0] = new
-                return x
-            q = new
-        x[0] = np.nan
+        x[0] = wall_unknown(target, b)
         return x
 
     def step_fraction(self, x: np.ndarray, dx: np.ndarray) -> float:
@@ -272,9 +242,47 @@ class ImposedSpeed(ShearStressDiffusion):
         return float(min(1.0, np.min(-0.5 * mt[falling] / dmt[falling]))) if falling.any() else 1.0
 
 
+def first_cell(q: float, b: float):
+    """L = int_0^1 ds/(a + (b - a) s) = ln(b/a)/(b - a) with a = exp(-q), and dL/dq, dL/db (plain math:
+    continuum.speed_bdf compiles this same function)."""
+    if not b > 0:  # an inadmissible Newton iterate
+        return math.nan, math.nan, math.nan
+    a = math.exp(min(-q, EXP_MAX))  # scalars by math: this runs a few times per rate evaluation
+    d = b - a
+    r = d / (b + a)
+    if abs(r) < SERIES_BELOW:  # atanh(r)/r and the derivatives' limits, to O(r^4)
+        lam = 2.0 / (a + b) * (1.0 + r * r / 3.0)
+        return lam, 1.0 / (2 * a) - d / (3 * a * a), -1.0 / (2 * a * a) + 2 * d / (3 * a**3)
+    # ln(b/a) = 2 atanh(r) has no cancellation for a ~ b; ln b + q none for a << b
+    lam = 2 * math.atanh(r) / d if abs(r) < ATANH_BELOW else (math.log(b) + q) / d
+    return lam, (1.0 - a * lam) / d, (1.0 / b - lam) / d
+
+
+def wall_unknown(target: float, b: float) -> float:
+    """The q with L(q) = target (``first_cell``; L increases with q) by Newton kept inside the bracket of the
+    iterates so far (bisection when it leaves it); NaN if it fails.  Plain math, so that continuum.speed_bdf
+    compiles this same function."""
+    q = max(target * b - math.log(b), math.log(target))  # L's limits for a << b and a >> b
+    lo, hi = -math.inf, math.inf
+    for _ in range(PROJECTION_ITERATIONS):
+        lam, dq, _ = first_cell(q, b)
+        if lam > target:
+            hi = q
+        else:
+            lo = q
+        new = q - (lam - target) / dq
+        if not lo < new < hi:
+            away = (int(target > lam) - int(target < lam)) * max(1.0, abs(q))  # unbracketed: step out
+            new = 0.5 * (lo + hi) if math.isfinite(lo + hi) else q + away
+        if abs(new - q) <= PROJECTION_TOL * max(1.0, abs(q)):
+            return new
+        q = new
+    return math.nan
+
+
 #: ImposedSpeed's exp(-q) is capped here (math.exp overflows above it, where numpy gave inf)
 EXP_MAX = 709.0
-#: ImposedSpeed._first_cell switches to its series below this |b - a|/(b + a)
+#: first_cell switches to its series below this |b - a|/(b + a)
 SERIES_BELOW = 1e-4
 #: ... and to the atanh form of ln(b/a) below this |r| (the plain logarithms above it)
 ATANH_BELOW = 0.5

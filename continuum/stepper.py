@@ -142,6 +142,9 @@ BORDERED_BDF = True
 #: cells stalled BDF, which handed over to SDIRK4, which crawled), bench/RESULTS.md "The speed's cost and BDF's
 #: order-1 trap"
 BDF_WALL_NEWTON = True
+#: an imposed speed's bdf runs compiled (continuum.speed_bdf: the same algorithm and system, measured ~5-15x less
+#: CPU a solve; False: scipy's BDF here, the reference of tests/continuum/test_speed_bdf.py)
+COMPILED_SPEED = True
 #: what the bordered bdf hands scipy for its Jacobian (``_integrate_bdf``)
 BORDERED_MARKER = -1.0
 
@@ -460,10 +463,14 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     Newton from converging and the steps shrink without end: once the step has stayed below BDF_STALL t
     for STALL_STEPS steps, after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is
     needed), the rest goes to HANDOVER (whose Newton accepts an update at round-off)."""
-    from scipy.integrate import BDF
-
     if not np.all(problem.mass[1:] == 1.0) or problem.mass[0] != 0.0:
         raise ValueError("method 'bdf' needs an algebraic row 0 and unit mass elsewhere")
+    if COMPILED_SPEED and BORDERED_BDF and BDF_WALL_NEWTON and problem.imposed == "speed" and resume is None:
+        from .speed_bdf import integrate_speed  # imports numba (~0.4 s): only a speed's solve pays it
+
+        return integrate_speed(problem, t_out, rtol=rtol, atol=atol, h0=h0, observer=observer, max_steps=max_steps)
+    from scipy.integrate import BDF
+
     t_out = np.asarray(t_out, dtype=float)
     stats = StepStats(rejected=None)
     start = time.process_time()

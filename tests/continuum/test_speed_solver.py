@@ -64,21 +64,26 @@ def test_wall_friction_is_mu_d_before_t_mud_on_any_mesh(paper_friction):
         assert fr.tilde(sol.mu_w[0]) < 1e-12 < 1e-2 < fr.tilde(sol.mu_w[1])
 
 
+@pytest.mark.parametrize("compiled", [False, True], ids=["python", "compiled"])
 @pytest.mark.parametrize("q, b", [(3.0, 0.5), (0.7, 0.5), (np.log(2.0) + 1e-7, 0.5), (np.log(2.0) + 1e-3, 0.5),
                                   (0.1, 0.9), (40.0, 0.2), (-2.0, 0.3)])
-def test_first_cell_integral_and_derivatives(paper_friction, q, b):
+def test_first_cell_integral_and_derivatives(q, b, compiled):
     """The first cell's int_0^1 ds/(a + (b - a) s), a = exp(-q), against adaptive quadrature (to 1e-13) in
-    each of its three forms (series, atanh, logarithms), and its derivatives against central differences."""
+    each of its three forms (series, atanh, logarithms), and its derivatives against central differences; as
+    ImposedSpeed runs it and as continuum.speed_bdf compiles it."""
     from scipy.integrate import quad
 
-    pb = ImposedSpeed(paper_friction, 1.0, Mesh.graded(16))
+    if compiled:
+        from continuum.speed_bdf import first_cell
+    else:
+        from continuum.problems import first_cell
     a = np.exp(-q)
     ref = quad(lambda s: 1 / (a + (b - a) * s), 0, 1, epsabs=0, epsrel=1e-13, limit=200)[0]
-    lam, dq, db = pb._first_cell(q, b)
+    lam, dq, db = first_cell(q, b)
     assert lam == pytest.approx(ref, rel=2e-13)
     e = 1e-6
-    assert dq == pytest.approx((pb._first_cell(q + e, b)[0] - pb._first_cell(q - e, b)[0]) / (2 * e), rel=1e-7)
-    assert db == pytest.approx((pb._first_cell(q, b + e)[0] - pb._first_cell(q, b - e)[0]) / (2 * e), rel=1e-7)
+    assert dq == pytest.approx((first_cell(q + e, b)[0] - first_cell(q - e, b)[0]) / (2 * e), rel=1e-7)
+    assert db == pytest.approx((first_cell(q, b + e)[0] - first_cell(q, b - e)[0]) / (2 * e), rel=1e-7)
 
 
 @pytest.mark.parametrize("u_w", SPEEDS)

@@ -1,0 +1,137 @@
+"""The compiled BDF of an imposed speed (continuum.speed_bdf) against what it compiles: ImposedSpeed's rate,
+Jacobian, wall row and projection, LAPACK's banded LU (through scipy), and scipy's BDF step for step."""
+import numpy as np
+import pytest
+from scipy.linalg import solve_banded
+
+import continuum.speed_bdf as sb
+import continuum.stepper as stepper
+from continuum.problems import ImposedSpeed
+from continuum.solver import TIME_ERROR_PER_RTOL, Numerics, map_for, solve_speed
+from continuum.steady import mu_w_for_speed
+
+#: the compiled arithmetic differs from numpy's in the order of additions only: relative round-off of a few
+#: operations, besides the cancellations bounded in each test
+ROUND_OFF = 1e-13
+
+
+@pytest.fixture(scope="module")
+def speed_state(request):
+    """An imposed speed (u~_w = 1.334, 64 cells on its solve's map) and its state in the lift-off, t~ = 0.3
+    (q = 2.5: mu~_w = 0.08)."""
+    from continuum.rheology import Friction
+    import math
+
+    fr = Friction(math.tan(math.radians(21.0)), math.tan(math.radians(33.0)))
+    numerics = Numerics(n_cells=64).for_drive("speed")
+    pb = ImposedSpeed(fr, 1.334, numerics.mesh(*map_for(fr, mu_w_for_speed(fr, 1.334), "speed", 1e-4)))
+    x = stepper.integrate(pb, [0.3], method="bdf", rtol=numerics.rtol, atol=numerics.atol)[0][0]
+    return pb, x
+
+
+def _kernel_args(pb):
+    fr = pb.friction
+    return dict(cols=np.ascontiguousarray(pb.lap.cols), weights=np.ascontiguousarray(pb.lap.weights),
+                mud_p=pb._mud_p, p32=pb._p32, mu_w=pb.mu_w, mu_d=fr.mu_d, dmu=fr.dmu, p0=pb.p[0])
+
+
+def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
+    """The compiled projection, rate and Jacobian band equal ImposedSpeed's at a state in the lift-off, to the
+    round-off of the sums they make in another order: q to that of its constraint (the interior's share over the
+    first cell's weight w_0 ~ 8e-6 and dL/dq: N eps share/(w_0 dL/dq) ~ 4e-10), the rate and the band's diagonal
+    to that of the Laplacian (weights up to ~1/h_0^2 on values O(1): measured 5e-9 of the largest rate), every
+    entry to ROUND_OFF relative besides."""
+    from continuum.problems import first_cell
+
+    pb, x = speed_state
+    fr, n = pb.friction, len(x)
+    projected = np.empty(n)
+    sb._project(x[1:].copy(), projected, pb.u_w, pb._w_first, pb.mu_w, fr.mu_d, fr.mu_s, fr.dmu, pb.p, pb._wq)
+    _, b, share = pb._interior(x)
+    q = pb.project(x.copy())[0]
+    bound = n * np.finfo(float).eps * share / (pb._w_first * first_cell(q, b)[1])
+    assert abs(projected[0] - q) <= bound and 2 < q < 3
+    # the Laplacian's sums cancel (weights up to ~1/h_0^2 on values O(1)): their round-off, row by row
+    tau = pb.full(x)
+    cancel = 8 * np.finfo(float).eps * np.sum(np.abs(pb.lap.weights * tau[pb.lap.cols]), axis=1)
+    s = pb._mud_p - pb.mu_w * x[1:]
+    args = _kernel_args(pb)
+    f = np.empty(n - 1)
+    sb._rate(x, f, np.empty(n + 1), **args)
+    ref = pb.interior_rate(x)
+    assert np.all(np.abs(f - ref) <= s * s / pb._p32 * cancel + ROUND_OFF * np.abs(ref))
+    band = np.zeros((pb.kl + pb.ku + 1, n - 1))
+    sb._jacobian_band(x, band, pb.ku, np.empty(n + 1), np.empty(n - 1), **args)
+    full = pb.jacobian(x).bands[:, 1:]  # columns 1..N-1; its entries of row 0 (the dense wall row) are masked
+    rows = np.arange(band.shape[0])[:, None] - pb.ku + np.arange(1, n)[None, :]  # the row i of each band entry
+    interior = (rows >= 1) & (rows <= n - 1)
+    allowed = ROUND_OFF * np.abs(full)
+    allowed[pb.ku] += 2 * pb.mu_w * np.abs(s) / pb._p32 * cancel  # the diagonal's d D/d tau~ times the Laplacian
+    assert np.all(np.where(interior, np.abs(band - full) <= allowed, True))
+    assert np.all(band[~interior] == 0.0)
+
+
+def test_wall_row_and_column_are_imposed_speeds(speed_state):
+    """The compiled wall row (the constraint's gradient) and column (dF_i/dq, rows 1..kl) equal
+    ImposedSpeed.wall_jacobian's to ROUND_OFF relative."""
+    pb, x = speed_state
+    fr, n = pb.friction, len(x)
+    row0, column = np.empty(n), np.empty(len(pb._lap_wall))
+    sb._wall(x, row0, column, np.ascontiguousarray(pb.lap.cols), np.ascontiguousarray(pb.lap.weights),
+             pb._lap_wall, pb.u_w, pb._w_first, pb.mu_w, fr.mu_d, fr.dmu, pb.p, pb._wq, pb._mud_p, pb._p32)
+    ref_row, ref_column = pb.wall_jacobian(x)
+    assert np.max(np.abs(row0 - ref_row)) <= ROUND_OFF * np.max(np.abs(ref_row))
+    assert np.max(np.abs(column - ref_column)) <= ROUND_OFF * np.max(np.abs(ref_column))
+
+
+def test_band_lu_solves_as_lapack_does():
+    """_band_lu/_band_solve (partial pivoting) solve a random band system (kl = 3, ku = 2, its sub-diagonals
+    larger than the diagonal: rows are swapped) as LAPACK's gbsv through scipy's solve_banded, to 1e-12."""
+    rng = np.random.default_rng(7)
+    n, kl, ku = 40, 3, 2
+    band = rng.uniform(-1, 1, (kl + ku + 1, n))
+    band[ku + 1] *= 4.0  # the first sub-diagonal dominates: pivoting
+    rhs = rng.uniform(-1, 1, n)
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")
+    ab[kl:] = band
+    piv = np.zeros(n, dtype=np.int64)
+    assert sb._band_lu(ab, piv, kl, ku)
+    assert np.any(piv != np.arange(n))
+    x = rhs.copy()
+    sb._band_solve(ab, piv, kl, ku, x)
+    ref = solve_banded((kl, ku), band, rhs)
+    assert np.max(np.abs(x - ref)) <= 1e-12 * np.max(np.abs(ref))
+
+
+def _steps(monkeypatch, compiled: bool, pb, times, numerics):
+    rows = []
+    monkeypatch.setattr(stepper, "COMPILED_SPEED", compiled)
+    stepper.integrate(pb, times, method="bdf", rtol=numerics.rtol, atol=numerics.atol, h0=1e-9,
+                      observer=lambda t, x: rows.append((t, x[0])))
+    return np.array(rows)
+
+
+def test_compiled_bdf_takes_scipys_steps(speed_state, monkeypatch):
+    """Step for step scipy's BDF: the first 50 steps land on the times of scipy's to 1e-9 relative (measured 8e-11:
+    round-off of the sums, growing by the step control's feedback; a wrong coefficient or control rule moves
+    them by O(1)), and their wall unknowns q agree as well."""
+    pb, _ = speed_state
+    numerics = Numerics(n_cells=64).for_drive("speed")
+    times = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]
+    ours, scipys = (_steps(monkeypatch, compiled, pb, times, numerics) for compiled in (True, False))
+    assert np.max(np.abs(ours[1:51] / scipys[1:51] - 1)) < 1e-9
+
+
+def test_compiled_solve_is_scipys_to_the_time_error(monkeypatch):
+    """solve_speed compiled and with scipy's BDF (COMPILED_SPEED = False) agree in mu_w and delta at t~ = 1e-4 ... 10
+    to the time error, TIME_ERROR_PER_RTOL rtol (their step sequences part by round-off after a few hundred steps:
+    measured 6e-9 relative at rtol 1e-8)."""
+    from tests.continuum.reference import DISKS
+
+    times = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]
+    ours = solve_speed(DISKS, 1.0, times, Numerics(n_cells=128))
+    monkeypatch.setattr(stepper, "COMPILED_SPEED", False)
+    scipys = solve_speed(DISKS, 1.0, times, Numerics(n_cells=128))
+    bound = TIME_ERROR_PER_RTOL["bdf"] * ours.numerics.rtol
+    for q in ("mu_w", "delta"):
+        assert np.max(np.abs(getattr(ours, q) / getattr(scipys, q) - 1)) < bound, q
