@@ -302,16 +302,17 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
                     for i in range(m):
                         dy[i] -= x0 * zb[i]
                     dy_norm = _rms(dy, scale)
-                    # an update within the wall unknown's round-off, felt by z through zb, is converged (NOT scipy's:
-                    # after the lift-off q is fixed by u~_w less the interior's share over w_0 ~ 1e-9, and its noise
-                    # kept Newton from converging at the steady state's tight tolerances: the step collapsed)
-                    if dy_norm <= ROUND_OFF_UPDATES * EPS * (u_w + share) / abs(row0[0]) * _rms(zb, scale):
-                        y_new += dy
-                        dsum += dy
-                        converged = True
-                        break
                     rate = dy_norm / dy_norm_old if dy_norm_old >= 0 else -1.0
                     if rate >= 0 and (rate >= 1 or rate ** (NEWTON_MAXITER - k) / (1 - rate) * dy_norm > newton_tol):
+                        # NOT scipy's: after the lift-off, an iteration that stalls within the wall unknown's round-off
+                        # (felt by z through zb) is converged. There q is fixed by u~_w less the interior's share over
+                        # w_0 ~ 1e-9, and its noise kept Newton from converging at the steady state's tight tolerances:
+                        # the step collapsed
+                        if t > lift_off_end and dy_norm <= ROUND_OFF_UPDATES * EPS * (u_w + share) / abs(
+                                row0[0]) * _rms(zb, scale):
+                            y_new += dy
+                            dsum += dy
+                            converged = True
                         break
                     for i in range(m):
                         y_new[i] += dy[i]
