@@ -138,7 +138,8 @@ def test_compiled_solve_is_scipys_to_the_time_error(monkeypatch):
 
 
 def test_newton_floor_carries_a_steady_state_past_its_round_off():
-    """After the lift-off Newton accepts an update within the wall unknown's round-off (speed_bdf.ROUND_OFF_UPDATES):
+    """After the lift-off, where scipy's Newton would give up, an update within the wall unknown's round-off is
+    accepted (speed_bdf.ROUND_OFF_UPDATES):
     the disks' u~_w = 0.05 on 512 cells at the matched rtol (6.25e-10) reaches t~ = 10 (without the floor its step
     collapsed at t~ = 9.244, measured on this machine; the collapse is chaotic in the round-off, so it is not
     replayed here), at its steady state mu_w^inf to the time error TIME_ERROR_PER_RTOL rtol (1.9e-8; measured
