@@ -8,7 +8,9 @@ with the wall unknown q = x[0] from the constraint (ImposedSpeed.project, by the
 with the wall's row and column at each iterate (stepper.BDF_WALL_NEWTON).  Profiled, the Python solve spent its
 ~0.55 ms a step in call overhead: the band solves of ~256 values (12 us each, f2py), the projection's scalar
 Newton, scipy's bookkeeping (bench/RESULTS.md "The speed compiled").  The rate and Jacobian here are the
-stencil sums of ImposedSpeed.interior_rate and .jacobian, asserted equal to them (tests/continuum).
+stencil sums of ImposedSpeed.interior_rate and .jacobian, asserted equal to them (tests/continuum).  One
+deviation from scipy: after the lift-off, where its Newton would give up, an update within the wall unknown's
+round-off is accepted (``advance``, ROUND_OFF_UPDATES).
 """
 from __future__ import annotations
 
@@ -19,8 +21,7 @@ import types
 import numpy as np
 from numba import njit
 
-from . import problems
-from . import stepper
+from . import problems, stepper
 from .stepper import NewtonFailure, StepperFailure, StepStats
 
 #: scipy.integrate.BDF's constants (scipy/integrate/_ivp/bdf.py): most order, Newton iterations, step factors
@@ -211,9 +212,10 @@ def _change_d(d, order, factor):
 @njit(cache=True)
 def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_steps, lift_off_end, stall, rec_t, rec_x,
             cols, weights, lap_wall, mud_p, p32, p, wq, u_w, w_first, mu_w, mu_d, mu_s, dmu, kl, ku):
-    """Step until t_bound is reached (LANDED), the record is full, BDF stalls after the lift-off (stall = (stepper.BDF_STALL,
-    stepper.STALL_STEPS)), or fails.
-    state = [t, h_abs, newton_tol]; ints = [order, n_equal_steps, lu_valid, nfev, nlu, njev, steps, small, recorded]."""
+    """Step until t_bound is reached (LANDED), the record is full, BDF stalls after the lift-off (stall =
+    (stepper.BDF_STALL, stepper.STALL_STEPS)), or fails.  BDF's state between calls: d (the differences array),
+    state = [t, h_abs, newton_tol, c of the factors in ab, the last step], ints = [order, n_equal_steps, lu_valid,
+    nfev, nlu, njev, steps, small steps in a row, rows recorded in this call]."""
     m = d.shape[1]
     x, f, row0, column = np.empty(m + 1), np.empty(m), np.empty(m + 1), np.zeros(m)
     zb, dy, y, y_new = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
@@ -427,8 +429,9 @@ def integrate_speed(problem, t_out, *, rtol, atol, h0, observer, max_steps):
             k += 1
         elif exit_ == STALLED:
             t, x = rec_t[ints[8] - 1], rec_x[ints[8] - 1].copy()
-            states[k:], rest = stepper.integrate(problem, t_out[k:], method=stepper.HANDOVER, rtol=rtol, atol=atol, h0=state[4],
-                                         observer=observer, max_steps=max_steps - int(ints[6]), resume=(t, x))
+            states[k:], rest = stepper.integrate(problem, t_out[k:], method=stepper.HANDOVER, rtol=rtol, atol=atol,
+                                                 h0=state[4], observer=observer, max_steps=max_steps - int(ints[6]),
+                                                 resume=(t, x))
             stats.steps += rest.steps
             stats.newton_iterations += rest.newton_iterations
             break
