@@ -110,6 +110,8 @@ class ImposedStress(ShearStressDiffusion):
 
     imposed = "stress"
     dense_wall = False
+    #: stepper.integrate runs its adaptive DIRKs compiled (continuum.stress_dirk)
+    compiled_dirk = True
 
     def wall_residual(self, x: np.ndarray) -> float:
         return x[0] - 1.0

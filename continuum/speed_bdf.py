@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import math
 import time
-import types
 
 import numpy as np
 from numba import njit
 
 from . import problems, stepper
+from .compiled import band_lu, band_solve, compile_function, laplacians, rms
 from .stepper import NewtonFailure, StepperFailure, StepStats
 
 #: scipy.integrate.BDF's constants (scipy/integrate/_ivp/bdf.py): most order, Newton iterations, step factors
@@ -39,13 +39,8 @@ ROUND_OFF_UPDATES = 4.0
 LANDED, RECORDS_FULL, STALLED, TOO_SMALL, FAILED = range(5)
 
 
-def _compiled(fn, **replaced):
-    """``fn`` compiled, its globals' functions replaced by compiled ones (the same source, one definition)."""
-    return njit(cache=True)(types.FunctionType(fn.__code__, {**fn.__globals__, **replaced}, fn.__name__))
-
-
-first_cell = _compiled(problems.first_cell)
-wall_unknown = _compiled(problems.wall_unknown, first_cell=first_cell)
+first_cell = compile_function(problems.first_cell)
+wall_unknown = compile_function(problems.wall_unknown, first_cell=first_cell)
 
 
 # --- the problem: ImposedSpeed's projection, rate and Jacobian on arrays --------------------------------------
@@ -75,23 +70,9 @@ def _tau0(q, mu_w, mu_d, dmu, p0):
 
 
 @njit(cache=True)
-def _laplacians(x, tau, lap, cols, weights, mu_w, mu_d, dmu, p0):
-    """d2 tau~/dy~2 at nodes 1..N-1 into ``lap``; ``tau`` (N + 1 values) gets tau~ at every node."""
-    n = len(x)
-    tau[0] = _tau0(x[0], mu_w, mu_d, dmu, p0)
-    tau[1:n] = x[1:]
-    tau[n] = 1.0
-    for i in range(len(lap)):
-        total = 0.0
-        for k in range(cols.shape[1]):
-            total += weights[i, k] * tau[cols[i, k]]
-        lap[i] = total
-
-
-@njit(cache=True)
 def _rate(x, f, tau, cols, weights, mud_p, p32, mu_w, mu_d, dmu, p0):
     """ImposedSpeed.interior_rate: f = D(tau~) d2 tau~/dy~2 at nodes 1..N-1 (``tau``: workspace of N + 1)."""
-    _laplacians(x, tau, f, cols, weights, mu_w, mu_d, dmu, p0)
+    laplacians(x, _tau0(x[0], mu_w, mu_d, dmu, p0), tau, f, cols, weights)
     for i in range(len(f)):
         s = mud_p[i] - mu_w * x[i + 1]
         f[i] *= s * s / p32[i]
@@ -101,7 +82,7 @@ def _rate(x, f, tau, cols, weights, mud_p, p32, mu_w, mu_d, dmu, p0):
 def _jacobian_band(x, band, ku, tau, lap, cols, weights, mud_p, p32, mu_w, mu_d, dmu, p0):
     """ImposedSpeed.jacobian's rows and columns 1..N-1, band[ku + i - j, j] = dF_i/dz_j (z = x[1:]; ``tau``,
     ``lap``: workspaces of N + 1 and N - 1)."""
-    _laplacians(x, tau, lap, cols, weights, mu_w, mu_d, dmu, p0)
+    laplacians(x, _tau0(x[0], mu_w, mu_d, dmu, p0), tau, lap, cols, weights)
     n = len(x)
     band[:] = 0.0
     for i in range(n - 1):
@@ -134,66 +115,7 @@ def _wall(x, row0, column, cols, weights, lap_wall, u_w, w_first, mu_w, mu_d, dm
         column[k] = s * s / p32[k] * lap_wall[k] * dtau0
 
 
-# --- banded LU with partial pivoting (LAPACK dgbtf2/dgbtrs, no transpose) -------------------------------------
-
-@njit(cache=True)
-def _band_lu(ab, piv, kl, ku):
-    """Factorise A in place, A[i, j] = ab[kl + ku + i - j, j] (rows 0..kl-1 of ab: room for the fill-in)."""
-    n = ab.shape[1]
-    kv = kl + ku
-    ju = 0
-    for j in range(n):
-        km = min(kl, n - 1 - j)
-        jp, big = 0, abs(ab[kv, j])
-        for r in range(1, km + 1):
-            if abs(ab[kv + r, j]) > big:
-                jp, big = r, abs(ab[kv + r, j])
-        piv[j] = j + jp
-        if big == 0.0:
-            return False
-        ju = max(ju, min(j + ku + jp, n - 1))
-        if jp != 0:
-            for c in range(j, ju + 1):
-                a, b = kv + j - c, kv + j + jp - c
-                ab[a, c], ab[b, c] = ab[b, c], ab[a, c]
-        pivot = ab[kv, j]
-        for r in range(1, km + 1):
-            ab[kv + r, j] /= pivot
-        for c in range(j + 1, ju + 1):
-            u = ab[kv + j - c, c]
-            if u != 0.0:
-                for r in range(1, km + 1):
-                    ab[kv + j + r - c, c] -= ab[kv + r, j] * u
-    return True
-
-
-@njit(cache=True)
-def _band_solve(ab, piv, kl, ku, b):
-    """b = A^-1 b from ``_band_lu``'s factors."""
-    n = ab.shape[1]
-    kv = kl + ku
-    for j in range(n - 1):
-        lm = min(kl, n - 1 - j)
-        m = piv[j]
-        if m != j:
-            b[m], b[j] = b[j], b[m]
-        for r in range(1, lm + 1):
-            b[j + r] -= ab[kv + r, j] * b[j]
-    for j in range(n - 1, -1, -1):
-        b[j] /= ab[kv, j]
-        for r in range(max(0, j - kv), j):
-            b[r] -= ab[kv + r - j, j] * b[j]
-
-
 # --- scipy's BDF ------------------------------------------------------------------------------------------------
-
-@njit(cache=True)
-def _rms(v, scale):
-    total = 0.0
-    for i in range(len(v)):
-        total += (v[i] / scale[i]) ** 2
-    return math.sqrt(total / len(v))
-
 
 @njit(cache=True)
 def _change_d(d, order, factor):
@@ -215,7 +137,7 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
     """Step until t_bound is reached (LANDED), the record is full, BDF stalls after the lift-off (stall =
     (stepper.BDF_STALL, stepper.STALL_STEPS)), or fails.  BDF's state between calls: d (the differences array),
     state = [t, h_abs, newton_tol, c of the factors in ab, the last step], ints = [order, n_equal_steps, lu_valid,
-    nfev, nlu, njev, steps, small steps in a row, rows recorded in this call]."""
+    nfev, nlu, njev, steps, small steps in a row, rows recorded in this call, U's upper bandwidth]."""
     m = d.shape[1]
     x, f, row0, column = np.empty(m + 1), np.empty(m), np.empty(m + 1), np.zeros(m)
     zb, dy, y, y_new = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
@@ -260,12 +182,13 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
                     ab[kl + ku] += 1.0
                     ab[:kl] = 0.0
                     ints[4] += 1
-                    if not _band_lu(ab, piv, kl, ku):
+                    ints[9] = band_lu(ab, piv, kl, ku)
+                    if ints[9] < 0:
                         return FAILED
                     for w in range(lap_wall_n):  # T^-1 e_w: the wall column's share of every solve
                         units[w] = 0.0
                         units[w, w] = 1.0
-                        _band_solve(ab, piv, kl, ku, units[w])
+                        band_solve(ab, piv, kl, ku, ints[9], units[w])
                     lu_valid, c_lu = True, c
                 # scipy's solve_bdf_system
                 psi[:] = 0.0
@@ -295,7 +218,7 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
                         zb -= c_lu * column[w] * units[w]
                     for i in range(m):
                         dy[i] = c * f[i] - psi[i] - dsum[i]
-                    _band_solve(ab, piv, kl, ku, dy)
+                    band_solve(ab, piv, kl, ku, ints[9], dy)
                     pivot, top = -c_lu * row0[0], 0.0
                     for i in range(m):
                         pivot += c_lu * row0[i + 1] * zb[i]
@@ -303,7 +226,7 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
                     x0 = top / pivot
                     for i in range(m):
                         dy[i] -= x0 * zb[i]
-                    dy_norm = _rms(dy, scale)
+                    dy_norm = rms(dy, scale)
                     rate = dy_norm / dy_norm_old if dy_norm_old >= 0 else -1.0
                     if rate >= 0 and (rate >= 1 or rate ** (NEWTON_MAXITER - k) / (1 - rate) * dy_norm > newton_tol):
                         # NOT scipy's: after the lift-off, an iteration that stalls within the wall unknown's round-off
@@ -311,7 +234,7 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
                         # w_0 ~ 1e-9, and its noise kept Newton from converging at the steady state's tight tolerances:
                         # the step collapsed
                         if t > lift_off_end and dy_norm <= ROUND_OFF_UPDATES * EPS * (u_w + share) / abs(
-                                row0[0]) * _rms(zb, scale):
+                                row0[0]) * rms(zb, scale):
                             y_new += dy
                             dsum += dy
                             converged = True
@@ -339,7 +262,7 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
             for i in range(m):
                 scale[i] = atol + rtol * abs(y_new[i])
-            error_norm = ERROR_CONST[order] * _rms(dsum, scale)
+            error_norm = ERROR_CONST[order] * rms(dsum, scale)
             if error_norm > 1:
                 factor = max(MIN_FACTOR, safety * error_norm ** (-1 / (order + 1)))
                 h_abs *= factor
@@ -356,8 +279,8 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
         for i in range(order, -1, -1):
             d[i] += d[i + 1]
         if n_equal >= order + 1:
-            e_m = ERROR_CONST[order - 1] * _rms(d[order], scale) if order > 1 else math.inf
-            e_p = ERROR_CONST[order + 1] * _rms(d[order + 2], scale) if order < MAX_ORDER else math.inf
+            e_m = ERROR_CONST[order - 1] * rms(d[order], scale) if order > 1 else math.inf
+            e_p = ERROR_CONST[order + 1] * rms(d[order + 2], scale) if order < MAX_ORDER else math.inf
             norms = (e_m, error_norm, e_p)
             best, delta_order = -1.0, 0
             for k in range(3):
@@ -410,7 +333,7 @@ def integrate_speed(problem, t_out, *, rtol, atol, h0, observer, max_steps):
     ab, piv = np.zeros((2 * kl + ku + 1, m), order="F"), np.zeros(m, dtype=np.int64)
     units = np.zeros((len(lap_wall), m))  # T^-1 e_k of the factors in ab
     state = np.array([0.0, h0, max(10 * EPS / rtol, min(0.03, rtol**0.5)), 0.0, 0.0])
-    ints = np.array([1, 0, 0, 1, 0, 1, 0, 0, 0], dtype=np.int64)
+    ints = np.array([1, 0, 0, 1, 0, 1, 0, 0, 0, 0], dtype=np.int64)
     rec_t, rec_x = np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n))
     if observer is not None:
         observer(0.0, x.copy())

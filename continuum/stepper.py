@@ -145,6 +145,9 @@ BDF_WALL_NEWTON = True
 #: an imposed speed's bdf runs compiled (continuum.speed_bdf: the same algorithm and system, measured ~5-15x less
 #: CPU a solve; False: scipy's BDF here, the reference of tests/continuum/test_speed_bdf.py)
 COMPILED_SPEED = True
+#: an imposed stress's adaptive DIRK runs compiled (continuum.stress_dirk: the same steps, rule for rule; False: the
+#: Python here, the reference of tests/continuum/test_stress_dirk.py)
+COMPILED_STRESS = True
 #: what the bordered bdf hands scipy for its Jacobian (``_integrate_bdf``)
 BORDERED_MARKER = -1.0
 
@@ -371,6 +374,11 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
     tab = TABLEAUX[method]
     if fixed_times is None and tab.err is None:
         raise ValueError(f"method {method!r} has no error estimate: give fixed_times")
+    if COMPILED_STRESS and getattr(problem, "compiled_dirk", False) and fixed_times is None and resume is None:
+        from .stress_dirk import integrate_stress  # imports numba (~0.4 s)
+
+        return integrate_stress(problem, t_out, tab, rtol=rtol, atol=atol, h0=h0, newton_tol=newton_tol,
+                                observer=observer, max_steps=max_steps)
     t_out = np.asarray(t_out, dtype=float)
     differential = problem.mass > 0
     rows = mass_rows(problem.mass)

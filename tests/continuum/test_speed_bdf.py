@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy.linalg import solve_banded
 
+import continuum.compiled as compiled
 import continuum.speed_bdf as sb
 import continuum.stepper as stepper
 from continuum.problems import ImposedSpeed
@@ -84,21 +85,27 @@ def test_wall_row_and_column_are_imposed_speeds(speed_state):
     assert np.max(np.abs(column - ref_column)) <= ROUND_OFF * np.max(np.abs(ref_column))
 
 
-def test_band_lu_solves_as_lapack_does():
-    """_band_lu/_band_solve (partial pivoting) solve a random band system (kl = 3, ku = 2, its sub-diagonals
-    larger than the diagonal: rows are swapped) as LAPACK's gbsv through scipy's solve_banded, to 1e-12."""
+@pytest.mark.parametrize("dominant", [False, True], ids=["rows swapped", "no swaps"])
+def test_band_lu_solves_as_lapack_does(dominant):
+    """compiled.band_lu/band_solve solve a random band system (kl = 3, ku = 2) as LAPACK's gbsv through scipy's
+    solve_banded, to 1e-12: with its first sub-diagonal the largest (rows are swapped; U's upper bandwidth kl + ku)
+    and with a dominant diagonal (none; ku, and the solve skips the fill's bands)."""
     rng = np.random.default_rng(7)
     n, kl, ku = 40, 3, 2
     band = rng.uniform(-1, 1, (kl + ku + 1, n))
-    band[ku + 1] *= 4.0  # the first sub-diagonal dominates: pivoting
+    if dominant:
+        band[ku] += 10.0 * np.sign(band[ku])  # |diagonal| > 10 > the column's other |entries| (< 5)
+    else:
+        band[ku + 1] *= 8.0
     rhs = rng.uniform(-1, 1, n)
     ab = np.zeros((2 * kl + ku + 1, n), order="F")
     ab[kl:] = band
     piv = np.zeros(n, dtype=np.int64)
-    assert sb._band_lu(ab, piv, kl, ku)
-    assert np.any(piv != np.arange(n))
+    upper = compiled.band_lu(ab, piv, kl, ku)
+    assert upper == (ku if dominant else kl + ku)
+    assert np.any(piv != np.arange(n)) != dominant
     x = rhs.copy()
-    sb._band_solve(ab, piv, kl, ku, x)
+    compiled.band_solve(ab, piv, kl, ku, upper, x)
     ref = solve_banded((kl, ku), band, rhs)
     assert np.max(np.abs(x - ref)) <= 1e-12 * np.max(np.abs(ref))
 

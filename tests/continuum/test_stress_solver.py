@@ -55,7 +55,10 @@ def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
     """mu~_w = 0.1 on 64 cells at rtol 1e-4: every accepted step used to be followed by a Newton failure at
     the size the error control grows it back to (41 886 steps without the repeat cap, stepper.REPEAT_BAND);
     the cap breaks the loop (measured 4 986 steps) and the answer stays within its time error of a tight
-    solve on the same mesh (measured 4.2e-4 in u~_w, 2.2e-6 in delta: held to rtol-scaled bounds 1e-3, 1e-5)."""
+    solve on the same mesh (measured 4.2e-4 in u~_w, 2.2e-6 in delta: held to rtol-scaled bounds 1e-3, 1e-5).
+    The loop is chaotic in the round-off: the compiled DIRK (continuum.stress_dirk, the same rules) falls into it
+    less deeply (to t~ = 0.5 uncapped: 269 steps, 174 rejected, against the Python's 1250 and 1185), so the
+    control runs the Python (stepper.COMPILED_STRESS = False)."""
     import continuum.stepper as stepper
 
     mu_w, times = paper_friction.mu_w_from_tilde(0.1), [1e-4, 1e-2, 1.0, 10.0]
@@ -64,6 +67,7 @@ def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
     assert loose.stats.steps < 10_000
     assert np.max(np.abs(loose.u_w / tight.u_w - 1)) < 10 * 1e-4
     assert np.max(np.abs(loose.delta / tight.delta - 1)) < 0.1 * 1e-4
+    monkeypatch.setattr(stepper, "COMPILED_STRESS", False)
     short = solve_stress(paper_friction, mu_w, [1e-4, 0.5], Numerics(n_cells=64, rtol=1e-4))
     monkeypatch.setattr(stepper, "REPEAT_BAND", 0.0)  # the cap never set: the loop is back (to t~ = 0.5:
     uncapped = solve_stress(paper_friction, mu_w, [1e-4, 0.5], Numerics(n_cells=64, rtol=1e-4))  # 1250 steps, 598 capped)

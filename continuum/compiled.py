@@ -1,0 +1,94 @@
+"""numba kernels shared by the compiled steppers (continuum.speed_bdf, continuum.stress_dirk): the banded LU of
+their Newton matrices, the Laplacian's stencil sums, the weighted RMS norm, and the compiling of a plain function
+of continuum.problems (one definition, run by Python and compiled)."""
+from __future__ import annotations
+
+import math
+import types
+
+from numba import njit
+
+
+def compile_function(fn, **replaced):
+    """``fn`` compiled, its globals' functions replaced by compiled ones (the same source, one definition)."""
+    return njit(cache=True)(types.FunctionType(fn.__code__, {**fn.__globals__, **replaced}, fn.__name__))
+
+
+@njit(cache=True)
+def laplacians(x, tau0, tau, lap, cols, weights):
+    """d2 tau~/dy~2 at nodes 1..N-1 into ``lap`` (continuum.mesh.Stencil: cols, weights); ``tau`` (N + 1 values)
+    gets tau~ at every node: tau0 at the wall, x[1:] inside, 1 at the bottom (eq. BCStokesEqn)."""
+    n = len(x)
+    tau[0] = tau0
+    tau[1:n] = x[1:]
+    tau[n] = 1.0
+    for i in range(len(lap)):
+        total = 0.0
+        for k in range(cols.shape[1]):
+            total += weights[i, k] * tau[cols[i, k]]
+        lap[i] = total
+
+
+@njit(cache=True)
+def rms(v, scale):
+    """sqrt(mean((v/scale)^2)), the steppers' error and Newton norm."""
+    total = 0.0
+    for i in range(len(v)):
+        total += (v[i] / scale[i]) ** 2
+    return math.sqrt(total / len(v))
+
+
+@njit(cache=True)
+def band_lu(ab, piv, kl, ku):
+    """Factorise A in place, A[i, j] = ab[kl + ku + i - j, j] (rows 0..kl-1 of ab: room for the fill-in), by partial
+    pivoting (LAPACK dgbtf2), the pivots stored as their reciprocals.  Returns U's upper bandwidth for band_solve: ku
+    if no rows were swapped, kl + ku if some were; -1 if A is singular."""
+    n = ab.shape[1]
+    kv = kl + ku
+    ju = 0
+    upper = ku
+    for j in range(n):
+        km = min(kl, n - 1 - j)
+        jp, big = 0, abs(ab[kv, j])
+        for r in range(1, km + 1):
+            if abs(ab[kv + r, j]) > big:
+                jp, big = r, abs(ab[kv + r, j])
+        piv[j] = j + jp
+        if big == 0.0:
+            return -1
+        ju = max(ju, min(j + ku + jp, n - 1))
+        if jp != 0:
+            upper = kv
+            for c in range(j, ju + 1):
+                a, b = kv + j - c, kv + j + jp - c
+                ab[a, c], ab[b, c] = ab[b, c], ab[a, c]
+        pivot = ab[kv, j]
+        for r in range(1, km + 1):
+            ab[kv + r, j] /= pivot
+        for c in range(j + 1, ju + 1):
+            u = ab[kv + j - c, c]
+            if u != 0.0:
+                for r in range(1, km + 1):
+                    ab[kv + j + r - c, c] -= ab[kv + r, j] * u
+        ab[kv, j] = 1.0 / pivot
+    return upper
+
+
+@njit(cache=True)
+def band_solve(ab, piv, kl, ku, upper, b):
+    """b = A^-1 b from ``band_lu``'s factors and its upper bandwidth (LAPACK dgbtrs)."""
+    n = ab.shape[1]
+    kv = kl + ku
+    for j in range(n - 1):
+        lm = min(kl, n - 1 - j)
+        m = piv[j]
+        if m != j:
+            b[m], b[j] = b[j], b[m]
+        bj = b[j]
+        for r in range(1, lm + 1):
+            b[j + r] -= ab[kv + r, j] * bj
+    for j in range(n - 1, -1, -1):
+        bj = b[j] * ab[kv, j]
+        b[j] = bj
+        for r in range(max(0, j - upper), j):
+            b[r] -= ab[kv + r - j, j] * bj
