@@ -93,7 +93,7 @@ def main():
     ax.set(xscale="log", yscale="log", xlabel="CPU time [s], one core",
            ylabel="relative error of u~_w(t~=1), mu~_w = 0.5",
            title="Work-precision (faint: every run; line: Pareto front)")
-    ax.legend(fontsize=8)
+    fig.legend(*ax.get_legend_handles_labels(), fontsize=8, loc="outside lower left", ncol=2)  # the fronts fill the panel
     n = np.array([16, 1600])
     ax_space.loglog(n, 2.5e-5 * (n / 200.0) ** -2, "k:", label="slope -2")
     ax_space.loglog(n, 1e-5 * (n / 32.0) ** -4, "k--", label="slope -4")
