@@ -149,7 +149,8 @@ def _dirk_step(x, f, h, weights, newton_tol, eta, tableau, rates, est, stage, gu
 
 
 @njit(cache=True)
-def advance(x, f, state, counters, t_bound, rtol, atol, max_steps, control, tableau, rec_t, rec_x, kl, ku, problem):
+def advance(x, f, state, counters, t_bound, rtol, atol, newton_tol, max_steps, control, tableau, rec_t, rec_x, kl, ku,
+            problem):
     """Step until t_bound is reached (LANDED; within control's OUTPUT_RTOL), the record is full, or max_steps.
     state = [t, h, eta, h_fail, cap]; control = stepper's (NEWTON_CUT, REPEAT_BAND, CAP_START, CAP_GROWTH,
     ETA_FLOOR, ETA_DECAY, OUTPUT_RTOL); x, f: the state and its rate, carried."""
@@ -173,7 +174,7 @@ def advance(x, f, state, counters, t_bound, rtol, atol, max_steps, control, tabl
             h_try = t_bound - t
         for i in range(n):
             weights[i] = atol + rtol * abs(x[i])
-        ok, eta_step = _dirk_step(x, f, h_try, weights, 0.03, eta, tableau[:4], rates, est, stage, guess, ab, piv,
+        ok, eta_step = _dirk_step(x, f, h_try, weights, newton_tol, eta, tableau[:4], rates, est, stage, guess, ab, piv,
                                   full_ab, full_piv, kl, ku, counters, work, problem, (eta_floor, eta_decay))
         if not ok:  # stepper.integrate's NewtonFailure
             eta = 1.0
@@ -207,8 +208,6 @@ def advance(x, f, state, counters, t_bound, rtol, atol, max_steps, control, tabl
 
 def integrate_stress(problem, t_out, tab, *, rtol, atol, h0, newton_tol, observer, max_steps):
     """stepper.integrate for an ImposedStress with an adaptive DIRK ``tab``, compiled: (states at t_out, StepStats)."""
-    if newton_tol != 0.03:
-        raise ValueError("the compiled DIRK has stepper.integrate's default newton_tol = 0.03")
     t_out = np.asarray(t_out, dtype=float)
     start = time.process_time()
     n = problem.mesh.n_cells
@@ -228,8 +227,8 @@ def integrate_stress(problem, t_out, tab, *, rtol, atol, h0, newton_tol, observe
     states = np.empty((len(t_out), n))
     k = 0
     while k < len(t_out):
-        exit_ = advance(x, f, state, counters, t_out[k], rtol, atol, max_steps, control, tableau, rec_t, rec_x,
-                        problem.kl, problem.ku, data)
+        exit_ = advance(x, f, state, counters, t_out[k], rtol, atol, newton_tol, max_steps, control, tableau, rec_t,
+                        rec_x, problem.kl, problem.ku, data)
         if observer is not None:
             for row in range(counters[RECORDED]):
                 observer(rec_t[row], rec_x[row].copy())
