@@ -156,3 +156,11 @@ def test_newton_floor_carries_a_steady_state_past_its_round_off():
 
     sol = solve_speed(DISKS, 0.05, [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0], Numerics(n_cells=512))
     assert abs(sol.mu_w[-1] / mu_w_for_speed(DISKS, 0.05) - 1) < TIME_ERROR_PER_RTOL["bdf"] * sol.numerics.rtol
+
+
+def test_a_step_limit_is_a_stepper_failure(speed_state):
+    """The compiled BDF stops at max_steps with stepper.StepperFailure (the CLI's exit 1, one line), naming the
+    limit and the time reached, as scipy's path does."""
+    pb, _ = speed_state
+    with pytest.raises(stepper.StepperFailure, match=r"max_steps = 20 reached at t = "):
+        stepper.integrate(pb, [1.0], method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9, max_steps=20)

@@ -82,3 +82,11 @@ def test_compiled_solve_is_the_pythons_to_the_time_error(monkeypatch, friction, 
     bound = TIME_ERROR_PER_RTOL["sdirk4"] * ours.numerics.rtol
     for q in ("u_w", "delta"):
         assert np.max(np.abs(getattr(ours, q) / getattr(python, q) - 1)) < bound, q
+
+
+def test_a_step_limit_is_a_stepper_failure(stress_state):
+    """The compiled DIRK stops at max_steps (accepted plus rejected) with stepper.StepperFailure, naming the limit
+    and the time reached, as the Python does."""
+    pb, _, numerics = stress_state
+    with pytest.raises(stepper.StepperFailure, match=r"max_steps = 20 reached at t = "):
+        stepper.integrate(pb, [1.0], rtol=numerics.rtol, atol=numerics.atol, h0=1e-9, max_steps=20)
