@@ -117,6 +117,14 @@ PREDICTOR_POINTS = 2
 #: fail-quarter-regrow loop (mu~_w = 0.1, 64 cells, rtol 1e-4: 14x fewer Newton iterations; unchanged at
 #: mu~_w = 0.1 and 0.5, 96 cells, rtol 1e-6), bench/RESULTS.md "The paper's figure set"
 NEWTON_CUT, REPEAT_BAND, CAP_START, CAP_GROWTH = 0.25, 0.05, 0.5, 1.1
+#: a stage's simplified Newton: most iterations on the step's matrix, and of the full-Newton fallback; the
+#: contraction at which each gives up; an update below SMALL_UPDATE of the tolerance is converged
+NEWTON_ITERATIONS, FULL_NEWTON_ITERATIONS = 8, 15
+NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE = 1.0, 0.99, 1e-3
+#: the DIRKs' step control: a step that would leave less than LANDING_SHARE of itself before an output time is
+#: stretched onto it; the new step is STEP_SAFETY err^(-1/order) times the last, within [STEP_SHRINK, STEP_GROW];
+#: the error norm is floored at ERROR_FLOOR
+LANDING_SHARE, STEP_SAFETY, STEP_SHRINK, STEP_GROW, ERROR_FLOOR = 0.05, 0.9, 0.2, 4.0, 1e-10
 #: a step ends on an output time within this relative distance of it
 OUTPUT_RTOL = 1e-13
 #: bdf hands over to HANDOVER when its step has stayed below BDF_STALL t for STALL_STEPS steps in a row after
@@ -269,7 +277,7 @@ class NewtonMatrix:
         return np.concatenate(([x0], zr - x0 * self.zb))
 
 
-def solve_stage(problem, matrix, x, rhs, weights, tol, stats, eta=1.0, max_iter=8, full=False):
+def solve_stage(problem, matrix, x, rhs, weights, tol, stats, eta=1.0, max_iter=NEWTON_ITERATIONS, full=False):
     """Solve M X - dh F(X) = rhs by simplified Newton from the guess x.
 
     Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta); at the
@@ -301,10 +309,10 @@ def solve_stage(problem, matrix, x, rhs, weights, tol, stats, eta=1.0, max_iter=
             x += fraction * dx
         if previous is not None:
             theta = size / previous
-            if theta >= (0.99 if full else 1.0):  # no contraction: give up (the caller tries full Newton)
+            if theta >= (NO_CONTRACTION_FULL if full else NO_CONTRACTION):  # give up (the caller tries full Newton)
                 break
             eta = theta / (1.0 - theta)
-        if eta * size < tol or size < 1e-3 * tol:
+        if eta * size < tol or size < SMALL_UPDATE * tol:
             x = problem.project(x)
             return x, problem.rate(x), eta
         rate = problem.rate(x)
@@ -347,7 +355,7 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
                                                max(eta, ETA_FLOOR) ** ETA_DECAY if carry else 1.0)
         except NewtonFailure:
             X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
-                                               max_iter=15, full=True)
+                                               max_iter=FULL_NEWTON_ITERATIONS, full=True)
     if tab.err is None:
         return X, rates[-1], None, eta
     est = h * (tab.error_weights @ rates[1:])
@@ -400,7 +408,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
             h_try = next(schedule) - t
         else:
             h_try = min(h, t_out[k] - t)
-            if t_out[k] - (t + h_try) < 0.05 * h_try:
+            if t_out[k] - (t + h_try) < LANDING_SHARE * h_try:
                 h_try = t_out[k] - t
         weights = atol + rtol * np.abs(x)
         try:
@@ -416,13 +424,13 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
             continue
         if schedule is None:
             scaled = err_vec[differential] / weights[differential]
-            err = max(np.sqrt(scaled @ scaled / len(scaled)), 1e-10)
-            factor = 0.9 * err ** (-1.0 / tab.err_order)
+            err = max(np.sqrt(scaled @ scaled / len(scaled)), ERROR_FLOOR)
+            factor = STEP_SAFETY * err ** (-1.0 / tab.err_order)
             if err > 1.0:
                 stats.rejected += 1
-                h = h_try * max(0.2, factor)
+                h = h_try * max(STEP_SHRINK, factor)
                 continue
-            h = min(h_try * min(4.0, max(0.2, factor)), cap)
+            h = min(h_try * min(STEP_GROW, max(STEP_SHRINK, factor)), cap)
             cap *= CAP_GROWTH
         stats.steps += 1
         x, f, t = x1, f1, t + h_try

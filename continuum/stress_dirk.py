@@ -61,8 +61,9 @@ def _newton_matrix(x, dh, ab, piv, kl, ku, tau, lap, cols, weights, mud_p, p32, 
 
 @njit(cache=True)
 def _solve_stage(x, f, rhs, weights, tol, eta, max_iter, full, dh, ab, piv, upper, full_ab, full_piv, kl, ku,
-                 counters, work, problem):
-    """stepper.solve_stage: x (the guess) becomes the stage X, f its F(X); returns (converged, eta)."""
+                 counters, work, problem, newton):
+    """stepper.solve_stage: x (the guess) becomes the stage X, f its F(X); returns (converged, eta).  newton =
+    stepper's (NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE)."""
     tau, lap, dx, cols, weights_lap, mud_p, p32, mu_w = (work[0], work[1], work[2], problem[0], problem[1],
                                                          problem[2], problem[3], problem[4])
     _rate(x, f, tau, lap, cols, weights_lap, mud_p, p32, mu_w)
@@ -88,10 +89,10 @@ def _solve_stage(x, f, rhs, weights, tol, eta, max_iter, full, dh, ab, piv, uppe
         x += dx
         if previous >= 0:
             theta = size / previous
-            if theta >= (0.99 if full else 1.0):  # no contraction
+            if theta >= (newton[1] if full else newton[0]):  # no contraction
                 break
             eta = theta / (1.0 - theta)
-        if eta * size < tol or size < 1e-3 * tol:
+        if eta * size < tol or size < newton[2] * tol:
             x[0] = 1.0  # ImposedStress.project
             _rate(x, f, tau, lap, cols, weights_lap, mud_p, p32, mu_w)
             return True, eta
@@ -103,7 +104,7 @@ def _solve_stage(x, f, rhs, weights, tol, eta, max_iter, full, dh, ab, piv, uppe
 
 @njit(cache=True)
 def _dirk_step(x, f, h, weights, newton_tol, eta, tableau, rates, est, stage, guess, ab, piv, full_ab, full_piv,
-               kl, ku, counters, work, problem, eta_rule):
+               kl, ku, counters, work, problem, newton):
     """stepper.dirk_step: the stage X (and F(X) in rates[-1]) from (x, f), the filtered error estimate in est;
     returns (ok, eta)."""
     a, w, err, explicit_first = tableau
@@ -129,12 +130,13 @@ def _dirk_step(x, f, h, weights, newton_tol, eta, tableau, rates, est, stage, gu
         est[0] = 0.0
         guess[0] = stage[0]  # the wall row from the last stage
         start = guess.copy()
-        ok, eta = _solve_stage(guess, rates[i + 1], est, weights, newton_tol, max(eta, eta_rule[0]) ** eta_rule[1],
-                               8, False, dh, ab, piv, upper, full_ab, full_piv, kl, ku, counters, work, problem)
+        ok, eta = _solve_stage(guess, rates[i + 1], est, weights, newton_tol, max(eta, newton[3]) ** newton[4],
+                               newton[5], False, dh, ab, piv, upper, full_ab, full_piv, kl, ku, counters, work, problem,
+                               newton)
         if not ok:
             guess[:] = start
-            ok, eta = _solve_stage(guess, rates[i + 1], est, weights, newton_tol, 1.0, 15, True, dh, ab, piv, upper,
-                                   full_ab, full_piv, kl, ku, counters, work, problem)
+            ok, eta = _solve_stage(guess, rates[i + 1], est, weights, newton_tol, 1.0, newton[6], True, dh, ab, piv,
+                                   upper, full_ab, full_piv, kl, ku, counters, work, problem, newton)
             if not ok:
                 return False, eta
         stage[:] = guess
@@ -149,12 +151,14 @@ def _dirk_step(x, f, h, weights, newton_tol, eta, tableau, rates, est, stage, gu
 
 
 @njit(cache=True)
-def advance(x, f, state, counters, t_bound, rtol, atol, newton_tol, max_steps, control, tableau, rec_t, rec_x, kl, ku,
-            problem):
+def advance(x, f, state, counters, t_bound, rtol, atol, newton_tol, max_steps, control, newton, tableau, rec_t, rec_x,
+            kl, ku, problem):
     """Step until t_bound is reached (LANDED; within control's OUTPUT_RTOL), the record is full, or max_steps.
-    state = [t, h, eta, h_fail, cap]; control = stepper's (NEWTON_CUT, REPEAT_BAND, CAP_START, CAP_GROWTH,
-    ETA_FLOOR, ETA_DECAY, OUTPUT_RTOL); x, f: the state and its rate, carried."""
-    newton_cut, repeat_band, cap_start, cap_growth, eta_floor, eta_decay, output_rtol = control
+    state = [t, h, eta, h_fail, cap]; control = stepper's step control (NEWTON_CUT, REPEAT_BAND, CAP_START, CAP_GROWTH,
+    OUTPUT_RTOL, LANDING_SHARE, STEP_SAFETY, STEP_SHRINK, STEP_GROW, ERROR_FLOOR), newton its Newton rules
+    (NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE, ETA_FLOOR, ETA_DECAY, NEWTON_ITERATIONS,
+    FULL_NEWTON_ITERATIONS); x, f: the state and its rate, carried."""
+    newton_cut, repeat_band, cap_start, cap_growth, output_rtol, landing, safety, shrink, grow, floor = control
     n = len(x)
     s = tableau[0].shape[0]
     err_order = tableau[4]
@@ -170,12 +174,12 @@ def advance(x, f, state, counters, t_bound, rtol, atol, newton_tol, max_steps, c
             state[0], state[1], state[2], state[3], state[4] = t, h, eta, h_fail, cap
             return MAX_STEPS
         h_try = min(h, t_bound - t)
-        if t_bound - (t + h_try) < 0.05 * h_try:
+        if t_bound - (t + h_try) < landing * h_try:
             h_try = t_bound - t
         for i in range(n):
             weights[i] = atol + rtol * abs(x[i])
         ok, eta_step = _dirk_step(x, f, h_try, weights, newton_tol, eta, tableau[:4], rates, est, stage, guess, ab, piv,
-                                  full_ab, full_piv, kl, ku, counters, work, problem, (eta_floor, eta_decay))
+                                  full_ab, full_piv, kl, ku, counters, work, problem, newton)
         if not ok:  # stepper.integrate's NewtonFailure
             eta = 1.0
             counters[REJECTED] += 1
@@ -184,13 +188,13 @@ def advance(x, f, state, counters, t_bound, rtol, atol, newton_tol, max_steps, c
             h, h_fail = newton_cut * h_try, h_try
             continue
         eta = eta_step
-        err = max(rms(est[1:], weights[1:]), 1e-10)
-        factor = 0.9 * err ** (-1.0 / err_order)
+        err = max(rms(est[1:], weights[1:]), floor)
+        factor = safety * err ** (-1.0 / err_order)
         if err > 1.0:
             counters[REJECTED] += 1
-            h = h_try * max(0.2, factor)
+            h = h_try * max(shrink, factor)
             continue
-        h = min(h_try * min(4.0, max(0.2, factor)), cap)
+        h = min(h_try * min(grow, max(shrink, factor)), cap)
         cap *= cap_growth
         counters[STEPS] += 1
         x[:] = stage
@@ -214,8 +218,10 @@ def integrate_stress(problem, t_out, tab, *, rtol, atol, h0, newton_tol, observe
     data = (np.ascontiguousarray(problem.lap.cols), np.ascontiguousarray(problem.lap.weights), problem._mud_p,
             problem._p32, float(problem.mu_w))
     tableau = (tab.matrix, tab.stage_weights, tab.error_weights, tab.explicit_first, int(tab.err_order))
-    control = (stepper.NEWTON_CUT, stepper.REPEAT_BAND, stepper.CAP_START, stepper.CAP_GROWTH, stepper.ETA_FLOOR,
-               stepper.ETA_DECAY, stepper.OUTPUT_RTOL)
+    control = (stepper.NEWTON_CUT, stepper.REPEAT_BAND, stepper.CAP_START, stepper.CAP_GROWTH, stepper.OUTPUT_RTOL,
+               stepper.LANDING_SHARE, stepper.STEP_SAFETY, stepper.STEP_SHRINK, stepper.STEP_GROW, stepper.ERROR_FLOOR)
+    newton = (stepper.NO_CONTRACTION, stepper.NO_CONTRACTION_FULL, stepper.SMALL_UPDATE, stepper.ETA_FLOOR,
+              stepper.ETA_DECAY, stepper.NEWTON_ITERATIONS, stepper.FULL_NEWTON_ITERATIONS)
     x = problem.initial().astype(float)
     f = np.empty(n)
     _rate(x, f, np.empty(n + 1), np.empty(n - 1), *data)
@@ -227,8 +233,8 @@ def integrate_stress(problem, t_out, tab, *, rtol, atol, h0, newton_tol, observe
     states = np.empty((len(t_out), n))
     k = 0
     while k < len(t_out):
-        exit_ = advance(x, f, state, counters, t_out[k], rtol, atol, newton_tol, max_steps, control, tableau, rec_t,
-                        rec_x, problem.kl, problem.ku, data)
+        exit_ = advance(x, f, state, counters, t_out[k], rtol, atol, newton_tol, max_steps, control, newton, tableau,
+                        rec_t, rec_x, problem.kl, problem.ku, data)
         if observer is not None:
             for row in range(counters[RECORDED]):
                 observer(rec_t[row], rec_x[row].copy())
