@@ -8,13 +8,36 @@ import types
 
 from numba import njit
 
+#: every kernel's numba options: cached on disk (continuum/__pycache__; see BUILT_FROM in the modules that build
+#: these kernels in), and numpy's floating-point semantics (a division by zero gives inf or NaN, as in the Python
+#: code, which the steppers then treat as an inadmissible iterate, instead of raising ZeroDivisionError)
+JIT = dict(cache=True, error_model="numpy")
+
+
+def jit(fn):
+    """``fn`` compiled with JIT's options."""
+    return njit(**JIT)(fn)
+
 
 def compile_function(fn, **replaced):
     """``fn`` compiled, its globals' functions replaced by compiled ones (the same source, one definition)."""
-    return njit(cache=True)(types.FunctionType(fn.__code__, {**fn.__globals__, **replaced}, fn.__name__))
+    return jit(types.FunctionType(fn.__code__, {**fn.__globals__, **replaced}, fn.__name__))
 
 
-@njit(cache=True)
+def digest(*modules) -> str:
+    """A short hash of these modules' source files: numba's cache of a kernel checks only its own file, so a module
+    whose kernels build in code from others records their digest (BUILT_FROM) and changes with it
+    (tests/continuum/test_compiled_cache.py)."""
+    import hashlib
+    import inspect
+
+    h = hashlib.sha256()
+    for module in modules:
+        h.update(inspect.getsource(module).encode())
+    return h.hexdigest()[:16]
+
+
+@jit
 def laplacians(x, tau0, tau, lap, cols, weights):
     """d2 tau~/dy~2 at nodes 1..N-1 into ``lap`` (continuum.mesh.Stencil: cols, weights); ``tau`` (N + 1 values)
     gets tau~ at every node: tau0 at the wall, x[1:] inside, 1 at the bottom (eq. BCStokesEqn)."""
@@ -29,7 +52,7 @@ def laplacians(x, tau0, tau, lap, cols, weights):
         lap[i] = total
 
 
-@njit(cache=True)
+@jit
 def rms(v, scale):
     """sqrt(mean((v/scale)^2)), the steppers' error and Newton norm."""
     total = 0.0
@@ -38,7 +61,7 @@ def rms(v, scale):
     return math.sqrt(total / len(v))
 
 
-@njit(cache=True)
+@jit
 def band_lu(ab, piv, kl, ku):
     """Factorise A in place, A[i, j] = ab[kl + ku + i - j, j] (rows 0..kl-1 of ab: room for the fill-in), by partial
     pivoting (LAPACK dgbtf2), the pivots stored as their reciprocals.  Returns U's upper bandwidth for band_solve: ku
@@ -74,7 +97,7 @@ def band_lu(ab, piv, kl, ku):
     return upper
 
 
-@njit(cache=True)
+@jit
 def band_solve(ab, piv, kl, ku, upper, b):
     """b = A^-1 b from ``band_lu``'s factors and its upper bandwidth (LAPACK dgbtrs)."""
     n = ab.shape[1]

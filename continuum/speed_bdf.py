@@ -18,12 +18,14 @@ import math
 import time
 
 import numpy as np
-from numba import njit
 
 from . import problems, stepper
-from .compiled import band_lu, band_solve, compile_function, laplacians, rms
+from .compiled import band_lu, band_solve, compile_function, jit, laplacians, rms
 from .stepper import NewtonFailure, StepperFailure, StepStats
 
+#: compiled.digest(compiled, problems): these kernels build in code from both, and numba's cache checks only this
+#: file, so this line changes with them (tests/continuum/test_compiled_cache.py gives the new value)
+BUILT_FROM = "991ac565fbcaf358"
 #: scipy.integrate.BDF's constants (scipy/integrate/_ivp/bdf.py): most order, Newton iterations, step factors
 MAX_ORDER, NEWTON_MAXITER, MIN_FACTOR, MAX_FACTOR = 5, 4, 0.2, 10.0
 KAPPA = np.array([0.0, -0.1850, -1 / 9, -0.0823, -0.0415, 0.0])
@@ -45,7 +47,7 @@ wall_unknown = compile_function(problems.wall_unknown, first_cell=first_cell)
 
 # --- the problem: ImposedSpeed's projection, rate and Jacobian on arrays --------------------------------------
 
-@njit(cache=True)
+@jit
 def _project(z, x, u_w, w_first, mu_w, mu_d, mu_s, dmu, p, wq):
     """x = (q, z) with q from the constraint (ImposedSpeed.project); q = NaN where inadmissible.  Returns the
     interior's share of u~_w summed in absolute value (the scale of its round-off)."""
@@ -64,12 +66,12 @@ def _project(z, x, u_w, w_first, mu_w, mu_d, mu_s, dmu, p, wq):
     return magnitude
 
 
-@njit(cache=True)
+@jit
 def _tau0(q, mu_w, mu_d, dmu, p0):
     return (mu_d - dmu * math.exp(min(-q, problems.EXP_MAX))) * p0 / mu_w
 
 
-@njit(cache=True)
+@jit
 def _rate(x, f, tau, cols, weights, mud_p, p32, mu_w, mu_d, dmu, p0):
     """ImposedSpeed.interior_rate: f = D(tau~) d2 tau~/dy~2 at nodes 1..N-1 (``tau``: workspace of N + 1)."""
     laplacians(x, _tau0(x[0], mu_w, mu_d, dmu, p0), tau, f, cols, weights)
@@ -78,7 +80,7 @@ def _rate(x, f, tau, cols, weights, mud_p, p32, mu_w, mu_d, dmu, p0):
         f[i] *= s * s / p32[i]
 
 
-@njit(cache=True)
+@jit
 def _jacobian_band(x, band, ku, tau, lap, cols, weights, mud_p, p32, mu_w, mu_d, dmu, p0):
     """ImposedSpeed.jacobian's rows and columns 1..N-1, band[ku + i - j, j] = dF_i/dz_j (z = x[1:]; ``tau``,
     ``lap``: workspaces of N + 1 and N - 1)."""
@@ -95,7 +97,7 @@ def _jacobian_band(x, band, ku, tau, lap, cols, weights, mud_p, p32, mu_w, mu_d,
         band[ku, i] -= 2 * mu_w * s / p32[i] * lap[i]
 
 
-@njit(cache=True)
+@jit
 def _wall(x, row0, column, cols, weights, lap_wall, u_w, w_first, mu_w, mu_d, dmu, p, wq, mud_p, p32):
     """ImposedSpeed.wall_jacobian: the constraint's gradient (row0) and dF_i/dq at rows 1..kl (column)."""
     n = len(x)
@@ -117,7 +119,7 @@ def _wall(x, row0, column, cols, weights, lap_wall, u_w, w_first, mu_w, mu_d, dm
 
 # --- scipy's BDF ------------------------------------------------------------------------------------------------
 
-@njit(cache=True)
+@jit
 def _change_d(d, order, factor):
     """scipy's change_D: rescale the differences array to a step ``factor`` times the last."""
     r = np.zeros((order + 1, order + 1))
@@ -131,7 +133,7 @@ def _change_d(d, order, factor):
     d[:order + 1] = ru.T @ d[:order + 1].copy()
 
 
-@njit(cache=True)
+@jit
 def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_steps, lift_off_end, stall, rec_t, rec_x,
             cols, weights, lap_wall, mud_p, p32, p, wq, u_w, w_first, mu_w, mu_d, mu_s, dmu, kl, ku):
     """Step until t_bound is reached (LANDED), the record is full, BDF stalls after the lift-off (stall =
@@ -293,7 +295,7 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
             _change_d(d, order, factor)
             n_equal, lu_valid = 0, False
         ints[6] += 1
-        _project(d[0], x, u_w, w_first, mu_w, mu_d, mu_s, dmu, p, wq)
+        _project(y_new, x, u_w, w_first, mu_w, mu_d, mu_s, dmu, p, wq)  # scipy's y (d[0] sums it in another order)
         rec_t[ints[8]] = t
         rec_x[ints[8]] = x
         ints[8] += 1
@@ -341,6 +343,10 @@ def integrate_speed(problem, t_out, *, rtol, atol, h0, observer, max_steps):
     lift_off_end = getattr(problem, "lift_off_end", 0.0)
     k = 0
     while k < len(t_out):
+        if k > 0 and t_out[k] == state[0]:  # a repeated output time: scipy's solver is already there
+            states[k] = states[k - 1]
+            k += 1
+            continue
         exit_ = advance(state, d, ints, jband, ab, piv, units, t_out[k], rtol, atol, max_steps, lift_off_end,
                         (stepper.BDF_STALL, stepper.STALL_STEPS), rec_t, rec_x,
                         *args)

@@ -15,12 +15,14 @@ import math
 import time
 
 import numpy as np
-from numba import njit
 
 from . import stepper
-from .compiled import band_lu, band_solve, laplacians, rms
+from .compiled import band_lu, band_solve, jit, laplacians, rms
 from .stepper import StepperFailure, StepStats
 
+#: compiled.digest(compiled): these kernels build in its code, and numba's cache checks only this file, so this line
+#: changes with it (tests/continuum/test_compiled_cache.py gives the new value)
+BUILT_FROM = "d1454a97fe0eb3fa"
 #: per-step rows kept between two returns to Python (the observer's), per kernel call
 RECORD_ROWS = 1024
 #: the kernel's exits
@@ -29,7 +31,7 @@ LANDED, RECORDS_FULL, MAX_STEPS = range(3)
 STEPS, REJECTED, ITERATIONS, FAILURES, RECORDED = range(5)
 
 
-@njit(cache=True)
+@jit
 def _rate(x, f, tau, lap, cols, weights, mud_p, p32, mu_w):
     """ImposedStress.rate: the wall row x_0 - 1, then D(tau~) d2 tau~/dy~2 at nodes 1..N-1."""
     laplacians(x, x[0], tau, lap, cols, weights)
@@ -39,7 +41,7 @@ def _rate(x, f, tau, lap, cols, weights, mud_p, p32, mu_w):
         f[i + 1] = s * s / p32[i] * lap[i]
 
 
-@njit(cache=True)
+@jit
 def _newton_matrix(x, dh, ab, piv, kl, ku, tau, lap, cols, weights, mud_p, p32, mu_w):
     """LU of M - dh J(x) into ab (stepper.NewtonMatrix; ImposedStress.jacobian, whose wall row is e_0 with mass 0);
     U's upper bandwidth (compiled.band_lu; -1: singular)."""
@@ -59,7 +61,7 @@ def _newton_matrix(x, dh, ab, piv, kl, ku, tau, lap, cols, weights, mud_p, p32, 
     return band_lu(ab, piv, kl, ku)
 
 
-@njit(cache=True)
+@jit
 def _solve_stage(x, f, rhs, weights, tol, eta, max_iter, full, dh, ab, piv, upper, full_ab, full_piv, kl, ku,
                  counters, work, problem, newton):
     """stepper.solve_stage: x (the guess) becomes the stage X, f its F(X); returns (converged, eta).  newton =
@@ -74,8 +76,8 @@ def _solve_stage(x, f, rhs, weights, tol, eta, max_iter, full, dh, ab, piv, uppe
         counters[ITERATIONS] += 1
         if full:
             full_upper = _newton_matrix(x, dh, full_ab, full_piv, kl, ku, tau, lap, cols, weights_lap, mud_p, p32, mu_w)
-            if full_upper < 0:
-                break
+            if full_upper < 0:  # stepper.NewtonMatrix raises: a failed step, no Newton failure counted
+                return False, eta
         dx[0] = rhs[0] + dh * f[0]  # mass 0 on the wall row
         for i in range(1, n):
             dx[i] = rhs[i] - x[i] + dh * f[i]
@@ -102,7 +104,7 @@ def _solve_stage(x, f, rhs, weights, tol, eta, max_iter, full, dh, ab, piv, uppe
     return False, eta
 
 
-@njit(cache=True)
+@jit
 def _dirk_step(x, f, h, weights, newton_tol, eta, tableau, rates, est, stage, guess, ab, piv, full_ab, full_piv,
                kl, ku, counters, work, problem, newton):
     """stepper.dirk_step: the stage X (and F(X) in rates[-1]) from (x, f), the filtered error estimate in est;
@@ -150,7 +152,7 @@ def _dirk_step(x, f, h, weights, newton_tol, eta, tableau, rates, est, stage, gu
     return True, eta
 
 
-@njit(cache=True)
+@jit
 def advance(x, f, state, counters, t_bound, rtol, atol, newton_tol, max_steps, control, newton, tableau, rec_t, rec_x,
             kl, ku, problem):
     """Step until t_bound is reached (LANDED; within control's OUTPUT_RTOL), the record is full, or max_steps.

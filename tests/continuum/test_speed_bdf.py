@@ -164,3 +164,16 @@ def test_a_step_limit_is_a_stepper_failure(speed_state):
     pb, _ = speed_state
     with pytest.raises(stepper.StepperFailure, match=r"max_steps = 20 reached at t = "):
         stepper.integrate(pb, [1.0], method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9, max_steps=20)
+
+
+def test_a_repeated_output_time_is_landed_on_once(speed_state, monkeypatch):
+    """stepper.integrate's output times may repeat (solve_speed refuses that, direct callers may not): the compiled
+    BDF returns the same state twice, as scipy's path does (its solver is already there), instead of a zero step
+    (found by review: a division by the zero step)."""
+    pb, _ = speed_state
+    times = [1e-3, 1e-2, 1e-2, 0.1]
+    ours = stepper.integrate(pb, times, method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9)[0]
+    monkeypatch.setattr(stepper, "COMPILED_SPEED", False)
+    scipys = stepper.integrate(pb, times, method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9)[0]
+    assert np.array_equal(ours[1], ours[2])
+    assert np.max(np.abs(ours[:, 1:] - scipys[:, 1:])) < TIME_ERROR_PER_RTOL["bdf"] * 1e-8
