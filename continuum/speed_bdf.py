@@ -319,8 +319,7 @@ def integrate_speed(problem, t_out, *, rtol, atol, h0, observer, max_steps):
     x0 = problem.initial()
     n = len(x0)
     m = n - 1
-    pb = problem
-    fr = pb.friction
+    pb, fr = problem, problem.friction
     args = (np.ascontiguousarray(pb.lap.cols), np.ascontiguousarray(pb.lap.weights), pb._lap_wall, pb._mud_p,
             pb._p32, pb.p, pb._wq, pb.u_w, pb._w_first, pb.mu_w, fr.mu_d, fr.mu_s, fr.dmu, pb.kl, pb.ku)
     cols, weights, lap_wall, mud_p, p32, p, wq, u_w, w_first, mu_w, mu_d, mu_s, dmu, kl, ku = args
@@ -334,7 +333,8 @@ def integrate_speed(problem, t_out, *, rtol, atol, h0, observer, max_steps):
     _jacobian_band(x, jband, ku, tau, lap, cols, weights, mud_p, p32, mu_w, mu_d, dmu, p[0])
     ab, piv = np.zeros((2 * kl + ku + 1, m), order="F"), np.zeros(m, dtype=np.int64)
     units = np.zeros((len(lap_wall), m))  # T^-1 e_k of the factors in ab
-    state = np.array([0.0, h0, max(10 * EPS / rtol, min(0.03, rtol**0.5)), 0.0, 0.0])
+    newton_tol = max(10 * EPS / rtol, min(0.03, rtol**0.5))  # scipy's BDF.__init__
+    state = np.array([0.0, h0, newton_tol, 0.0, 0.0])
     ints = np.array([1, 0, 0, 1, 0, 1, 0, 0, 0, 0], dtype=np.int64)
     rec_t, rec_x = np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n))
     if observer is not None:
@@ -348,8 +348,7 @@ def integrate_speed(problem, t_out, *, rtol, atol, h0, observer, max_steps):
             k += 1
             continue
         exit_ = advance(state, d, ints, jband, ab, piv, units, t_out[k], rtol, atol, max_steps, lift_off_end,
-                        (stepper.BDF_STALL, stepper.STALL_STEPS), rec_t, rec_x,
-                        *args)
+                        (stepper.BDF_STALL, stepper.STALL_STEPS), rec_t, rec_x, *args)
         if observer is not None:
             for row in range(ints[8]):
                 observer(rec_t[row], rec_x[row].copy())
