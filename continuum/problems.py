@@ -148,6 +148,8 @@ class ImposedSpeed(ShearStressDiffusion):
 
     imposed = "speed"
     dense_wall = True
+    #: stepper's bdf runs compiled on it (continuum.speed_bdf)
+    compiled_bdf = True
 
     def __init__(self, friction: Friction, u_w: float, mesh: Mesh, order: int = 4):
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)

@@ -311,9 +311,9 @@ IMPOSED = {"stress": "mu_w", "speed": "u_w"}
 #: the range of relative accuracies that can be asked for
 ACCURACY_RANGE = (1e-10, 1e-2)
 #: refinement stops here (a request that needs more is refused with the accuracy reached): a speed on
-#: 512 cells takes 1.5-4 s (its companion on 256 included); on 1024 its wall cells (7.6e-8) stall BDF by
-#: round-off near the steady state (measured: u~_w = 0.198 not at t~ = 10 after 400 s; bench/RESULTS.md "One map
-#: with a wall cluster")
+#: 512 cells takes 0.2-0.6 s (compiled, its companion on 256 included); on 1024 its wall cells (7.6e-8) stall BDF by
+#: round-off near the steady state (measured: u~_w = 0.198 not at t~ = 10 after 400 s, bench/RESULTS.md "One map
+#: with a wall cluster"; compiled, 1.334 and the disks' 1.0 still fail there, "The speed compiled")
 MAX_CELLS = {"stress": 2048, "speed": 512}
 #: an estimated solve has at least this many cells: the companion of a speed on 64 cells (32) is
 #: pre-asymptotic through the lift-off (measured: mu_w at u~_w = 1.334, t~ = 1 underestimated 1.5x)

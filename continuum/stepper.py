@@ -150,8 +150,9 @@ BORDERED_BDF = True
 #: cells stalled BDF, which handed over to SDIRK4, which crawled), bench/RESULTS.md "The speed's cost and BDF's
 #: order-1 trap"
 BDF_WALL_NEWTON = True
-#: an imposed speed's bdf runs compiled (continuum.speed_bdf: the same algorithm and system, measured ~5-15x less
-#: CPU a solve; False: scipy's BDF here, the reference of tests/continuum/test_speed_bdf.py)
+#: an imposed speed's bdf runs compiled (continuum.speed_bdf: the same algorithm and system, measured 5.6-7.5x less
+#: CPU at the default accuracy, 17-21x on 64 cells; False: scipy's BDF here, the reference of
+#: tests/continuum/test_speed_bdf.py)
 COMPILED_SPEED = True
 #: an imposed stress's adaptive DIRK runs compiled (continuum.stress_dirk: the same steps, rule for rule; False: the
 #: Python here, the reference of tests/continuum/test_stress_dirk.py)
@@ -481,8 +482,9 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     needed), the rest goes to HANDOVER (whose Newton accepts an update at round-off)."""
     if not np.all(problem.mass[1:] == 1.0) or problem.mass[0] != 0.0:
         raise ValueError("method 'bdf' needs an algebraic row 0 and unit mass elsewhere")
-    if COMPILED_SPEED and BORDERED_BDF and BDF_WALL_NEWTON and problem.imposed == "speed" and resume is None:
-        from .speed_bdf import integrate_speed  # imports numba (~0.4 s): only a speed's solve pays it
+    compiled = COMPILED_SPEED and BORDERED_BDF and BDF_WALL_NEWTON and getattr(problem, "compiled_bdf", False)
+    if compiled and resume is None:
+        from .speed_bdf import integrate_speed  # imports numba (~0.4 s, once a process)
 
         return integrate_speed(problem, t_out, rtol=rtol, atol=atol, h0=h0, observer=observer, max_steps=max_steps)
     from scipy.integrate import BDF

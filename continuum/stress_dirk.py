@@ -131,7 +131,8 @@ def _dirk_step(x, f, h, weights, newton_tol, eta, tableau, rates, est, stage, gu
                 guess[m] += hp * rates[j, m]
         est[0] = 0.0
         guess[0] = stage[0]  # the wall row from the last stage
-        start = guess.copy()
+        start = work[3]  # the guess, for the full-Newton fallback
+        start[:] = guess
         ok, eta = _solve_stage(guess, rates[i + 1], est, weights, newton_tol, max(eta, newton[3]) ** newton[4],
                                newton[5], False, dh, ab, piv, upper, full_ab, full_piv, kl, ku, counters, work, problem,
                                newton)
@@ -168,7 +169,7 @@ def advance(x, f, state, counters, t_bound, rtol, atol, newton_tol, max_steps, c
     stage, guess, weights = np.empty(n), np.empty(n), np.empty(n)
     ab, full_ab = np.empty((n, 2 * kl + ku + 1)).T, np.empty((n, 2 * kl + ku + 1)).T  # columns contiguous
     piv, full_piv = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
-    work = (np.empty(n + 1), np.empty(n - 1), np.empty(n))
+    work = (np.empty(n + 1), np.empty(n - 1), np.empty(n), np.empty(n))  # tau~ at all nodes, Laplacian, update, guess
     t, h, eta, h_fail, cap = state[0], state[1], state[2], state[3], state[4]
     counters[RECORDED] = 0
     while True:
