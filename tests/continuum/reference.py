@@ -14,7 +14,8 @@ mu_w = mu(0), delta = the first depth where v = DELTA_THRESHOLD, a root of the i
 
 Converged means: the degree-COARSE_DEGREE, rtol-COARSE_RTOL companion differs by less than CONVERGED
 (relative) in every quantity at every time.  Imposed speed (``speed_reference``): the same collocation
-of eq. GranularStokesEqn_muBIS, converged only after the lift-off of mu_w from mu_d (see there).  The
+of eq. GranularStokesEqn_muBIS, converged at every time by pieces (``pieces``): on wall-clustered maps before
+and through the lift-off of mu_w from mu_d, on the exponential map after it (see there).  The
 values of both, at both resolutions, are cached in data/reference.csv, written by
 ``python -m tests.continuum.reference [CASE-PREFIX ...]`` (tests/continuum/test_reference.py checks the cache).
 
@@ -62,37 +63,57 @@ STRESS_CASES = {"paper-0.9": (PAPER, 0.9), "paper-0.5": (PAPER, 0.5), "paper-0.1
 #: reference and its companion (10-40 s of CPU per solve)
 SPEED_STRETCH = 8.0
 SPEED_DEGREE, SPEED_COARSE_DEGREE = 96, 64
-#: before the lift-off (``speed_early_case``): the map of SPEED_STRETCH plus a wall cluster of EARLY_WALL_FOLDS
-#: e-folds within CLUSTER_WIDTH of the wall (the solver's map, continuum.mesh), integrated only to the last
-#: time before the lift-off (through it, its wall node's tiny weight makes Radau's Newton fail: measured 47-87 s
-#: a solve, or failure); the degrees of the reference and its companion (5-16 s of CPU per solve).  Measured,
-#: degree 128 against 160: u~_w, mu_w, delta within 2e-10 (with 14 e-folds delta moved 1.4e-7 at t~ = 1e-4)
+#: before and through the lift-off (``speed_early_case``): the map of SPEED_STRETCH plus a wall cluster of
+#: EARLY_WALL_FOLDS e-folds within CLUSTER_WIDTH of the wall (the solver's map, continuum.mesh); the degrees of
+#: the reference and its companion (8-200 s of CPU per solve).  Measured, degree 128 against 160: u~_w, mu_w,
+#: delta within 2e-10 (with 14 e-folds delta moved 1.4e-7 at t~ = 1e-4), through the lift-off too (1.334 and
+#: the disks at t~ = 0.1, 4.629 at 1: within 2.7e-11), where the map of SPEED_STRETCH alone was off by 2e-8-8e-8
 EARLY_WALL_FOLDS, CLUSTER_WIDTH = 12.0, 0.1
 EARLY_DEGREE, EARLY_COARSE_DEGREE = 160, 128
+#: u~_w = 0.198's lift-off (t~_mud = 0.039) is a solve apart on a shallower cluster (``speed_lift_off_case``):
+#: on EARLY_WALL_FOLDS, and on 9, Radau fails in it ("step size less than spacing"); on 6 it passes, converged
+#: at t~ = 1e-2 and 0.1 (degree 128 against 160 within 1.2e-10), not before (4.6e-8 at 1e-3: the early solve's)
+LIFT_OFF_WALL_FOLDS = 6.0
+#: from its first converged time on, 0.198 is carried to the exponential map of this stretch (``speed_reference``
+#: ``remap``): on SPEED_STRETCH the wall unknown, stiff through the wall node's weight ~ 1e-8, stalls Radau
+#: between t~ = 1 and 10 (mu~_w ~ 0.9); on stretch 2 degree 96 against 128 agree within 2e-13 at t~ = 3 and 10
+REMAP_STRETCH = 2.0
 
 
 @dataclass(frozen=True)
 class SpeedCase:
-    """An imposed-speed case: its friction and u~_w, the output times of its reference, those before its lift-off
-    (t~_mud = u~_w^2), where the early reference is run, and the time from which the reference is converged to
-    CONVERGED (measured, test_reference.py); cached as speed-LABEL and speed-early-LABEL."""
+    """An imposed-speed case: its friction and u~_w, the output times of its reference, those solved on the
+    wall-clustered map (before and through its lift-off, t~_mud = u~_w^2) and on the lift-off's own map, the time
+    from which the exponential map's reference is converged to CONVERGED (measured, test_reference.py) and,
+    if set, the time from which it runs on REMAP_STRETCH; cached as speed-early-LABEL, speed-lift-off-LABEL
+    and speed-LABEL (``pieces``)."""
 
     friction: Friction
     u_w: float
     times: tuple
     early_times: tuple
     converged_from: float
+    lift_off_times: tuple = ()
+    remap_from: float | None = None
 
 
 #: the paper's three wall speeds (section 3.4; t~_mud = 0.039, 1.8, 21) and a second parameter set, the disks
-#: (DISKS) at u~_w = 1 (t~_mud = 1, mu~_w^inf = 0.34).  0.198 stops at t~ = 1: near its steady state
-#: (mu~_w ~ 0.9) the wall unknown, stiff through the wall node's weight ~ 1e-8, stalls Radau between t~ = 1 and
-#: 10.  Converged after the lift-off: 2e-9 at t~ = 0.1 for 0.198, 3e-8 at t~ = 1 for 4.629, 2.6e-8 at 0.1 for
-#: the disks, so each from the next time on
-SPEED_CASES = {"0.198": SpeedCase(PAPER, 0.198, TIMES[:-1], TIMES[:2], 1.0),
-               "1.334": SpeedCase(PAPER, 1.334, TIMES, TIMES[:3], 1.0),
-               "4.629": SpeedCase(PAPER, 4.629, TIMES, TIMES[:4], 10.0),
-               "disks-1": SpeedCase(DISKS, 1.0, TIMES, TIMES[:3], 1.0)}
+#: (DISKS) at u~_w = 1 (t~_mud = 1, mu~_w^inf = 0.34).  The exponential map's reference is converged after the
+#: lift-off (2e-9 at t~ = 0.1 for 0.198, 3e-8 at t~ = 1 for 4.629, 2.6e-8 at 0.1 for the disks), so from the
+#: next time on; the times before on the clustered maps
+SPEED_CASES = {"0.198": SpeedCase(PAPER, 0.198, TIMES, TIMES[:2], 1.0, TIMES[2:4], 1.0),
+               "1.334": SpeedCase(PAPER, 1.334, TIMES, TIMES[:4], 1.0),
+               "4.629": SpeedCase(PAPER, 4.629, TIMES, TIMES[:5], 10.0),
+               "disks-1": SpeedCase(DISKS, 1.0, TIMES, TIMES[:4], 1.0)}
+
+
+def pieces(label: str) -> dict:
+    """The cached solves that cover one of SPEED_CASES, each where it is converged: {cache name: its times}."""
+    case = SPEED_CASES[label]
+    out = {f"speed-early-{label}": case.early_times, f"speed-lift-off-{label}": case.lift_off_times,
+           f"speed-{label}": tuple(t for t in case.times if t >= case.converged_from)}
+    return {name: times for name, times in out.items() if times}
+
 
 DATA = Path(__file__).parent / "data" / "reference.csv"
 QUANTITIES = ("u_w", "mu_w", "delta")
@@ -213,22 +234,10 @@ def stress_reference(fr: Friction, mu_w: float, times=TIMES, degree: int = DEGRE
     return Reference(t, u_w, mu[:, 0], delta, degree, rtol, cpu)
 
 
-def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_DEGREE, rtol: float = RTOL,
-                    wall_folds: float = 0.0) -> Reference:
-    """u~_w(t~), mu_w(t~) and delta(t~) for an imposed wall speed: eq. GranularStokesEqn_muBIS for mu~ at the
-    interior nodes (mu~(1) = 1, mu~(y~, 0) = 1, beta_w from the steady mu_w^inf) and q = ln(1/mu~_w) at the
-    wall, from eq. GranularStokesEqn_muBIS_BCs (Clenshaw-Curtis weights w_j) differentiated in time,
-
-        w_0 sqrt(p~_0) e^q dq/dt~ = sum_j>0 w_j sqrt(p~_j) (dmu~_j/dt~)/mu~_j^2,
-
-    from the q that puts all of u~_w in the wall node's weight at t~ = 0 (the discrete form of the
-    singular start); the returned u~_w is the quadrature, so shows the drift.  Before t~_mud ~ u~_w^2 the
-    continuum's mu~_w is exponentially small (below e^-700 at t~ = 1e-4 for the larger speeds) in a wall
-    sub-layer no grid resolves: there the discrete mu~_w is set by the wall node's weight and the
-    reference converges slowly (measured, test_reference.py)."""
-    t = np.asarray(times, dtype=float)
+def _speed_system(fr: Friction, u_w: float, grid: ChebyshevMap):
+    """Rate and Jacobian of x = (q, mu~ at the interior nodes) on ``grid`` (speed_reference), and sqrt(p~) w_j."""
+    degree = len(grid.y) - 1
     beta, dmu = fr.beta(mu_w_for_speed(fr, u_w)), fr.dmu
-    grid = ChebyshevMap(degree, SPEED_STRETCH, wall_folds)
     p = 1 + beta * grid.y
     op = ((2 * beta / np.sqrt(p))[:, None] * grid.d1 + np.sqrt(p)[:, None] * grid.d2)[1:-1]
     op_wall, op_in, op_bottom = op[:, 0], op[:, 1:-1], op[:, -1]
@@ -253,19 +262,66 @@ def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_D
         jac[1:, 1:][np.diag_indices(degree - 1)] += 2 * dmu**2 * m * lap
         return jac
 
+    return rate, jacobian, weights
+
+
+def _remapped(fr: Friction, u_w: float, old: ChebyshevMap, x: np.ndarray, new: ChebyshevMap) -> np.ndarray:
+    """The state x on ``old`` carried to ``new``: mu~ interpolated at the new nodes, q from the integral condition."""
+    m = np.r_[math.exp(-x[0]), x[1:], 1.0]
+    s_old = np.log1p(new.y * math.expm1(old.stretch)) / old.stretch  # old.wall_folds == 0
+    m_new = np.array([old.interpolate(m, s) for s in s_old])
+    weights = new.weights * np.sqrt(1 + fr.beta(mu_w_for_speed(fr, u_w)) * new.y)
+    share = weights[1:-1] @ (1 / m_new[1:-1] - 1)
+    return np.r_[math.log1p((u_w * fr.dmu - share) / weights[0]), m_new[1:-1]]
+
+
+def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_DEGREE, rtol: float = RTOL,
+                    wall_folds: float = 0.0, remap: tuple | None = None) -> Reference:
+    """u~_w(t~), mu_w(t~) and delta(t~) for an imposed wall speed: eq. GranularStokesEqn_muBIS for mu~ at the
+    interior nodes (mu~(1) = 1, mu~(y~, 0) = 1, beta_w from the steady mu_w^inf) and q = ln(1/mu~_w) at the
+    wall, from eq. GranularStokesEqn_muBIS_BCs (Clenshaw-Curtis weights w_j) differentiated in time,
+
+        w_0 sqrt(p~_0) e^q dq/dt~ = sum_j>0 w_j sqrt(p~_j) (dmu~_j/dt~)/mu~_j^2,
+
+    from the q that puts all of u~_w in the wall node's weight at t~ = 0 (the discrete form of the
+    singular start); the returned u~_w is the quadrature, so shows the drift.  Before t~_mud ~ u~_w^2 the
+    continuum's mu~_w is exponentially small (below e^-700 at t~ = 1e-4 for the larger speeds) in a wall
+    sub-layer no grid resolves: there the discrete mu~_w is set by the wall node's weight and the
+    reference converges slowly (measured, test_reference.py).  ``remap`` = (t~_r, stretch): from the output
+    time t~_r on, the exponential map of this stretch (REMAP), the state carried over by ``_remapped``."""
+    t = np.asarray(times, dtype=float)
+    grids, pieces = [ChebyshevMap(degree, SPEED_STRETCH, wall_folds)], [t]
+    if remap is not None:
+        assert remap[0] in t and not wall_folds, "remap at an output time, from the exponential map"
+        grids.append(ChebyshevMap(degree, remap[1]))
+        pieces = [t[t <= remap[0]], t[t > remap[0]]]
     start = time.process_time()
+    x, out = None, []
     with threadpool_limits(1):
-        sol = solve_ivp(rate, (0.0, t[-1]), np.r_[math.log1p(u_w * dmu / weights[0]), np.ones(degree - 1)],
-                        method="Radau", t_eval=t, rtol=rtol, atol=ATOL_PER_RTOL * rtol, jac=jacobian,
-                        first_step=FIRST_STEP)
+        for k, (grid, t_seg) in enumerate(zip(grids, pieces)):
+            rate, jacobian, weights = _speed_system(fr, u_w, grid)
+            if k == 0:
+                x, t0, first = np.r_[math.log1p(u_w * fr.dmu / weights[0]), np.ones(degree - 1)], 0.0, FIRST_STEP
+            else:
+                x, t0, first = _remapped(fr, u_w, grids[k - 1], x, grid), pieces[k - 1][-1], None
+            sol = solve_ivp(rate, (t0, t_seg[-1]), x, method="Radau", t_eval=t_seg, rtol=rtol,
+                            atol=ATOL_PER_RTOL * rtol, jac=jacobian, first_step=first)
+            if not sol.success:
+                raise RuntimeError(sol.message)
+            out.append(_speed_observables(fr, u_w, grid, sol.y))
+            x = sol.y[:, -1]
     cpu = time.process_time() - start
-    if not sol.success:
-        raise RuntimeError(sol.message)
-    mt = np.column_stack([np.exp(-sol.y[0]), sol.y[1:].T, np.ones(len(t))])
+    u, mu_w, delta = (np.concatenate(parts) for parts in zip(*out))
+    return Reference(t, u, mu_w, delta, degree, rtol, cpu)
+
+
+def _speed_observables(fr: Friction, u_w: float, grid: ChebyshevMap, y: np.ndarray):
+    """u~_w (the quadrature), mu_w and delta of the states y (columns) on ``grid``."""
+    p = 1 + fr.beta(mu_w_for_speed(fr, u_w)) * grid.y
+    mt = np.column_stack([np.exp(-y[0]), y[1:].T, np.ones(y.shape[1])])
     v = (1 - mt) / (1 - mt[:, :1])  # (mu - mu_s)/(mu_w - mu_s)
     delta = np.array([grid.crossing(row, DELTA_THRESHOLD) for row in v])
-    return Reference(t, (np.sqrt(p) / dmu * (1 / mt - 1)) @ grid.weights, fr.mu_d - dmu * mt[:, 0], delta,
-                     degree, rtol, cpu)
+    return (np.sqrt(p) / fr.dmu * (1 / mt - 1)) @ grid.weights, fr.mu_d - fr.dmu * mt[:, 0], delta
 
 
 def stress_case(name: str, degree: int = DEGREE, rtol: float = RTOL) -> Reference:
@@ -293,7 +349,7 @@ def cached(case: str, degree: int | None = None, times=TIMES, table=None) -> dic
     """u~_w, mu_w and delta (arrays at ``times``) of one cached case, at the reference degree (default) or
     ``degree``, from ``table`` (default: ``load()``)."""
     table = load() if table is None else table
-    degree = degree or (EARLY_DEGREE if case.startswith("speed-early") else
+    degree = degree or (EARLY_DEGREE if case.startswith(("speed-early", "speed-lift-off")) else
                         SPEED_DEGREE if case.startswith("speed") else DEGREE)
     rows = table[(table.case == case) & (table.degree == degree)]
     if not np.array_equal(rows.t, times):
@@ -301,16 +357,37 @@ def cached(case: str, degree: int | None = None, times=TIMES, table=None) -> dic
     return {q: rows[q].to_numpy() for q in QUANTITIES}
 
 
+def assembled(label: str, table=None) -> dict:
+    """u~_w, mu_w and delta (arrays at its times) of one of SPEED_CASES, each time from its converged piece
+    (``pieces``; the exponential map's solve is cached at all the case's times)."""
+    table = load() if table is None else table
+    times = np.array(SPEED_CASES[label].times)
+    out = {q: np.full(len(times), np.nan) for q in QUANTITIES}
+    for name, piece in pieces(label).items():
+        solved = times if name == f"speed-{label}" else np.array(piece)
+        values = cached(name, times=solved, table=table)
+        for q in QUANTITIES:
+            out[q][np.isin(times, piece)] = values[q][np.isin(solved, piece)]
+    return out
+
+
 def speed_case(label: str, degree: int = SPEED_DEGREE) -> Reference:
-    """The reference of one of SPEED_CASES at its times."""
+    """The reference of one of SPEED_CASES at its times (on REMAP_STRETCH from its ``remap_from``)."""
     case = SPEED_CASES[label]
-    return speed_reference(case.friction, case.u_w, case.times, degree)
+    remap = None if case.remap_from is None else (case.remap_from, REMAP_STRETCH)
+    return speed_reference(case.friction, case.u_w, case.times, degree, remap=remap)
 
 
 def speed_early_case(label: str, degree: int = EARLY_DEGREE) -> Reference:
-    """The reference of one of SPEED_CASES before its lift-off (its early_times), on the wall-clustered map."""
+    """The reference of one of SPEED_CASES at its early_times, on the wall-clustered map."""
     case = SPEED_CASES[label]
     return speed_reference(case.friction, case.u_w, case.early_times, degree, wall_folds=EARLY_WALL_FOLDS)
+
+
+def speed_lift_off_case(label: str, degree: int = EARLY_DEGREE) -> Reference:
+    """The reference of one of SPEED_CASES at its lift_off_times, on the map of LIFT_OFF_WALL_FOLDS."""
+    case = SPEED_CASES[label]
+    return speed_reference(case.friction, case.u_w, case.lift_off_times, degree, wall_folds=LIFT_OFF_WALL_FOLDS)
 
 
 def main(only: list[str]) -> None:
@@ -324,6 +401,9 @@ def main(only: list[str]) -> None:
                for label in SPEED_CASES for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
     solves += [(f"speed-early-{label}", degree, lambda label=label, degree=degree: speed_early_case(label, degree))
                for label in SPEED_CASES for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
+    solves += [(f"speed-lift-off-{label}", degree, lambda label=label, degree=degree: speed_lift_off_case(label, degree))
+               for label, case in SPEED_CASES.items() if case.lift_off_times
+               for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
     solves = [solve for solve in solves if not only or solve[0].startswith(tuple(only))]
     frames = [] if not only else [load()[lambda table: ~table.case.str.startswith(tuple(only))]]
     for name, degree, solve in solves:
