@@ -265,14 +265,14 @@ def _speed_system(fr: Friction, u_w: float, grid: ChebyshevMap):
     return rate, jacobian, weights
 
 
-def _remapped(fr: Friction, u_w: float, old: ChebyshevMap, x: np.ndarray, new: ChebyshevMap) -> np.ndarray:
-    """The state x on ``old`` carried to ``new``: mu~ interpolated at the new nodes, q from the integral condition."""
+def _remapped(old: ChebyshevMap, x: np.ndarray, new: ChebyshevMap, weights: np.ndarray, target: float) -> np.ndarray:
+    """The state x on ``old`` carried to ``new``: mu~ interpolated at the new nodes, q from the integral condition
+    (``weights`` sqrt(p~) w_j of ``new``, ``target`` = u~_w Dmu)."""
     m = np.r_[math.exp(-x[0]), x[1:], 1.0]
     s_old = np.log1p(new.y * math.expm1(old.stretch)) / old.stretch  # old.wall_folds == 0
     m_new = np.array([old.interpolate(m, s) for s in s_old])
-    weights = new.weights * np.sqrt(1 + fr.beta(mu_w_for_speed(fr, u_w)) * new.y)
     share = weights[1:-1] @ (1 / m_new[1:-1] - 1)
-    return np.r_[math.log1p((u_w * fr.dmu - share) / weights[0]), m_new[1:-1]]
+    return np.r_[math.log1p((target - share) / weights[0]), m_new[1:-1]]
 
 
 def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_DEGREE, rtol: float = RTOL,
@@ -288,7 +288,8 @@ def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_D
     continuum's mu~_w is exponentially small (below e^-700 at t~ = 1e-4 for the larger speeds) in a wall
     sub-layer no grid resolves: there the discrete mu~_w is set by the wall node's weight and the
     reference converges slowly (measured, test_reference.py).  ``remap`` = (t~_r, stretch): from the output
-    time t~_r on, the exponential map of this stretch (REMAP), the state carried over by ``_remapped``."""
+    time t~_r on, the exponential map of this stretch (SpeedCase.remap_from, REMAP_STRETCH), the state carried
+    over by ``_remapped``."""
     t = np.asarray(times, dtype=float)
     grids, pieces = [ChebyshevMap(degree, SPEED_STRETCH, wall_folds)], [t]
     if remap is not None:
@@ -303,7 +304,7 @@ def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_D
             if k == 0:
                 x, t0, first = np.r_[math.log1p(u_w * fr.dmu / weights[0]), np.ones(degree - 1)], 0.0, FIRST_STEP
             else:
-                x, t0, first = _remapped(fr, u_w, grids[k - 1], x, grid), pieces[k - 1][-1], None
+                x, t0, first = _remapped(grids[k - 1], x, grid, weights, u_w * fr.dmu), pieces[k - 1][-1], None
             sol = solve_ivp(rate, (t0, t_seg[-1]), x, method="Radau", t_eval=t_seg, rtol=rtol,
                             atol=ATOL_PER_RTOL * rtol, jac=jacobian, first_step=first)
             if not sol.success:
