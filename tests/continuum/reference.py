@@ -291,38 +291,37 @@ def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_D
     time t~_r on, the exponential map of this stretch (SpeedCase.remap_from, REMAP_STRETCH), the state carried
     over by ``_remapped``."""
     t = np.asarray(times, dtype=float)
-    grids, pieces = [ChebyshevMap(degree, SPEED_STRETCH, wall_folds)], [t]
+    grids, spans = [ChebyshevMap(degree, SPEED_STRETCH, wall_folds)], [t]
     if remap is not None:
         assert remap[0] in t and not wall_folds, "remap at an output time, from the exponential map"
         grids.append(ChebyshevMap(degree, remap[1]))
-        pieces = [t[t <= remap[0]], t[t > remap[0]]]
+        spans = [t[t <= remap[0]], t[t > remap[0]]]
     start = time.process_time()
-    x, out = None, []
+    out = []
     with threadpool_limits(1):
-        for k, (grid, t_seg) in enumerate(zip(grids, pieces)):
+        for k, (grid, t_seg) in enumerate(zip(grids, spans)):
             rate, jacobian, weights = _speed_system(fr, u_w, grid)
             if k == 0:
                 x, t0, first = np.r_[math.log1p(u_w * fr.dmu / weights[0]), np.ones(degree - 1)], 0.0, FIRST_STEP
             else:
-                x, t0, first = _remapped(grids[k - 1], x, grid, weights, u_w * fr.dmu), pieces[k - 1][-1], None
+                x, t0, first = _remapped(grids[k - 1], x, grid, weights, u_w * fr.dmu), spans[k - 1][-1], None
             sol = solve_ivp(rate, (t0, t_seg[-1]), x, method="Radau", t_eval=t_seg, rtol=rtol,
                             atol=ATOL_PER_RTOL * rtol, jac=jacobian, first_step=first)
             if not sol.success:
                 raise RuntimeError(sol.message)
-            out.append(_speed_observables(fr, u_w, grid, sol.y))
+            out.append(_speed_observables(fr, grid, weights, sol.y))
             x = sol.y[:, -1]
     cpu = time.process_time() - start
     u, mu_w, delta = (np.concatenate(parts) for parts in zip(*out))
     return Reference(t, u, mu_w, delta, degree, rtol, cpu)
 
 
-def _speed_observables(fr: Friction, u_w: float, grid: ChebyshevMap, y: np.ndarray):
-    """u~_w (the quadrature), mu_w and delta of the states y (columns) on ``grid``."""
-    p = 1 + fr.beta(mu_w_for_speed(fr, u_w)) * grid.y
+def _speed_observables(fr: Friction, grid: ChebyshevMap, weights: np.ndarray, y: np.ndarray):
+    """u~_w (the quadrature with ``weights`` sqrt(p~) w_j), mu_w and delta of the states y (columns) on ``grid``."""
     mt = np.column_stack([np.exp(-y[0]), y[1:].T, np.ones(y.shape[1])])
     v = (1 - mt) / (1 - mt[:, :1])  # (mu - mu_s)/(mu_w - mu_s)
     delta = np.array([grid.crossing(row, DELTA_THRESHOLD) for row in v])
-    return (np.sqrt(p) / fr.dmu * (1 / mt - 1)) @ grid.weights, fr.mu_d - fr.dmu * mt[:, 0], delta
+    return (1 / mt - 1) @ weights / fr.dmu, fr.mu_d - fr.dmu * mt[:, 0], delta
 
 
 def stress_case(name: str, degree: int = DEGREE, rtol: float = RTOL) -> Reference:
