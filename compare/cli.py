@@ -4,17 +4,20 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from granstokes.validate import output_dir, require
+from granstokes.staging import claim, staged
+from granstokes.validate import require
+
+COMMAND = "compare"
 
 
 def run_compare(args) -> int:
     from dem.layout import RUN_JSON
-    from granstokes.staging import staged
 
     for run in args.runs:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
-    output_dir(args.out, "--out")
+    inputs = [*args.runs, *([args.calibration] if args.calibration is not None else [])]
+    claim(args.out, "--out", COMMAND, inputs)
     from .calibrate import load
     from .comparison import build, check_grains
 
@@ -23,7 +26,7 @@ def run_compare(args) -> int:
     from .report import write_report
 
     comparison = build(args.runs, calibration=args.calibration)
-    with staged(args.out) as work:
+    with staged(args.out, COMMAND, inputs) as work:
         m = write_report(comparison, work)
     if args.json:
         print(json.dumps(m, default=float))

@@ -8,12 +8,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from granstokes.validate import finite, output_dir, output_file, require
+from granstokes.staging import claim, staged
+from granstokes.validate import finite, output_file, require
 
 #: the CLI's default relative accuracy of every number (both drives; an imposed speed reaches it on 512
 #: cells in 2-13 s CPU: bench/RESULTS.md "Imposed speed over its range")
 ACCURACY = 1e-6
 DEFAULT_CELLS = 64
+COMMAND = "continuum"
 
 
 def _friction_and_case(args):
@@ -42,7 +44,7 @@ def run_continuum(args) -> int:
     if args.plot is not None:
         output_file(args.plot, "--plot", ".png")
     if args.save is not None:
-        output_dir(args.save, "--save")
+        claim(args.save, "--save", COMMAND)
     solve = solve_stress if imposed == "stress" else solve_speed
     sol = solve(fr, value, times, numerics, accuracy=accuracy, estimate=True)
     if args.json:
@@ -52,8 +54,15 @@ def run_continuum(args) -> int:
     if args.plot is not None:
         plot_profiles(sol, args.plot)
     if args.save is not None:
-        sol.save(args.save)
+        with staged(args.save, COMMAND, keep=True) as work:
+            sol.save(work, save_stem(sol))
     return 0
+
+
+def save_stem(sol) -> str:
+    """The file stem of a saved solve, one per case, so that saving another case beside it keeps it."""
+    case = f"mu_w{sol.mu_w_inf:.6g}" if sol.imposed == "stress" else f"u_w{sol.u_w_imposed:.6g}"
+    return f"continuum_{sol.imposed}_{case}_mu_s{sol.friction.mu_s:.6g}_mu_d{sol.friction.mu_d:.6g}"
 
 
 def format_table(sol) -> str:
@@ -111,7 +120,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.add_argument("--plot", type=Path, help="draw the profiles at the requested times into FILE.png")
     p.add_argument("--save", type=Path, metavar="DIR",
-                   help="write continuum_profiles.csv, continuum_series.csv (every step) and continuum.json")
+                   help="write STEM_profiles.csv, STEM_series.csv (every step) and STEM.json, STEM naming the case "
+                        "(continuum_stress_mu_w0.5_mu_s0.38_mu_d0.64); other cases saved there are kept")
     p.add_argument("--accuracy", type=float, metavar="TOL",
                    help=f"refine until every estimated relative error is below TOL (default {ACCURACY:g})")
     p.add_argument("--n-cells", type=int, default=DEFAULT_CELLS, help="(starting) mesh cells (default %(default)s)")

@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 
 from continuum import calibration as fitting
+from granstokes import staging
 from granstokes.provenance import provenance
 from granstokes.statistics import autocorrelation_time
 from granstokes.validate import require
@@ -49,6 +50,9 @@ from .config import Config, parse
 from .runner import Interrupted, RunError, _Lammps, _write_json
 from .shear import SQUEEZE_TIME, ShearPoint, mean_grain_volume, shear_script
 from .sizing import PACKING
+
+#: the command whose manifest marks a folder as this module's output (granstokes.staging)
+COMMAND = "dem calibrate"
 
 BLOCK_TAU = 3.0
 MIN_BLOCKS = 6
@@ -307,7 +311,7 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
         state = {"name": cfg.name, "status": "running", "message": "", "plan": plan.as_dict(),
                  "provenance": {**provenance(), **lammps_env.lammps_info(), "np": np, "jobs": jobs},
                  "points": {}, "started": _now()}
-        out.mkdir(parents=True, exist_ok=True)
+        staging.start(out, COMMAND)
         (out / layout.CONFIG_TOML).write_text(text)
     if announce is not None:
         c = cfg.calibration

@@ -28,6 +28,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from continuum.scales import UNITS
+from granstokes import staging
 from granstokes.provenance import provenance
 from granstokes.validate import require
 
@@ -35,6 +36,9 @@ from . import lammps_env, layout, outputs, scene
 from .config import Config, parse
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .sizing import DrivePlan, Plan, plan
+
+#: the command whose manifest marks a folder as this module's output (granstokes.staging)
+COMMAND = "dem run"
 
 _THERMO = re.compile(r"^\s*(\d+)\s+(\S+)")
 _NONFINITE = re.compile(r"(?<![A-Za-z_])-?(nan|inf)\b", re.IGNORECASE)
@@ -448,7 +452,7 @@ def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: b
         meta.setdefault("resumes", []).append(_now())
     else:
         meta = runner.new_metadata()  # queries the LAMMPS library: fails before anything is written
-        out.mkdir(parents=True, exist_ok=True)
+        staging.start(out, COMMAND)
         (out / layout.CONFIG_TOML).write_text(text)
     runner.save(meta)
     previous = signal.getsignal(signal.SIGTERM)

@@ -21,8 +21,9 @@ from dem.calibrate import calibrate as dem_calibrate
 from dem.runner import run as dem_run
 
 from .page import page
-from .staging import staged
-from .validate import output_dir
+from .staging import claim, staged, start
+
+COMMAND = "demo"
 
 
 def _resumable(what: str, preset: str, folder: Path, state: Path, action) -> None:
@@ -76,18 +77,26 @@ def _stage(name: str, clock: dict, action):
 
 
 def run_demo(out_dir, presets: tuple[str, ...] = ("quick", "smoke"), calibrated: str = "quick") -> Path:
-    out = output_dir(out_dir, "--out")
-    out.mkdir(parents=True, exist_ok=True)
+    out = start(claim(out_dir, "--out", COMMAND), COMMAND)
+    for part in ("continuum", "compare"):
+        claim(out / part, "--out", COMMAND)
     clock = {}
-    _stage("continuum report (the paper's figures)", clock, lambda: write_continuum_report(out / "continuum"))
+
+    def continuum_report():
+        with staged(out / "continuum", COMMAND) as work:
+            write_continuum_report(work)
+
+    _stage("continuum report (the paper's figures)", clock, continuum_report)
     run_dirs = [_stage(f"DEM preset {p}", clock, lambda p=p: _dem(p, out / f"dem-{p}")) for p in presets]
     calibration = _stage(f"mu(I) calibration of the {calibrated} grains by plane shear", clock,
                          lambda: _calibration(calibrated, out / f"calibration-{calibrated}"))
     comparison = _stage("blind comparison (coarse-graining, predictions from the calibration, uncertainty)", clock,
                         lambda: build(run_dirs, calibration=calibration))
-    with staged(out / "compare") as work:
+    with staged(out / "compare", COMMAND) as work:
         write_report(comparison, work)
-    return write_index(comparison, out, presets, clock)
+    with staged(out, COMMAND, keep=True) as work:
+        write_index(comparison, work, presets, clock)
+    return out / "index.html"
 
 
 def write_index(comparison, out: Path, presets, clock: dict) -> Path:

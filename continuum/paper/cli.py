@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from granstokes.staging import staged
-from granstokes.validate import output_dir, read_json
+from granstokes.staging import claim, staged
+from granstokes.validate import read_json
 
 #: what --calibration must hold (I0 in the DEM convention)
 CALIBRATION_KEYS = ("mu_s", "mu_d", "I0")
@@ -13,7 +13,7 @@ CALIBRATION_KEYS = ("mu_s", "mu_d", "I0")
 def run_paper_figures(args) -> int:
     from .figures import paper_figures
 
-    with staged(output_dir(args.out, "--out")) as work:
+    with staged(claim(args.out, "--out", "paper-figures"), "paper-figures") as work:
         result = paper_figures(work)
     names = sorted(k for k in result if k != "timing")
     print(f"wrote the paper's figures into {args.out}: " + ", ".join(names))
@@ -24,14 +24,15 @@ def run_stability(args) -> int:
     from ..scales import Material
     from .stability import write_stability
 
-    output_dir(args.out, "--out")
+    inputs = [args.calibration] if args.calibration is not None else []
+    claim(args.out, "--out", "stability", inputs)
     calibrated = None
     if args.calibration is not None:
         cal = read_json(args.calibration, "--calibration", CALIBRATION_KEYS,
                         "a calibration.json (granstokes dem calibrate) or metrics.json (granstokes compare)")
         convention = cal.get("I_convention", cal.get("I0_convention"))
         calibrated = Material(mu_s=cal["mu_s"], mu_d=cal["mu_d"], I0=cal["I0"], I_convention=convention)
-    with staged(args.out) as work:
+    with staged(args.out, "stability", inputs) as work:
         result = write_stability(work, calibrated)
     counts = result["table"].groupby(["method", "class"]).size().unstack(fill_value=0)
     print(counts.to_string())

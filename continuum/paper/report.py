@@ -90,7 +90,7 @@ def write_continuum_report(out_dir) -> Path:
         body.append(f"<h3>{html.escape(name)}</h3><img src='{figs_dir.name}/{png.name}' alt='{html.escape(name)}'>")
     index = out / "index.html"
     index.write_text(page("granstokes continuum", "".join(body)))
-    (out / "continuum_report.json").write_text(json.dumps({"figures": {k: str(v) for k, v in pngs.items()},
+    (out / "continuum_report.json").write_text(json.dumps({"figures": {k: f"{figs_dir.name}/{v.name}" for k, v in pngs.items()},
                                                            "timing": result["timing"], "units": UNITS,
                                                            "provenance": provenance()}, indent=2))
     return index

@@ -146,9 +146,11 @@ def test_save_writes_pandas_readable_tables_and_metadata(capsys, tmp_path):
 
     code, _, _ = run(capsys, "--u-w", "1.334", "--times", "0.01", "1", "--save", str(tmp_path / "out"))
     assert code == 0
-    prof = pd.read_csv(tmp_path / "out" / "continuum_profiles.csv")
-    series = pd.read_csv(tmp_path / "out" / "continuum_series.csv")
-    meta = json.loads((tmp_path / "out" / "continuum.json").read_text())
+    (stem,) = [p.name[:-len("_profiles.csv")] for p in (tmp_path / "out").glob("*_profiles.csv")]
+    assert stem.startswith("continuum_speed_u_w1.334_")
+    prof = pd.read_csv(tmp_path / "out" / f"{stem}_profiles.csv")
+    series = pd.read_csv(tmp_path / "out" / f"{stem}_series.csv")
+    meta = json.loads((tmp_path / "out" / f"{stem}.json").read_text())
     assert sorted(prof.t.unique()) == [0.01, 1.0]
     wall = prof[prof.y == 0.0].sort_values("t")
     assert wall.u.to_numpy() == pytest.approx([1.334, 1.334], rel=1e-9)  # the imposed speed, at the wall
