@@ -71,7 +71,8 @@ def main() -> int:
         failures += len(rows)
     if args.smoke_run is not None:
         with tempfile.TemporaryDirectory() as tmp:
-            new = json.loads(granstokes("compare", str(args.smoke_run), "--out", str(Path(tmp) / "report"), "--json"))
+            new = json.loads(granstokes("compare", str(args.smoke_run), "--out", str(Path(tmp) / "report"), "--json",
+                                         "--fit-on-drives"))
         rows = diff(json.loads((BASE / "smoke_metrics.json").read_text()), new, 1e-6)
         print(f"smoke metrics: {'same' if not rows else f'{len(rows)} changed'}", *rows, sep="\n")
         failures += len(rows)

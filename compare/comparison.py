@@ -3,8 +3,10 @@ calibration, the continuum predictions from it, and the checks of the coarse-gra
 
 ``build(run_dirs, settings, calibration=...)`` -> ``Comparison`` (frozen).  With ``calibration`` (a
 calibration.json of ``granstokes dem calibrate``) mu(I) and phi come from that independent plane-shear
-measurement and the drives are a blind test; without it mu(I) is fitted on the drives' own steady
-windows (``Comparison.calibration.kind`` and ``calibration_source`` say which: a fit, not a prediction).
+measurement and the drives are a blind test; only with ``fit_on_drives`` is mu(I) fitted on the drives' own
+steady windows instead (``Comparison.calibration.kind`` and ``calibration_source`` say so: a fit, not a
+prediction, and no row of it is blind).  A calibration that does not determine its law
+(``Calibration.failure``) predicts nothing; an NGF amplitude at its search bound gives no NGF rows.
 compare.metrics and compare.report only render it.  DEM units throughout; I in the DEM convention.
 """
 from __future__ import annotations
@@ -31,7 +33,7 @@ from .models import LOCAL, PAPER, Prediction, ngf_model
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings
-from .scorecard import Z95, Scorecard, scene_checks, score
+from .scorecard import Z95, Scorecard, base_reach, headline, scene_checks, score
 
 #: smoothing of mu_w(t) before the paper's threshold is applied (delta_mu), in time units: single
 #: plate samples scatter by about their mean, the threshold is 1e-3 of the wall excess
@@ -45,14 +47,16 @@ REPLICATES = 200
 @dataclass(frozen=True, eq=False)
 class DriveComparison:
     """One drive: the DEM analysis, the paper's scales with the calibrated material, the continuum
-    predictions (empty with ``note`` saying why when the calibrated law cannot sustain the drive) and
-    delta_mu(t) (the paper's threshold on mu, aligned with ``dem.delta.t``)."""
+    predictions (empty with ``note`` saying why when the calibrated law cannot sustain the drive),
+    delta_mu(t) (the paper's threshold on mu, aligned with ``dem.delta.t``) and ``base``: why the flow
+    reaches the base, or "" (compare.scorecard.base_reach)."""
 
     dem: DriveAnalysis
     scales: Scales | None
     predictions: tuple[Prediction, ...]
     note: str
     delta_mu: np.ndarray
+    base: str = ""
 
     @property
     def label(self) -> str:
@@ -97,6 +101,16 @@ class Comparison:
     def blind(self) -> bool:
         """True when mu(I) and phi come from an independent calibration (a prediction, not a fit)."""
         return self.calibration.is_prediction
+
+    @property
+    def failure(self) -> str:
+        """Why the calibration cannot be used ("" when it can): then nothing is predicted."""
+        return self.calibration.failure
+
+    @property
+    def verdict(self) -> str:
+        """The comparison's verdict in one sentence (compare.scorecard.headline)."""
+        return headline(self.scorecard.rows, self.blind, self.failure, len(self.drives))
 
 
 def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.WALL_EXCLUSION,
@@ -192,9 +206,11 @@ def _checks(a: DriveAnalysis) -> Checks:
     return Checks(a.label, widths, cross, summary)
 
 
-def _predict(a: DriveAnalysis, material: Material, models) -> DriveComparison:
+def _predict(a: DriveAnalysis, material: Material, models, failure: str) -> DriveComparison:
     s = a.spec
     dm = delta_mu(a, material.mu_s)
+    if failure:
+        return DriveComparison(a, None, (), f"no continuum prediction: the mu(I) calibration failed ({failure})", dm)
     try:
         scales = (Scales(material, s.p_w, s.value / s.p_w) if s.kind == "stress"
                   else Scales.for_speed(material, s.p_w, s.value))
@@ -210,7 +226,7 @@ def _predict(a: DriveAnalysis, material: Material, models) -> DriveComparison:
         except RuntimeError as err:  # a solver that gave up (continuum.stepper): said, not hidden
             return DriveComparison(a, None, (), f"no continuum prediction: the {model.key} model's solver failed "
                                                 f"({err}) at this calibration", dm)
-    return DriveComparison(a, scales, tuple(preds), "", dm)
+    return DriveComparison(a, scales, tuple(preds), "", dm, base_reach(a, preds[0].steady.delta_s))
 
 
 def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.DataFrame:
@@ -231,9 +247,13 @@ def check_grains(cal: Calibration, runs) -> None:
 
 
 def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
-          calibration: str | Path | None = None) -> Comparison:
+          calibration: str | Path | None = None, fit_on_drives: bool = False) -> Comparison:
     """Analyse every drive of ``run_dirs``; take mu(I) and phi from ``calibration`` (calibration.json,
-    refused if its grains differ from the runs') or else fit them on the steady windows; predict each drive."""
+    refused if its grains differ from the runs') or, only with ``fit_on_drives``, fit them on the steady
+    windows; predict each drive."""
+    if (calibration is None) != fit_on_drives:
+        raise ValueError("--calibration or --fit-on-drives: exactly one of them (an independent calibration.json of "
+                         "granstokes dem calibrate, or a fit on the drives that is never scored as support)")
     runs = tuple(Path(r) for r in run_dirs)
     resolved = [r.resolve() for r in runs]
     require(len(set(resolved)) == len(resolved), "RUN_DIR", "distinct run folders (one was given twice)",
@@ -243,7 +263,7 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
         independent = calibrate.load(calibration)
         check_grains(independent, runs)
     specs = [spec for run in runs for spec in drive_specs(run)]
-    drives = [analyse_drive(spec, settings) for spec in tqdm(specs, desc="coarse-graining", disable=not progress)]
+    drives = [analyse_drive(spec, settings) for spec in tqdm(specs, desc="coarse-graining", disable=not progress or None)]
     pairs = steady_pairs(drives)
     phi = float(pairs.phi.mean())
     if independent is None:
@@ -257,17 +277,19 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
         source = f"blind: independent plane-shear calibration {cal.source}"
         material = cal.material()
         replicates = replicates_of(cal, cal.replicates["phi_max"])
-    fluidity = _fit_fluidity(drives, material)
-    models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if fluidity else [])
-    if fluidity:
+    failure = cal.failure
+    fluidity = None if failure else _fit_fluidity(drives, material)
+    ngf = fluidity is not None and not fluidity.at_bound  # an amplitude at its search bound is a failed fit
+    models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if ngf else [])
+    if ngf:
         replicates = replicates.assign(A=_amplitude_samples(fluidity, len(replicates)))
-    compared = tuple(_predict(a, material, models)
-                     for a in tqdm(drives, desc="continuum predictions", disable=not progress))
+    compared = tuple(_predict(a, material, models, failure)
+                     for a in tqdm(drives, desc="continuum predictions", disable=not progress or None))
     predictions = {(dc.label, p.model): p for dc in compared for p in dc.predictions}
     delta_s = {dc.label: dc.predictions[0].steady.delta_s for dc in compared if dc.predictions}
     t0 = {a.label: a.t_window for a in drives}
     rows, edges, bands = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
-                        delta_s, t0, {"ngf": fluidity.drive} if fluidity else {}, progress)
+                               delta_s, t0, {"ngf": fluidity.drive} if ngf else {}, progress, independent is not None)
     card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a)], len(replicates), edges, bands)
     return Comparison(runs, compared, pairs, cal, source, replicates, material, phi,
                       mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings, law_test(pairs, cal))

@@ -12,7 +12,7 @@ from .analysis import TRANSITS_BEFORE_COMPARISON
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
 from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_CHANGE, STEADY_WINDOW
-from .scorecard import BLOCKS, OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length
+from .scorecard import BLOCKS, OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length, tally
 
 #: name -> (unit, definition)
 DEFINITIONS = {
@@ -31,6 +31,11 @@ DEFINITIONS = {
                           f"down to {WALL_EXCLUSION:g} d above the base; local mu(I) is rigid there (0)"),
     "sigma": ("1", "(DEM - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical_err^2), band_sd = band width / 3.92; "
                    f"'consistent' when |sigma| <= {SIGMA_CONSISTENT:g}"),
+    "scored": ("-", "False where the scene cannot support the row (the flow reaches the base: the layer rows, and every "
+                    "row of the half-space model; a model not steady within the record: its steady rows); 'note' "
+                    "says why. Only scored rows with blind = true count for a model"),
+    "tally": ("-", "per model, over the scored blind rows every model has (same drive and observable): rows, "
+                   "consistent rows, share, median |sigma|; the verdict ranks models by share, then median |sigma|"),
     "model_at_end": ("unit of the row", "the model's free response averaged over the DEM record's final quarter "
                                         "(as the DEM's steady value): near 'predicted' when the model is steady by then"),
     "band": ("unit of the row", "95 % band of the prediction from the calibration's uncertainty (compare.scorecard)"),
@@ -88,6 +93,7 @@ def drive_metrics(dc: DriveComparison) -> dict:
         "frames": len(g.profiles[0].results.steps),
         "dropped_frames": sum(f.atoms.dropped + f.contacts.dropped for f in spec.folders),
         "prediction": dc.note or "predicted from the calibration",
+        "base_confined": bool(dc.base), "base_note": dc.base,
     }
     for p in dc.predictions:
         out[f"steady_{p.model}"] = {"u_w": p.steady.u_w, "mu_w": p.steady.mu_w, "delta_s": p.steady.delta_s,
@@ -115,14 +121,20 @@ def _clean(v):
 
 
 SCORECARD_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted",
-                  "band", "numerical_err", "sigma", "verdict", "blind", "model_at_end")
+                  "band", "numerical_err", "sigma", "verdict", "scored", "note", "blind", "model_at_end")
 
 
 def metrics(c: Comparison) -> dict:
     """metrics.json: scorecard, scene checks, calibration, per-drive numbers, definitions, provenance."""
     cal = c.calibration
+    rows = c.scorecard.rows
+    short = {label: sorted(g.model.unique()) for label, g in rows[rows.note.str.contains("record is shorter")]
+             .groupby("drive")} if len(rows) else {}
+    drives = {dc.label: {**drive_metrics(dc), "record_short_for": short.get(dc.label, [])} for dc in c.drives}
     return _clean({
-        "scorecard": [{k: r[k] for k in SCORECARD_KEYS} for r in c.scorecard.rows.to_dict("records")],
+        "verdict": c.verdict, "calibration_failure": c.failure,
+        "tally": tally(rows).to_dict("records"),
+        "scorecard": [{k: r[k] for k in SCORECARD_KEYS} for r in rows.to_dict("records")],
         "scene_checks": c.scorecard.scene.to_dict("records"),
         "uncertainty": {"replicates": c.scorecard.replicates, "band_edge_stability": c.scorecard.edge_stability},
         "calibration": {**cal.as_dict(), "source": c.calibration_source},
@@ -132,7 +144,7 @@ def metrics(c: Comparison) -> dict:
         "ngf": None if c.fluidity is None else {"A": c.fluidity.A, "A_err": c.fluidity.err, "ci95": c.fluidity.ci95,
                                                 "fitted_on": c.fluidity.drive, "how": c.fluidity.how,
                                                 "points": c.fluidity.points, "at_search_bound": c.fluidity.at_bound},
-        "drives": {dc.label: drive_metrics(dc) for dc in c.drives},
+        "drives": drives,
         "definitions": {k: {"unit": u, "definition": d} for k, (u, d) in DEFINITIONS.items()},
         "units": UNITS["dem_units"], "I_convention": UNITS["inertial_number"],
         "runs": [str(r) for r in c.runs],

@@ -163,7 +163,7 @@ def _ngf_transient(fluidity: ngf.NonlocalFluidity, material: Material, drive: Dr
 class SceneModel:
     """A registered model: ``steady(material, drive)`` and ``transient(material, drive, times)``;
     ``parameter``: the name of its own fitted parameter (beyond the material), and ``factory`` builds
-    the model at another value of it (uncertainty propagation)."""
+    the model at another value of it (uncertainty propagation); ``half_space``: the model's bed has no base."""
 
     key: str
     label: str
@@ -172,6 +172,7 @@ class SceneModel:
     parameters: dict = field(default_factory=dict)
     parameter: str | None = None
     factory: Callable | None = None
+    half_space: bool = False
 
     def at(self, values) -> "SceneModel":
         """This model with its own parameter taken from ``values`` (a mapping), if it has one."""
@@ -184,7 +185,8 @@ class SceneModel:
 
 
 LOCAL = SceneModel("local", "local mu(I), velocity form on the DEM scene", _local_steady, _local_transient)
-PAPER = SceneModel("paper", "paper's model (stress diffusion, tau = mu_s p at t = 0)", _paper_steady, _paper_transient)
+PAPER = SceneModel("paper", "paper's model (stress diffusion, tau = mu_s p at t = 0)", _paper_steady, _paper_transient,
+                   half_space=True)
 
 
 def ngf_model(A: float) -> SceneModel:

@@ -22,7 +22,7 @@ from .analysis import snapshot_times
 from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
-from .scorecard import SIGMA_CONSISTENT, T90_WINDOW
+from .scorecard import MODEL_UNSTEADY, SIGMA_CONSISTENT, T90_WINDOW, tally
 
 MODEL_STYLE = {"local": dict(color="C1", ls="-"), "paper": dict(color="C2", ls="--"), "ngf": dict(color="C3", ls="-.")}
 FIELD_LABELS = {"u_x": "u [sqrt(g d)]", "phi": "phi", "p": "p = sigma_yy [rho_p g d]", "tau": "tau [rho_p g d]",
@@ -280,8 +280,10 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
     fig = Figure(figsize=(8, 0.35 * len(rows) + 1.5), layout="constrained")
     ax = fig.subplots()
     y = np.arange(len(rows))
-    colors = [MODEL_STYLE[m]["color"] for m in rows.model]
-    ax.barh(y, rows.sigma.clip(-20, 20), color=colors)
+    scored = rows.scored.to_numpy(dtype=bool)
+    ax.barh(y, np.where(scored, rows.sigma.clip(-20, 20), 0.0), color=[MODEL_STYLE[m]["color"] for m in rows.model])
+    for k in np.flatnonzero(~scored):
+        ax.text(0, k, " not scored (see the row's note)", va="center", fontsize=7, color="0.35")
     ax.axvspan(-SIGMA_CONSISTENT, SIGMA_CONSISTENT, color="0.85", zorder=0, label=f"|sigma| <= {SIGMA_CONSISTENT:g}")
     ax.set_yticks(y, [f"{'/'.join(r.drive.split('/')[-2:])}: {r.observable} ({r.model})" for r in rows.itertuples()],
                   fontsize=7)
@@ -320,13 +322,27 @@ def _table(header, rows) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
+VERDICT_COLOUR = {"consistent": "#2a7", "disagrees": "#c33", "not scored": "#777"}
+
+
+def verdict_html(c: Comparison) -> str:
+    """The one-sentence verdict the page opens with."""
+    return f"<p class='verdict'><b>Verdict.</b> {html.escape(c.verdict)}</p>"
+
+
 def scorecard_html(c: Comparison) -> str:
     rows = []
     for r in c.scorecard.rows.itertuples():
-        verdict = f"<b style='color:{'#2a7' if r.verdict == 'consistent' else '#c33'}'>{r.verdict}</b>"
+        verdict = f"<b style='color:{VERDICT_COLOUR[r.verdict]}'>{html.escape(r.verdict)}</b>"
+        if r.note:
+            verdict += f"<br><small>{html.escape(r.note.removeprefix('not scored: '))}</small>"
+        model = html.escape(r.model_label) + ("" if r.blind else " (not blind: fitted on the drives)"
+                                              if not c.blind else " (not blind: fitted on this drive)")
         rows.append([html.escape(r.drive), f"{html.escape(r.observable)} [{html.escape(r.unit)}]",
-                     fmt(r.dem, r.dem_err), html.escape(r.model_label) + ("" if r.blind else " (fitted here)"),
-                     fmt(r.predicted), fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}", verdict])
+                     fmt(r.dem, r.dem_err), model, fmt(r.predicted), fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}",
+                     verdict])
+    if not rows:
+        return f"<p>No scorecard rows: {html.escape(c.failure or 'no drive has a continuum prediction')}.</p>"
     return _table(["drive", "observable [unit]", "DEM ± error", "model", "predicted", "95 % band", "sigma",
                    "verdict"], rows)
 
@@ -340,12 +356,19 @@ def scene_html(c: Comparison) -> str:
 def conclusions(c: Comparison) -> list[str]:
     """Sentences written from the scorecard's numbers."""
     rows, out = c.scorecard.rows, []
-    if "blind" not in c.calibration_source:
+    if c.failure:
+        return [f"The mu(I) calibration failed: {html.escape(c.failure)}. Nothing was predicted or scored with it."]
+    if not c.blind:
         out.append(f"The calibration is an {html.escape(c.calibration_source)}: the predictions share data with what "
-                   "they are compared with, so agreement here is weaker evidence than a blind test.")
+                   "they are compared with, so no row counts as support for a model.")
+    for dc in c.drives:
+        if dc.base:
+            out.append(f"{html.escape(dc.label)}: {html.escape(dc.base)}; its layer rows, and every row of the "
+                       "half-space model, are not scored.")
     if rows.empty:  # every drive's prediction was refused or failed: each drive's note says why
         return out + ["No drive has a scored continuum prediction (each drive's section says why)."]
-    for model, g in rows.groupby("model", sort=False):
+    scored = rows[rows.scored]
+    for model, g in scored.groupby("model", sort=False):
         ok = g[g.verdict == "consistent"]
         bad = g[g.verdict != "consistent"]
         text = f"<b>{html.escape(g.model_label.iloc[0])}</b>: {len(ok)} of {len(g)} predictions within 2 sigma"
@@ -355,17 +378,11 @@ def conclusions(c: Comparison) -> list[str]:
                               for r in bad.itertuples() if r.dem)
             text += f"; it fails on {worst}"
         out.append(text + ".")
-    blind = rows[rows.blind]
-    if len(blind) and blind.model.nunique() > 1:
-        tally = blind.groupby("model", sort=False).agg(n=("sigma", "size"),
-                                                        ok=("verdict", lambda v: int((v == "consistent").sum())),
-                                                        med=("sigma", lambda v: float(np.median(np.abs(v)))))
-        tally["share"] = tally.ok / tally.n
-        best = tally.sort_values(["share", "med"], ascending=[False, True]).index[0]
-        label = blind[blind.model == best].model_label.iloc[0]
-        out.append("Blind rows only: " + "; ".join(f"{html.escape(m)} {int(t.ok)} of {int(t.n)} consistent (median |sigma| "
-                                                     f"{t.med:.1f})" for m, t in tally.iterrows())
-                   + f". The DEM supports <b>{html.escape(label)}</b> best.")
+    shared = tally(rows)
+    if len(shared) > 1:
+        out.append(f"Ranked over the {int(shared.n.iloc[0])} scored blind row(s) every model has: "
+                   + "; ".join(f"{html.escape(t.model)} {t.consistent} of {t.n} consistent (median |sigma| "
+                               f"{t.median_abs_sigma:.1f})" for t in shared.itertuples()) + ".")
     fl = c.fluidity
     if fl is not None:
         lo, hi = fl.ci95
@@ -375,14 +392,15 @@ def conclusions(c: Comparison) -> list[str]:
         if fl.at_bound:
             text += " The fit ran into its search range: that profile does not determine A, and the NGF rows test little."
         out.append(text)
-    steady_rows = rows[np.isfinite(rows.model_at_end.astype(float))] if "model_at_end" in rows else rows.iloc[0:0]
-    late = steady_rows[(steady_rows.model_at_end / steady_rows.predicted - 1).abs() > MODEL_UNSTEADY]
+    steady_rows = rows[np.isfinite(rows.model_at_end.astype(float))]
+    late = steady_rows[~((steady_rows.model_at_end / steady_rows.predicted - 1).abs() <= MODEL_UNSTEADY)]
     if len(late):
-        out.append("Steady values are compared with each model's exact steady state; over the DEM's final quarter "
-                   "some models are still on their way: " + ", ".join(
+        out.append("Over the DEM's final quarter some models are still more than "
+                   f"{MODEL_UNSTEADY:.0%} from their steady state: " + ", ".join(
                        f"{html.escape(r.model)} on {html.escape(r.drive)} at {r.model_at_end:.3g} "
                        f"({(r.model_at_end / r.predicted - 1) * 100:+.0f} % of its steady {r.predicted:.3g})"
-                       for r in late.itertuples()) + ": there the DEM record is short of the model's time scale.")
+                       for r in late.itertuples()) + ": the record is shorter than those models' time scale, so "
+                   "their steady rows there are not scored.")
     creep = rows[(rows.observable == "creep_length") & (rows.model == "local")]
     if len(creep):
         out.append(f"Below the layer the DEM creeps with an e-folding length of "
@@ -398,9 +416,6 @@ def conclusions(c: Comparison) -> list[str]:
                    "compared, since the continuum is rigid.")
     return out
 
-
-#: a model whose free response over the DEM's final quarter is this far from its steady value is not steady yet
-MODEL_UNSTEADY = 0.05
 
 HOW_TO_READ = {
     "scorecard": "Each bar is one scorecard row: how many combined standard errors the DEM lies from the prediction. "
@@ -451,7 +466,8 @@ def write_report(c: Comparison, out_dir) -> dict:
     ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False)
     drive_rows = [[html.escape(label), d["kind"], fmt(d["imposed"]), html.escape(d["imposed_unit"]), str(d["seeds"]),
                    fmt(d["u_w_inf"]["dem"], d["u_w_inf"]["dem_err"]), fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]),
-                   fmt(d["t_steady"]), str(d["frames"]), str(d["dropped_frames"])]
+                   fmt(d["t_steady"]), str(d["frames"]), str(d["dropped_frames"]),
+                   "yes" if d["base_confined"] else "no"]
                   for label, d in m["drives"].items()]
     cross_rows = [[html.escape(q), f"{v:.1%}"] for q, v in ch.crosscheck_bulk.items()]
     plateau = ch.plateau
@@ -461,7 +477,7 @@ def write_report(c: Comparison, out_dir) -> dict:
                       for kind, path in figs)
     prov = m["provenance"]
     body = [
-        "<h1>granstokes: continuum vs DEM</h1>",
+        "<h1>granstokes: continuum vs DEM</h1>", verdict_html(c),
         f"<p>Runs: {html.escape(', '.join(m['runs']))}. Calibration: {html.escape(c.calibration_source)}. "
         f"DEM units: {html.escape(UNITS['dem_units'])}. Inertial number: {html.escape(UNITS['inertial_number'])}.</p>",
         "<h2>Scorecard</h2>", scorecard_html(c),
@@ -473,7 +489,7 @@ def write_report(c: Comparison, out_dir) -> dict:
         "<h2>Figures</h2>", figures,
         calibration_section(c),
         "<h2>Drives</h2>", _table(["drive", "kind", "imposed", "unit", "seeds", "u_w_inf [sqrt(g d)]", "mu_w_inf",
-                                   "t_steady [sqrt(d/g)]", "frames", "dropped frames"], drive_rows),
+                                   "t_steady [sqrt(d/g)]", "frames", "dropped frames", "flow reaches the base"], drive_rows),
         "<h2>Definitions</h2>", _table(["name", "unit", "definition"],
                                        [[html.escape(k), html.escape(u), html.escape(d)]
                                         for k, (u, d) in DEFINITIONS.items()]),

@@ -19,6 +19,13 @@ t90 (a transient solve per sample is too costly) the linearised propagation J C 
 replicates' covariance C, J by one-sided differences, band +-1.96 sd; the numerical error of t90 is its change
 when every other output time is dropped (interpolation), of the steady values the solver's estimate.  sigma = (dem - predicted) / sqrt(dem_err^2
 + band_sd^2 + numerical^2), band_sd = band width / (2 x 1.96); verdict "consistent" when |sigma| <= 2.
+
+Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where
+the drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose
+bed is a half-space; where a model is not yet steady over the DEM's final quarter (the record is shorter
+than the model's time scale), that model's steady rows.  A row is ``blind`` only when mu(I) comes from an
+independent calibration and the model's own parameter was not fitted on that drive; only scored blind
+rows count for a model (``tally``), and models are ranked over the rows they share.
 """
 from __future__ import annotations
 
@@ -49,6 +56,12 @@ SIGMA_CONSISTENT = 2.0
 Z95 = stats.norm.ppf(0.975)
 #: t90: the running mean over this fraction of the record reaches this fraction of the change
 T90_WINDOW, T90_LEVEL = 0.05, 0.9
+#: a model whose free response over the DEM's final quarter is this far from its steady value is not steady
+#: within the record: the record is shorter than the model's time scale
+MODEL_UNSTEADY = 0.05
+#: the observables of the steady state, and those of the layer (meaningless where the flow reaches the base)
+STEADY_OBSERVABLES = ("u_w_inf", "mu_w_inf", "delta_u", "creep_length")
+LAYER_OBSERVABLES = ("delta_u", "creep_length")
 #: relative step of the central differences of the linearised t90 propagation
 FD_STEP = 1e-3
 PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
@@ -94,6 +107,21 @@ def _mean_err(values, how: str) -> Measured:
     if len(v) < 2:
         return Measured(float(v.mean()) if len(v) else np.nan, np.nan, how)
     return Measured(float(v.mean()), float(v.std(ddof=1) / np.sqrt(len(v))), how)
+
+
+def base_reach(a: DriveAnalysis, delta_s: float) -> str:
+    """Why drive ``a``'s flow reaches the base, or "": its steady DEM layer (delta_u) or the calibrated
+    delta_s comes within WALL_EXCLUSION of the base, or u never falls to 5 % of u_w in the bed."""
+    p = a.steady_profile
+    p = p[p.depth >= 0].sort_values("depth")
+    dem = depth_at_fraction(p.depth.to_numpy(), p.u_x.to_numpy(), p.u_x.iloc[0])
+    limit = a.spec.depth - WALL_EXCLUSION
+    if not np.isfinite(dem):
+        return f"the flow reaches the base: u stays above 5 % of u_w down to the base of the {a.spec.depth:.3g} d bed"
+    if max(dem, delta_s) >= limit:
+        return (f"the flow reaches the base: the layer (DEM delta_u {dem:.3g} d, calibrated delta_s {delta_s:.3g} d) "
+                f"comes within {WALL_EXCLUSION:g} d of the base of the {a.spec.depth:.3g} d bed")
+    return ""
 
 
 def steady_samples(a: DriveAnalysis, t0: float) -> tuple[list[pd.DataFrame], str]:
@@ -243,25 +271,38 @@ def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
     return abs(t90(t, np.interp(t, series.t, series[a.response])) - t90(t, np.interp(t, coarse.t, coarse[a.response])))
 
 
+def _not_scored(obs: str, model: SceneModel, base: str, end_value: float, steady_value: float) -> str:
+    """Why a row is not scored, or "" (see the module's docstring)."""
+    if base and (obs in LAYER_OBSERVABLES or model.half_space):
+        return "not scored: " + base + (" (the model's bed is a half-space)" if model.half_space else "")
+    change = end_value / steady_value - 1 if steady_value else np.nan
+    if obs in STEADY_OBSERVABLES and not abs(change) <= MODEL_UNSTEADY:
+        return (f"not scored: over the DEM's final quarter the model is still {change:+.0%} from its steady value "
+                "(the record is shorter than the model's time scale)")
+    return ""
+
+
 def score(drives, models: list[SceneModel], predictions: dict, material: Material, replicates: pd.DataFrame,
-          delta_s: dict, t0: dict, fitted_on: dict | None = None, progress: bool = True):
+          delta_s: dict, t0: dict, fitted_on: dict | None = None, progress: bool = True, independent: bool = True):
     """Scorecard rows, the band edges' stability (largest relative change from half to all replicates)
     and the free responses' 95 % bands per (drive, model) (linearised).
     ``predictions[(label, key)]``: the central Prediction of each drive and model; ``delta_s[label]``,
     ``t0[label]``: the calibrated layer depth and steady-window start of each drive; ``fitted_on[key]``:
-    the drive a model's own parameter was fitted on (its rows there are not blind)."""
+    the drive a model's own parameter was fitted on (its rows there are not blind); ``independent``: mu(I)
+    comes from an independent calibration (else no row is blind)."""
     fitted_on = fitted_on or {}
     rows, edges, bands = [], [], {}
     half = len(replicates) // 2
     for a in drives:
         dem = dem_observables(a, t0[a.label], delta_s[a.label])
+        base = base_reach(a, delta_s[a.label])
         for model in models:
             pred: Prediction | None = predictions.get((a.label, model.key))
             if pred is None:
                 continue
             central = model_observables(pred.steady, pred.series, a, delta_s[a.label])
             samples = []
-            for _, r in tqdm(replicates.iterrows(), total=len(replicates), disable=not progress, leave=False,
+            for _, r in tqdm(replicates.iterrows(), total=len(replicates), disable=not progress or None, leave=False,
                              desc=f"uncertainty {a.label} {model.key}"):
                 try:
                     samples.append(model_observables(model.at(r).steady(_material(material, r), a.spec.drive), None,
@@ -289,11 +330,54 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                 band_sd = (hi - lo) / (2 * Z95)
                 combined = np.sqrt(np.nan_to_num(measured.err) ** 2 + band_sd**2 + numerical**2)
                 sigma = (measured.value - value) / combined if combined > 0 else np.inf
+                note = _not_scored(obs, model, base, end_value, central[f"{a.response}_inf"])
                 rows.append({"drive": a.label, "observable": obs, "unit": OBSERVABLES[obs][0],
                              "dem": measured.value, "dem_err": measured.err, "dem_how": measured.how,
                              "model": model.key, "model_label": model.label, "predicted": value,
                              "band": [float(lo), float(hi)], "numerical_err": numerical, "sigma": float(sigma),
-                             "verdict": "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees",
-                             "blind": fitted_on.get(model.key) != a.label,
+                             "verdict": "not scored" if note else
+                             "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees",
+                             "scored": not note, "note": note,
+                             "blind": independent and fitted_on.get(model.key) != a.label,
                              "model_at_end": end_value if obs == f"{a.response}_inf" else np.nan})
     return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands
+
+
+def tally(rows: pd.DataFrame) -> pd.DataFrame:
+    """Per model, over the scored blind rows that every such model has (same drive and observable): rows,
+    consistent rows, their share and the median |sigma|, best first; empty when no row is shared."""
+    use = rows[rows.scored & rows.blind] if len(rows) else rows
+    if use.empty:
+        return pd.DataFrame(columns=["model", "label", "n", "consistent", "share", "median_abs_sigma"])
+    keys = set.intersection(*(set(zip(g.drive, g.observable)) for _, g in use.groupby("model")))
+    shared = use[[k in keys for k in zip(use.drive, use.observable)]]
+    out = shared.groupby("model", sort=False).agg(
+        label=("model_label", "first"), n=("sigma", "size"),
+        consistent=("verdict", lambda v: int((v == "consistent").sum())),
+        median_abs_sigma=("sigma", lambda v: float(np.median(np.abs(v))))).reset_index()
+    out["share"] = out.consistent / out.n
+    return out.sort_values(["share", "median_abs_sigma"], ascending=[False, True], ignore_index=True)
+
+
+def headline(rows: pd.DataFrame, blind: bool, failure: str, n_drives: int) -> str:
+    """The comparison's verdict in one sentence, written from the numbers."""
+    if failure:
+        return f"No verdict: the mu(I) calibration failed ({failure}), so no prediction was made or scored."
+    if not blind:
+        return ("No verdict: mu(I) was fitted on the drives themselves, so the rows restate the fit and none counts "
+                "as support for a model; pass an independent calibration (--calibration) for a test.")
+    t = tally(rows)
+    skipped = int((~rows.scored).sum()) if len(rows) else 0
+    aside = f"; {skipped} row(s) not scored (the scene cannot support them: see each row's note)" if skipped else ""
+    if t.empty:
+        return f"No verdict: no blind row is shared by the models over {n_drives} drive(s){aside}."
+    parts = ", ".join(f"{r.label} consistent on {r.consistent} of {r.n} (median |sigma| {r.median_abs_sigma:.1f})"
+                      for r in t.itertuples())
+    best = t.iloc[0]
+    if len(t) == 1:
+        return (f"Blind test over {n_drives} drive(s), one model scored: {parts}; no ranking, since no other model "
+                f"has a scored row{aside}.")
+    ranking = (f"the DEM supports {best.label} best" if best.share >= 0.5 else
+               "no model is consistent on most of them")
+    return (f"Blind test on the {int(best.n)} row(s) the models share over {n_drives} drive(s): {parts}; "
+            f"{ranking}{aside}.")

@@ -33,6 +33,10 @@ BOOTSTRAP_SEED = 10
 #: the kinds of calibration: an independent measurement (a prediction follows) or a fit on the drives
 PLANE_SHEAR, IN_DRIVE = "plane shear (independent)", "fit on the drives' steady windows (not a prediction)"
 JOP_BOUNDS = ([0.0, 0.0, 1e-6], [2.0, 3.0, 50.0])
+#: a Jop parameter is not determined by the data when its best fit or an end of its 95 % interval comes within
+#: BOUND_TOLERANCE of a bound of JOP_BOUNDS, or its interval covers more than SPAN_MAX of that range (both as
+#: fractions of the range; of its logarithm for I0)
+BOUND_TOLERANCE, SPAN_MAX = 1e-3, 0.5
 #: replicate keys of calibration.json (the issue-10 contract) and the parameter each one samples
 REPLICATE_KEYS = {"mu_s": "mu_s", "mu_d": "mu_d", "I0": "I0_dem", "phi_max": "phi_max", "a": "phi_slope"}
 
@@ -87,6 +91,25 @@ class Calibration:
     def is_prediction(self) -> bool:
         """True when mu(I) comes from an independent measurement, so the drives are a blind test."""
         return self.kind == PLANE_SHEAR
+
+    @property
+    def failure(self) -> str:
+        """Why this fit cannot be used, in one line, or "" when it can: a Jop parameter at a bound of its
+        admissible range (JOP_BOUNDS) or with a 95 % interval reaching one or spanning most of it."""
+        for k, name in enumerate(("mu_s", "mu_d", "I0_dem")):
+            scale = np.log10 if name == "I0_dem" else float
+            lo, hi = scale(JOP_BOUNDS[0][k]), scale(JOP_BOUNDS[1][k])
+            value, (c_lo, c_hi) = getattr(self, name), self.ci95[name]
+            where = [scale(max(x, JOP_BOUNDS[0][k])) for x in (value, c_lo, c_hi)]
+            stated = f"{name} = {value:.3g} (95 % interval [{c_lo:.3g}, {c_hi:.3g}])"
+            if any(min(x - lo, hi - x) <= BOUND_TOLERANCE * (hi - lo) for x in where):
+                return (f"{stated} reaches a bound of its admissible range [{JOP_BOUNDS[0][k]:g}, "
+                        f"{JOP_BOUNDS[1][k]:g}]: the data do not determine it")
+            if where[2] - where[1] > SPAN_MAX * (hi - lo):
+                return f"{stated} spans most of its admissible range: the data do not determine it"
+        if self.mu_d <= self.mu_s:
+            return f"mu_d = {self.mu_d:.3g} <= mu_s = {self.mu_s:.3g}: no mu(I) law"
+        return ""
 
     @property
     def I0_paper(self) -> float:

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 from compare.comparison import build
-from compare.report import conclusions, scorecard_html, slug, write_report
+from compare.report import conclusions, scorecard_html, slug, verdict_html, write_report
 from continuum.paper.report import write_continuum_report
 from dem import config as dem_config
 from dem import layout
@@ -103,7 +103,7 @@ def write_index(comparison, out: Path, presets, clock: dict) -> Path:
     """The demo's front page: links to both reports, the scorecard, the conclusions, the main figure."""
     timing = ", ".join(f"{k} {v:.0f} s" for k, v in clock.items())
     main = next((dc for dc in comparison.drives if dc.predictions), comparison.drives[0])
-    body = (f"<h1>granstokes demo</h1><ul><li><a href='compare/index.html'>continuum vs DEM "
+    body = (f"<h1>granstokes demo</h1>{verdict_html(comparison)}<ul><li><a href='compare/index.html'>continuum vs DEM "
             f"({html.escape(', '.join(presets))} presets): the full report</a></li>"
             f"<li><a href='continuum/index.html'>continuum: the paper's figures regenerated</a></li></ul>"
             f"<h2>Scorecard</h2>{scorecard_html(comparison)}<h2>Conclusions</h2><ul>"

@@ -1,3 +1,5 @@
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -18,3 +20,9 @@ def smoke_run(tmp_path_factory):
     run = tmp_path_factory.mktemp("smoke") / "run"
     assert main(["dem", "run", "--preset", "smoke", "--out", str(run), "--quiet"]) == 0
     return run
+
+
+@pytest.fixture(scope="session")
+def smoke_calibration():
+    """The committed plane-shear calibration of the quick preset's grains, which the smoke preset shares."""
+    return Path(__file__).resolve().parents[1] / "results" / "quick-calibration" / "calibration.json"

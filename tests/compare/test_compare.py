@@ -151,14 +151,20 @@ def test_depth_at_fraction_interpolates():
 @pytest.mark.slow
 def test_compare_report_on_a_smoke_run(smoke_run, tmp_path, capsys):
     """granstokes compare on a real (smoke) run: strict JSON, numbers that check the coarse-graining
-    (mass to round-off, pressure slope phi rho g within 15 %), a calibration with mu_s < mu_d."""
-    assert granstokes_main(["compare", str(smoke_run), "--out", str(tmp_path / "report"), "--json"]) == 0
+    (mass to round-off, pressure slope phi rho g within 15 %); the fit on the smoke's one drive does not
+    determine mu(I) (mu_s runs to its bound 0): a failed fit, said, with nothing scored."""
+    assert granstokes_main(["compare", str(smoke_run), "--out", str(tmp_path / "report")]) == 2
+    assert "--calibration is required" in capsys.readouterr().err and not (tmp_path / "report").exists()
+    assert granstokes_main(["compare", str(smoke_run), "--out", str(tmp_path / "report"), "--json",
+                            "--fit-on-drives"]) == 0
     m = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"non-JSON constant {c}"))
-    assert m["I0_convention"] == "dem" and 0 < m["mu_s"] < m["mu_d"]
+    assert m["I0_convention"] == "dem" and not m["blind"]
+    assert m["calibration_failure"] and "mu_s" in m["calibration_failure"] and m["mu_s"] < 1e-3
+    assert m["scorecard"] == [] and m["tally"] == [] and m["verdict"].startswith("No verdict: the mu(I) calibration")
     assert abs(m["mass_error"]) < 1e-6
     (d,) = m["drives"].values()
     assert d["pressure_slope"] == pytest.approx(m["phi_bulk"], rel=0.15)
-    assert d["u_w_inf"]["dem"] > 0 and d["steady_local"]["u_w"] > 0
+    assert d["u_w_inf"]["dem"] > 0 and "steady_local" not in d and "calibration failed" in d["prediction"]
     # the steady window's coarse-grained bulk tau is the plate's <tau_w> within 2 standard errors of the
     # difference (block errors of the frames and of the plate record over the same window: ~10 % of tau
     # for the smoke's 3 time units; the pre-issue-9 estimators missed by 18 %)
@@ -171,7 +177,7 @@ def test_compare_report_on_a_smoke_run(smoke_run, tmp_path, capsys):
     assert 0 < d["elastic_start"]["transit_time"] < d["elastic_start"]["compared_from"]
     assert json.loads((tmp_path / "report" / "metrics.json").read_text())["mu_s"] == m["mu_s"]
     page = (tmp_path / "report" / "index.html").read_text()
-    assert not m["blind"] and "fit" in m["calibration"]["kind"] and "In-drive fit" in page
+    assert "fit" in m["calibration"]["kind"] and "In-drive fit" in page and "No verdict" in page
     # blind: mu(I) and phi from a calibration.json of the same grains (here a synthetic one)
     truth = (0.28, 0.62, 0.3)
     cal = fit_blocks(_synthetic_blocks(truth), "synthetic", n_boot=50)

@@ -56,9 +56,9 @@ def check_page(path: Path) -> Page:
 
 
 @pytest.fixture(scope="module")
-def report(smoke_run, tmp_path_factory):
+def report(smoke_run, smoke_calibration, tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
-    comparison = build([smoke_run], progress=False)
+    comparison = build([smoke_run], progress=False, calibration=smoke_calibration)
     m = write_report(comparison, out / "compare")
     return comparison, m, out
 
@@ -72,7 +72,9 @@ def test_scorecard_contract(report):
         assert all(isinstance(v, float) and math.isfinite(v) for v in numbers), row
         lo, hi = row["band"]
         assert lo <= row["predicted"] <= hi and row["dem_err"] > 0
-        assert row["verdict"] == ("consistent" if abs(row["sigma"]) <= 2 else "disagrees")
+        assert row["verdict"] == ("not scored" if not row["scored"] else
+                                  "consistent" if abs(row["sigma"]) <= 2 else "disagrees")
+        assert row["scored"] == (not row["note"]) and row["blind"]
     observables = {(r["observable"], r["model"]) for r in m["scorecard"]}
     response = "u_w_inf" if next(iter(m["drives"].values()))["kind"] == "stress" else "mu_w_inf"
     assert {(response, "local"), ("delta_u", "local"), ("t90", "local"), (response, "paper")} <= observables
@@ -92,14 +94,15 @@ def test_every_page_the_demo_writes_is_whole(report):
     check_page(out / "continuum" / "index.html")
 
 
-def test_runs_named_alike_get_their_own_sections(smoke_run, tmp_path, capsys):
+def test_runs_named_alike_get_their_own_sections(smoke_run, smoke_calibration, tmp_path, capsys):
     for parent in ("x", "y"):
         shutil.copytree(smoke_run, tmp_path / parent / "r")
     assert main(["compare", str(tmp_path / "x" / "r"), str(tmp_path / "y" / "r"), "--out", str(tmp_path / "rep"),
-                 "--json"]) == 0
+                 "--json", "--calibration", str(smoke_calibration)]) == 0
     m = json.loads(capsys.readouterr().out)
     assert len(m["drives"]) == 2 and len({k for k in m["drives"]}) == 2
     figures = sorted(p.name for p in (tmp_path / "rep").glob("drive_*.png"))
     assert len(figures) == 2
-    assert main(["compare", str(tmp_path / "x" / "r"), str(tmp_path / "x" / "r"), "--out", str(tmp_path / "r2")]) == 2
+    assert main(["compare", str(tmp_path / "x" / "r"), str(tmp_path / "x" / "r"), "--out", str(tmp_path / "r2"),
+                 "--calibration", str(smoke_calibration)]) == 2
     assert "distinct run folders" in capsys.readouterr().err and not (tmp_path / "r2").exists()

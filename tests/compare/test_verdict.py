@@ -1,0 +1,81 @@
+"""Verdicts a referee accepts: a fit that does not determine its law predicts nothing, models are ranked
+over the rows they share, only blind scored rows count, and a drive whose flow reaches the base has its
+layer rows (and every row of the half-space model) left unscored."""
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from compare.models import LOCAL, PAPER
+from compare.scorecard import _not_scored, base_reach, headline, tally
+from continuum.calibration import IN_DRIVE, JOP_BOUNDS, from_replicates
+
+
+def _row(drive, observable, model, sigma, scored=True, blind=True):
+    return {"drive": drive, "observable": observable, "model": model, "model_label": f"{model} model",
+            "sigma": sigma, "scored": scored, "blind": blind, "note": "" if scored else "not scored: why",
+            "verdict": "not scored" if not scored else "consistent" if abs(sigma) <= 2 else "disagrees"}
+
+
+def test_models_are_ranked_over_the_rows_they_share_only():
+    # the paper's model has no creep row; local mu(I) fails exactly there: over all rows local would look worse
+    rows = pd.DataFrame([
+        _row("a", "u_w_inf", "local", 0.5), _row("a", "delta_u", "local", 1.0), _row("a", "creep_length", "local", 9.0),
+        _row("a", "u_w_inf", "paper", 2.5), _row("a", "delta_u", "paper", 3.0),
+    ])
+    t = tally(rows)
+    assert list(t.model) == ["local", "paper"] and list(t.n) == [2, 2] and list(t.consistent) == [2, 0]
+    assert t.median_abs_sigma.tolist() == pytest.approx([0.75, 2.75])
+    text = headline(rows, blind=True, failure="", n_drives=1)
+    assert "on the 2 row(s) the models share" in text and text.endswith("the DEM supports local model best.")
+
+
+def test_rows_not_scored_or_not_blind_never_count():
+    rows = pd.DataFrame([
+        _row("a", "u_w_inf", "local", 0.5), _row("a", "delta_u", "local", 0.2, scored=False),
+        _row("a", "u_w_inf", "ngf", 0.1, blind=False), _row("b", "u_w_inf", "local", 5.0),
+    ])
+    t = tally(rows)
+    assert list(t.model) == ["local"] and int(t.n.iloc[0]) == 2 and int(t.consistent.iloc[0]) == 1
+    text = headline(rows, blind=True, failure="", n_drives=2)
+    assert "no ranking" in text and "1 row(s) not scored" in text
+    fitted = headline(rows, blind=False, failure="", n_drives=2)
+    assert fitted.startswith("No verdict") and "fitted on the drives" in fitted
+
+
+def test_a_fit_at_a_bound_or_spanning_its_range_is_a_failed_fit():
+    def calibration(mu_s, mu_d, I0, spread):
+        rng = np.random.default_rng(1)
+        reps = np.column_stack([np.clip(rng.normal(v, s, 400), lo, hi) for v, s, lo, hi in
+                                zip((mu_s, mu_d, I0), spread, *JOP_BOUNDS)]
+                               + [np.full(400, x) for x in (0.3, 1.0, 0.8, 0.3)])
+        return from_replicates([mu_s, mu_d, I0, 0.3, 1.0, 0.8, 0.3], reps, pd.DataFrame(), IN_DRIVE, "test", 0.01)
+
+    assert calibration(0.28, 0.62, 0.3, (0.005, 0.01, 0.02)).failure == ""
+    degenerate = calibration(1.2e-14, 0.42, 0.007, (0.1, 0.01, 0.001)).failure  # the smoke's in-drive fit
+    assert degenerate.startswith("mu_s = 1.2e-14") and "bound" in degenerate
+    assert "mu_d" in calibration(0.28, 0.62, 0.3, (0.005, 0.8, 0.02)).failure  # mu_d's interval spans [0, 3]
+    assert "I0_dem" in calibration(0.28, 0.62, 0.3, (0.005, 0.01, 20.0)).failure
+    assert "no mu(I) law" in calibration(0.5, 0.45, 0.3, (0.005, 0.01, 0.02)).failure
+
+
+def _drive(depth_of_layer, bed=12.0):
+    """A steady profile decaying linearly to zero at ``depth_of_layer`` below the plate (u_w = 1)."""
+    depth = np.linspace(-0.5, bed, 126)
+    u = np.clip(1 - depth / depth_of_layer, 0, 1)
+    return SimpleNamespace(steady_profile=pd.DataFrame({"depth": depth, "u_x": u}), spec=SimpleNamespace(depth=bed))
+
+
+def test_a_drive_whose_layer_reaches_the_base_is_flagged_and_its_layer_rows_unscored():
+    assert base_reach(_drive(5.0), delta_s=4.0) == ""
+    deep = base_reach(_drive(11.0), delta_s=9.3)  # delta_u = 0.95 x 11 d = 10.45 d in a 12 d bed: the smoke drive
+    assert "reaches the base" in deep and "10.4 d" in deep
+    assert "reaches the base" in base_reach(_drive(5.0), delta_s=10.5)  # the calibrated layer reaches it
+    assert "stays above 5 %" in base_reach(_drive(40.0), delta_s=9.0)
+    assert _not_scored("delta_u", LOCAL, deep, 1.0, 1.0).startswith("not scored: the flow reaches the base")
+    assert _not_scored("u_w_inf", LOCAL, deep, 1.0, 1.0) == ""
+    assert "half-space" in _not_scored("t90", PAPER, deep, 1.0, 1.0)
+    short = _not_scored("u_w_inf", LOCAL, "", 0.9, 1.0)
+    assert "-10%" in short and "shorter than the model's time scale" in short
+    assert _not_scored("t90", LOCAL, "", 0.9, 1.0) == ""
