@@ -1,12 +1,15 @@
 """numba kernels shared by the compiled steppers (continuum.speed_bdf, continuum.stress_dirk): the banded LU of
 their Newton matrices, the Laplacian's stencil sums, the weighted RMS norm, and the compiling of a plain function
-of continuum.problems (one definition, run by Python and compiled)."""
+of continuum.problems (one definition, run by Python and compiled); and the one line on stderr that a kernel must
+compile."""
 from __future__ import annotations
 
 import math
+import sys
 import types
 
 from numba import njit
+from numba.core import event
 
 #: every kernel's numba options: cached on disk (continuum/__pycache__; see BUILT_FROM in the modules that build
 #: these kernels in), and numpy's floating-point semantics (a division by zero gives inf or NaN, as in the Python
@@ -17,6 +20,34 @@ JIT = dict(cache=True, error_model="numpy")
 def jit(fn):
     """``fn`` compiled with JIT's options."""
     return njit(**JIT)(fn)
+
+
+#: the modules whose kernels a drive calls from Python, their drive and about how long a first solve compiles them
+#: (wall on 2 cores: 10-13 s and 11-18 s measured, bench/RESULTS.md "First solve after set-up"; the set-up compiles
+#: them ahead, continuum.warmup)
+DRIVES = {"continuum.stress_dirk": ("imposed-stress", 15), "continuum.speed_bdf": ("imposed-speed", 20)}
+
+
+class _CompileNotice(event.Listener):
+    """Says on stderr, once a drive and process, that its kernels compile: numba sends "numba:compile" only when a
+    kernel is not in memory nor in its disk cache for these argument types, just before compiling it."""
+
+    def __init__(self):
+        self.told = set()
+
+    def on_start(self, ev):
+        module = ev.data["dispatcher"].py_func.__module__
+        if module in DRIVES and module not in self.told:
+            self.told.add(module)
+            drive, seconds = DRIVES[module]
+            print(f"granstokes: compiling the {drive} solver's kernels once (about {seconds} s); later runs start at "
+                  "once", file=sys.stderr, flush=True)
+
+    def on_end(self, ev):
+        pass
+
+
+event.register("numba:compile", _CompileNotice())
 
 
 def compile_function(fn, **replaced):

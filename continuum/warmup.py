@@ -1,0 +1,37 @@
+"""Compile the continuum solver's numba kernels into their disk cache (continuum/__pycache__ beside the sources, or
+NUMBA_CACHE_DIR) by solving a small case of each drive through the solver's entry points, so that the first
+``granstokes continuum`` after set-up starts at once.  The Makefile's install step runs it:
+
+    .venv/bin/python -m continuum.warmup
+"""
+from __future__ import annotations
+
+import time
+
+#: the cases: the command's example friction, one output time; few cells, and an error estimate as the command makes
+FRICTION = (0.3839, 0.6494)
+MU_W_TILDE, U_W, TIMES = 0.5, 1.334, [1.0]
+
+
+def warm_up() -> dict:
+    """Solve one imposed stress and one imposed speed (compiling, or loading from the cache, the kernels each calls):
+    {drive: wall seconds}."""
+    from .rheology import Friction
+    from .solver import Numerics, solve_speed, solve_stress
+
+    fr = Friction(*FRICTION)
+    seconds = {}
+    for drive, solve, value in (("stress", solve_stress, fr.mu_w_from_tilde(MU_W_TILDE)), ("speed", solve_speed, U_W)):
+        start = time.perf_counter()
+        solve(fr, value, TIMES, Numerics(n_cells=16), estimate=True)
+        seconds[drive] = time.perf_counter() - start
+    return seconds
+
+
+def main() -> None:
+    seconds = warm_up()
+    print("granstokes: solver kernels ready (" + ", ".join(f"{d} {s:.1f} s" for d, s in seconds.items()) + ")")
+
+
+if __name__ == "__main__":
+    main()
