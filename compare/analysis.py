@@ -242,3 +242,9 @@ def mass_error(a: DriveAnalysis) -> float:
     area = widths[0] if drive.dimension == 2 else widths[0] * widths[2]
     integral = np.trapezoid(res.additive["phi"][0], res.y)
     return float(integral / (volume.sum() / area) - 1)
+
+
+def nearest_frame(df: pd.DataFrame, t: float) -> pd.DataFrame:
+    """The rows of a table of profiles (column t) at its one time nearest ``t``: one profile, never two."""
+    times = df.t.unique()
+    return df[df.t == times[np.argmin(np.abs(times - t))]]

@@ -27,7 +27,7 @@ from dem.layout import RUN_JSON
 from granstokes.validate import require
 
 from . import calibrate
-from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, snapshot_times
+from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, nearest_frame, snapshot_times
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
 from .models import LOCAL, PAPER, Prediction, ngf_model
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
@@ -169,7 +169,7 @@ def delta_mu(a: DriveAnalysis, mu_s: float) -> np.ndarray:
     mu_w_smooth = a.series.mu_w.rolling(window, center=True, min_periods=1).mean()
     out = []
     for t in a.delta.t:
-        frame = a.instant[np.isclose(a.instant.t, t)].sort_values("depth")
+        frame = nearest_frame(a.instant, t).sort_values("depth")
         keep = (frame.depth >= calibrate.WALL_EXCLUSION) & np.isfinite(frame.mu)
         mu_w = float(np.interp(t, a.series.t, mu_w_smooth))
         excess = (frame.mu[keep].to_numpy() - mu_s) / (mu_w - mu_s)

@@ -113,9 +113,9 @@ def _clean(v):
         return {k: _clean(x) for k, x in v.items()}
     if isinstance(v, (list, tuple, np.ndarray)):
         return [_clean(x) for x in v]
-    if isinstance(v, (np.integer,)):
+    if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
         return int(v)
-    if isinstance(v, (float, np.floating, int)) and not isinstance(v, bool):
+    if isinstance(v, (float, np.floating)):
         return float(v) if np.isfinite(v) else None
     return v
 

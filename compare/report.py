@@ -6,11 +6,16 @@ from __future__ import annotations
 import html
 import json
 import math
-from pathlib import Path
+import textwrap
+from pathlib import Path, PurePath
 
 import numpy as np
 import pandas as pd
+from matplotlib import colormaps
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from matplotlib.ticker import LogFormatter, LogLocator
 
 from continuum.calibration import LINEAR_I_MAX, mu_law
 from continuum import ngf
@@ -18,13 +23,19 @@ from continuum.scales import UNITS
 from continuum.steady import steady_mu
 from granstokes.page import page
 
-from .analysis import snapshot_times
+from .analysis import nearest_frame, snapshot_times
 from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
 from .scorecard import MODEL_UNSTEADY, SIGMA_CONSISTENT, T90_WINDOW, tally
 
-MODEL_STYLE = {"local": dict(color="C1", ls="-"), "paper": dict(color="C2", ls="--"), "ngf": dict(color="C3", ls="-.")}
+#: the DEM is blue (C0); the models take colours no verdict (VERDICT_COLOUR: green, red, grey) nor the DEM has
+DEM_COLOUR = "C0"
+DRIVE_MARKERS = "o^vD<>"            # the drives' points where several share a panel (all in DEM blues)
+PUBLISHED_COLOURS = ("C6", "C8", "C9")  # published laws beside the calibration
+SIGMA_CLIP = 20.0                   # the scorecard figure's bars stop here (the value is written on the bar)
+MODEL_STYLE = {"local": dict(color="#7b3294", ls="-"), "paper": dict(color="#e08214", ls="--"),
+               "ngf": dict(color="#8c510a", ls="-.")}
 FIELD_LABELS = {"u_x": "u [sqrt(g d)]", "phi": "phi", "p": "p = sigma_yy [rho_p g d]", "tau": "tau [rho_p g d]",
                 "mu": "mu = tau/p", "I_dem": "I_dem = |du/dy| d/sqrt(p/rho_p)"}
 T_LABEL, DEPTH_LABEL = "t [sqrt(d/g)]", "depth below the plate [d]"
@@ -35,21 +46,99 @@ def slug(label: str) -> str:
     return "".join(c if c.isalnum() else "_" for c in label).strip("_")
 
 
+def display_label(label: str, labels=()) -> str:
+    """A drive's label for a reader, "run: drive" ("gs-smoke: speed"): the run folder's name, with as many
+    parent folders as keep it apart from the other ``labels``."""
+    def parts(x):
+        path = PurePath(x)
+        return [q for q in path.parent.parts if q not in ("/", ".")], path.name
+
+    run, name = parts(label)
+    others = [parts(x) for x in labels if x != label]
+    for k in range(1, len(run) + 1):
+        if all(o[1] != name or o[0][-k:] != run[-k:] for o in others):
+            return f"{'/'.join(run[-k:])}: {name}"
+    return f"{'/'.join(run)}: {name}" if run else name
+
+
+def display_labels(c: Comparison) -> dict:
+    """Every drive label of ``c`` (and of its scorecard) to its display_label."""
+    labels = list(dict.fromkeys([dc.label for dc in c.drives] + list(c.scorecard.rows.get("drive", []))))
+    return {x: display_label(x, labels) for x in labels}
+
+
+#: significant digits a page prints at most (an error finer than that is shown to 1 digit beside it)
+MAX_DIGITS = 6
+
+
+def _decimals(err) -> int:
+    """Decimals that print ``err`` to 2 significant digits."""
+    return max(0, 1 - int(math.floor(math.log10(err))))
+
+
+def _too_fine(value, decimals) -> bool:
+    """``value`` to ``decimals`` would print more than MAX_DIGITS significant digits (or a long run of zeros)."""
+    return decimals > MAX_DIGITS + 2 or bool(value) and decimals + int(math.floor(math.log10(abs(value)))) >= MAX_DIGITS
+
+
 def fmt(value, err=None) -> str:
-    """A number to the digits its error supports (the error to 2 significant digits); 4 significant
-    digits without an error; an en dash when there is no number."""
+    """A number to the digits its error supports (the error to 2 significant digits), at most MAX_DIGITS
+    significant digits; 4 significant digits without an error; an en dash when there is no number."""
     if value is None or not np.isfinite(value):
         return "–"
     if err is None or not np.isfinite(err) or err <= 0:
         return f"{value:.4g}"
-    digits = max(0, 1 - int(math.floor(math.log10(err))))
-    return f"{value:.{digits}f} ± {err:.{digits}f}"
+    digits = _decimals(err)
+    if _too_fine(value, digits):
+        return f"{value:.{MAX_DIGITS}g} ± {err:.0e}"
+    shown = f"{value:.{digits}f}"
+    return f"{shown.lstrip('-') if float(shown) == 0 else shown} ± {err:.{digits}f}"
 
 
 def fmt_band(band, err_like) -> str:
+    """A band [lo, hi] to the decimals of ``err_like`` (fmt's), at most MAX_DIGITS significant digits."""
     lo, hi = band
-    digits = max(0, 1 - int(math.floor(math.log10(err_like)))) if err_like and np.isfinite(err_like) and err_like > 0 else 3
-    return f"[{lo:.{digits}f}, {hi:.{digits}f}]"
+    if not (err_like and np.isfinite(err_like) and err_like > 0):
+        return f"[{lo:.3f}, {hi:.3f}]"
+    if _too_fine(max(abs(lo), abs(hi)), _decimals(err_like)):
+        return f"[{lo:.{MAX_DIGITS}g}, {hi:.{MAX_DIGITS}g}]"
+    return f"[{lo:.{_decimals(err_like)}f}, {hi:.{_decimals(err_like)}f}]"
+
+
+def fmt_cell(value) -> str:
+    """A table cell: counts (and whole floats from JSON) as integers, other numbers through fmt, text escaped."""
+    if isinstance(value, bool) or value is None:
+        return html.escape(str(value))
+    if isinstance(value, (int, np.integer)) or (isinstance(value, float) and value.is_integer()):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        return fmt(float(value))
+    return html.escape(str(value))
+
+
+def wrap(text: str, width_in: float, fontsize: float = 12) -> str:
+    """``text`` broken into lines that fit ``width_in`` inches at ``fontsize`` points."""
+    return textwrap.fill(" ".join(text.split()), max(20, int(width_in * 72 / (0.6 * fontsize))))
+
+
+def suptitle(fig, text: str, fontsize: float = 12):
+    """A figure title wrapped to the figure's width."""
+    fig.suptitle(wrap(text, fig.get_figwidth(), fontsize), fontsize=fontsize)
+
+
+def plain_log(axis):
+    """Plain numbers (2, 3, 10) instead of 2x10^0 on a log axis that spans few decades."""
+    axis.set_major_formatter(LogFormatter())
+    axis.set_minor_formatter(LogFormatter(labelOnlyBase=False))
+
+
+def figure_legend(fig, axes, ncols=3, fontsize=8):
+    """One legend below the axes for every labelled artist of ``axes`` (each label once)."""
+    seen = {}
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            seen.setdefault(lab, h)
+    fig.legend(seen.values(), seen.keys(), loc="outside lower center", ncols=ncols, fontsize=fontsize, frameon=False)
 
 
 def _running(s: pd.Series, n: int) -> pd.Series:
@@ -58,18 +147,21 @@ def _running(s: pd.Series, n: int) -> pd.Series:
 
 # --- figures -----------------------------------------------------------------------------------------
 
-def drive_figure(dc: DriveComparison, bands: dict, out: Path) -> Path:
-    """The free response against time, delta_u(t), and the steady velocity profile (linear and log)."""
+def drive_figure(dc: DriveComparison, bands: dict, out: Path, name: str | None = None) -> Path:
+    """The free response against time, delta_u(t), and the steady velocity profile (linear and log);
+    ``name``: the drive's display label."""
     g, spec, resp = dc.dem, dc.dem.spec, dc.dem.response
     fig = Figure(figsize=(12, 8.5), layout="constrained")
     ax = fig.subplots(2, 2).ravel()
     s = g.series
     n = int(T90_WINDOW * len(s))
     smooth = _running(s[resp], n)
-    ax[0].plot(s.t, smooth, color="C0", lw=1.8, label=f"DEM, running mean ({T90_WINDOW:.0%} of the record)")
+    ax[0].plot(s.t, smooth, color=DEM_COLOUR, lw=1.8, label=f"DEM, running mean ({T90_WINDOW:.0%} of the record)")
     if len(spec.folders) > 1:
-        ax[0].fill_between(s.t, _running(s[f"{resp}_lo"], n), _running(s[f"{resp}_hi"], n), color="C0", alpha=0.25,
-                           label=f"DEM, 95 % band over {len(spec.folders)} seeds")
+        ax[0].fill_between(s.t, _running(s[f"{resp}_lo"], n), _running(s[f"{resp}_hi"], n), color=DEM_COLOUR,
+                           alpha=0.25,
+                           label=f"DEM, 95 % band of the {len(spec.folders)}-seed mean per output "
+                                 "(edges: running mean)")
     for p in dc.predictions:
         ax[0].plot(p.series.t, p.series[resp], label=p.label, **MODEL_STYLE[p.model])
         if (dc.label, p.model) in bands:
@@ -81,23 +173,24 @@ def drive_figure(dc: DriveComparison, bands: dict, out: Path) -> Path:
     ax[0].set(xlabel=T_LABEL, ylabel=RESPONSE_LABEL[resp], ylim=(min(lo, 0) - pad, top + pad),
               title=f"free response: {RESPONSE_LABEL[resp]}")
     ax[0].ticklabel_format(useOffset=False)
-    ax[1].plot(g.delta.t, g.delta.delta_u, "o", ms=3, color="C0", label="DEM delta_u (coarse-grained u)")
+    ax[1].plot(g.delta.t, g.delta.delta_u, "o", ms=3, color=DEM_COLOUR, label="DEM delta_u (coarse-grained u)")
     for p in dc.predictions:
         ax[1].plot(p.series.t, p.series.delta_u, label=p.label, **MODEL_STYLE[p.model])
     if dc.predictions:
         ax[1].axhline(dc.predictions[0].steady.delta_s, color="k", lw=0.7, ls=":", label="delta_s (calibrated)")
     ax[1].set(xscale="log", yscale="log", xlabel=T_LABEL, ylabel="delta_u [d] (u = 5 % of u_w)",
               title="layer thickness")
+    plain_log(ax[1].yaxis)
     for axis in ax[:2]:  # the elastic start: the load is carried down by a shear wave, not compared
         axis.axvline(spec.transit_time, color="0.3", lw=0.8, ls="--", label="shear-wave transit over the bed")
         axis.axvspan(0, spec.compared_from, color="0.85", alpha=0.5, lw=0, label="elastic start (not compared)")
-    ax[0].legend(fontsize=7)
-    ax[1].legend(fontsize=7)
     p = g.steady_profile
+    spread = f"{len(spec.folders)} seeds" if len(spec.folders) > 1 else "the window's frames"
     for a_, scale in ((ax[2], "linear"), (ax[3], "log")):
-        a_.plot(p.u_x.clip(lower=1e-6) if scale == "log" else p.u_x, p.depth, color="C0", lw=1.8,
+        a_.plot(p.u_x.clip(lower=1e-6) if scale == "log" else p.u_x, p.depth, color=DEM_COLOUR, lw=1.8,
                 label="DEM steady window")
-        a_.fill_betweenx(p.depth, p.u_x_lo.clip(lower=1e-6), p.u_x_hi.clip(lower=1e-6), color="C0", alpha=0.25)
+        a_.fill_betweenx(p.depth, p.u_x_lo.clip(lower=1e-6), p.u_x_hi.clip(lower=1e-6), color=DEM_COLOUR, alpha=0.25,
+                         label=f"DEM steady window, band over {spread}")
         for pr in dc.predictions:
             u = pr.steady.u.clip(1e-6) if scale == "log" else pr.steady.u
             a_.plot(u, pr.steady.y, label=pr.label, **MODEL_STYLE[pr.model])
@@ -105,23 +198,26 @@ def drive_figure(dc: DriveComparison, bands: dict, out: Path) -> Path:
                ylabel=DEPTH_LABEL, ylim=(spec.depth, 0), title=f"steady velocity ({scale})")
         if scale == "log":
             a_.set_xlim(1e-4 * max(p.u_x.max(), 1e-6), 2 * max(p.u_x.max(), 1e-6))
-    ax[2].legend(fontsize=7)
+    figure_legend(fig, ax)
     imposed = f"tau_w = {spec.value:.4g} rho_p g d" if spec.kind == "stress" else f"u_w = {spec.value:.4g} sqrt(g d)"
-    fig.suptitle(f"{g.label}: imposed {spec.kind} ({imposed}), p_w = {spec.p_w:g} rho_p g d; DEM units")
+    suptitle(fig, f"{name or display_label(g.label)} – imposed {spec.kind} ({imposed}), p_w = {spec.p_w:g} rho_p g d; "
+             "DEM units")
     path = out / f"drive_{slug(g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
 
 
-def profiles_figure(dc: DriveComparison, material, out: Path) -> Path:
+def profiles_figure(dc: DriveComparison, material, out: Path, name: str | None = None) -> Path:
     """Steady-window profiles (bands over seeds or frames) with the local model's steady state."""
     g, spec = dc.dem, dc.dem.spec
     p = g.steady_profile
-    fig = Figure(figsize=(15, 4.2), layout="constrained")
+    fig = Figure(figsize=(15, 4.6), layout="constrained")
     axes = fig.subplots(1, 6, sharey=True)
+    spread = f"{len(spec.folders)} seeds" if len(spec.folders) > 1 else "the window's frames"
     for ax, f in zip(axes, FIELD_LABELS):
-        ax.plot(p[f], p.depth, color="C0", label="DEM")
-        ax.fill_betweenx(p.depth, p[f"{f}_lo"], p[f"{f}_hi"], color="C0", alpha=0.25)
+        ax.plot(p[f], p.depth, color=DEM_COLOUR, label="DEM steady window")
+        ax.fill_betweenx(p.depth, p[f"{f}_lo"], p[f"{f}_hi"], color=DEM_COLOUR, alpha=0.25,
+                         label=f"DEM, band over {spread}")
         ax.set_xlabel(FIELD_LABELS[f])
     local = dc.predictions[0].steady
     z = np.linspace(0, spec.depth, 200)
@@ -133,39 +229,48 @@ def profiles_figure(dc: DriveComparison, material, out: Path) -> Path:
     mu = steady_mu(material.friction, local.mu_w, z / local.delta_s)
     axes[4].plot(mu, z, **style)
     axes[5].plot(material.friction.I_of_mu(mu, material.I0), z, **style)
+    axes[1].set_xlim(0, 1)
     axes[4].set_xlim(0, 1)
-    axes[5].set_xscale("log")
+    axes[5].set(xscale="log", xlim=(1e-5, 2))
+    axes[5].xaxis.set_major_locator(LogLocator(numticks=4))
     axes[0].set(ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
-    axes[0].legend(fontsize=7)
-    fig.suptitle(f"{g.label}: steady-window profiles (Lucy kernel, width in metrics.json); DEM units")
+    figure_legend(fig, axes[:1], ncols=3)
+    suptitle(fig, f"{name or display_label(g.label)} – steady-window profiles (Lucy kernel, width in metrics.json); "
+             "DEM units, I in the DEM convention")
     path = out / f"profiles_{slug(g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
 
 
-def transient_figure(dc: DriveComparison, material, out: Path) -> Path:
-    """u, mu and I against depth at a few snapshot times: DEM (seed-averaged) solid, local model dashed."""
+def transient_figure(dc: DriveComparison, material, out: Path, name: str | None = None) -> Path:
+    """u, mu and I against depth at a few snapshot times (colour: time): DEM (seed-averaged) solid, local
+    model dashed; one profile per time, the frame nearest it."""
     g, spec = dc.dem, dc.dem.spec
     vel = dc.predictions[0].profiles
-    fig = Figure(figsize=(12, 4.5), layout="constrained")
+    fig = Figure(figsize=(12, 5), layout="constrained")
     axes = fig.subplots(1, 3, sharey=True)
-    for k, t in enumerate(snapshot_times(g)):
-        dem = g.instant[np.isclose(g.instant.t, t)]
-        cont = vel[np.isclose(vel.t, t)]
+    times = snapshot_times(g)
+    for k, t in enumerate(times):
+        dem, cont = nearest_frame(g.instant, t).sort_values("depth"), nearest_frame(vel, t).sort_values("depth")
         model = {"u_x": cont.u, "mu": cont.mu,
                  "I_dem": material.friction.I_of_mu(cont.mu.clip(upper=material.mu_d - 1e-9), material.I0)}
         early = " (elastic start: not compared)" if t < spec.compared_from else ""
+        colour = colormaps["viridis"](0.9 * k / max(1, len(times) - 1))
         for ax, f in zip(axes, model):
-            ax.plot(dem[f], dem.depth, color=f"C{k}", label=f"t = {t:.3g}{early}")
-            ax.plot(model[f], cont.depth, color=f"C{k}", ls="--")
+            ax.plot(dem[f], dem.depth, color=colour, label=f"t = {t:.3g}{early}")
+            ax.plot(model[f], cont.depth, color=colour, ls="--")
     for ax, f in zip(axes, ("u_x", "mu", "I_dem")):
         ax.set_xlabel(FIELD_LABELS[f])
     axes[1].set_xlim(0, 1)
     axes[2].set(xscale="log", xlim=(1e-5, 2))
     axes[0].set(ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
-    axes[0].legend(fontsize=7, title="solid DEM, dashed local mu(I)", title_fontsize=7)
-    fig.suptitle(f"{g.label}: transient profiles at snapshot times [sqrt(d/g)] (DEM units, I in the DEM convention)\n"
-                 f"shear-wave transit {spec.transit_time:.3g}, compared from {spec.compared_from:.3g}")
+    handles, labels = axes[0].get_legend_handles_labels()
+    handles += [Line2D([], [], color="k"), Line2D([], [], color="k", ls="--")]
+    labels += ["DEM (solid)", "local mu(I) (dashed)"]
+    fig.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
+    suptitle(fig, f"{name or display_label(g.label)} – transient profiles at snapshot times t [sqrt(d/g)] (DEM units, "
+             f"I in the DEM convention); shear-wave transit {spec.transit_time:.3g}, compared from "
+             f"{spec.compared_from:.3g}")
     path = out / f"transient_{slug(g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
@@ -177,7 +282,7 @@ def _law_band(cal, I, q=(2.5, 97.5)):
     return np.percentile(reps, q, axis=0)
 
 
-def fluidity_figure(dc: DriveComparison, material, out: Path) -> Path:
+def fluidity_figure(dc: DriveComparison, material, out: Path, name: str | None = None) -> Path:
     """The steady fluidity g = |du/dy|/mu against depth: the DEM's (coarse-grained), NGF's, and the local
     g_loc(mu, p) of the same stress (zero below delta_s)."""
     g, spec = dc.dem, dc.dem.spec
@@ -186,7 +291,7 @@ def fluidity_figure(dc: DriveComparison, material, out: Path) -> Path:
     ax = fig.subplots()
     with np.errstate(divide="ignore", invalid="ignore"):
         dem_g = p.gamma_dot_dem / p.mu
-    ax.semilogx(dem_g.where(dem_g > 0), p.depth, color="C0", lw=1.8, label="DEM: |du/dy|/mu (coarse-grained)")
+    ax.semilogx(dem_g.where(dem_g > 0), p.depth, color=DEM_COLOUR, lw=1.8, label="DEM: |du/dy|/mu (coarse-grained)")
     for pr in dc.predictions:
         if pr.steady.g is not None:
             ax.semilogx(pr.steady.g, pr.steady.y, label=pr.label, **MODEL_STYLE[pr.model])
@@ -194,9 +299,9 @@ def fluidity_figure(dc: DriveComparison, material, out: Path) -> Path:
     pz = spec.p_w + material.phi * material.rho_p * material.g * z
     local = ngf.local_fluidity(material, ngf.NonlocalFluidity(A=0.0), dc.predictions[0].steady.mu_w * spec.p_w / pz, pz)
     ax.semilogx(np.where(local > 0, local, np.nan), z, label="local g_loc (rigid below delta_s)", **MODEL_STYLE["local"])
-    ax.set(xlabel="fluidity g = |du/dy|/mu [sqrt(g/d)]", ylabel=DEPTH_LABEL, ylim=(spec.depth, 0),
-           title=f"{g.label}: steady fluidity")
-    ax.legend(fontsize=7)
+    ax.set(xlabel="fluidity g = |du/dy|/mu [sqrt(g/d)]", ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
+    suptitle(fig, f"{name or display_label(g.label)} – steady fluidity; DEM units")
+    figure_legend(fig, [ax], ncols=2)
     path = out / f"fluidity_{slug(g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
@@ -206,8 +311,8 @@ def calibration_figure(c: Comparison, out: Path) -> Path:
     """mu(I) and phi(I): the law with its 95 % bootstrap band; blind comparison: the plane-shear points
     it was measured on and the drives' steady pairs over it as a test (seed bands as error bars);
     published values beside it.  In-drive fit: the pairs and the fit through them."""
-    cal, pairs = c.calibration, c.pairs
-    fig = Figure(figsize=(12, 4.6), layout="constrained")
+    cal, pairs, names = c.calibration, c.pairs, display_labels(c)
+    fig = Figure(figsize=(12, 6.2), layout="constrained")
     a, b = fig.subplots(1, 2)
     lo_I = min(pairs.I_dem[pairs.I_dem > 0].min(), cal.points.I.min() if len(cal.points) else 1.0)
     I = np.geomspace(max(lo_I, 1e-4), max(pairs.I_dem.max(), cal.points.I.max() if len(cal.points) else 0) * 1.5, 200)
@@ -223,19 +328,23 @@ def calibration_figure(c: Comparison, out: Path) -> Path:
                    label="plane-shear points (per seed)")
         b.errorbar(pts.I, pts.phi, xerr=pts.get("I_err"), yerr=pts.get("phi_err"), fmt="ks", ms=4, mfc="w",
                    label="plane-shear points")
-    for k, (label, g) in enumerate(pairs.groupby("drive")):
-        a.errorbar(g.I_dem, g.mu, xerr=g.I_err, yerr=g.mu_err, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6,
-                   label=f"{label} steady pairs" + (" (test)" if c.blind else ""))
-        b.errorbar(g.I_dem, g.phi, yerr=g.phi_err, fmt="o", ms=3, color=f"C{k}", alpha=0.7, lw=0.6, label=label)
-    for k, pub in enumerate(x for x in PUBLISHED if x["dimension"] == c.drives[0].dem.spec.folders[0].dimension):
+    groups = list(pairs.groupby("drive", sort=False))
+    for k, (label, g) in enumerate(groups):  # the DEM in blues, one marker per drive
+        style = dict(fmt=DRIVE_MARKERS[k % len(DRIVE_MARKERS)], ms=4, alpha=0.8, lw=0.6,
+                     color=colormaps["Blues"](0.95 - 0.45 * k / max(1, len(groups) - 1)))
+        a.errorbar(g.I_dem, g.mu, xerr=g.I_err, yerr=g.mu_err, **style,
+                   label=f"{names.get(label, label)} steady pairs" + (" (test)" if c.blind else ""))
+        b.errorbar(g.I_dem, g.phi, yerr=g.phi_err, **style, label=f"{names.get(label, label)} steady pairs")
+    dimension = c.drives[0].dem.spec.folders[0].dimension
+    for colour, pub in zip(PUBLISHED_COLOURS, [x for x in PUBLISHED if x["dimension"] == dimension], strict=False):
         if "mu_1" in pub:
-            a.plot(lin, pub["mu_1"] + pub["b"] * lin, color=f"C{k + 5}", ls=":", lw=1.2,
+            a.plot(lin, pub["mu_1"] + pub["b"] * lin, color=colour, ls=":", lw=1.4,
                    label=f"{pub['source'].split(',')[0]}: {pub['mu_1']:g} + {pub['b']:g} I")
         else:
-            a.plot(I, mu_law(I, pub["mu_s"], pub["mu_d"], pub["I0"]), color=f"C{k + 5}", ls=":", lw=1.2,
+            a.plot(I, mu_law(I, pub["mu_s"], pub["mu_d"], pub["I0"]), color=colour, ls=":", lw=1.4,
                    label=f"{pub['source'].split(',')[0]} (Jop form)")
         if "phi_max" in pub:
-            b.plot(lin, pub["phi_max"] - pub["a"] * lin, color=f"C{k + 5}", ls=":", lw=1.2,
+            b.plot(lin, pub["phi_max"] - pub["a"] * lin, color=colour, ls=":", lw=1.4,
                    label=f"{pub['source'].split(',')[0]}")
     if cal.I_min is not None:
         a.axvline(cal.I_min, color="0.6", ls=":", label="I_min (creep excluded from the fit)")
@@ -243,8 +352,8 @@ def calibration_figure(c: Comparison, out: Path) -> Path:
           title="mu(I): " + ("the drives as a blind test of the plane-shear law" if c.blind else "fit on the drives"))
     b.plot(lin, cal.phi_max - cal.phi_slope * lin, "k-", label=f"phi = {cal.phi_max:.3f} - {cal.phi_slope:.3f} I")
     b.set(xscale="log", xlabel=FIELD_LABELS["I_dem"], ylabel="phi", title="phi(I)")
-    a.legend(fontsize=6)
-    b.legend(fontsize=6)
+    for ax in (a, b):
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncols=2, frameon=False)
     path = out / "calibration.png"
     fig.savefig(path, dpi=100)
     return path
@@ -275,40 +384,113 @@ def calibration_section(c: Comparison) -> str:
 
 
 def sigma_figure(c: Comparison, out: Path) -> Path:
-    """One bar per scorecard row: sigma = (DEM - predicted)/combined error, the +-2 band shaded."""
-    rows = c.scorecard.rows
-    fig = Figure(figsize=(8, 0.35 * len(rows) + 1.5), layout="constrained")
+    """One bar per scorecard row: sigma = (DEM - predicted)/combined error in the model's colour, the +-2
+    band shaded, each row's label in its verdict's colour."""
+    rows, names = c.scorecard.rows, display_labels(c)
+    fig = Figure(figsize=(8.5, 0.32 * len(rows) + 2.0), layout="constrained")
     ax = fig.subplots()
     y = np.arange(len(rows))
     scored = rows.scored.to_numpy(dtype=bool)
-    ax.barh(y, np.where(scored, rows.sigma.clip(-20, 20), 0.0), color=[MODEL_STYLE[m]["color"] for m in rows.model])
+    sigma = rows.sigma.to_numpy(dtype=float)
+    ax.barh(y, np.where(scored, np.clip(sigma, -SIGMA_CLIP, SIGMA_CLIP), 0.0),
+            color=[MODEL_STYLE[m]["color"] for m in rows.model])
     for k in np.flatnonzero(~scored):
-        ax.text(0, k, " not scored (see the row's note)", va="center", fontsize=7, color="0.35")
-    ax.axvspan(-SIGMA_CONSISTENT, SIGMA_CONSISTENT, color="0.85", zorder=0, label=f"|sigma| <= {SIGMA_CONSISTENT:g}")
-    ax.set_yticks(y, [f"{'/'.join(r.drive.split('/')[-2:])}: {r.observable} ({r.model})" for r in rows.itertuples()],
+        ax.text(0, k, " not scored (see the row's note)", va="center", fontsize=7, color=VERDICT_COLOUR["not scored"])
+    for k in np.flatnonzero(scored & (np.abs(sigma) > SIGMA_CLIP)):
+        ax.text(np.sign(sigma[k]) * SIGMA_CLIP, k, f" {sigma[k]:+.0f} ", va="center", fontsize=7,
+                ha="left" if sigma[k] < 0 else "right", color="w")
+    ax.axvspan(-SIGMA_CONSISTENT, SIGMA_CONSISTENT, color="0.88", zorder=0)
+    ax.set_yticks(y, [f"{names.get(r.drive, r.drive)}, {r.observable} ({r.model})" for r in rows.itertuples()],
                   fontsize=7)
+    for tick, verdict in zip(ax.get_yticklabels(), rows.verdict, strict=True):
+        tick.set_color(VERDICT_COLOUR[verdict])
     ax.invert_yaxis()
-    ax.set(xlabel="sigma = (DEM - predicted) / combined standard error (clipped at +-20)",
+    ax.set(xlabel=f"sigma = (DEM - predicted) / combined standard error (bars clipped at +-{SIGMA_CLIP:g})",
            title="scorecard: how far each prediction is from the DEM")
-    ax.legend(fontsize=7)
+    handles = [Patch(color=MODEL_STYLE[m]["color"], label=label)
+               for m, label in dict(zip(rows.model, rows.model_label, strict=True)).items()]
+    handles += [Patch(color="0.88", label=f"|sigma| <= {SIGMA_CONSISTENT:g}: consistent")]
+    handles += [Patch(color=colour, label=f"row label: {verdict}") for verdict, colour in VERDICT_COLOUR.items()]
+    fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=7, frameon=False)
     path = out / "scorecard.png"
     fig.savefig(path, dpi=100)
     return path
 
 
-def cost_figure(c: Comparison, out: Path) -> Path:
-    """Relative standard error of the steady response against the DEM's work (grains x steps x seeds)."""
-    fig = Figure(figsize=(6.5, 4.2), layout="constrained")
-    ax = fig.subplots()
+def noise_rows(c: Comparison, names: dict) -> pd.DataFrame:
+    """The DEM's relative standard error of each scored observable per drive (the scorecard's DEM value and
+    error; the steady response's when there is no scorecard), with the drive's work."""
+    sc, rows = c.scorecard.rows, []
     for dc in c.drives:
         g = dc.dem
         st = g.steady[g.response]
-        if np.isfinite(st["stderr"]) and st["value"]:
-            ax.plot(g.spec.cost, st["stderr"] / abs(st["value"]), "o",
-                    label=f"{g.label.split('/')[-2]}/{g.label.split('/')[-1]} ({st['method']})")
-    ax.set(xscale="log", yscale="log", xlabel="grains x steps (x seeds)",
-           ylabel="relative standard error of the steady response", title="DEM cost vs noise")
-    ax.legend(fontsize=7)
+        values = {f"{g.response}_inf": (st["value"], st["stderr"])}
+        if len(sc):
+            values.update({r.observable: (r.dem, r.dem_err)
+                           for r in sc[sc.drive == dc.label].drop_duplicates("observable").itertuples()})
+        for observable, (v, e) in values.items():
+            if v and np.isfinite(v) and np.isfinite(e) and e > 0:
+                rows.append({"drive": names.get(dc.label, dc.label), "observable": observable, "cost": g.spec.cost,
+                             "seeds": len(g.spec.folders), "percent": 100 * e / abs(v)})
+    return pd.DataFrame(rows, columns=["drive", "observable", "cost", "seeds", "percent"])
+
+
+def cost_figure(c: Comparison, out: Path) -> Path:
+    """The DEM's noise: relative standard error of each observable per drive.  Against the DEM's work
+    (grains x steps x seeds) when the drives span at least three costs; else a labelled dot plot, each
+    drive's cost beside it (one cost: in the title)."""
+    rows = noise_rows(c, display_labels(c))
+    costs = sorted(rows.cost.unique())
+    scatter = len(costs) >= 3
+    fig = Figure(figsize=(8, 4.6) if scatter else (8, 0.3 * len(rows) + 2.0), layout="constrained")
+    ax = fig.subplots()
+    markers = {o: "os^Dv<>"[k % 7] for k, o in enumerate(dict.fromkeys(rows.observable))}
+    if rows.empty:
+        ax.text(0.5, 0.5, "no DEM value with a standard error", ha="center", va="center", transform=ax.transAxes)
+        ax.set_axis_off()
+    elif scatter:
+        drives = list(dict.fromkeys(rows.drive))
+        colour = {d: colormaps["Blues"](0.95 - 0.5 * k / max(1, len(drives) - 1)) for k, d in enumerate(drives)}
+        for r in rows.itertuples():
+            ax.plot(r.cost, r.percent, markers[r.observable], color=colour[r.drive], ms=7)
+        handles = [Line2D([], [], color="k", marker=m, ls="none", label=o) for o, m in markers.items()]
+        handles += [Patch(color=colour[d], label=d) for d in drives]
+        fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=7, frameon=False)
+        ax.set(xscale="log", yscale="log", xlabel="DEM work: grains x steps x seeds",
+               ylabel="relative standard error [%]")
+        suptitle(fig, "DEM cost vs noise: relative standard error of each observable against the DEM's work", 11)
+    else:
+        y = np.arange(len(rows))
+        for k, r in enumerate(rows.itertuples()):
+            ax.plot(r.percent, k, markers[r.observable], color=DEM_COLOUR, ms=7)
+            ax.annotate(f"{r.percent:.2g} %", (r.percent, k), xytext=(6, 0), textcoords="offset points",
+                        va="center", fontsize=7)
+        ax.set_yticks(y, [f"{r.drive}, {r.observable}" for r in rows.itertuples()], fontsize=8)
+        ax.set_ylim(len(rows) - 0.5, -0.5)
+        for k in np.flatnonzero(rows.drive.to_numpy()[1:] != rows.drive.to_numpy()[:-1]):
+            ax.axhline(k + 0.5, color="0.8", lw=0.8)
+        if rows.percent.max() > 10 * rows.percent.min():
+            ax.set_xscale("log")
+            plain_log(ax.xaxis)
+        if ax.get_xscale() == "log":
+            ax.set_xlim(rows.percent.min() / 1.6, rows.percent.max() * 3)
+        else:
+            ax.set_xlim(0, rows.percent.max() * 1.25)
+        ax.set_xlabel("relative standard error of the DEM value [%]")
+        ax.grid(axis="x", color="0.92")
+        if len(costs) == 1:
+            seeds = "/".join(str(s) for s in sorted(rows.seeds.unique()))
+            note = (f"every drive cost the same, {costs[0]:.2g} grains x steps x seeds ({seeds} "
+                    f"seed{'' if seeds == '1' else 's'}): the noise differs by observable, not by work")
+        else:
+            note = "the drives span only two costs, too few for a trend; each drive's work is on the right"
+            for d, g in rows.groupby("drive", sort=False):
+                first = int(np.flatnonzero(rows.drive.to_numpy() == d)[0])
+                ax.annotate(f"{g.cost.iloc[0]:.2g} grain-steps, {g.seeds.iloc[0]} seed"
+                            + ("" if g.seeds.iloc[0] == 1 else "s"),
+                            (1.01, first), xycoords=("axes fraction", "data"), va="center", fontsize=7,
+                            annotation_clip=False)
+        suptitle(fig, f"DEM noise per observable: {note}", 10)
     path = out / "cost_noise.png"
     fig.savefig(path, dpi=100)
     return path
@@ -331,14 +513,14 @@ def verdict_html(c: Comparison) -> str:
 
 
 def scorecard_html(c: Comparison) -> str:
-    rows = []
+    rows, names = [], display_labels(c)
     for r in c.scorecard.rows.itertuples():
         verdict = f"<b style='color:{VERDICT_COLOUR[r.verdict]}'>{html.escape(r.verdict)}</b>"
         if r.note:
             verdict += f"<br><small>{html.escape(r.note.removeprefix('not scored: '))}</small>"
         model = html.escape(r.model_label) + ("" if r.blind else " (not blind: fitted on the drives)"
                                               if not c.blind else " (not blind: fitted on this drive)")
-        rows.append([html.escape(r.drive), f"{html.escape(r.observable)} [{html.escape(r.unit)}]",
+        rows.append([html.escape(names.get(r.drive, r.drive)), f"{html.escape(r.observable)} [{html.escape(r.unit)}]",
                      fmt(r.dem, r.dem_err), model, fmt(r.predicted), fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}",
                      verdict])
     if not rows:
@@ -348,14 +530,20 @@ def scorecard_html(c: Comparison) -> str:
 
 
 def scene_html(c: Comparison) -> str:
-    rows = [[html.escape(r.drive), f"{html.escape(r.check)} [{html.escape(r.unit)}]", fmt(r.value, r.err),
-             html.escape(r.target), html.escape(r.verdict), html.escape(r.how)] for r in c.scorecard.scene.itertuples()]
+    names = display_labels(c)
+    rows = [[html.escape(names.get(r.drive, r.drive)), f"{html.escape(r.check)} [{html.escape(r.unit)}]",
+             fmt(r.value, r.err), html.escape(r.target), html.escape(r.verdict), html.escape(r.how)]
+            for r in c.scorecard.scene.itertuples()]
     return _table(["drive", "check [unit]", "value ± error", "target", "verdict", "error from"], rows)
 
 
 def conclusions(c: Comparison) -> list[str]:
     """Sentences written from the scorecard's numbers."""
-    rows, out = c.scorecard.rows, []
+    rows, out, names = c.scorecard.rows, [], display_labels(c)
+
+    def name(label):
+        return html.escape(names.get(label, label))
+
     if c.failure:
         return [f"The mu(I) calibration failed: {html.escape(c.failure)}. Nothing was predicted or scored with it."]
     if not c.blind:
@@ -363,7 +551,7 @@ def conclusions(c: Comparison) -> list[str]:
                    "they are compared with, so no row counts as support for a model.")
     for dc in c.drives:
         if dc.base:
-            out.append(f"{html.escape(dc.label)}: {html.escape(dc.base)}; its layer rows, and every row of the "
+            out.append(f"{name(dc.label)}: {html.escape(dc.base)}; its layer rows, and every row of the "
                        "half-space model, are not scored.")
     if rows.empty:  # every drive's prediction was refused or failed: each drive's note says why
         return out + ["No drive has a scored continuum prediction (each drive's section says why)."]
@@ -373,7 +561,7 @@ def conclusions(c: Comparison) -> list[str]:
         bad = g[g.verdict != "consistent"]
         text = f"<b>{html.escape(g.model_label.iloc[0])}</b>: {len(ok)} of {len(g)} predictions within 2 sigma"
         if len(bad):
-            worst = ", ".join(f"{html.escape(r.observable)} of {html.escape(r.drive.split('/')[-1])} "
+            worst = ", ".join(f"{html.escape(r.observable)} of {name(r.drive)} "
                               f"({(r.predicted / r.dem - 1) * 100:+.0f} %, {r.sigma:+.1f} sigma)"
                               for r in bad.itertuples() if r.dem)
             text += f"; it fails on {worst}"
@@ -381,14 +569,14 @@ def conclusions(c: Comparison) -> list[str]:
     shared = tally(rows)
     if len(shared) > 1:
         out.append(f"Ranked over the {int(shared.n.iloc[0])} scored blind row(s) every model has: "
-                   + "; ".join(f"{html.escape(t.model)} {t.consistent} of {t.n} consistent (median |sigma| "
+                   + "; ".join(f"{html.escape(t.model)} {int(t.consistent)} of {int(t.n)} consistent (median |sigma| "
                                f"{t.median_abs_sigma:.1f})" for t in shared.itertuples()) + ".")
     fl = c.fluidity
     if fl is not None:
         lo, hi = fl.ci95
         text = (f"The nonlocal amplitude A = {fmt(fl.A, fl.err)} (95 % interval [{lo:.3g}, {hi:.3g}], {fl.how}) was fitted "
-                f"on the shape of the steady creep profile of {html.escape(fl.drive)} ({fl.points} points, one per d); its "
-                "rows for that drive are not blind, every other NGF row is.")
+                f"on the shape of the steady creep profile of {name(fl.drive)} ({int(fl.points)} points, one per d); "
+                "its rows for that drive are not blind, every other NGF row is.")
         if fl.at_bound:
             text += " The fit ran into its search range: that profile does not determine A, and the NGF rows test little."
         out.append(text)
@@ -397,7 +585,7 @@ def conclusions(c: Comparison) -> list[str]:
     if len(late):
         out.append("Over the DEM's final quarter some models are still more than "
                    f"{MODEL_UNSTEADY:.0%} from their steady state: " + ", ".join(
-                       f"{html.escape(r.model)} on {html.escape(r.drive)} at {r.model_at_end:.3g} "
+                       f"{html.escape(r.model)} on {name(r.drive)} at {r.model_at_end:.3g} "
                        f"({(r.model_at_end / r.predicted - 1) * 100:+.0f} % of its steady {r.predicted:.3g})"
                        for r in late.itertuples()) + ": the record is shorter than those models' time scale, so "
                    "their steady rows there are not scored.")
@@ -407,19 +595,21 @@ def conclusions(c: Comparison) -> list[str]:
                    f"{fmt(creep.dem.mean(), creep.dem_err.mean())} d, which local mu(I) cannot have (it is rigid there).")
     scene = c.scorecard.scene
     for r in scene[scene.verdict.isin(["off", "slips"])].itertuples() if len(scene) else []:
-        out.append(f"Scene check off: {html.escape(r.check)} = {fmt(r.value, r.err)} for {html.escape(r.drive)} "
+        out.append(f"Scene check off: {html.escape(r.check)} = {fmt(r.value, r.err)} for {name(r.drive)} "
                    f"(target {html.escape(r.target)}); differences in that drive may be the scene's, not the rheology's.")
     if len(scene):
         slips = scene[scene.check == "slip at the plate"]
-        out.append(f"The plate slips by {slips.value.min():.1%} to {slips.value.max():.1%} over the drives; the "
+        lo, hi = f"{slips.value.min() * 100:.1f} %", f"{slips.value.max() * 100:.1f} %"
+        out.append(f"The plate slips by {lo if lo == hi else f'{lo} to {hi}'} over the drive(s); the "
                    "elastic start (a few shear-wave transits over the bed, shaded on the drive figures) is not "
                    "compared, since the continuum is rigid.")
     return out
 
 
 HOW_TO_READ = {
-    "scorecard": "Each bar is one scorecard row: how many combined standard errors the DEM lies from the prediction. "
-                 "Inside the grey band the prediction is consistent with the DEM.",
+    "scorecard": "Each bar is one scorecard row, in its model's colour: how many combined standard errors the DEM "
+                 "lies from the prediction. Inside the grey band the prediction is consistent with the DEM; each row's "
+                 "label has its verdict's colour (green consistent, red disagrees, grey not scored).",
     "drive": "Top left: the free response (u_w under an imposed stress, mu_w under an imposed speed), the DEM as a running "
              "mean with its band over seeds, each model as a line with its 95 % band from the calibration's uncertainty "
              "(linearised). Top right: the layer thickness delta_u on log axes "
@@ -435,9 +625,13 @@ HOW_TO_READ = {
                    "(dotted). Blind comparison: the plane-shear points it was measured on (squares) and the drives' "
                    "steady (mu, I) pairs, one per d of depth away from the walls, with their errors, as a test of the "
                    "law; in-drive fit: the pairs and the fit through them.",
-    "cost_noise": "What each grain-step buys: the relative standard error of each drive's steady response against the "
-                  "DEM's work.",
+    "cost_noise": "How noisy the DEM is: the relative standard error of each scored DEM value (error / |value|), per "
+                  "drive and observable. When the drives span three or more costs, against the DEM's work (grains x "
+                  "steps x seeds); otherwise as dots, with the drives' work written beside them.",
 }
+FIGURE_TITLES = {"scorecard": "Scorecard", "calibration": "mu(I) calibration", "cost_noise": "DEM noise and cost",
+                 "drive": "Free response and steady velocity", "profiles": "Steady-window profiles",
+                 "transient": "Transient profiles", "fluidity": "Steady fluidity"}
 
 
 def write_report(c: Comparison, out_dir) -> dict:
@@ -448,33 +642,37 @@ def write_report(c: Comparison, out_dir) -> dict:
     (out / "metrics.json").write_text(json.dumps(m, indent=2))
     c.pairs.to_csv(out / "calibration_pairs.csv", index=False)
     c.scorecard.rows.to_csv(out / "scorecard.csv", index=False)
-    figs = [("scorecard", sigma_figure(c, out))] if len(c.scorecard.rows) else []
-    figs += [("calibration", calibration_figure(c, out)), ("cost_noise", cost_figure(c, out))]
+    names = display_labels(c)
+    figs = [("scorecard", sigma_figure(c, out), "")] if len(c.scorecard.rows) else []
+    figs += [("calibration", calibration_figure(c, out), ""), ("cost_noise", cost_figure(c, out), "")]
     for dc in c.drives:
-        g, stem = dc.dem, slug(dc.label)
+        g, stem, name = dc.dem, slug(dc.label), names[dc.label]
         g.series.to_csv(out / f"series_{stem}.csv", index=False)
         g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False)
         g.delta.assign(delta_mu=dc.delta_mu).to_csv(out / f"delta_{stem}.csv", index=False)
         for p in dc.predictions:
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{p.model}.csv", index=False)
         if dc.predictions:
-            figs += [("drive", drive_figure(dc, c.scorecard.bands, out)), ("profiles", profiles_figure(dc, c.material, out)),
-                     ("transient", transient_figure(dc, c.material, out)),
-                     ("fluidity", fluidity_figure(dc, c.material, out))]
+            figs += [("drive", drive_figure(dc, c.scorecard.bands, out, name), name),
+                     ("profiles", profiles_figure(dc, c.material, out, name), name),
+                     ("transient", transient_figure(dc, c.material, out, name), name),
+                     ("fluidity", fluidity_figure(dc, c.material, out, name), name)]
     ch = c.checks
     ch.width.to_csv(out / "width_check.csv", index=False)
     ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False)
-    drive_rows = [[html.escape(label), d["kind"], fmt(d["imposed"]), html.escape(d["imposed_unit"]), str(d["seeds"]),
-                   fmt(d["u_w_inf"]["dem"], d["u_w_inf"]["dem_err"]), fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]),
-                   fmt(d["t_steady"]), str(d["frames"]), str(d["dropped_frames"]),
-                   "yes" if d["base_confined"] else "no"]
+    drive_rows = [[html.escape(names.get(label, label)), d["kind"], fmt(d["imposed"]), html.escape(d["imposed_unit"]),
+                   fmt_cell(d["seeds"]), fmt(d["u_w_inf"]["dem"], d["u_w_inf"]["dem_err"]),
+                   fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]), fmt(d["t_steady"]), fmt_cell(d["frames"]),
+                   fmt_cell(d["dropped_frames"]), "yes" if d["base_confined"] else "no"]
                   for label, d in m["drives"].items()]
-    cross_rows = [[html.escape(q), f"{v:.1%}"] for q, v in ch.crosscheck_bulk.items()]
+    cross_rows = [[html.escape(q), f"{v * 100:.1f} %"] for q, v in ch.crosscheck_bulk.items()]
     plateau = ch.plateau
-    plateau_rows = [[html.escape(f)] + [f"{v:.0%}" for v in plateau.loc[f]] for f in plateau.index]
-    figures = "".join(f"<h3>{html.escape(path.stem)}</h3><p class='how'>{html.escape(HOW_TO_READ[kind])}</p>"
-                      f"<p><img src='{path.name}' alt='{html.escape(kind)} figure: {html.escape(path.stem)}'></p>"
-                      for kind, path in figs)
+    plateau_rows = [[html.escape(f)] + [f"{v * 100:.0f} %" for v in plateau.loc[f]] for f in plateau.index]
+    figures = "".join(f"<h3>{html.escape(FIGURE_TITLES[kind] + (f': {name}' if name else ''))}</h3>"
+                      f"<p class='how'>{html.escape(HOW_TO_READ[kind])}</p>"
+                      f"<p><img src='{path.name}' alt='{html.escape(FIGURE_TITLES[kind])} figure"
+                      f"{html.escape(f' of {name}' if name else '')}'></p>"
+                      for kind, path, name in figs)
     prov = m["provenance"]
     body = [
         "<h1>granstokes: continuum vs DEM</h1>", verdict_html(c),
@@ -493,7 +691,7 @@ def write_report(c: Comparison, out_dir) -> dict:
         "<h2>Definitions</h2>", _table(["name", "unit", "definition"],
                                        [[html.escape(k), html.escape(u), html.escape(d)]
                                         for k, (u, d) in DEFINITIONS.items()]),
-        f"<h2>Checks of the coarse-graining ({html.escape(ch.drive)})</h2>",
+        f"<h2>Checks of the coarse-graining ({html.escape(names.get(ch.drive, ch.drive))})</h2>",
         "<p>Width check: fraction of heights where a field plateaus (relative change within 5 %) going from the next "
         "smaller kernel width to this one, over the last 30 % of the run (width_check.csv):</p>",
         _table(["field"] + [f"w = {w:g} d" for w in plateau.columns], plateau_rows),
@@ -501,7 +699,7 @@ def write_report(c: Comparison, out_dir) -> dict:
         "(lammps_crosscheck.csv). They differ because LAMMPS bins grain centres (no kernel), puts the virial at grain "
         "centres (no stress line) and has no wall term; p_mop and tau_mop are method-of-planes values.</p>",
         _table(["quantity", "relative difference"], cross_rows),
-        "<h2>Provenance</h2>", _table(["item", "value"], [[html.escape(k), html.escape(str(v))]
+        "<h2>Provenance</h2>", _table(["item", "value"], [[html.escape(k), fmt_cell(v)]
                                                          for k, v in prov.items() if k != "inputs"]),
     ]
     (out / "index.html").write_text(page("granstokes compare", "".join(body)))

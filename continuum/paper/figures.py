@@ -91,7 +91,9 @@ class Sheet:
     def __init__(self, name: str, title: str, nrows: int, ncols: int, panel=(4.4, 3.5)):
         self.name, self.rows, self.frames = name, [], {}
         self.fig = Figure(figsize=(panel[0] * ncols, panel[1] * nrows + 0.5), layout="constrained")
-        self.fig.suptitle(textwrap.fill(" ".join(title.split()), int(12 * panel[0] * ncols)), fontsize=10)
+        width = panel[0] * ncols  # inches; about 11 characters of the 10 pt title per inch
+        self.fig.suptitle(textwrap.fill(" ".join(title.split()) + " [dimensionless tilde variables]", int(11 * width)),
+                          fontsize=10)
         self.axes = self.fig.subplots(nrows, ncols, squeeze=False)
 
     def frame(self, ax, panel: str, x: str, y: str, title: str = "", log: str = "", case: str = "all", **limits):

@@ -20,7 +20,14 @@ from granstokes.provenance import provenance
 
 
 def table_html(df: pd.DataFrame, caption: str) -> str:
-    return f"<p><b>{html.escape(caption)}</b></p>" + df.to_html(index=False, float_format=lambda v: f"{v:.6g}")
+    return f"<p><b>{html.escape(caption)}</b></p>" + df.to_html(index=False, justify="left",
+                                                                 float_format=lambda v: f"{v:.6g}")
+
+
+def figure_heading(name: str) -> str:
+    """A figure's heading from its name: fig4_steady_wall_speed -> Fig. 4: steady wall speed."""
+    number, _, rest = name.partition("_")
+    return f"Fig. {number.removeprefix('fig')}: {rest.replace('_', ' ')}"
 
 
 def steady_table() -> pd.DataFrame:
@@ -86,8 +93,11 @@ def write_continuum_report(out_dir) -> Path:
             "<h2>Where the numerics disagree with printed numbers</h2>", table_html(notes, "Printed vs computed"),
             "<h2>Steady wall speed</h2>", table_html(steady, "u~_w^inf: exact quadrature vs the paper's approximations"),
             "<h2>The paper's figures, regenerated</h2>"]
-    for name, png in sorted(pngs.items()):
-        body.append(f"<h3>{html.escape(name)}</h3><img src='{figs_dir.name}/{png.name}' alt='{html.escape(name)}'>")
+    body.append("<p>Every figure is in the paper's dimensionless tilde variables (above); each PNG has its data "
+                "beside it as CSV.</p>")
+    for name, png in sorted(pngs.items(), key=lambda kv: int(kv[0].partition("_")[0].removeprefix("fig"))):
+        body.append(f"<h3>{html.escape(figure_heading(name))}</h3>"
+                    f"<img src='{figs_dir.name}/{png.name}' alt='{html.escape(figure_heading(name))}'>")
     index = out / "index.html"
     index.write_text(page("granstokes continuum", "".join(body)))
     (out / "continuum_report.json").write_text(json.dumps({"figures": {k: f"{figs_dir.name}/{v.name}" for k, v in pngs.items()},

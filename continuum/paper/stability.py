@@ -45,7 +45,7 @@ from ..velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 CLASSES = ("converged", "inaccurate", "oscillating", "constraint-violating", "out of bounds", "blown up")
 COLORS = {"converged": "#2ca02c", "inaccurate": "#ffbf00", "oscillating": "#9467bd",
-          "constraint-violating": "#17becf", "out of bounds": "#ff7f0e", "blown up": "#d62728"}
+          "constraint-violating": "#17becf", "out of bounds": "#8c564b", "blown up": "#d62728"}
 MU_W_TILDE = (0.01, 0.03, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99)
 U_W = (0.01, 0.1, 1.0, 5.0, 20.0)
 T_END = 1.0
@@ -380,7 +380,7 @@ def write_stability(out_dir, calibrated: Material | None = None) -> dict:
     table = stability_table(fr)
     table.to_csv(out / "stability.csv", index=False)
     maps = plot_maps(table, out)
-    materials = {"paper's beads (tan 21, tan 33, I0_dem 0.279)": paper}
+    materials = {"paper's beads (tan 21°, tan 33°, I0_dem 0.279)": paper}
     if calibrated is not None:
         m = calibrated
         materials[f"DEM-calibrated ({m.mu_s:.3f}, {m.mu_d:.3f}, I0_{m.I_convention} {m.I0:.3g})"] = m

@@ -2,28 +2,47 @@
 (every link and image there, alt text, no raw dict or nan in a cell), and runs named alike."""
 import json
 import math
+import re
 import shutil
 from html.parser import HTMLParser
 from pathlib import Path
 
+import pandas as pd
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.text import Text
 
 from compare.comparison import build
-from compare.report import write_report
+from compare.report import display_label, fmt, fmt_band, nearest_frame, suptitle, write_report
 from continuum.paper.report import write_continuum_report
 from granstokes.cli import main
 from granstokes.demo import write_index
 
 pytestmark = pytest.mark.slow
 SCORECARD_KEYS = {"drive", "observable", "unit", "dem", "dem_err", "model", "predicted", "band", "sigma", "verdict"}
+#: a decimal number as a page prints it (not part of a version string such as 2025.7.22 or a word)
+DECIMAL = re.compile(r"(?<![\w.])[-+]?(\d*\.\d+)(?:e[-+]?\d+)?(?![\w.]*\d)", re.IGNORECASE)
+#: table columns and provenance items that are counts
+COUNTS = {"seeds", "frames", "dropped frames", "cpus", "points"}
+#: a count written as a float in prose ("2.0 seeds", "seeds 2.0")
+COUNT_AS_FLOAT = re.compile(r"\b\d+\.0\s+(seeds?|frames?|points?|replicates|drives?|rows?)\b"
+                            r"|\b(seeds?|frames?|points?|cpus)\s*[:=]?\s*\d+\.\d+", re.IGNORECASE)
+
+
+def significant_digits(number: str) -> int:
+    """Significant digits of a printed decimal (leading zeros are not)."""
+    return len(number.replace(".", "").lstrip("0"))
 
 
 class Page(HTMLParser):
-    """Links, images (with their alt text) and table cells of one HTML page."""
+    """Links, images (with their alt text), table cells (and each table's header and rows) and the text of
+    paragraphs and list items."""
 
     def __init__(self):
         super().__init__()
-        self.links, self.images, self.cells, self._cell = [], [], [], None
+        self.links, self.images, self.cells, self.tables, self.texts = [], [], [], [], []
+        self._row = self._cell = self._text = None
 
     def handle_starttag(self, tag, attrs):
         a = dict(attrs)
@@ -31,17 +50,52 @@ class Page(HTMLParser):
             self.images.append(a)
         if "href" in a:
             self.links.append(a["href"])
+        if tag == "table":
+            self.tables.append({"header": [], "rows": []})
+        if tag == "tr":
+            self._row = []
         if tag in ("td", "th"):
             self._cell = []
+        if tag in ("p", "li"):
+            self._text = []
 
     def handle_data(self, data):
-        if self._cell is not None:
-            self._cell.append(data)
+        for part in (self._cell, self._text):
+            if part is not None:
+                part.append(data)
 
     def handle_endtag(self, tag):
         if tag in ("td", "th") and self._cell is not None:
-            self.cells.append("".join(self._cell).strip())
+            cell = "".join(self._cell).strip()
+            self.cells.append(cell)
+            if self._row is not None:
+                self._row.append((tag, cell))
             self._cell = None
+        if tag == "tr" and self._row is not None and self.tables:
+            cells = [c for _, c in self._row]
+            if all(t == "th" for t, _ in self._row):
+                self.tables[-1]["header"] = cells
+            else:
+                self.tables[-1]["rows"].append(cells)
+            self._row = None
+        if tag in ("p", "li") and self._text is not None:
+            self.texts.append(" ".join("".join(self._text).split()))
+            self._text = None
+
+
+def check_numbers(path: Path, page: Page):
+    """No number printed to more than 6 significant digits in a cell or paragraph; counts as integers."""
+    for text in page.cells + page.texts:
+        for number in DECIMAL.findall(text):
+            assert significant_digits(number) <= 6, f"{path}: {number} printed to too many digits in {text!r}"
+        assert not COUNT_AS_FLOAT.search(text), f"{path}: a count printed as a float in {text!r}"
+    for table in page.tables:
+        for row in table["rows"]:
+            counts = {h: v for h, v in zip(table["header"], row, strict=False) if h in COUNTS}
+            if table["header"] == ["item", "value"] and row[0] in COUNTS:
+                counts[row[0]] = row[1]
+            for name, value in counts.items():
+                assert re.fullmatch(r"\d+", value), f"{path}: the count {name} printed as {value!r}"
 
 
 def check_page(path: Path) -> Page:
@@ -52,6 +106,7 @@ def check_page(path: Path) -> Page:
     assert all(img.get("alt") for img in page.images), f"{path}: an image without alt text"
     for cell in page.cells:
         assert not cell.startswith("{") and "nan" not in cell.lower().split(), f"{path}: raw cell {cell!r}"
+    check_numbers(path, page)
     return page
 
 
@@ -106,3 +161,22 @@ def test_runs_named_alike_get_their_own_sections(smoke_run, smoke_calibration, t
     assert main(["compare", str(tmp_path / "x" / "r"), str(tmp_path / "x" / "r"), "--out", str(tmp_path / "r2"),
                  "--calibration", str(smoke_calibration)]) == 2
     assert "distinct run folders" in capsys.readouterr().err and not (tmp_path / "r2").exists()
+
+
+def test_numbers_labels_and_frames_a_reader_trusts():
+    assert fmt(1.809861200000000059, 3.4e-17) == "1.80986 ± 3e-17"  # an imposed value: 6 digits at most
+    assert fmt(10.451, 0.098) == "10.451 ± 0.098" and fmt(-0.001, 0.24) == "0.00 ± 0.24"
+    assert fmt_band((1.8098612, 1.8098613), 3e-17) == "[1.80986, 1.80986]"
+    labels = ["/tmp/gs-smoke/speed", "/tmp/x/r/speed", "/tmp/y/r/speed"]
+    assert [display_label(x, labels) for x in labels] == ["gs-smoke: speed", "x/r: speed", "y/r: speed"]
+    # two output times a rounding apart are one profile, never two joined by a line
+    t_end = 9.99
+    frames = pd.DataFrame({"t": [1.0] * 3 + [t_end] * 3 + [t_end * (1 + 1e-15)] * 3, "depth": [0, 1, 2] * 3})
+    assert len(nearest_frame(frames, t_end)) == 3 and len(nearest_frame(frames, 1.2)) == 3
+    # a long drive label on the narrowest figure: the title wraps inside it
+    fig = Figure(figsize=(6.5, 5))
+    suptitle(fig, "/a/very/long/run/folder/spheres-3d-long-name: stress – transient profiles at snapshot times "
+             "t [sqrt(d/g)] (DEM units, I in the DEM convention); shear-wave transit 0.0685, compared from 0.206")
+    title = next(t for t in fig.findobj(Text) if t.get_text() == fig.get_suptitle())
+    extent = title.get_window_extent(FigureCanvasAgg(fig).get_renderer())
+    assert fig.get_suptitle().count("\n") >= 1 and 0 <= extent.x0 and extent.x1 <= fig.bbox.width

@@ -3,9 +3,11 @@ import json
 
 import numpy as np
 import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.text import Text
 
 from continuum.closed_forms import SELF_SIMILAR_DELTA
-from continuum.paper.figures import FRICTION, SPEED_CASES, T_MIN, paper_figures
+from continuum.paper.figures import FIGURES, FRICTION, SPEED_CASES, T_MIN, Sheet, paper_figures
 from continuum.steady import mu_w_for_speed, steady_delta
 from tests.continuum import reference
 
@@ -50,3 +52,12 @@ def test_paper_figures(tmp_path):
     fig1 = pd.read_csv(tmp_path / "fig1_shear_stress.csv")
     delta = fig1[(fig1.panel == "a_bottom") & (fig1.curve == "numerics")].iloc[0]
     assert abs(delta.y / (FRICTION.dmu * np.sqrt(delta.x)) / SELF_SIMILAR_DELTA - 1) < 1e-2
+
+
+def test_titles_fit_their_figures():
+    for draw, *layout in FIGURES:
+        sheet = Sheet(draw.__name__, draw.__doc__, *layout)
+        title = sheet.fig.get_suptitle()
+        text = next(t for t in sheet.fig.findobj(Text) if t.get_text() == title)
+        extent = text.get_window_extent(FigureCanvasAgg(sheet.fig).get_renderer())
+        assert extent.x0 >= 0 and extent.x1 <= sheet.fig.bbox.width, f"{draw.__name__}: {title!r} is cut"
