@@ -6,6 +6,7 @@ from __future__ import annotations
 import html
 import json
 import math
+import re
 import textwrap
 from pathlib import Path, PurePath
 
@@ -43,7 +44,8 @@ RESPONSE_LABEL = {"u_w": "u_w [sqrt(g d)]", "mu_w": "mu_w = <tau_w>/<p>"}
 
 
 def slug(label: str) -> str:
-    return "".join(c if c.isalnum() else "_" for c in label).strip("_")
+    """A file-name stem of a label: letters and digits, every other run of characters one underscore."""
+    return re.sub(r"[^0-9A-Za-z]+", "_", label).strip("_")
 
 
 def display_label(label: str, labels=()) -> str:
@@ -202,7 +204,7 @@ def drive_figure(dc: DriveComparison, bands: dict, out: Path, name: str | None =
     imposed = f"tau_w = {spec.value:.4g} rho_p g d" if spec.kind == "stress" else f"u_w = {spec.value:.4g} sqrt(g d)"
     suptitle(fig, f"{name or display_label(g.label)} – imposed {spec.kind} ({imposed}), p_w = {spec.p_w:g} rho_p g d; "
              "DEM units")
-    path = out / f"drive_{slug(g.label)}.png"
+    path = out / f"drive_{slug(name or g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
 
@@ -237,7 +239,7 @@ def profiles_figure(dc: DriveComparison, material, out: Path, name: str | None =
     figure_legend(fig, axes[:1], ncols=3)
     suptitle(fig, f"{name or display_label(g.label)} – steady-window profiles (Lucy kernel, width in metrics.json); "
              "DEM units, I in the DEM convention")
-    path = out / f"profiles_{slug(g.label)}.png"
+    path = out / f"profiles_{slug(name or g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
 
@@ -271,7 +273,7 @@ def transient_figure(dc: DriveComparison, material, out: Path, name: str | None 
     suptitle(fig, f"{name or display_label(g.label)} – transient profiles at snapshot times t [sqrt(d/g)] (DEM units, "
              f"I in the DEM convention); shear-wave transit {spec.transit_time:.3g}, compared from "
              f"{spec.compared_from:.3g}")
-    path = out / f"transient_{slug(g.label)}.png"
+    path = out / f"transient_{slug(name or g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
 
@@ -302,7 +304,7 @@ def fluidity_figure(dc: DriveComparison, material, out: Path, name: str | None =
     ax.set(xlabel="fluidity g = |du/dy|/mu [sqrt(g/d)]", ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
     suptitle(fig, f"{name or display_label(g.label)} – steady fluidity; DEM units")
     figure_legend(fig, [ax], ncols=2)
-    path = out / f"fluidity_{slug(g.label)}.png"
+    path = out / f"fluidity_{slug(name or g.label)}.png"
     fig.savefig(path, dpi=100)
     return path
 
@@ -646,7 +648,8 @@ def write_report(c: Comparison, out_dir) -> dict:
     figs = [("scorecard", sigma_figure(c, out), "")] if len(c.scorecard.rows) else []
     figs += [("calibration", calibration_figure(c, out), ""), ("cost_noise", cost_figure(c, out), "")]
     for dc in c.drives:
-        g, stem, name = dc.dem, slug(dc.label), names[dc.label]
+        g, name = dc.dem, names[dc.label]
+        stem = slug(name)
         g.series.to_csv(out / f"series_{stem}.csv", index=False)
         g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False)
         g.delta.assign(delta_mu=dc.delta_mu).to_csv(out / f"delta_{stem}.csv", index=False)

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 from compare.comparison import build
-from compare.report import conclusions, scorecard_html, slug, verdict_html, write_report
+from compare.report import conclusions, display_labels, scorecard_html, slug, verdict_html, write_report
 from continuum.paper.report import write_continuum_report
 from dem import config as dem_config
 from dem import layout
@@ -103,13 +103,14 @@ def write_index(comparison, out: Path, presets, clock: dict) -> Path:
     """The demo's front page: links to both reports, the scorecard, the conclusions, the main figure."""
     timing = ", ".join(f"{k} {v:.0f} s" for k, v in clock.items())
     main = next((dc for dc in comparison.drives if dc.predictions), comparison.drives[0])
+    name = display_labels(comparison)[main.label]
     body = (f"<h1>granstokes demo</h1>{verdict_html(comparison)}<ul><li><a href='compare/index.html'>continuum vs DEM "
             f"({html.escape(', '.join(presets))} presets): the full report</a></li>"
             f"<li><a href='continuum/index.html'>continuum: the paper's figures regenerated</a></li></ul>"
             f"<h2>Scorecard</h2>{scorecard_html(comparison)}<h2>Conclusions</h2><ul>"
             + "".join(f"<li>{c}</li>" for c in conclusions(comparison)) + "</ul>"
             f"<p>Wall time: {html.escape(timing)}.</p>"
-            f"<p><img src='compare/drive_{slug(main.label)}.png' alt='drive figure of {html.escape(main.label)}'></p>")
+            f"<p><img src='compare/drive_{slug(name)}.png' alt='drive figure of {html.escape(name)}'></p>")
     index = out / "index.html"
     index.write_text(page("granstokes demo", body))
     return index
