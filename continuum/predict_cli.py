@@ -7,11 +7,15 @@ DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rh
 * ``--model local --steady``: the closed-form steady state of the scene (continuum.scene); u_w_err = 0:
   exact up to rounding.
 * ``--model local --times``: the velocity form (continuum.velocity.solve_velocity) from a bed at rest,
-  regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/models.py); u_w_err = |u_N - u_N/2|/3 (second order
-  in space; the regularisation's own creep is not in it).
-* ``--model ngf``: continuum.ngf (steady: Chebyshev, u_w_err the change from n/2 points; transient:
-  from rest, u_w_err Richardson from N/2 cells).  g is given at the nodes y (for the transient,
+  regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/models.py); errors
+  |x_N - x_N/2|/3 (second order in space; the regularisation's own creep is not in it).
+* ``--model ngf``: continuum.ngf (steady: Chebyshev, errors the change from n/2 points; transient:
+  from rest, errors Richardson from N/2 cells).  g is given at the nodes y (for the transient,
   ln g interpolated linearly from the cell centres).
+
+Every output gives the plate's speed and friction with their errors (u_w_err, mu_w_err; the imposed one's
+is 0) and the layer depth in d: the steady state's delta_s (where tau/p falls to mu_s), a transient's
+delta_u at each time (where u falls to DELTA_U_FRACTION of u_w, the depth compare/ measures in the DEM).
 
 Bad input raises ValueError naming the parameter and its range (the root parser, granstokes.cli, prints
 one line and exits 2).  The solvers are imported when a prediction runs, not when the parser is built
@@ -28,6 +32,12 @@ import numpy as np
 from granstokes.validate import finite, require
 
 MODELS = ("local", "ngf")
+BOUNDARIES = ("neumann", "dirichlet")
+#: delta_u: the depth below the plate where u falls to this fraction of u_w (compare.models.U_FRACTION)
+DELTA_U_FRACTION = 0.05
+#: second order in space: the error of the N-cell solution is |x_N - x_N/2| / (2^2 - 1)
+RICHARDSON = 3
+STEADY_LAYER = "delta_s [d]: the steady yield depth, where tau/p falls to mu_s"
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -39,7 +49,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--model", required=True, choices=MODELS, help="local mu(I) or ngf (nonlocal granular fluidity)")
     p.add_argument("--mu-s", type=float, required=True, help="static friction mu_s > 0")
     p.add_argument("--mu-d", type=float, required=True, help="dynamic friction mu_d > mu_s")
-    p.add_argument("--I0", type=float, required=True, help="I0 > 0 of the Jop law, DEM convention (I = |du/dy| d/sqrt(p/rho_p))")
+    p.add_argument("--I0", type=float, required=True,
+                   help="I0 > 0 of the Jop law, DEM convention (I = |du/dy| d/sqrt(p/rho_p))")
     p.add_argument("--A", type=float, help="nonlocal amplitude A >= 0 (ngf only; the length is A d)")
     p.add_argument("--phi", type=float, required=True, help="solid fraction in (0, 1)")
     p.add_argument("--p-w", type=float, required=True, help="plate pressure p_w > 0 (rho_p g d)")
@@ -49,10 +60,13 @@ def register(subparsers) -> argparse.ArgumentParser:
     drive.add_argument("--u-w", type=float, help="imposed plate speed u_w > 0 (sqrt(g d))")
     when = p.add_mutually_exclusive_group(required=True)
     when.add_argument("--steady", action="store_true", help="the steady state")
-    when.add_argument("--times", type=float, nargs="+", help="output times > 0, increasing (sqrt(d/g)), from a bed at rest")
+    when.add_argument("--times", type=float, nargs="+",
+                      help="output times > 0, increasing (sqrt(d/g)), from a bed at rest")
     p.add_argument("--plate-mass", type=float, default=0.0, help="plate mass per unit area >= 0 (rho_p d), default 0")
-    p.add_argument("--boundary", default="neumann", help="ngf fluidity boundary condition: neumann (dg/dy = 0, default) or dirichlet (g = g_loc)")
-    p.add_argument("--t0-hat", type=float, default=1.0, help="ngf transient relaxation time in local inertial times d sqrt(rho_p/p), default 1")
+    p.add_argument("--boundary", default="neumann", choices=BOUNDARIES,
+                   help="ngf fluidity boundary condition: neumann (dg/dy = 0, default) or dirichlet (g = g_loc)")
+    p.add_argument("--t0-hat", type=float, default=1.0,
+                   help="ngf transient relaxation time in local inertial times d sqrt(rho_p/p), default 1")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run_predict)
     return p
@@ -85,6 +99,24 @@ def _drive(args, mu_top: float, top_name: str = "mu_d") -> dict:
     return {"u_w": float(args.u_w)}
 
 
+def _delta_u(y, u) -> np.ndarray:
+    """delta_u at each time: the first depth where u falls below DELTA_U_FRACTION of u_w (u[:, 0])."""
+    from .crossing import crossing_depth
+
+    u = np.asarray(u)
+    return np.array([crossing_depth(y, uk / uk[0], DELTA_U_FRACTION) if uk[0] > 0 else np.nan for uk in u])
+
+
+def _fine_and_coarse(solve, numerics) -> tuple[tuple, dict]:
+    """``solve(numerics)`` -> (y, u, mu_w) on N and N/2 cells: the fine solution and the errors of u_w, mu_w
+    and delta_u (Richardson)."""
+    fine, coarse = (solve(n) for n in (numerics, replace(numerics, n_cells=numerics.n_cells // 2)))
+    (y, u, mw), (yc, uc, mwc) = fine, coarse
+    err = {"u_w_err": np.abs(u[:, 0] - uc[:, 0]) / RICHARDSON, "mu_w_err": np.abs(mw - mwc) / RICHARDSON,
+           "delta_u_err": np.abs(_delta_u(y, u) - _delta_u(yc, uc)) / RICHARDSON}
+    return fine, err
+
+
 def _local_transient(scene, t, drive: dict):
     from .rules import YieldRule
     from .scales import Scales
@@ -93,12 +125,27 @@ def _local_transient(scene, t, drive: dict):
     m = scene.material
     sc = Scales(m, scene.p_w, drive["mu_w"]) if "mu_w" in drive else Scales.for_speed(m, scene.p_w, drive["u_w"])
     rule = YieldRule.for_layer(sc)
-    out = []
-    for numerics in (VELOCITY_NUMERICS, replace(VELOCITY_NUMERICS, n_cells=VELOCITY_NUMERICS.n_cells // 2)):
+
+    def solve(numerics):
         vel = solve_velocity(scene, t, rule=rule, initial="rest", numerics=numerics, compare_steady=False, **drive)
-        out.append((vel, vel.mu_w))
-    (fine, mw), (coarse, mw_c) = out
-    return fine.y, fine.u, mw, np.abs(fine.u[:, 0] - coarse.u[:, 0]) / 3, np.abs(mw - mw_c) / 3
+        return vel.y, vel.u, vel.mu_w
+
+    return _fine_and_coarse(solve, VELOCITY_NUMERICS)
+
+
+def _ngf_transient(scene, fluidity, t, drive: dict):
+    from .ngf import TransientNumerics, solve_transient
+
+    cells = {}
+
+    def solve(numerics):
+        tr = solve_transient(scene, fluidity, t, numerics=numerics, error_estimate=False, **drive)
+        cells[numerics.n_cells] = tr
+        return tr.y, tr.u, tr.mu_w
+
+    numerics = TransientNumerics()
+    fine, err = _fine_and_coarse(solve, numerics)
+    return fine, err, cells[numerics.n_cells]
 
 
 def _g_at_nodes(y, y_cell, g):
@@ -107,7 +154,7 @@ def _g_at_nodes(y, y_cell, g):
 
 def predict(args) -> dict:
     """The prediction as a JSON-ready dict (lists and floats)."""
-    from .ngf import NonlocalFluidity, TransientNumerics, mu_max, solve_steady, solve_transient
+    from .ngf import NonlocalFluidity, mu_max, solve_steady
     from .rules import EPS_FRACTION
     from .scales import UNITS
     from .scene import scene_steady
@@ -122,7 +169,7 @@ def predict(args) -> dict:
     else:
         require(args.A is not None, "--A", "a finite number >= 0, required with --model ngf", args.A)
         require(finite(args.A) and args.A >= 0, "--A", "a finite number >= 0", args.A)
-        require(args.boundary in ("neumann", "dirichlet"), "--boundary", "'neumann' or 'dirichlet'", args.boundary)
+        require(args.boundary in BOUNDARIES, "--boundary", f"one of {BOUNDARIES}", args.boundary)
         require(finite(args.t0_hat) and args.t0_hat > 0, "--t0-hat", "a finite number > 0", args.t0_hat)
         fluidity = NonlocalFluidity(A=args.A, boundary=args.boundary, t0_hat=args.t0_hat)
         drive = _drive(args, mu_max(m, fluidity), "mu(I_max = 10), just below mu_d")
@@ -136,25 +183,27 @@ def predict(args) -> dict:
         if args.model == "local":
             st = scene_steady(scene, **drive)
             out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": 0.0, "mu_w_err": 0.0,
-                        "delta_s": st.delta_s, "y": st.y.tolist(), "u": st.u.tolist(),
+                        "delta_s": st.delta_s, "layer": STEADY_LAYER, "y": st.y.tolist(), "u": st.u.tolist(),
                         "method": "closed form (continuum.steady) scaled with continuum.scales"})
         else:
             st = solve_steady(scene, fluidity, **drive)
             out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": st.u_w_err, "mu_w_err": st.mu_w_err,
-                        "delta_s": st.delta_s, "y": st.y.tolist(), "u": st.u.tolist(), "g": st.g.tolist(),
+                        "delta_s": st.delta_s, "layer": STEADY_LAYER, "y": st.y.tolist(), "u": st.u.tolist(),
+                        "g": st.g.tolist(),
                         "method": f"Chebyshev collocation, {st.n} intervals per piece; errors: change from n/2"})
         return out
     t = check_times(args.times, "--times")
     if args.model == "local":
-        y, u, mw, u_err, mu_err = _local_transient(scene, t, drive)
-        out["method"] = f"velocity form (continuum.velocity), eps = {EPS_FRACTION:g} U/delta_s; errors: Richardson from N/2"
+        (y, u, mw), err = _local_transient(scene, t, drive)
+        out["method"] = (f"velocity form (continuum.velocity), eps = {EPS_FRACTION:g} U/delta_s; "
+                         "errors: Richardson from N/2")
     else:
-        tr = solve_transient(scene, fluidity, t, numerics=TransientNumerics(), **drive)
-        y, u, mw, u_err, mu_err = tr.y, tr.u, tr.mu_w, tr.u_w_err, tr.mu_w_err
+        (y, u, mw), err, tr = _ngf_transient(scene, fluidity, t, drive)
         out["g"] = [_g_at_nodes(y, tr.y_cell, gk).tolist() for gk in tr.g]
         out["method"] = "finite volumes (u, ln g), scipy Radau; errors: Richardson from N/2"
     out.update({"t": t.tolist(), "u_w": u[:, 0].tolist(), "mu_w": np.asarray(mw).tolist(),
-                "u_w_err": np.asarray(u_err).tolist(), "mu_w_err": np.asarray(mu_err).tolist(),
+                "delta_u": _delta_u(y, u).tolist(), **{k: v.tolist() for k, v in err.items()},
+                "layer": f"delta_u [d]: the depth below the plate where u falls to {DELTA_U_FRACTION:g} u_w",
                 "y": np.asarray(y).tolist(), "u": np.asarray(u).tolist()})
     return out
 
@@ -167,9 +216,11 @@ def run_predict(args) -> int:
     print(f"{out['model']} model, imposed {out['imposed']} ({out['units']}; I0 {out['I_convention']})")
     if args.steady:
         print(f"steady: u_w = {out['u_w']:.8g} (+- {out['u_w_err']:.2g}), mu_w = {out['mu_w']:.8g} "
-              f"(+- {out['mu_w_err']:.2g}), delta_s = {out['delta_s']:.6g}")
+              f"(+- {out['mu_w_err']:.2g}), delta_s = {out['delta_s']:.6g} d")
     else:
-        print(f"{'t':>12} {'u_w':>14} {'u_w_err':>10} {'mu_w':>12}")
-        for row in zip(out["t"], out["u_w"], out["u_w_err"], out["mu_w"]):
-            print(f"{row[0]:12.5g} {row[1]:14.8g} {row[2]:10.2g} {row[3]:12.8g}")
+        print(f"{'t':>12} {'u_w':>14} {'u_w_err':>10} {'mu_w':>12} {'mu_w_err':>10} {'delta_u [d]':>12} "
+              f"{'delta_u_err':>11}")
+        for row in zip(*(out[k] for k in ("t", "u_w", "u_w_err", "mu_w", "mu_w_err", "delta_u", "delta_u_err"))):
+            print(f"{row[0]:12.5g} {row[1]:14.8g} {row[2]:10.2g} {row[3]:12.8g} {row[4]:10.2g} {row[5]:12.6g} "
+                  f"{row[6]:11.2g}")
     return 0

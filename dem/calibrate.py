@@ -47,9 +47,11 @@ from granstokes.validate import require
 
 from . import lammps_env, layout
 from .config import Config, parse
+from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .runner import Interrupted, RunError, _Lammps, _write_json
-from .shear import SQUEEZE_TIME, ShearPoint, mean_grain_volume, shear_script
-from .sizing import PACKING
+from .shear import (COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, mean_grain_volume,
+                    shear_script)
+from .sizing import CONTENTION, OVERHEAD, PACKING, THROUGHPUT, count, duration_text, makespan
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)
 COMMAND = "dem calibrate"
@@ -63,8 +65,6 @@ HOMOGENEITY_TOL = 0.1
 #: under the pressure control) still reaches ``strain``
 STRAIN_MARGIN = 0.03
 STRAIN_REFERENCE_I = 0.05
-#: default concurrent points: two single-rank LAMMPS processes on the 2-core machine (README)
-DEFAULT_JOBS = 2
 
 
 @dataclass(frozen=True)
@@ -88,6 +88,45 @@ class CalibrationPlan:
     def steps(self, k: int) -> int:
         p = self.points[k]
         return round(SQUEEZE_TIME / self.dt) + p.start_steps + p.measure_steps
+
+    @staticmethod
+    def key(k: int, seed: int) -> str:
+        """state.json's key of point ``k`` and ``seed``."""
+        return f"I-{k}/seed-{seed}"
+
+    @property
+    def compress_steps(self) -> int:
+        """A cell's expected compression to p: from PRE_PACKING to the material's phi at COMPRESS_RATE."""
+        phi = self.config.material.phi / PRE_PACKING[self.config.grains.dimension]
+        return round(min(COMPRESS_MAX, math.log(max(1.0, phi)) / COMPRESS_RATE) / self.dt)
+
+    def task_seconds(self, k: int) -> float:
+        """Expected LAMMPS wall time of one point and seed run alone at one rank (sizing.THROUGHPUT)."""
+        steps = self.steps(k) + self.compress_steps
+        return self.n_grains * steps / THROUGHPUT[self.config.grains.dimension]["shear"]
+
+    def cost_seconds(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=()) -> float:
+        """Expected wall time of the calibration (or of the points left: ``done`` holds the complete keys)."""
+        work = [self.task_seconds(k) for k, seed in self.tasks() if self.key(k, seed) not in done]
+        return OVERHEAD + makespan(work, jobs, np_)
+
+    def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=()) -> str:
+        """One line: the calibration's size and its expected wall time on this machine."""
+        rate = THROUGHPUT[self.config.grains.dimension]["shear"]
+        if all(self.key(k, seed) in done for k, seed in self.tasks()):
+            return "cost: none, every point is complete"
+        left = " of what is left" if done else ""
+        return (f"cost: {len(self.tasks())} cells of {self.n_grains} grains, each compressing ~"
+                f"{count(self.compress_steps)} steps first; about {duration_text(self.cost_seconds(jobs, np_, done))}"
+                f"{left} with {jobs} job(s) x {np_} rank(s) (one cell alone at one rank: {rate / 1e6:.2g} M "
+                f"grain-steps/s; two at once {CONTENTION:g}x slower each; bench/RESULTS.md)")
+
+    def summary(self, out) -> str:
+        """One line: what the calibration measures, and where."""
+        c = self.config.calibration
+        return (f"dem calibrate: '{self.config.name}' grains, {len(self.points)} inertial numbers in [{c.I_min:g}, "
+                f"{c.I_max:g}] x {len(c.seeds)} seed(s), {self.n_grains} grains at p = {self.config.p_w:g}, "
+                f"{self.as_dict()['total_steps']:.3g} steps -> {out}")
 
     def as_dict(self) -> dict:
         cal = self.config.calibration
@@ -119,7 +158,8 @@ def plan_calibration(cfg: Config) -> CalibrationPlan:
         sample = max(1, round(cal.sample * per_strain))
         profile = max(1, round(cal.profile / cal.sample)) * sample
         measure = math.ceil(strain * (1 + STRAIN_MARGIN) * per_strain / profile) * profile
-        points.append(ShearPoint(float(I), rate, dt, math.ceil(cal.strain_start * per_strain), measure, sample, profile))
+        start = math.ceil(cal.strain_start * per_strain)
+        points.append(ShearPoint(float(I), rate, dt, start, measure, sample, profile))
     return CalibrationPlan(cfg, dt, n, tuple(points))
 
 
@@ -198,7 +238,7 @@ class _Calibrator:
             _write_json(self.out / layout.CALIBRATION_STATE, self.state)
 
     def task(self, k: int, seed: int) -> None:
-        key = f"I-{k}/seed-{seed}"
+        key = self.plan.key(k, seed)
         d = layout.point_dir(self.out, k, seed)
         old = self.state["points"].get(key, {})
         if old.get("status") == "complete":  # re-analysed from its stored series: the fit uses the current analysis
@@ -253,12 +293,12 @@ class _Calibrator:
 def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Calibration:
     rows, blocks, excluded = [], [], []
     for k, seed in sorted(plan.tasks()):
-        entry = state["points"][f"I-{k}/seed-{seed}"]
+        entry = state["points"][plan.key(k, seed)]
         if entry["checks"]["passed"]:
             rows.append({**entry["row"], "point": k})
             blocks.append(pd.read_csv(layout.point_dir(out, k, seed) / layout.BLOCKS_CSV))
         else:
-            excluded.append(f"I-{k}/seed-{seed}")
+            excluded.append(plan.key(k, seed))
     cal = fitting.fit_blocks(pd.concat(blocks, ignore_index=True), str(out / layout.CALIBRATION_JSON))
     passed = pd.DataFrame(rows).sort_values(["point", "seed"])
     points = passed[list(layout.POINT_COLUMNS)]
@@ -284,40 +324,62 @@ class CalibrateResult:
     calibration: fitting.Calibration | None
 
 
-def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS, np: int = 1,
-              resume: bool = False, launcher: str | None = None, progress: bool = True,
-              announce=None) -> CalibrateResult:
-    """Run (or with ``resume`` continue: unfinished points rerun, finished ones re-analysed, then the
-    fit) the calibration of ``cfg`` into ``out``; everything is validated before the folder is touched
-    (ValueError / LammpsNotFound, nothing written); ``announce(line)`` then receives a summary."""
+def check_calibration(cfg: Config, out: str | Path, jobs: int = DEFAULT_JOBS, np: int = DEFAULT_NP,
+                      resume: bool = False, launcher: str | None = None) -> CalibrationPlan:
+    """Everything ``calibrate`` checks before it touches the folder (ValueError / LammpsNotFound naming the
+    parameter): jobs, ranks, the launcher, the plan, the wheels, the folder and a resume's config."""
     require(isinstance(jobs, int) and not isinstance(jobs, bool) and jobs >= 1, "--jobs", "an integer >= 1", jobs)
     require(isinstance(np, int) and not isinstance(np, bool) and np >= 1, "--np", "an integer >= 1", np)
     require(launcher is None or "{np}" in launcher, "--launcher", "a command template containing {np}", launcher)
     out = Path(out)
+    require(not out.exists() or out.is_dir(), "--out", "a folder (this path is an existing file)", str(out))
     plan = plan_calibration(cfg)
     lammps_env.lmp_binary(), lammps_env.mpirun()
-    state_path = out / layout.CALIBRATION_STATE
     if resume:
-        require(state_path.exists(), "--resume", f"an existing calibration folder with {layout.CALIBRATION_STATE}",
-                str(out))
+        require((out / layout.CALIBRATION_STATE).exists() and (out / layout.CONFIG_TOML).is_file(), "--resume",
+                f"an existing calibration folder (with {layout.CALIBRATION_STATE} and {layout.CONFIG_TOML})", str(out))
         stored = parse((out / layout.CONFIG_TOML).read_text())
         require(stored.as_dict() == cfg.as_dict(), "--resume", f"the config stored in {out / layout.CONFIG_TOML}",
                 "a different config")
-        state = json.loads(state_path.read_text())
-        state.setdefault("resumes", []).append(_now())
     else:
         require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
                 str(out))
+    return plan
+
+
+def completed_points(out: str | Path, plan: CalibrationPlan) -> tuple[list[str], list[str]]:
+    """The keys of a calibration folder's complete points (each seed) and of those left, in run order."""
+    points = json.loads((Path(out) / layout.CALIBRATION_STATE).read_text()).get("points", {})
+    done, left = [], []
+    for k, seed in plan.tasks():
+        key = plan.key(k, seed)
+        (done if points.get(key, {}).get("status") == "complete" else left).append(key)
+    return done, left
+
+
+def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS, np: int = DEFAULT_NP,
+              resume: bool = False, launcher: str | None = None, progress: bool = True,
+              announce=None) -> CalibrateResult:
+    """Run (or with ``resume`` continue: unfinished points rerun, finished ones re-analysed, then the
+    fit) the calibration of ``cfg`` into ``out``; everything is validated before the folder is touched
+    (``check_calibration``: ValueError / LammpsNotFound, nothing written); ``announce(line)`` then
+    receives a summary and the cost estimate."""
+    plan = check_calibration(cfg, out, jobs, np, resume, launcher)
+    out = Path(out)
+    state_path = out / layout.CALIBRATION_STATE
+    if resume:
+        state = json.loads(state_path.read_text())
+        state.setdefault("resumes", []).append(_now())
+    else:
         state = {"name": cfg.name, "status": "running", "message": "", "plan": plan.as_dict(),
                  "provenance": {**provenance(), **lammps_env.lammps_info(), "np": np, "jobs": jobs},
                  "points": {}, "started": _now()}
         staging.start(out, COMMAND)
         (out / layout.CONFIG_TOML).write_text(text)
     if announce is not None:
-        c = cfg.calibration
-        announce(f"dem calibrate: '{cfg.name}' grains, {len(plan.points)} inertial numbers in [{c.I_min:g}, "
-                 f"{c.I_max:g}] x {len(c.seeds)} seed(s), {plan.n_grains} grains at p = {cfg.p_w:g}, "
-                 f"{plan.as_dict()['total_steps']:.3g} steps -> {out}")
+        done = completed_points(out, plan)[0] if resume else ()
+        announce(plan.summary(out))
+        announce(f"  {plan.cost_estimate(jobs, np, done)}")
     state["status"], state["message"] = "running", ""
     runner = _Calibrator(plan, out, state, _Lammps(np, launcher, progress))
     runner.save()

@@ -1,26 +1,63 @@
-"""``granstokes dem run``: run a DEM scene from a TOML config or a preset.
+"""``granstokes dem``: run a DEM scene, or calibrate its grains' mu(I), from a TOML config or a preset.
 
-    granstokes dem run CONFIG.toml --out DIR [--jobs 2] [--np 1] [--resume] [--launcher 'srun -n {np}']
-    granstokes dem run --preset smoke|quick|paper --out DIR
-    granstokes dem calibrate (CONFIG.toml | --preset NAME) --out DIR [--jobs N] [--np N] [--resume]
+    granstokes dem run (CONFIG.toml | --preset NAME) --out DIR [--jobs 2] [--np 1] [--launcher 'srun -n {np}']
+    granstokes dem run --resume --out DIR                 (continues the run with the config stored in DIR)
+    granstokes dem calibrate (CONFIG.toml | --preset NAME) --out DIR [--jobs 2] [--np 1]
+    granstokes dem calibrate --resume --out DIR
+
+``--dry-run`` validates, prints the plan and its cost estimate, and writes nothing.
 """
 from __future__ import annotations
 
 import os
 import signal
 import sys
+from pathlib import Path
+
+from granstokes.validate import require
 
 from . import config as config_mod
-from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, LammpsNotFound
+from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, PLAIN_FRACTION, PLAIN_SECONDS, LammpsNotFound
+
+
+QUIET_HELP = (f"no progress report (otherwise a bar per LAMMPS process on a terminal, or a line every "
+              f"{PLAIN_FRACTION * 100:g} %% or {PLAIN_SECONDS:g} s when stderr is a file or a pipe)")
+
+
+def _config(args, command: str):
+    """The config and its text: CONFIG.toml, --preset, or (with --resume and neither) the one stored in --out."""
+    from .layout import CONFIG_TOML  # pandas: imported when a command runs, not when the parser is built
+
+    given = [x for x in (args.config, args.preset) if x is not None]
+    require(len(given) <= 1, "CONFIG.toml / --preset", "given once (a config file or a preset, not both)", given)
+    if args.config is not None:
+        return config_mod.load(args.config)
+    if args.preset is not None:
+        return config_mod.preset(args.preset)
+    require(args.resume, "CONFIG.toml / --preset", "given (or --resume, to continue the folder in --out)", "neither")
+    stored = Path(args.out) / CONFIG_TOML
+    require(stored.is_file(), "--resume", f"given with a folder holding the {CONFIG_TOML} of an earlier "
+            f"granstokes dem {command}", str(args.out))
+    return config_mod.load(stored)
+
+
+def _resume_line(done: list[str], left: list[str], what: str) -> str:
+    return (f"resume: {len(done)} of {len(done) + len(left)} {what} complete ({', '.join(done) or 'none'}); "
+            f"left: {', '.join(left) or 'none'}")
+
+
+def _oversubscribed(np_: int, jobs: int) -> None:
+    cores = os.cpu_count() or 1
+    if np_ * jobs > cores:
+        print(f"dem: warning: --np {np_} x {jobs} job(s) = {np_ * jobs} ranks on {cores} cores: "
+              "oversubscribed, every rank waits for the others (slower than fewer ranks)", file=sys.stderr)
 
 
 def _cmd_run(args) -> int:
-    from .runner import check_request, run
+    from .runner import check_request, completed_stages, run
 
     try:
-        if (args.config is None) == (args.preset is None):
-            raise ValueError("give exactly one of CONFIG.toml or --preset")
-        cfg, text = config_mod.load(args.config) if args.config else config_mod.preset(args.preset)
+        cfg, text = _config(args, "run")
         runner = check_request(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
                                jobs=args.jobs)
     except (ValueError, OSError, LammpsNotFound) as exc:
@@ -29,11 +66,12 @@ def _cmd_run(args) -> int:
     print(f"dem: scene '{cfg.name}' -> {args.out}", file=sys.stderr)
     for reason in runner.plan.reasons:
         print(f"  {reason}", file=sys.stderr)
-    print(f"  {runner.plan.cost_estimate(runner.jobs)}", file=sys.stderr)
-    cores = os.cpu_count() or 1
-    if args.np * runner.jobs > cores:
-        print(f"dem: warning: --np {args.np} x {runner.jobs} job(s) = {args.np * runner.jobs} ranks on {cores} cores: "
-              "oversubscribed, every rank waits for the others (slower than fewer ranks)", file=sys.stderr)
+    done = []
+    if args.resume:
+        done, left = completed_stages(runner.out, runner.plan)
+        print(f"  {_resume_line(done, left, 'stages')}", file=sys.stderr)
+    print(f"  {runner.plan.cost_estimate(runner.jobs, args.np, done)}", file=sys.stderr)
+    _oversubscribed(args.np, runner.jobs)
     if args.dry_run:
         return 0
     result = run(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
@@ -46,51 +84,66 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_calibrate(args) -> int:
-    from .calibrate import DEFAULT_JOBS, calibrate
+    from .calibrate import calibrate, check_calibration, completed_points
 
     try:
-        if (args.config is None) == (args.preset is None):
-            raise ValueError("give exactly one of CONFIG.toml or --preset")
-        cfg, text = config_mod.load(args.config) if args.config else config_mod.preset(args.preset)
-        result = calibrate(cfg, text, args.out, jobs=DEFAULT_JOBS if args.jobs is None else args.jobs, np=args.np,
-                           resume=args.resume, launcher=args.launcher, progress=not args.quiet,
-                           announce=lambda line: print(line, file=sys.stderr))
+        cfg, text = _config(args, "calibrate")
+        plan = check_calibration(cfg, args.out, jobs=args.jobs, np=args.np, resume=args.resume,
+                                 launcher=args.launcher)
     except (ValueError, OSError, LammpsNotFound) as exc:
         print(f"granstokes dem calibrate: error: {exc}", file=sys.stderr)
         return 2
+    print(plan.summary(args.out), file=sys.stderr)
+    done = []
+    if args.resume:
+        done, left = completed_points(args.out, plan)
+        print(f"  {_resume_line(done, left, 'points')}", file=sys.stderr)
+    print(f"  {plan.cost_estimate(args.jobs, args.np, done)}", file=sys.stderr)
+    _oversubscribed(args.np, args.jobs)
+    if args.dry_run:
+        return 0
+    result = calibrate(cfg, text, args.out, jobs=args.jobs, np=args.np, resume=args.resume, launcher=args.launcher,
+                       progress=not args.quiet)
     print(f"dem calibrate: {result.status}" + (f": {result.message}" if result.message else "")
           + f" (see {result.out})", file=sys.stderr)
     return {"complete": 0, "interrupted": 130}.get(result.status, 1)
 
 
+def _common(p, what: str, config_help: str) -> None:
+    p.add_argument("config", nargs="?", help=f"TOML config file ({config_help}; see dem/config.py)")
+    p.add_argument("--preset", choices=config_mod.PRESETS, help="a shipped config (dem/presets/)")
+    p.add_argument("--out", required=True, help=f"{what} folder (new or empty, or with --resume an unfinished one)")
+    p.add_argument("--resume", action="store_true",
+                   help=f"continue the unfinished {what} in --out with the config stored there (a CONFIG.toml "
+                        "or --preset given too must match it)")
+    p.add_argument("--launcher", help="launcher template with {np}, e.g. 'srun -n {np}' (default: the "
+                                      "mpich wheel's mpirun)")
+    p.add_argument("--dry-run", action="store_true",
+                   help="validate, print the plan and its cost estimate, run and write nothing")
+
+
 def register(subparsers) -> None:
     """Add the ``dem`` subcommand to the ``granstokes`` parser."""
-    dem = subparsers.add_parser("dem", help="LAMMPS DEM scenes (plate over a granular bed)")
-    sub = dem.add_subparsers(dest="dem_command", required=True)
+    dem = subparsers.add_parser("dem", help="LAMMPS DEM scenes (plate over a granular bed)",
+                                description="LAMMPS DEM scenes (plate over a granular bed) and the plane-shear "
+                                            "calibration of their grains' mu(I).")
+    dem.set_defaults(func=lambda args: dem.print_help() or 0)
+    sub = dem.add_subparsers(dest="dem_command", metavar="{run,calibrate}")
     r = sub.add_parser("run", help="run a scene from a TOML config or a preset",
                        description="Run a DEM scene: prepare the bed(s), then each drive; outputs in --out.")
-    r.add_argument("config", nargs="?", help="TOML config file (see dem/config.py)")
-    r.add_argument("--preset", help=f"one of {list(config_mod.PRESETS)}")
-    r.add_argument("--out", required=True, help="run folder (must be new or empty unless --resume)")
+    _common(r, "run", "a scene")
     r.add_argument("--np", type=int, default=DEFAULT_NP, help=f"MPI ranks per LAMMPS process (default {DEFAULT_NP})")
     r.add_argument("--jobs", type=int, default=DEFAULT_JOBS,
                    help=f"seeds' beds run side by side as separate LAMMPS processes (default {DEFAULT_JOBS})")
-    r.add_argument("--resume", action="store_true", help="continue an interrupted run in --out")
-    r.add_argument("--launcher", help="launcher template with {np}, e.g. 'srun -n {np}' (default: the "
-                                      "mpich wheel's mpirun)")
-    r.add_argument("--quiet", action="store_true", help="no progress bar")
-    r.add_argument("--dry-run", action="store_true", help="validate, print the sizing and the cost estimate, run nothing")
+    r.add_argument("--quiet", action="store_true", help=QUIET_HELP)
     r.set_defaults(func=_cmd_run)
     c = sub.add_parser("calibrate", help="mu(I) of a config's grains by plane shear at controlled pressure",
                        description="Calibrate mu(I) and phi(I) by homogeneous (Lees-Edwards) plane shear of the "
                                    "config's grains at p = p_w; writes calibration.json and points.csv in --out.")
-    c.add_argument("config", nargs="?", help="TOML config file with a [calibration] table (see dem/config.py)")
-    c.add_argument("--preset", help=f"one of {list(config_mod.PRESETS)}")
-    c.add_argument("--out", required=True, help="calibration folder (must be new or empty unless --resume)")
-    c.add_argument("--jobs", type=int, help="points run concurrently (default 2: two single-rank processes "
-                                            "on 2 cores)")
-    c.add_argument("--np", type=int, default=1, help="MPI ranks per point (default 1: cells of ~100 grains)")
-    c.add_argument("--resume", action="store_true", help="continue an interrupted calibration in --out")
-    c.add_argument("--launcher", help="launcher template with {np} (default: the mpich wheel's mpirun)")
-    c.add_argument("--quiet", action="store_true", help="no progress bars")
+    _common(c, "calibration", "with a [calibration] table")
+    c.add_argument("--jobs", type=int, default=DEFAULT_JOBS,
+                   help=f"points run side by side as separate LAMMPS processes (default {DEFAULT_JOBS})")
+    c.add_argument("--np", type=int, default=DEFAULT_NP,
+                   help=f"MPI ranks per point (default {DEFAULT_NP})")
+    c.add_argument("--quiet", action="store_true", help=QUIET_HELP)
     c.set_defaults(func=_cmd_calibrate)

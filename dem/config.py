@@ -19,7 +19,8 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
     # mu(I) calibration by plane shear of the same grains at p = p_w (``granstokes dem calibrate``)
     calibration = {I_min = 1e-3, I_max = 0.5, points = 8, seeds = [1, 2], width = 10.0, strain = 5.0}
 
-Every key is optional except the drives; unknown keys are errors.
+The drives and the ``material`` table (mu_s, mu_d, I0, I_convention, phi: no defaults, a scene's size
+follows from them) are required, every other key is optional; unknown keys are errors.
 """
 from __future__ import annotations
 
@@ -39,7 +40,7 @@ from .contact import Contact
 MIN_WIDTH = 8.0  # d: narrower periodic boxes order the packing and correlate the plate with its image
 MIN_WIDTH_Z = 4.0
 MIN_DEPTH = 4.0
-MIN_CALIBRATION_STRAIN = 5.0  # issue 10: each calibration point is measured over at least this strain
+MIN_CALIBRATION_STRAIN = 5.0  # each calibration point is measured over at least this strain
 KAPPA_MIN = 1e4  # rigid limit: overlap under p_w d at most 1e-4 d
 
 
@@ -217,7 +218,7 @@ class Calibration:
 class Config:
     name: str
     drives: tuple[Drive, ...]
-    material: Material = field(default_factory=Material)
+    material: Material
     grains: Grains = field(default_factory=Grains)
     box: Box = field(default_factory=Box)
     p_w: float = 10.0
@@ -272,6 +273,8 @@ class Config:
 _TABLES = {"material": Material, "grains": Grains, "box": Box, "output": Output, "prepare": Prepare,
            "calibration": Calibration}
 _TOP = {"name", "seeds", "dt", "material", "grains", "box", "load", "drive", "output", "prepare", "calibration"}
+#: the material keys a config must give (the bed's expected mu(I) and packing: the scene is sized from them)
+MATERIAL_KEYS = ("mu_s", "mu_d", "I0", "I_convention", "phi")
 
 
 def _build(cls, table, where):
@@ -297,6 +300,12 @@ def from_dict(doc: dict) -> Config:
     """Validated Config from a parsed TOML document; raises ValueError naming the bad parameter."""
     unknown = sorted(set(doc) - _TOP)
     require(not unknown, "top-level keys", f"among {sorted(_TOP)}", unknown)
+    material = doc.get("material")
+    missing = [k for k in MATERIAL_KEYS if not isinstance(material, dict) or k not in material]
+    got = "no [material] table" if material is None else f"no {', '.join(missing)}" if isinstance(material, dict) \
+        else material
+    require(not missing, "[material]", f"a table giving {', '.join(MATERIAL_KEYS)} (the bed's expected mu(I) "
+            "and packing, from which the scene is sized)", got)
     kwargs = {k: _build(cls, doc[k], k) for k, cls in _TABLES.items() if k in doc}
     load = doc.get("load", {})
     require(isinstance(load, dict) and set(load) <= {"p_w"}, "[load] keys", "['p_w']", load)

@@ -16,6 +16,9 @@ from pathlib import Path
 #: 2D beds of a few hundred to a few thousand grains: one rank per bed and two beds side by side beat
 #: two ranks per bed on 2 cores (bench/RESULTS.md, bench/dem_concurrency.py)
 DEFAULT_NP, DEFAULT_JOBS = 1, 2
+#: progress without a terminal (a log, a pipe): a plain line whenever this fraction of a LAMMPS process's
+#: steps is done or this many seconds have passed since the last line
+PLAIN_FRACTION, PLAIN_SECONDS = 0.1, 30.0
 
 
 class LammpsNotFound(RuntimeError):

@@ -4,7 +4,8 @@ The run folder's layout is dem.layout's.
 Each seed's bed (preparation, then its drives) is an independent chain of LAMMPS processes; ``jobs``
 chains run side by side (threads, each waiting on its own subprocess), each process on ``np`` ranks
 under the mpich wheel's ``mpirun -np N`` (or a ``launcher`` template such as ``srun -n {np}``), its
-screen output feeding a tqdm bar.  Defaults (DEFAULT_JOBS, DEFAULT_NP) are measured in bench/RESULTS.md.  A failed, killed or interrupted run leaves
+screen output feeding a tqdm bar on a terminal, plain lines otherwise (``Lines``).  Defaults
+(DEFAULT_JOBS, DEFAULT_NP) are measured in bench/RESULTS.md.  A failed, killed or interrupted run leaves
 run.json saying what happened and the outputs assembled up to that point; ``resume=True`` continues
 every unfinished drive from its last restart file.
 """
@@ -19,6 +20,7 @@ import shlex
 import shutil
 import signal
 import subprocess
+import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -34,7 +36,7 @@ from granstokes.validate import require
 
 from . import lammps_env, layout, outputs, scene
 from .config import Config, parse
-from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
+from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, PLAIN_FRACTION, PLAIN_SECONDS
 from .sizing import DrivePlan, Plan, plan
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)
@@ -112,6 +114,52 @@ def _explain(returncode: int, error: str | None, nonfinite: bool, plan_: Plan) -
     return signals.get(returncode, f"LAMMPS exited with code {returncode}")
 
 
+class Lines:
+    """Progress as plain lines on stderr (a log, a pipe): the subset of tqdm that ``_Lammps`` uses; a line
+    each PLAIN_FRACTION of the total or PLAIN_SECONDS, whichever comes first, and one at the end."""
+
+    _print_lock = threading.Lock()
+
+    def __init__(self, total: int, initial: int, desc: str, clock=time.monotonic, stream=None):
+        self.total, self.n, self.desc, self.postfix = total, initial, desc, ""
+        self.clock, self.stream = clock, stream
+        self.t0 = self.last_time = clock()
+        self.last_n = initial
+
+    def set_description(self, desc: str) -> None:
+        self.desc = desc
+
+    def set_postfix_str(self, text: str) -> None:
+        self.postfix = text
+
+    def update(self, k: int) -> None:
+        self.n += k
+        if (self.n - self.last_n >= PLAIN_FRACTION * self.total
+                or self.clock() - self.last_time >= PLAIN_SECONDS):
+            self._line()
+
+    def close(self) -> None:
+        if self.n != self.last_n:
+            self._line()
+
+    def _line(self) -> None:
+        now = self.clock()
+        self.last_n, self.last_time = self.n, now
+        done = self.n / self.total if self.total else 1.0
+        extra = f", {self.postfix}" if self.postfix else ""
+        with self._print_lock:
+            print(f"{self.desc}: {done:.0%} ({self.n}/{self.total} steps{extra}), {now - self.t0:.0f} s",
+                  file=self.stream or sys.stderr, flush=True)
+
+
+def _progress(total: int, initial: int, desc: str, position: int, enabled: bool):
+    """A tqdm bar on a terminal, plain ``Lines`` otherwise (nothing when not ``enabled``)."""
+    if enabled and not sys.stderr.isatty():
+        return Lines(total, initial, desc)
+    return tqdm(total=total, initial=initial, desc=desc, unit="step", disable=not enabled, dynamic_ncols=True,
+                leave=True, position=position)
+
+
 class _Lammps:
     """One LAMMPS subprocess: launch, stream the screen into a progress bar, diagnose failures."""
 
@@ -139,8 +187,7 @@ class _Lammps:
         return [*self.prefix(), str(lammps_env.lmp_binary()), "-in", script, "-log", "log.lammps", "-nocite"]
 
     def run(self, script: str, cwd: Path, plan_: Plan, total: int, start: int, desc: str, position: int = 0) -> dict:
-        bar = tqdm(total=total, initial=start, desc=desc, unit="step", disable=not self.progress,
-                   dynamic_ncols=True, leave=True, position=position)
+        bar = _progress(total, start, desc, position, self.progress)
         t0, step, error, nonfinite, phases, in_thermo = time.monotonic(), start, None, False, [], False
         with self._lock:
             if self.stopping:
@@ -167,8 +214,8 @@ class _Lammps:
                         proc.terminate()
                         break
                     new = int(m.group(1))
-                    bar.update(max(0, min(new, total) - bar.n))
                     bar.set_postfix_str(f"t={m.group(2)}")
+                    bar.update(max(0, min(new, total) - bar.n))
                     step = new
             returncode = proc.wait()
         except BaseException:
@@ -253,7 +300,7 @@ class Runner:
                 "launcher": shlex.join(self.lmp.prefix()) or "(none: one rank)",
                 "lmp": str(lammps_env.lmp_binary()),
             },
-            "stages": {}, "timings": {"started": _now()},
+            "stages": {}, "timings": {"started": _now(), "load_average": os.getloadavg()},
         }
 
     def save(self, meta: dict) -> None:
@@ -421,17 +468,33 @@ def check_request(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP,
     require(launcher is None or "{np}" in launcher, "--launcher", "a command template containing {np}", launcher)
     out = Path(out)
     require(not out.exists() or out.is_dir(), "--out", "a folder (this path is an existing file)", str(out))
-    runner = Runner(cfg, text, out, np, launcher, progress, min(jobs, len(cfg.seeds)))  # sizing: raises on loads outside mu(I)
+    # the sizing raises on loads outside mu(I)
+    runner = Runner(cfg, text, out, np, launcher, progress, min(jobs, len(cfg.seeds)))
     lammps_env.lmp_binary(), lammps_env.mpirun()
     meta_path = out / layout.RUN_JSON
     if resume:
-        require(meta_path.exists(), "--resume", "given with an existing run folder (with run.json)", str(out))
+        require(meta_path.exists() and (out / layout.CONFIG_TOML).is_file(), "--resume",
+                f"given with an existing run folder (with {layout.RUN_JSON} and {layout.CONFIG_TOML})", str(out))
         stored = parse((out / layout.CONFIG_TOML).read_text())
         require(stored.as_dict() == cfg.as_dict(), "--resume",
                 f"given with the config stored in {out / layout.CONFIG_TOML}", "a different config")
     else:
-        require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)", str(out))
+        require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
+                str(out))
     return runner
+
+
+def completed_stages(out: str | Path, plan_: Plan) -> tuple[list[str], list[str]]:
+    """The keys of a run folder's complete stages and of those left, in the order they run."""
+    stages = json.loads((Path(out) / layout.RUN_JSON).read_text()).get("stages", {})
+    done, left = [], []
+    for seed in plan_.config.seeds:
+        for key in plan_.stage_keys(seed):
+            complete = stages.get(key, {}).get("status") == "complete"
+            if key == layout.stage_key(seed):  # a preparation counts once its bed is on disk
+                complete = complete and (layout.prepare_dir(out, seed) / layout.PREPARED_RESTART).exists()
+            (done if complete else left).append(key)
+    return done, left
 
 
 def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,

@@ -9,6 +9,7 @@ Every choice is written into run.json with its reason.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 from continuum.scales import Scales
@@ -17,14 +18,29 @@ from granstokes.validate import require
 
 from .config import Config, Drive
 from .contact import grain_volume
+from .layout import stage_key
 
 #: packing fractions used to turn a bed depth into a grain count (random close packing, loose side)
 PACKING = {2: 0.80, 3: 0.60}
 #: LAMMPS counts the steps of a run in a 32-bit integer ("Invalid run command N value" above it)
 MAX_STEPS = 2**31 - 1
-#: serial LAMMPS throughput on this kind of machine, atom-steps per second (bench/RESULTS.md: 2D 10.4-10.8 M,
-#: 3D 6.9 M, one rank): the cost estimate printed before a run
-THROUGHPUT = {2: 10e6, 3: 7e6}
+#: LAMMPS throughput on this 2-core machine of one process alone at one rank, in bed grains x steps per
+#: second, per dimension and phase: the preparation (free fall, settling, relaxation), the drives (with
+#: their outputs) and the calibration's shear cells (with their compression); fitted to the wall times
+#: that run.json and state.json record for the shipped presets (bench/RESULTS.md, "Cost estimates")
+THROUGHPUT = {2: {"prepare": 10.5e6, "drive": 6.2e6, "shear": 10.0e6},
+              3: {"prepare": 6.2e6, "drive": 3.65e6, "shear": 7.0e6}}
+#: wall time of each of two LAMMPS processes running at once over one running alone, on this machine as
+#: other sessions share it: 1.0-1.1 when they are idle, 2 when they keep a core busy (bench/RESULTS.md)
+CONTENTION = 1.6
+#: preparation's expected settling and relaxation after the free fall, in time units sqrt(d/g): the
+#: mean over the beds of the shipped presets' seeds (1.0 to 12.5; each stage is capped by
+#: prepare.settle_max and relax_max)
+SETTLE_RELAX_EXPECTED = 7.25
+#: a run's or a calibration's fixed wall time in seconds: start-up, the LAMMPS library query, the merges
+OVERHEAD = 1.0
+#: durations up to this many seconds are printed in s, up to this many minutes in min, beyond in h
+SECONDS_SHOWN, MINUTES_SHOWN = 90, 90
 
 
 def drive_scales(cfg: Config, drive: Drive) -> Scales:
@@ -78,18 +94,48 @@ class Plan:
         return self.depth / self.config.contact.shear_wave_speed
 
     @property
-    def atom_steps(self) -> float:
-        """grains x steps of the whole run: every seed's preparation (at most) and drives."""
-        c = self.config.prepare
-        prepare = (c.settle_max + c.relax_max) / self.dt
-        return float(len(self.config.seeds) * self.n_grains * (prepare + sum(d.steps for d in self.drives)))
+    def prepare_steps(self) -> tuple[int, int]:
+        """A preparation's expected and largest number of steps: the free fall, then settling and relaxing
+        (SETTLE_RELAX_EXPECTED, each stage capped)."""
+        from .scene import free_fall_steps
 
-    def cost_estimate(self, jobs: int = 1) -> str:
-        """One line: the run's atom-steps and the expected wall time at the measured throughput."""
-        minutes = self.atom_steps / THROUGHPUT[self.dimension] / max(1, jobs) / 60
-        return (f"cost: {self.n_grains} grains x {len(self.config.seeds)} seed(s), {self.atom_steps:.3g} atom-steps "
-                f"(preparation at most), about {minutes:.2g} min with {jobs} job(s) at "
-                f"{THROUGHPUT[self.dimension]:.2g} atom-steps/s per job (bench/RESULTS.md)")
+        c = self.config.prepare
+        fall = free_fall_steps(self)
+        expected = fall + round(min(SETTLE_RELAX_EXPECTED, c.settle_max + c.relax_max) / self.dt)
+        return expected, fall + round((c.settle_max + c.relax_max) / self.dt)
+
+    def stage_seconds(self, key: str) -> float:
+        """Expected LAMMPS wall time of one stage (dem.layout.stage_key) run alone at one rank."""
+        rate = THROUGHPUT[self.dimension]
+        drive = key.partition("/")[2]
+        if not drive:
+            return self.n_grains * self.prepare_steps[0] / rate["prepare"]
+        steps = next(d.steps for d in self.drives if d.drive.name == drive)
+        return self.n_grains * steps / rate["drive"]
+
+    def stage_keys(self, seed: int) -> list[str]:
+        """run.json's keys of a seed's stages in the order they run: the preparation, then each drive."""
+        return [stage_key(seed)] + [stage_key(seed, d.drive.name) for d in self.drives]
+
+    def cost_seconds(self, jobs: int = 1, np_: int = 1, done=()) -> float:
+        """Expected wall time of the run (or of what is left: ``done`` holds the complete stages' keys):
+        each seed's bed is one unit of work, ``jobs`` of them at a time."""
+        beds = [sum(self.stage_seconds(k) for k in self.stage_keys(seed) if k not in done)
+                for seed in self.config.seeds]
+        return OVERHEAD + makespan([b for b in beds if b > 0], jobs, np_)
+
+    def cost_estimate(self, jobs: int = 1, np_: int = 1, done=()) -> str:
+        """One line: the run's size and its expected wall time on this machine (``cost_seconds``)."""
+        rate = THROUGHPUT[self.dimension]
+        expected, most = self.prepare_steps
+        if all(k in done for seed in self.config.seeds for k in self.stage_keys(seed)):
+            return "cost: none, every stage is complete"
+        left = " of what is left" if done else ""
+        return (f"cost: {self.n_grains} grains x {len(self.config.seeds)} bed(s), each preparing ~{count(expected)} "
+                f"steps (at most {count(most)}) and driving {count(sum(d.steps for d in self.drives))}; about "
+                f"{duration_text(self.cost_seconds(jobs, np_, done))}{left} with {jobs} job(s) x {np_} rank(s) "
+                f"(one process alone at one rank: {rate['prepare'] / 1e6:.2g} M grain-steps/s preparing, "
+                f"{rate['drive'] / 1e6:.2g} M driving; two at once {CONTENTION:g}x slower each; bench/RESULTS.md)")
 
     def as_dict(self) -> dict:
         return {"depth": self.depth, "n_grains_target": self.n_grains, "width": self.config.box.width,
@@ -156,3 +202,38 @@ def plan(cfg: Config) -> Plan:
     intervals["restart"] = max(1, round(cfg.output.restart / dt / intervals["profiles"])) * intervals["profiles"]
     intervals["check"] = max(1, round(cfg.prepare.check_every / dt))
     return Plan(cfg, float(depth), n_grains, dt, intervals, tuple(drives), tuple(reasons))
+
+
+def slowdown(processes: int, np_: int = 1, cores: int | None = None) -> float:
+    """Wall time of each of ``processes`` concurrent LAMMPS processes of ``np_`` ranks over that of one
+    process alone at one rank (ranks are not credited with a speed-up: THROUGHPUT is measured at one)."""
+    ranks = processes * np_
+    cores = cores or os.cpu_count() or 1
+    shared = CONTENTION if min(ranks, cores) > 1 else 1.0
+    return shared * max(1.0, ranks / cores)
+
+
+def makespan(work, jobs: int, np_: int = 1, cores: int | None = None) -> float:
+    """Wall time of units of work (each its seconds alone) taken in order by ``jobs`` workers, every
+    running unit slowed by ``slowdown`` of how many run at once."""
+    pending, running, elapsed = list(work), [], 0.0
+    while pending or running:
+        while pending and len(running) < jobs:
+            running.append(pending.pop(0))
+        factor = slowdown(len(running), np_, cores)
+        first = min(running)
+        elapsed += first * factor
+        running = [w - first for w in running if w > first]
+    return elapsed
+
+
+def count(n: float) -> str:
+    """A large count to two significant digits, e.g. 1.6e5."""
+    return f"{n:.2g}".replace("e+0", "e").replace("e+", "e")
+
+
+def duration_text(seconds: float) -> str:
+    """``seconds`` as a readable duration in s, min or h (two significant digits, whole units from 100)."""
+    value, unit = ((seconds, "s") if seconds < SECONDS_SHOWN else (seconds / 60, "min")
+                   if seconds < MINUTES_SHOWN * 60 else (seconds / 3600, "h"))
+    return f"{value:.2g} {unit}" if value < 100 else f"{value:.0f} {unit}"

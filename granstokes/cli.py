@@ -49,9 +49,10 @@ def build_parser() -> argparse.ArgumentParser:
     from continuum.predict_cli import register as predict_register
     from dem.cli import register as dem_register
 
-    parser = OneLineParser(prog="granstokes", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="granstokes", description="Stokes' first problem in a dense granular bed: mu(I) and "
+                           "nonlocal continuum models against LAMMPS DEM. Each command has its own --help.")
     parser.add_argument("--version", action=_Version)
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
+    sub = parser.add_subparsers(dest="command", parser_class=OneLineParser)
     continuum_register(sub)
     predict_register(sub)
     paper_register(sub)
@@ -64,7 +65,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:  # the command alone: its help
+        parser.print_help()
+        return 0
     try:
         return args.func(args)
     except ValueError as err:

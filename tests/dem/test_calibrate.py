@@ -1,5 +1,5 @@
 """granstokes dem calibrate: the [calibration] table, the plan, bad input, and the smoke calibration
-through LAMMPS (the CI check of issue 10)."""
+through LAMMPS (the CI check)."""
 import json
 
 import numpy as np
@@ -35,7 +35,7 @@ def test_plan_follows_the_table_and_measures_at_least_the_strain():
     assert np.allclose(np.diff(np.log(I)), np.log(I[1] / I[0]))  # log-spaced in [I_min, I_max]
     cfg, _ = config.preset("quick")
     plan = plan_calibration(cfg)
-    I = np.array([p.I for p in plan.points])  # the listed I: >= 8 points over >= 2.5 decades (issue 10)
+    I = np.array([p.I for p in plan.points])  # the listed I: >= 8 points over >= 2.5 decades
     assert list(I) == list(cfg.calibration.I) and len(I) >= 8 and np.log10(I[-1] / I[0]) >= 2.5
     for p in plan.points:
         assert p.rate == pytest.approx(p.I * np.sqrt(cfg.p_w))  # I_dem = gamma_dot d / sqrt(p / rho_p)

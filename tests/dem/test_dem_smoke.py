@@ -80,10 +80,10 @@ def test_plate_held_at_speed_with_interval_averaged_forces(smoke):
     assert plate["x"].iloc[-1] - plate["x"].iloc[0] == pytest.approx(u_w * t_end, rel=0.01)
     assert moving["f_y"].std() < 0.35 * moving["f_y"].mean()
     slip = plate_slip(PlateRecord.read(out / "seed-1" / "speed"))
-    # issue 9: slip <= 5 %.  This bed slips 2.2 %; the preset's beds 1-4 slip 3.7 % on average with a
+    # slip <= 5 %.  This bed slips 2.2 %; the preset's beds 1-4 slip 3.7 % on average with a
     # bed-to-bed spread of 1.4 % (bench/RESULTS.md), larger than this bed's block error (~0.9 %), so the
-    # limit is asserted without a tolerance: it sits two spreads above this bed.  At p_w = 10 (the
-    # preset before) the beds slipped 5.9 +- 0.5 % and this assertion fails.
+    # limit is asserted without a tolerance: it sits two spreads above this bed.  At p_w = 10 the beds
+    # slip 5.9 +- 0.5 % and this assertion fails.
     assert -0.01 < slip["value"] <= 0.05, slip
     assert meta["sizing"]["elastic_start"]["transit_time"] == pytest.approx(
         meta["sizing"]["depth"] / meta["sizing"]["elastic_start"]["shear_wave_speed"])

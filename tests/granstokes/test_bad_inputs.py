@@ -21,6 +21,10 @@ def _case(tmp_path, monkeypatch, capsys, argv, name):
     (tmp_path / "not_a_run").mkdir()
     from dem import config
     (tmp_path / "forever.toml").write_text(config.preset_text("smoke").replace("duration = 7.0", "duration = 1e9"))
+    material = "[material]\nmu_s = 0.28\nmu_d = 0.58\nI0 = 0.3\nI_convention = \"dem\"\nphi = 0.8\n"
+    assert material in config.preset_text("smoke")
+    (tmp_path / "no_material.toml").write_text(config.preset_text("smoke").replace(material, ""))
+    (tmp_path / "no_I0.toml").write_text(config.preset_text("smoke").replace("I0 = 0.3\n", ""))
     monkeypatch.chdir(tmp_path)
     before = _files(tmp_path)
     try:
@@ -64,6 +68,8 @@ CASES = [
     (["predict", "--model", "local", *SCENE, "--mu-w", "0.43", "--times", "2", "1"], "--times"),
     (["predict", "--model", "local", *SCENE, "--mu-w", "0.43", "--steady", "--plate-mass", "-1"], "--plate-mass"),
     (["predict", "--model", "nonlocal", *SCENE, "--mu-w", "0.43", "--steady"], "--model"),
+    (["predict", "--model", "ngf", "--A", "0.5", *SCENE, "--mu-w", "0.43", "--steady", "--boundary", "dirchlet"],
+     "--boundary"),
     # paper-figures, stability
     (["paper-figures", "--out", "a_file.txt"], "--out"),
     (["paper-figures", "--out", "/proc/granstokes-figures"], "--out"),
@@ -81,6 +87,20 @@ CASES = [
     (["dem", "run", "--preset", "smoke", "--out", "r", "--jobs", "0"], "--jobs"),
     (["dem", "run", "--preset", "smoke", "--out", "a_file.txt"], "--out"),
     (["dem", "run", "forever.toml", "--out", "r"], "duration"),
+    (["dem", "run", "no_material.toml", "--out", "r"], "[material]"),
+    (["dem", "run", "no_I0.toml", "--out", "r", "--dry-run"], "[material]"),
+    (["dem", "run", "--resume", "--out", "not_a_run"], "--resume"),
+    (["dem", "run", "--resume", "--out", "missing_run", "--dry-run"], "--resume"),
+    (["dem", "run", "forever.toml", "--preset", "smoke", "--out", "r"], "--preset"),
+    # dem calibrate
+    (["dem", "calibrate", "--preset", "smoke", "--out", "c", "--dry-run", "--jobs", "0"], "--jobs"),
+    (["dem", "calibrate", "--preset", "smoke", "--out", "c", "--dry-run", "--np", "0"], "--np"),
+    (["dem", "calibrate", "--preset", "smoke", "--out", "a_file.txt", "--dry-run"], "--out"),
+    (["dem", "calibrate", "--preset", "smoke", "--out", "c", "--dry-run", "--launcher", "srun"], "--launcher"),
+    (["dem", "calibrate", "--preset", "tiny", "--out", "c", "--dry-run"], "--preset"),
+    (["dem", "calibrate", "no_material.toml", "--out", "c", "--dry-run"], "[material]"),
+    (["dem", "calibrate", "--resume", "--out", "not_a_run"], "--resume"),
+    (["dem", "calibrate", "--preset", "smoke", "--resume", "--out", "not_a_run", "--dry-run"], "--resume"),
     # compare
     (["compare", "not_a_run", "--out", "report"], "RUN_DIR"),
     (["compare", "missing_run", "--out", "report"], "RUN_DIR"),
@@ -101,7 +121,12 @@ def test_at_least_forty_cases_over_every_subcommand():
 
 
 def test_dry_run_prints_the_cost_and_writes_nothing(tmp_path, capsys):
+    from dem import config
+    from dem.sizing import duration_text, plan
+
     assert main(["dem", "run", "--preset", "quick", "--out", str(tmp_path / "r"), "--dry-run", "--np", "64"]) == 0
     err = capsys.readouterr().err
-    assert "cost:" in err and "atom-steps" in err and "min" in err and "oversubscribed" in err
+    p = plan(config.preset("quick")[0])
+    assert f"about {duration_text(p.cost_seconds(2, 64))} with 2 job(s) x 64 rank(s)" in err and "h with" in err
+    assert "cost: 820 grains x 3 bed(s)" in err and "oversubscribed" in err
     assert not (tmp_path / "r").exists()

@@ -177,7 +177,7 @@ def test_version_names_the_package_and_the_commit(capsys):
 
 
 def test_layering_no_package_imports_the_one_above():
-    """continuum/ imports neither dem nor compare; dem/ does not import compare (issue 8)."""
+    """continuum/ imports neither dem nor compare; dem/ does not import compare."""
     import re
     from pathlib import Path
 
@@ -205,3 +205,42 @@ def test_table_and_plot_of_a_speed(capsys, tmp_path):
         for value, err in ((r[4], r[6]), (r[7], r[9])):  # t, u~_w +- err, mu_w +- err, delta +- err
             assert float(err) <= 1e-6 * float(value)
     assert (tmp_path / "p.png").stat().st_size > 20_000
+
+
+PREDICT_SCENE = ["--mu-s", "0.28", "--mu-d", "0.58", "--I0", "0.3", "--phi", "0.8", "--p-w", "20", "--depth", "30"]
+
+
+def test_predict_at_an_imposed_speed_reports_the_friction_error_and_the_layer_depth(capsys):
+    """A transient at imposed speed: mu_w with its error, and delta_u (depth where u falls to 5 % of u_w) in the
+    JSON and the table; delta_u is the crossing of the returned profiles, and grows as the layer deepens."""
+    argv = ["predict", "--model", "local", *PREDICT_SCENE, "--u-w", "5", "--times", "1", "5"]
+    assert main([*argv, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["u_w_err"] == [0.0, 0.0] and 0 < max(data["mu_w_err"]) < 1e-4
+    assert data["layer"].startswith("delta_u [d]")
+    y, u = np.array(data["y"]), np.array(data["u"])
+    for k, delta in enumerate(data["delta_u"]):
+        ratio = u[k] / u[k, 0]
+        j = int(np.argmax(ratio < 0.05))  # first node below 5 % of u_w, interpolated linearly
+        assert delta == pytest.approx(np.interp(0.05, ratio[j:j - 2:-1], y[j:j - 2:-1]), rel=1e-12)
+        assert data["delta_u_err"][k] < 1e-3 * delta
+    assert 3 < data["delta_u"][0] < data["delta_u"][1] < 30
+    assert main(argv) == 0
+    table = capsys.readouterr().out.splitlines()
+    assert table[1].split() == ["t", "u_w", "u_w_err", "mu_w", "mu_w_err", "delta_u", "[d]", "delta_u_err"]
+    rows = [line.split() for line in table[2:]]
+    assert [float(r[3]) for r in rows] == pytest.approx(data["mu_w"], rel=1e-7)
+    assert [float(r[5]) for r in rows] == pytest.approx(data["delta_u"], rel=1e-5)
+
+
+def test_predict_steady_gives_delta_s_with_its_unit(capsys):
+    """delta_s = (tau_w/mu_s - p_w)/(phi rho_p g): (0.43 x 20/0.28 - 20)/0.8 = 13.393 d."""
+    assert main(["predict", "--model", "local", *PREDICT_SCENE, "--mu-w", "0.43", "--steady"]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[1].endswith("delta_s = 13.3929 d")
+
+
+def test_the_command_alone_prints_its_help(capsys):
+    assert exit_code([]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: granstokes") and all(c in out for c in ("continuum", "dem", "compare", "demo"))

@@ -1,0 +1,82 @@
+"""The cost estimate printed before a run or a calibration (dem.sizing): the schedule, the units, what a
+resume has left, and the estimate against a measured smoke run."""
+import json
+
+import pytest
+
+from dem import config, sizing
+from dem.calibrate import plan_calibration
+from dem.scene import free_fall_steps
+from dem.sizing import CONTENTION, OVERHEAD, THROUGHPUT, duration_text, makespan, plan, slowdown
+
+#: the estimate holds within this fraction of the measured wall time (bench/RESULTS.md, "Cost estimates")
+TOLERANCE = 0.3
+
+
+def test_two_processes_share_two_cores_and_more_wait():
+    assert slowdown(1, cores=2) == 1.0
+    assert slowdown(2, cores=2) == CONTENTION
+    assert slowdown(1, np_=2, cores=2) == CONTENTION  # ranks are not credited with a speed-up
+    assert slowdown(4, cores=2) == pytest.approx(2 * CONTENTION)
+    assert slowdown(2, cores=1) == 2.0  # one core: turns, no shared cache to fight over
+
+
+def test_beds_are_whole_units_spread_over_the_jobs():
+    """Three equal beds on two workers: two at once, then the third alone (not 1.5 beds' time)."""
+    assert makespan([10.0] * 3, 2, cores=2) == pytest.approx(10 * CONTENTION + 10)
+    assert makespan([10.0] * 3, 1, cores=2) == pytest.approx(30)
+    assert makespan([10.0] * 4, 2, cores=2) == pytest.approx(20 * CONTENTION)
+    # unequal units: the short one ends first, the long one finishes alone
+    assert makespan([10.0, 4.0], 2, cores=2) == pytest.approx(4 * CONTENTION + 6)
+    assert makespan([], 2) == 0.0
+
+
+@pytest.mark.parametrize("seconds, text", [(9.44, "9.4 s"), (89, "89 s"), (150, "2.5 min"), (5300, "88 min"),
+                                           (5500, "1.5 h"), (4e5, "111 h")])
+def test_durations_read_in_seconds_minutes_or_hours(seconds, text):
+    assert duration_text(seconds) == text
+
+
+def test_preparation_counts_its_expected_steps_not_its_cap():
+    p = plan(config.preset("smoke")[0])
+    c = p.config.prepare
+    expected, most = p.prepare_steps
+    assert expected == free_fall_steps(p) + round(sizing.SETTLE_RELAX_EXPECTED / p.dt)
+    assert most == free_fall_steps(p) + round((c.settle_max + c.relax_max) / p.dt)
+    rate = THROUGHPUT[2]
+    assert p.stage_seconds("seed-1") == pytest.approx(p.n_grains * expected / rate["prepare"])
+    assert p.stage_seconds("seed-1/speed") == pytest.approx(p.n_grains * p.drives[0].steps / rate["drive"])
+
+
+def test_the_estimate_follows_the_schedule_and_what_is_left():
+    p = plan(config.preset("quick")[0])
+    bed = sum(p.stage_seconds(k) for k in p.stage_keys(1))
+    assert p.cost_seconds(jobs=2, np_=1) == pytest.approx(OVERHEAD + bed * CONTENTION + bed)
+    assert p.cost_seconds(jobs=1) == pytest.approx(OVERHEAD + 3 * bed)
+    done = {"seed-1", "seed-1/stress", "seed-1/speed", "seed-2"}
+    left = bed - p.stage_seconds("seed-2")
+    assert p.cost_seconds(jobs=2, done=done) == pytest.approx(OVERHEAD + left * CONTENTION + (bed - left))
+    line = p.cost_estimate(jobs=2, done=done)
+    assert line.startswith("cost: 820 grains x 3 bed(s)") and "of what is left" in line
+    everything = {k for s in p.config.seeds for k in p.stage_keys(s)}
+    assert p.cost_estimate(jobs=2, done=everything) == "cost: none, every stage is complete"
+
+
+def test_a_calibration_runs_its_cells_longest_first_over_the_jobs():
+    cp = plan_calibration(config.preset("smoke")[0])
+    work = [cp.task_seconds(k) for k, _ in cp.tasks()]
+    assert work == sorted(work, reverse=True) and len(work) == 4
+    assert cp.cost_seconds(jobs=1) == pytest.approx(OVERHEAD + sum(work))
+    assert cp.cost_seconds(jobs=2) == pytest.approx(OVERHEAD + makespan(work, 2))
+    assert cp.cost_seconds(jobs=2) < cp.cost_seconds(jobs=1)
+    assert cp.cost_estimate(done={cp.key(k, s) for k, s in cp.tasks()}) == "cost: none, every point is complete"
+
+
+@pytest.mark.slow
+def test_the_estimate_holds_for_a_measured_smoke_run(smoke_run):
+    """The smoke preset's estimate (one bed, one job) against the wall time its run.json records."""
+    meta = json.loads((smoke_run / "run.json").read_text())
+    p = plan(config.parse((smoke_run / "config.toml").read_text()))
+    estimate = p.cost_seconds(jobs=meta["provenance"]["jobs"], np_=meta["provenance"]["np"])
+    measured = meta["timings"]["wall_time_this_invocation"]
+    assert abs(estimate / measured - 1) <= TOLERANCE, (estimate, measured, meta["timings"])

@@ -1,0 +1,120 @@
+"""``granstokes dem`` as users call it: help, --resume from the folder's own config with what is left,
+--dry-run of a calibration, and progress as plain lines when stderr is not a terminal (no LAMMPS run)."""
+import json
+import sys
+import textwrap
+
+from dem import config, layout
+from dem.calibrate import plan_calibration
+from dem.lammps_env import PLAIN_FRACTION, PLAIN_SECONDS
+from dem.runner import Lines, _Lammps
+from dem.sizing import plan
+from granstokes.cli import main
+
+
+def test_dem_alone_prints_its_help(capsys):
+    assert main(["dem"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: granstokes dem") and "run" in out and "calibrate" in out
+
+
+def _interrupted_run(folder):
+    """A smoke run folder whose bed is prepared and whose drive was interrupted."""
+    folder.mkdir()
+    (folder / layout.CONFIG_TOML).write_text(config.preset_text("smoke"))
+    stages = {"seed-1": {"status": "complete"}, "seed-1/speed": {"status": "interrupted"}}
+    (folder / layout.RUN_JSON).write_text(json.dumps({"status": "interrupted", "stages": stages}))
+    restart = layout.prepare_dir(folder, 1) / layout.PREPARED_RESTART
+    restart.parent.mkdir(parents=True)
+    restart.write_text("")
+    return folder
+
+
+def test_resume_reads_the_stored_config_and_says_what_is_left(tmp_path, capsys):
+    run = _interrupted_run(tmp_path / "run")
+    before = sorted(p.name for p in run.rglob("*"))
+    assert main(["dem", "run", "--resume", "--out", str(run), "--dry-run"]) == 0
+    err = capsys.readouterr().err
+    assert "resume: 1 of 2 stages complete (seed-1); left: seed-1/speed" in err
+    p = plan(config.preset("smoke")[0])
+    left = p.cost_estimate(1, 1, ["seed-1"])
+    assert f"  {left}\n" in err and "of what is left" in left
+    assert sorted(p.name for p in run.rglob("*")) == before
+    # the same with the preset given again (it must match the stored config)
+    assert main(["dem", "run", "--preset", "smoke", "--resume", "--out", str(run), "--dry-run"]) == 0
+    assert main(["dem", "run", "--preset", "quick", "--resume", "--out", str(run), "--dry-run"]) == 2
+    assert "--resume must be given with the config stored in" in capsys.readouterr().err
+
+
+def test_a_prepared_bed_without_its_restart_is_left_to_do(tmp_path, capsys):
+    run = _interrupted_run(tmp_path / "run")
+    (layout.prepare_dir(run, 1) / layout.PREPARED_RESTART).unlink()
+    assert main(["dem", "run", "--resume", "--out", str(run), "--dry-run"]) == 0
+    assert "resume: 0 of 2 stages complete (none); left: seed-1, seed-1/speed" in capsys.readouterr().err
+
+
+def test_calibrate_dry_run_prints_the_plan_and_its_cost_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "cal"
+    assert main(["dem", "calibrate", "--preset", "smoke", "--out", str(out), "--dry-run"]) == 0
+    err = capsys.readouterr().err
+    cp = plan_calibration(config.preset("smoke")[0])
+    assert f"{cp.summary(out)}\n  {cp.cost_estimate(2, 1)}\n" in err and "4 inertial numbers" in err
+    assert not out.exists()
+
+
+def test_calibrate_resume_reads_the_stored_config_and_counts_the_points(tmp_path, capsys):
+    out = tmp_path / "cal"
+    out.mkdir()
+    (out / layout.CONFIG_TOML).write_text(config.preset_text("smoke"))
+    points = {"I-0/seed-1": {"status": "complete"}, "I-3/seed-1": {"status": "complete"},
+              "I-1/seed-1": {"status": "interrupted"}}
+    (out / layout.CALIBRATION_STATE).write_text(json.dumps({"points": points}))
+    assert main(["dem", "calibrate", "--resume", "--out", str(out), "--dry-run"]) == 0
+    err = capsys.readouterr().err
+    # run order: longest (smallest I) first
+    assert "resume: 2 of 4 points complete (I-0/seed-1, I-3/seed-1); left: I-1/seed-1, I-2/seed-1" in err
+    assert "of what is left" in err
+
+
+class _Clock:
+    def __init__(self):
+        self.now = 0.0
+
+    def __call__(self):
+        return self.now
+
+
+def test_plain_progress_every_tenth_and_every_half_minute(capsys):
+    clock = _Clock()
+    bar = Lines(1000, 0, "seed-1/speed", clock=clock)
+    for _ in range(100):
+        bar.update(10)
+    bar.close()  # nothing new since the last line
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == round(1 / PLAIN_FRACTION) and lines[-1] == "seed-1/speed: 100% (1000/1000 steps), 0 s"
+    bar = Lines(1000, 500, "seed-2", clock=clock)
+    bar.set_postfix_str("t=1.5")
+    clock.now += PLAIN_SECONDS
+    bar.update(1)  # little progress, but half a minute passed
+    bar.update(1)
+    bar.close()
+    assert capsys.readouterr().err.splitlines() == ["seed-2: 50% (501/1000 steps, t=1.5), 30 s",
+                                                    "seed-2: 50% (502/1000 steps, t=1.5), 30 s"]
+
+
+def test_lammps_progress_without_a_terminal_is_plain_lines(tmp_path, capsys, monkeypatch):
+    """The screen of a (stand-in) LAMMPS process, read as a run reads it, reported as plain lines."""
+    screen = textwrap.dedent("""\
+        import sys
+        print("PHASE settle")
+        print("Step Time")
+        for step in range(0, 1001, 50):
+            print(f"  {step} {step / 1000}")
+        print("Loop time of 0.1 on 1 procs")
+        """)
+    monkeypatch.setattr(_Lammps, "command", lambda self, script: [sys.executable, "-c", screen])
+    info = _Lammps(1, None, True).run("in.lammps", tmp_path, None, 1000, 0, "seed-1")
+    assert info["last_step"] == 1000 and info["phases"] == ["settle"] and info["returncode"] == 0
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 10 and all(line.startswith("seed-1 settle: ") for line in lines)
+    assert lines[0].startswith("seed-1 settle: 10% (100/1000 steps, t=0.1)") and "100% (1000/1000" in lines[-1]
