@@ -19,6 +19,8 @@ def _case(tmp_path, monkeypatch, capsys, argv, name):
     (tmp_path / "not_json.toml").write_text("mu_s = 0.3\n")
     (tmp_path / "lacks_keys.json").write_text(json.dumps({"mu_s": 0.3}))
     (tmp_path / "not_a_run").mkdir()
+    (tmp_path / "a_run").mkdir()
+    (tmp_path / "a_run" / "run.json").write_text(json.dumps({"status": "complete"}))
     from dem import config
     (tmp_path / "forever.toml").write_text(config.preset_text("smoke").replace("duration = 7.0", "duration = 1e9"))
     material = "[material]\nmu_s = 0.28\nmu_d = 0.58\nI0 = 0.3\nI_convention = \"dem\"\nphi = 0.8\n"
@@ -104,6 +106,9 @@ CASES = [
     # compare
     (["compare", "not_a_run", "--out", "report"], "RUN_DIR"),
     (["compare", "missing_run", "--out", "report"], "RUN_DIR"),
+    (["compare", "a_run", "--out", "report"], "--calibration"),
+    (["compare", "a_run", "--out", "report", "--calibration", "lacks_keys.json", "--fit-on-drives"], "--fit-on-drives"),
+    (["compare", "a_run", "--out", "a_run/report", "--fit-on-drives"], "--out"),
     # demo
     (["demo", "--out", "a_file.txt"], "--out"),
 ]
