@@ -15,7 +15,7 @@ $(BIN)/python:
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[test]'
-	$(BIN)/python -m continuum.warmup
+	$(BIN)/python -m granstokes.continuum.warmup
 	touch $@
 
 test: $(STAMP)

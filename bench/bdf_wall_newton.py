@@ -16,10 +16,10 @@ import time
 
 import numpy as np
 
-import continuum.solver as solver
-import continuum.stepper as stepper
+import granstokes.continuum.solver as solver
+import granstokes.continuum.stepper as stepper
 from bench.speed_solver import TIMES
-from continuum.solver import Numerics, solve_speed
+from granstokes.continuum.solver import Numerics, solve_speed
 from tests.continuum.reference import DISKS, PAPER
 
 CASES = [("paper", PAPER, 1.334, 256, None), ("paper", PAPER, 2.0, 256, None), ("paper", PAPER, 1.334, 512, None),

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.profiles import CGSettings, DepthProfiles
-from compare.reader import find_drives
+from granstokes.compare.profiles import CGSettings, DepthProfiles
+from granstokes.compare.reader import find_drives
 
 DEFAULT = Path("/tmp/granstokes_cg_bench")
 
@@ -57,7 +57,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.drive is None and not (DEFAULT / "run" / "run.json").exists():
         from granstokes.cli import main as granstokes_main
-        from dem import config
+        from granstokes.dem import config
 
         DEFAULT.mkdir(parents=True, exist_ok=True)
         text = config.preset_text("smoke").replace("atoms = 1.0", "atoms = 0.05")

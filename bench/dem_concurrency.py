@@ -17,8 +17,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from dem import config
-from dem.runner import run
+from granstokes.dem import config
+from granstokes.dem.runner import run
 
 HERE = Path(__file__).resolve().parent
 REPEATS = 1  # each configuration costs ~2 min of both cores: one interleaved pass

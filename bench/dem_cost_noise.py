@@ -21,11 +21,11 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import LogFormatter
 
-from compare.analysis import analyse_drive, drive_specs
-from compare.plate import STEADY_WINDOW_LATEST
-from compare.profiles import CGSettings
-from dem import config
-from dem.runner import run
+from granstokes.compare.analysis import analyse_drive, drive_specs
+from granstokes.compare.plate import STEADY_WINDOW_LATEST
+from granstokes.compare.profiles import CGSettings
+from granstokes.dem import config
+from granstokes.dem.runner import run
 
 HERE = Path(__file__).parent
 SMOKE = config.preset_text("smoke")

@@ -18,10 +18,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from continuum.steady import steady_wall_speed  # noqa: E402
-from dem import config  # noqa: E402
-from dem.runner import run  # noqa: E402
-from dem.sizing import plan  # noqa: E402
+from granstokes.continuum.steady import steady_wall_speed  # noqa: E402
+from granstokes.dem import config  # noqa: E402
+from granstokes.dem.runner import run  # noqa: E402
+from granstokes.dem.sizing import plan  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 

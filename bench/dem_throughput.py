@@ -23,9 +23,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from dem import config, lammps_env, scene
-from dem.runner import Runner, _Lammps, run
-from dem.sizing import plan
+from granstokes.dem import config, lammps_env, scene
+from granstokes.dem.runner import Runner, _Lammps, run
+from granstokes.dem.sizing import plan
 
 HERE = Path(__file__).resolve().parent
 REPEATS = 3  # best of: the 2 cores may be shared

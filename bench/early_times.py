@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-import continuum.solver as solver
+import granstokes.continuum.solver as solver
 from bench.speed_solver import QUANTITIES, timed  # timed: best of its REPEATS
-from continuum.solver import Numerics, early_until, solve_speed
+from granstokes.continuum.solver import Numerics, early_until, solve_speed
 from tests.continuum.reference import PAPER, SPEED_CASES, cached
 
 CELLS = (64, 128, 256, 512)

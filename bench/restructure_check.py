@@ -1,37 +1,53 @@
-"""Behaviour before and after the restructure (issue 8): the same inputs must give the same numbers.
+"""Before and after a restructure, the same inputs must give the same numbers.
 
-    python bench/restructure_check.py [--smoke-run DIR]
+    python bench/restructure_check.py [--smoke-run DIR] [--save]
 
-Reruns ``granstokes continuum --json`` for the paper's three imposed stresses and one imposed speed
-and compares every number with the JSON saved before the restructure in bench/baseline/
-(continuum_*.json).  With ``--smoke-run DIR`` (a smoke run of the scene as it was then: the plate,
-disk inertia and plate-force averaging changed afterwards, issue 9) it also compares ``granstokes
-compare``'s metrics with smoke_metrics.json; at the restructure commit (3b556af) both were identical.
-Prints each number whose relative change exceeds the tolerance; exit status 1 if any.  Tolerances:
-1e-9 for the continuum (same arithmetic), 1e-6 for the DEM metrics (same seed, same ranks; LAMMPS
-granular runs are reproducible on one machine, not across machines).
+Reruns ``granstokes continuum --json`` (the paper's three imposed stresses, one imposed speed), ``granstokes
+predict --json`` (local and NGF, steady and transient, both drives), the DEM sizing of every preset
+(``granstokes.dem.sizing.plan(...).as_dict()``) and, with ``--smoke-run DIR``, ``granstokes compare --json`` of that run with
+the committed quick calibration; compares every number with the JSON in bench/baseline/ and prints each whose
+relative change exceeds the tolerance (exit status 1 if any).  ``--save`` writes the baseline instead (run it
+before the restructure).  Timings and provenance are not compared.  Tolerances: 1e-9 for the continuum, sizing
+and predictions (same arithmetic), 1e-6 for the comparison (coarse-graining sums in another order may move the
+last digits).
 """
 from __future__ import annotations
 
 import argparse
 import json
+import re
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
+ROOT = Path(__file__).resolve().parents[1]
 BASE = Path(__file__).parent / "baseline"
+CALIBRATION = ROOT / "results" / "quick-calibration" / "calibration.json"
 PAPER = ["--mu-s", "0.3839", "--mu-d", "0.6494"]
-CASES = {f"continuum_{mt}": [*PAPER, "--mu-w-tilde", mt, "--times", "1e-4", "1e-2", "1", "10"]
+SCENE = ["--mu-s", "0.28", "--mu-d", "0.58", "--I0", "0.3", "--phi", "0.8", "--p-w", "20", "--depth", "30"]
+CASES = {f"continuum_{mt}": ["continuum", *PAPER, "--mu-w-tilde", mt, "--times", "1e-4", "1e-2", "1", "10"]
          for mt in ("0.1", "0.5", "0.9")}
-CASES["continuum_speed"] = [*PAPER, "--u-w", "1.334", "--times", "1e-3", "1"]
+CASES["continuum_speed"] = ["continuum", *PAPER, "--u-w", "1.334", "--times", "1e-3", "1"]
+for model in ("local", "ngf"):
+    amplitude = ["--A", "0.5"] if model == "ngf" else []
+    CASES[f"predict_{model}_stress"] = ["predict", "--model", model, *amplitude, *SCENE, "--mu-w", "0.43",
+                                        "--times", "1", "10"]
+    CASES[f"predict_{model}_speed_steady"] = ["predict", "--model", model, *amplitude, *SCENE, "--u-w", "1.0",
+                                              "--steady"]
+PRESETS = ("smoke", "quick", "spheres", "paper")
+#: keys whose numbers measure the machine, not the result
+NOT_COMPARED = re.compile(r"(cpu|wall|seconds|timing|provenance|started|finished)", re.IGNORECASE)
+TOLERANCE = {"compare": 1e-6}
+DEFAULT_TOLERANCE = 1e-9
 
 
 def numbers(obj, prefix=""):
-    """Flatten nested dicts/lists into {path: number}."""
+    """Flatten nested dicts/lists into {path: number}, skipping NOT_COMPARED keys."""
     if isinstance(obj, dict):
         for k, v in obj.items():
-            yield from numbers(v, f"{prefix}.{k}" if prefix else k)
+            if not NOT_COMPARED.search(str(k)):
+                yield from numbers(v, f"{prefix}.{k}" if prefix else k)
     elif isinstance(obj, list):
         for i, v in enumerate(obj):
             yield from numbers(v, f"{prefix}[{i}]")
@@ -39,42 +55,58 @@ def numbers(obj, prefix=""):
         yield prefix, float(obj)
 
 
-def by_run_name(m: dict) -> dict:
-    """Drives keyed RUN_NAME/DRIVE (before the restructure the key was the run folder's name; now
-    it is its path, so that two runs named alike stay apart)."""
-    return {**m, "drives": {"/".join(Path(k).parts[-2:]): v for k, v in m.get("drives", {}).items()}}
-
-
 def diff(old: dict, new: dict, rtol: float) -> list[str]:
-    a, b = dict(numbers(by_run_name(old))), dict(numbers(by_run_name(new)))
+    a, b = dict(numbers(old)), dict(numbers(new))
     out = [f"  {k}: only before" for k in sorted(set(a) - set(b))]
+    out += [f"  {k}: only after" for k in sorted(set(b) - set(a))]
     for k in sorted(set(a) & set(b)):
         if abs(b[k] - a[k]) > rtol * max(abs(a[k]), 1e-12):
             out.append(f"  {k}: {a[k]:.10g} -> {b[k]:.10g}")
     return out
 
 
-def granstokes(*args) -> str:
-    return subprocess.run([sys.executable, "-m", "granstokes.cli", *args], capture_output=True, text=True,
-                          check=True).stdout
+def granstokes(*args) -> dict:
+    out = subprocess.run([sys.executable, "-m", "granstokes.cli", *args], capture_output=True, text=True, check=True)
+    return json.loads(out.stdout)
+
+
+def sizing() -> dict:
+    code = ("import json; from granstokes.dem import config, sizing; "
+            f"print(json.dumps({{p: sizing.plan(config.preset(p)[0]).as_dict() for p in {PRESETS!r}}}, default=str))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    return json.loads(out.stdout)
+
+
+def current(smoke_run: Path | None) -> dict:
+    """Every case's numbers now: {name: JSON}."""
+    out = {name: granstokes(*argv, "--json") for name, argv in CASES.items()}
+    out["sizing"] = sizing()
+    if smoke_run is not None:
+        with tempfile.TemporaryDirectory() as tmp:
+            metrics = granstokes("compare", str(smoke_run), "--out", str(Path(tmp) / "report"), "--json",
+                                 "--calibration", str(CALIBRATION))
+        metrics["drives"] = {Path(k).name: v for k, v in metrics["drives"].items()}
+        metrics["scorecard"] = [{**r, "drive": Path(r["drive"]).name} for r in metrics["scorecard"]]
+        out["compare"] = metrics
+    return out
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--smoke-run", type=Path, help="an existing smoke run folder (default: run one)")
+    ap.add_argument("--smoke-run", type=Path, help="a smoke run folder (granstokes dem run --preset smoke)")
+    ap.add_argument("--save", action="store_true", help="write the baseline instead of comparing with it")
     args = ap.parse_args()
+    now = current(args.smoke_run)
+    if args.save:
+        BASE.mkdir(exist_ok=True)
+        for name, doc in now.items():
+            (BASE / f"{name}.json").write_text(json.dumps(doc, indent=1, default=str))
+        print(f"baseline written: {', '.join(now)}")
+        return 0
     failures = 0
-    for name, argv in CASES.items():
-        rows = diff(json.loads((BASE / f"{name}.json").read_text()), json.loads(granstokes("continuum", *argv, "--json")),
-                    1e-9)
+    for name, doc in now.items():
+        rows = diff(json.loads((BASE / f"{name}.json").read_text()), doc, TOLERANCE.get(name, DEFAULT_TOLERANCE))
         print(f"{name}: {'same' if not rows else f'{len(rows)} changed'}", *rows, sep="\n")
-        failures += len(rows)
-    if args.smoke_run is not None:
-        with tempfile.TemporaryDirectory() as tmp:
-            new = json.loads(granstokes("compare", str(args.smoke_run), "--out", str(Path(tmp) / "report"), "--json",
-                                         "--fit-on-drives"))
-        rows = diff(json.loads((BASE / "smoke_metrics.json").read_text()), new, 1e-6)
-        print(f"smoke metrics: {'same' if not rows else f'{len(rows)} changed'}", *rows, sep="\n")
         failures += len(rows)
     return 1 if failures else 0
 

@@ -16,9 +16,9 @@ import time
 import numpy as np
 
 from bench.speed_solver import QUANTITIES, TIMES
-from continuum.cli import ACCURACY
-from continuum.scales import UNITS
-from continuum.solver import solve_speed
+from granstokes.continuum.cli import ACCURACY
+from granstokes.continuum.scales import UNITS
+from granstokes.continuum.solver import solve_speed
 from tests.continuum.reference import DISKS, PAPER
 
 FRICTIONS = {"paper": PAPER, "disks": DISKS}

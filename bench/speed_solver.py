@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from continuum.rheology import Friction
-from continuum.solver import WALL_STRETCH, Numerics, solve_speed
+from granstokes.continuum.rheology import Friction
+from granstokes.continuum.solver import WALL_STRETCH, Numerics, solve_speed
 
 FR = Friction(np.tan(np.radians(21.0)), np.tan(np.radians(33.0)))
 SPEEDS = (0.198, 1.334, 4.629)

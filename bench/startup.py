@@ -22,12 +22,12 @@ COMMANDS = {
     "python -c pass": ["-c", "pass"],
     "granstokes --version": ["-m", "granstokes.cli", "--version"],
     # the parser's other subcommands, without continuum.cli (whose module imports its solver)
-    "register compare, dem, paper, predict": ["-c", "import argparse, granstokes.cli, compare.cli, dem.cli, "
-                                              "continuum.paper.cli, continuum.predict_cli as p; "
+    "register compare, dem, paper, predict": ["-c", "import argparse, granstokes.cli, granstokes.compare.cli, granstokes.dem.cli, "
+                                              "granstokes.continuum.paper.cli, granstokes.continuum.predict_cli as p; "
                                               "s = argparse.ArgumentParser().add_subparsers(); "
-                                              "[m.register(s) for m in (compare.cli, dem.cli, continuum.paper.cli, p)]"],
+                                              "[m.register(s) for m in (granstokes.compare.cli, granstokes.dem.cli, granstokes.continuum.paper.cli, p)]"],
     "granstokes continuum ... --json, up to the solve": ["-c", "import granstokes.cli as c; c.build_parser().parse_args("
-                                                         f"{CONTINUUM!r}); import continuum.solver"],
+                                                         f"{CONTINUUM!r}); import granstokes.continuum.solver"],
     "granstokes continuum ... --json": ["-m", "granstokes.cli", *CONTINUUM],
 }
 

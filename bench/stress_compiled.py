@@ -13,9 +13,9 @@ import time
 
 import numpy as np
 
-import continuum.stepper as stepper
+import granstokes.continuum.stepper as stepper
 from bench.speed_solver import TIMES
-from continuum.solver import solve_stress
+from granstokes.continuum.solver import solve_stress
 from tests.continuum.reference import DISKS, PAPER
 
 CASES = [("paper", PAPER, 0.9), ("paper", PAPER, 0.5), ("paper", PAPER, 0.1), ("disks", DISKS, 0.3)]

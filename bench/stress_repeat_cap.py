@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 
-from continuum import stepper
-from continuum.paper.figures import DECADES, FIG4_CASES, FIG4_T, FRICTION as FR, STRESS_CASES
-from continuum.solver import Numerics, solve_stress
+from granstokes.continuum import stepper
+from granstokes.continuum.paper.figures import DECADES, FIG4_CASES, FIG4_T, FRICTION as FR, STRESS_CASES
+from granstokes.continuum.solver import Numerics, solve_stress
 
 TIMES = list(DECADES)
 CASES = {

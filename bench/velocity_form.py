@@ -19,15 +19,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from compare import calibrate
-from compare.comparison import PREDICTION_SPAN, PREDICTION_TIMES
-from compare.models import Drive, _series
-from continuum.rules import YieldRule
-from continuum.solver import Numerics
-from continuum.velocity import VELOCITY_NUMERICS, solve_velocity
-from dem.config import preset
-from dem.scene import plate_geometry
-from dem.sizing import plan
+from granstokes.compare import calibrate
+from granstokes.compare.comparison import PREDICTION_SPAN, PREDICTION_TIMES
+from granstokes.compare.models import Drive, _series
+from granstokes.continuum.rules import YieldRule
+from granstokes.continuum.solver import Numerics
+from granstokes.continuum.velocity import VELOCITY_NUMERICS, solve_velocity
+from granstokes.dem.config import preset
+from granstokes.dem.scene import plate_geometry
+from granstokes.dem.sizing import plan
 
 HERE = Path(__file__).parent
 ROOT = HERE.parent

@@ -16,9 +16,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from continuum.mol import solve_stress_mol
-from continuum.rheology import Friction
-from continuum.solver import Numerics, solve_stress
+from granstokes.continuum.mol import solve_stress_mol
+from granstokes.continuum.rheology import Friction
+from granstokes.continuum.solver import Numerics, solve_stress
 
 HERE = Path(__file__).parent
 FR = Friction(np.tan(np.radians(21.0)), np.tan(np.radians(33.0)))

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dem import layout
+from granstokes.dem import layout
 
 from .calibrate import WALL_EXCLUSION
 from .models import Drive, depth_at_fraction

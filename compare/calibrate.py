@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from continuum.calibration import (BOOTSTRAP_SEED, IN_DRIVE, LINEAR_I_MAX, N_BOOTSTRAP, PLANE_SHEAR, Calibration,
+from granstokes.continuum.calibration import (BOOTSTRAP_SEED, IN_DRIVE, LINEAR_I_MAX, N_BOOTSTRAP, PLANE_SHEAR, Calibration,
                                    from_replicates, fit_laws, mu_law)
-from dem.layout import POINTS_CSV
-from granstokes.validate import require
+from granstokes.dem.layout import POINTS_CSV
+from granstokes.lib.validate import require
 
 WALL_EXCLUSION = 2.0  # d
 I_MIN = 1e-3

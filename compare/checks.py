@@ -40,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from granstokes.validate import finite, require
+from granstokes.lib.validate import finite, require
 
 from .kernels import KERNELS
 from .profiles import ADDITIVE, CGSettings, DepthProfiles, _nanmean, coarse_grain, derive

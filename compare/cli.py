@@ -4,14 +4,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from granstokes.staging import claim, staged
-from granstokes.validate import require
+from granstokes.lib.staging import claim, staged
+from granstokes.lib.validate import require
 
 COMMAND = "compare"
 
 
 def run_compare(args) -> int:
-    from dem.layout import RUN_JSON
+    from granstokes.dem.layout import RUN_JSON
 
     for run in args.runs:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",

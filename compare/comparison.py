@@ -19,12 +19,12 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from continuum.calibration import Calibration, mu_law
-from continuum.crossing import crossing_depth
-from continuum.scales import Material, Scales
-from continuum.steady import DELTA_THRESHOLD
-from dem.layout import RUN_JSON
-from granstokes.validate import require
+from granstokes.continuum.calibration import Calibration, mu_law
+from granstokes.continuum.crossing import crossing_depth
+from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.steady import DELTA_THRESHOLD
+from granstokes.dem.layout import RUN_JSON
+from granstokes.lib.validate import require
 
 from . import calibrate
 from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, nearest_frame, snapshot_times

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import erf
 
-from granstokes.validate import finite, require
+from granstokes.lib.validate import finite, require
 
 KERNELS = ("gaussian", "lucy")
 GAUSS_CUT = 3.0  # Gaussian cutoff in widths

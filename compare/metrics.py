@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from continuum.scales import UNITS
-from granstokes.provenance import provenance
+from granstokes.continuum.scales import UNITS
+from granstokes.lib.provenance import provenance
 
 from .analysis import TRANSITS_BEFORE_COMPARISON
 from .calibrate import WALL_EXCLUSION

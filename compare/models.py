@@ -25,14 +25,14 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from continuum import ngf
-from continuum.crossing import crossing_depth
-from continuum.rules import YieldRule
-from continuum.scales import Material, Scales
-from continuum.scene import scene_steady
-from continuum.solver import solve_speed, solve_stress
-from continuum.steady import steady_velocity
-from continuum.velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
+from granstokes.continuum import ngf
+from granstokes.continuum.crossing import crossing_depth
+from granstokes.continuum.rules import YieldRule
+from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.scene import scene_steady
+from granstokes.continuum.solver import solve_speed, solve_stress
+from granstokes.continuum.steady import steady_velocity
+from granstokes.continuum.velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
 U_FRACTION = 0.05
 

@@ -18,8 +18,8 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import minimize_scalar
 
-from continuum.ngf import NonlocalFluidity, solve_steady
-from continuum.scales import Material
+from granstokes.continuum.ngf import NonlocalFluidity, solve_steady
+from granstokes.continuum.scales import Material
 
 from .analysis import DriveAnalysis
 from .calibrate import PAIR_SPACING, WALL_EXCLUSION

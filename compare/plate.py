@@ -20,8 +20,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from dem.layout import PLATE_CSV
-from granstokes.statistics import autocorrelation_time
+from granstokes.dem.layout import PLATE_CSV
+from granstokes.lib.statistics import autocorrelation_time
 
 #: steady-state criterion (stated in every report): the running mean over 5 % of the record stays
 #: within max(3 standard errors of the final-quarter mean, 5 % of the total change) of that mean

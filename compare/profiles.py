@@ -59,8 +59,8 @@ import pandas as pd
 from MDAnalysis.analysis.base import AnalysisBase
 from scipy import stats
 
-from dem.layout import BED, CONTACT_COLUMNS
-from granstokes.validate import finite, require
+from granstokes.dem.layout import BED, CONTACT_COLUMNS
+from granstokes.lib.validate import finite, require
 
 from .kernels import Kernel
 from .reader import DriveFolder, Frame

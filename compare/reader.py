@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dem.layout import (ATOMS, CONTACT_COLUMNS, CONTACTS, PLATE_CSV, PROFILES_CSV, RUN_JSON, SEGMENTS,
+from granstokes.dem.layout import (ATOMS, CONTACT_COLUMNS, CONTACTS, PLATE_CSV, PROFILES_CSV, RUN_JSON, SEGMENTS,
                         grains_table)
 
 _MARK = b"ITEM: TIMESTEP"

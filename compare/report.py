@@ -18,11 +18,11 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import LogFormatter, LogLocator
 
-from continuum.calibration import LINEAR_I_MAX, mu_law
-from continuum import ngf
-from continuum.scales import UNITS
-from continuum.steady import steady_mu
-from granstokes.page import page
+from granstokes.continuum.calibration import LINEAR_I_MAX, mu_law
+from granstokes.continuum import ngf
+from granstokes.continuum.scales import UNITS
+from granstokes.continuum.steady import steady_mu
+from granstokes.lib.page import page
 
 from .analysis import nearest_frame, snapshot_times
 from .calibrate import PUBLISHED

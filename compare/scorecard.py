@@ -36,8 +36,8 @@ import pandas as pd
 from scipy import stats
 from tqdm import tqdm
 
-from continuum.crossing import crossing_depth
-from continuum.scales import Material
+from granstokes.continuum.crossing import crossing_depth
+from granstokes.continuum.scales import Material
 
 from .analysis import DriveAnalysis
 from .calibrate import WALL_EXCLUSION

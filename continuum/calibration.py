@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import curve_fit
 
-from granstokes.validate import require
+from granstokes.lib.validate import require
 
 from .rheology import convert_I, jop_law
 from .scales import Material

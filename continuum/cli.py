@@ -8,8 +8,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from granstokes.staging import claim, staged
-from granstokes.validate import finite, output_file, require
+from granstokes.lib.staging import claim, staged
+from granstokes.lib.validate import finite, output_file, require
 
 #: the CLI's default relative accuracy of every number (both drives; an imposed speed reaches it on 512
 #: cells in 2-13 s CPU: bench/RESULTS.md "Imposed speed over its range")

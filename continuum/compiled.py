@@ -25,7 +25,7 @@ def jit(fn):
 #: the modules whose kernels a drive calls from Python, their drive and about how long a first solve compiles them
 #: (wall on 2 cores: 10-13 s and 11-18 s measured, bench/RESULTS.md "First solve after set-up"; the set-up compiles
 #: them ahead, continuum.warmup)
-DRIVES = {"continuum.stress_dirk": ("imposed-stress", 15), "continuum.speed_bdf": ("imposed-speed", 20)}
+DRIVES = {f"{__package__}.stress_dirk": ("imposed-stress", 15), f"{__package__}.speed_bdf": ("imposed-speed", 20)}
 
 
 class _CompileNotice(event.Listener):

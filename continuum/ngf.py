@@ -78,7 +78,7 @@ from scipy.optimize import brentq
 from scipy.sparse import lil_matrix
 
 from .mesh import Mesh
-from granstokes.validate import finite, require
+from granstokes.lib.validate import finite, require
 
 from .rheology import convert_I
 from .scales import UNITS, Material

@@ -29,7 +29,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from granstokes.validate import finite, require
+from granstokes.lib.validate import finite, require
 
 MODELS = ("local", "ngf")
 BOUNDARIES = ("neumann", "dirichlet")

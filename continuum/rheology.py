@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from granstokes.validate import finite, require
+from granstokes.lib.validate import finite, require
 
 #: |gamma_dot| = SHEAR_RATE_FACTOR[convention] * |du/dy|
 SHEAR_RATE_FACTOR = {"paper": 0.5, "dem": 1.0}

@@ -23,7 +23,7 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import brentq
 
-from granstokes.validate import finite, require
+from granstokes.lib.validate import finite, require
 
 from .rheology import Friction
 

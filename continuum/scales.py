@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from granstokes.validate import finite, require
+from granstokes.lib.validate import finite, require
 
 from .rheology import SHEAR_RATE_FACTOR, Friction, convert_I
 from .steady import steady_wall_speed

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from granstokes.validate import require
+from granstokes.lib.validate import require
 
 from .scales import Scales
 from .steady import steady_velocity

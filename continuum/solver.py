@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from granstokes.provenance import provenance
+from granstokes.lib.provenance import provenance
 
 from . import observables as obs
 from .mesh import MAX_STRETCH, ORDERS, Mesh

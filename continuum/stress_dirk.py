@@ -22,7 +22,7 @@ from .stepper import StepperFailure, StepStats
 
 #: compiled.digest(compiled): these kernels build in its code, and numba's cache checks only this file, so this line
 #: changes with it (tests/continuum/test_compiled_cache.py gives the new value)
-BUILT_FROM = "fd9a7dc8a23cf592"
+BUILT_FROM = "ccdb4c6a4e3ad703"
 #: per-step rows kept between two returns to Python (the observer's), per kernel call
 RECORD_ROWS = 1024
 #: the kernel's exits

@@ -2,7 +2,7 @@
 NUMBA_CACHE_DIR) by solving a small case of each drive through the solver's entry points, so that the first
 ``granstokes continuum`` after set-up starts at once.  The Makefile's install step runs it:
 
-    .venv/bin/python -m continuum.warmup
+    .venv/bin/python -m granstokes.continuum.warmup
 """
 from __future__ import annotations
 

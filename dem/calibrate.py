@@ -39,11 +39,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from continuum import calibration as fitting
-from granstokes import staging
-from granstokes.provenance import provenance
-from granstokes.statistics import autocorrelation_time
-from granstokes.validate import require
+from granstokes.continuum import calibration as fitting
+from granstokes.lib import staging
+from granstokes.lib.provenance import provenance
+from granstokes.lib.statistics import autocorrelation_time
+from granstokes.lib.validate import require
 
 from . import lammps_env, layout
 from .config import Config, parse

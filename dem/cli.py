@@ -14,7 +14,7 @@ import signal
 import sys
 from pathlib import Path
 
-from granstokes.validate import require
+from granstokes.lib.validate import require
 
 from . import config as config_mod
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, PLAIN_FRACTION, PLAIN_SECONDS, LammpsNotFound

@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from granstokes.validate import finite, require
-from continuum.scales import Material
+from granstokes.lib.validate import finite, require
+from granstokes.continuum.scales import Material
 
 from .contact import Contact
 

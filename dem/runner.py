@@ -29,10 +29,10 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from continuum.scales import UNITS
-from granstokes import staging
-from granstokes.provenance import provenance
-from granstokes.validate import require
+from granstokes.continuum.scales import UNITS
+from granstokes.lib import staging
+from granstokes.lib.provenance import provenance
+from granstokes.lib.validate import require
 
 from . import lammps_env, layout, outputs, scene
 from .config import Config, parse

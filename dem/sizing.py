@@ -12,9 +12,9 @@ import math
 import os
 from dataclasses import dataclass
 
-from continuum.scales import Scales
-from continuum.steady import steady_wall_speed
-from granstokes.validate import require
+from granstokes.continuum.scales import Scales
+from granstokes.continuum.steady import steady_wall_speed
+from granstokes.lib.validate import require
 
 from .config import Config, Drive
 from .contact import grain_volume

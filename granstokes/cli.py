@@ -28,7 +28,7 @@ def run_demo(args) -> int:
 
 def version_text() -> str:
     from . import __version__
-    from .provenance import git_hash
+    from .lib.provenance import git_hash
 
     return f"granstokes {__version__} (git {git_hash() or 'unknown'})"
 
@@ -43,11 +43,11 @@ class _Version(argparse.Action):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from compare.cli import register as compare_register
-    from continuum.cli import register as continuum_register
-    from continuum.paper.cli import register as paper_register
-    from continuum.predict_cli import register as predict_register
-    from dem.cli import register as dem_register
+    from granstokes.compare.cli import register as compare_register
+    from granstokes.continuum.cli import register as continuum_register
+    from granstokes.continuum.paper.cli import register as paper_register
+    from granstokes.continuum.predict_cli import register as predict_register
+    from granstokes.dem.cli import register as dem_register
 
     parser = OneLineParser(prog="granstokes", description="Stokes' first problem in a dense granular bed: mu(I) and "
                            "nonlocal continuum models against LAMMPS DEM. Each command has its own --help.")
@@ -81,7 +81,7 @@ def main(argv=None) -> int:
         print(f"granstokes: error: {err}", file=sys.stderr)
         return 2
     except RuntimeError as err:
-        from continuum.stepper import StepperFailure
+        from granstokes.continuum.stepper import StepperFailure
 
         if not isinstance(err, StepperFailure):
             raise

@@ -12,16 +12,16 @@ import sys
 import time
 from pathlib import Path
 
-from compare.comparison import build
-from compare.report import conclusions, display_labels, scorecard_html, slug, verdict_html, write_report
-from continuum.paper.report import write_continuum_report
-from dem import config as dem_config
-from dem import layout
-from dem.calibrate import calibrate as dem_calibrate
-from dem.runner import run as dem_run
+from granstokes.compare.comparison import build
+from granstokes.compare.report import conclusions, display_labels, scorecard_html, slug, verdict_html, write_report
+from granstokes.continuum.paper.report import write_continuum_report
+from granstokes.dem import config as dem_config
+from granstokes.dem import layout
+from granstokes.dem.calibrate import calibrate as dem_calibrate
+from granstokes.dem.runner import run as dem_run
 
-from .page import page
-from .staging import claim, staged, start
+from .lib.page import page
+from .lib.staging import claim, staged, start
 
 COMMAND = "demo"
 

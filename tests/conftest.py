@@ -3,7 +3,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from continuum.rheology import Friction
+from granstokes.continuum.rheology import Friction
 
 
 @pytest.fixture(scope="session")

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from granstokes.staging import claim, staged
-from granstokes.validate import read_json
+from granstokes.lib.staging import claim, staged
+from granstokes.lib.validate import read_json
 
 #: what --calibration must hold (I0 in the DEM convention)
 CALIBRATION_KEYS = ("mu_s", "mu_d", "I0")

@@ -14,8 +14,8 @@ from .figures import FRICTION, paper_figures
 from ..scales import UNITS
 from ..solver import solve_speed, solve_stress
 from ..steady import steady_wall_speed
-from granstokes.page import page
-from granstokes.provenance import provenance
+from granstokes.lib.page import page
+from granstokes.lib.provenance import provenance
 
 
 

@@ -6,10 +6,10 @@ import pandas as pd
 import pytest
 from scipy.integrate import quad
 
-from compare.kernels import Kernel
-from compare.profiles import ADDITIVE, CGSettings, DepthProfiles, Grid, coarse_grain, derive, ensemble
-from compare.reader import DriveFolder, Frame, find_drives
-from dem.layout import BASE, BED, CONTACT_COLUMNS
+from granstokes.compare.kernels import Kernel
+from granstokes.compare.profiles import ADDITIVE, CGSettings, DepthProfiles, Grid, coarse_grain, derive, ensemble
+from granstokes.compare.reader import DriveFolder, Frame, find_drives
+from granstokes.dem.layout import BASE, BED, CONTACT_COLUMNS
 
 KERNELS = [Kernel("lucy", 0.5), Kernel("gaussian", 0.5), Kernel("lucy", 1.3), Kernel("gaussian", 0.2)]
 

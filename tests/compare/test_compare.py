@@ -5,13 +5,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from compare.calibrate import fit, load
-from compare.comparison import check_grains
-from continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
-from compare.models import depth_at_fraction
-from compare.plate import block_estimate, friction, power_law, pooled, steady_state
+from granstokes.compare.calibrate import fit, load
+from granstokes.compare.comparison import check_grains
+from granstokes.continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
+from granstokes.compare.models import depth_at_fraction
+from granstokes.compare.plate import block_estimate, friction, power_law, pooled, steady_state
 from granstokes.cli import main as granstokes_main
-from granstokes.statistics import autocorrelation_time
+from granstokes.lib.statistics import autocorrelation_time
 
 
 def test_calibration_recovers_a_known_law_within_its_interval():

@@ -7,9 +7,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from compare.models import LOCAL, PAPER
-from compare.scorecard import _not_scored, base_reach, headline, tally
-from continuum.calibration import IN_DRIVE, JOP_BOUNDS, from_replicates
+from granstokes.compare.models import LOCAL, PAPER
+from granstokes.compare.scorecard import _not_scored, base_reach, headline, tally
+from granstokes.continuum.calibration import IN_DRIVE, JOP_BOUNDS, from_replicates
 
 
 def _row(drive, observable, model, sigma, scored=True, blind=True):

@@ -35,8 +35,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from threadpoolctl import threadpool_limits
 
-from continuum.rheology import Friction
-from continuum.steady import DELTA_THRESHOLD, mu_w_for_speed
+from granstokes.continuum.rheology import Friction
+from granstokes.continuum.steady import DELTA_THRESHOLD, mu_w_for_speed
 
 #: reference degree and time tolerance, and those of its refinement companion
 DEGREE, RTOL = 160, 1e-12

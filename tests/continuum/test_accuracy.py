@@ -7,8 +7,8 @@ import sys
 import numpy as np
 import pytest
 
-from continuum.closed_forms import SmallTimeLimit
-from continuum.solver import Numerics, solve_stress
+from granstokes.continuum.closed_forms import SmallTimeLimit
+from granstokes.continuum.solver import Numerics, solve_stress
 from tests.continuum import reference
 
 TIMES = list(reference.TIMES)

@@ -3,10 +3,10 @@ other modules records their digest (BUILT_FROM), so that editing them changes it
 code is recompiled (found by review: a caller kept the old callee's code after the callee's file changed)."""
 import pytest
 
-import continuum.compiled as compiled
-import continuum.problems as problems
-import continuum.speed_bdf as speed_bdf
-import continuum.stress_dirk as stress_dirk
+import granstokes.continuum.compiled as compiled
+import granstokes.continuum.problems as problems
+import granstokes.continuum.speed_bdf as speed_bdf
+import granstokes.continuum.stress_dirk as stress_dirk
 
 
 @pytest.mark.parametrize("module, built_from", [(speed_bdf, (compiled, problems)), (stress_dirk, (compiled,))],

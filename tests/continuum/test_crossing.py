@@ -4,7 +4,7 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import erfc
 
-from continuum.crossing import crossing_depth
+from granstokes.continuum.crossing import crossing_depth
 
 LEVEL = 1e-3
 

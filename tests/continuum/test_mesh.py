@@ -3,7 +3,7 @@ output times from their deeper wall cluster onto the solve's mesh (continuum.sol
 import numpy as np
 import pytest
 
-from continuum.mesh import RESAMPLE_DEGREE, Mesh
+from granstokes.continuum.mesh import RESAMPLE_DEGREE, Mesh
 
 
 @pytest.mark.parametrize("stretch, folds", [(0.0, 0.0), (6.0, 0.0), (6.0, 12.0)])

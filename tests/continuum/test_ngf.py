@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from continuum.ngf import (NonlocalFluidity, TransientNumerics, solve_steady, solve_transient, steady_profile,
+from granstokes.continuum.ngf import (NonlocalFluidity, TransientNumerics, solve_steady, solve_transient, steady_profile,
                            yield_depth)
-from continuum.predict_cli import register, run_predict
+from granstokes.continuum.predict_cli import register, run_predict
 from granstokes.cli import main
-from continuum.scales import Material, Scales
-from continuum.steady import steady_velocity
-from continuum.velocity import BedScene
+from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.steady import steady_velocity
+from granstokes.continuum.velocity import BedScene
 
 MAT = Material(mu_s=0.28, mu_d=0.58, I0=0.3, I_convention="dem", phi=0.8)
 P_W, MU_W, H = 20.0, 0.43, 24.0

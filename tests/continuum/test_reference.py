@@ -5,7 +5,7 @@ through the lift-off of mu_w from mu_d, on the exponential map after it (referen
 import numpy as np
 import pytest
 
-from continuum.solver import Numerics, solve_stress
+from granstokes.continuum.solver import Numerics, solve_stress
 from tests.continuum import reference as ref
 
 #: the recomputation of a cached case matches it to this (relative): a tenth of the claimed accuracy

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 from scipy.linalg import solve_banded
 
-import continuum.compiled as compiled
-import continuum.speed_bdf as sb
-import continuum.stepper as stepper
-from continuum.problems import ImposedSpeed
-from continuum.solver import TIME_ERROR_PER_RTOL, Numerics, map_for, solve_speed
-from continuum.steady import mu_w_for_speed
+import granstokes.continuum.compiled as compiled
+import granstokes.continuum.speed_bdf as sb
+import granstokes.continuum.stepper as stepper
+from granstokes.continuum.problems import ImposedSpeed
+from granstokes.continuum.solver import TIME_ERROR_PER_RTOL, Numerics, map_for, solve_speed
+from granstokes.continuum.steady import mu_w_for_speed
 
 #: the compiled arithmetic differs from numpy's in the order of additions only: relative round-off of a few
 #: operations, besides the cancellations bounded in each test
@@ -20,7 +20,7 @@ ROUND_OFF = 1e-13
 def speed_state(request):
     """An imposed speed (u~_w = 1.334, 64 cells on its solve's map) and its state in the lift-off, t~ = 0.3
     (q = 2.5: mu~_w = 0.08)."""
-    from continuum.rheology import Friction
+    from granstokes.continuum.rheology import Friction
     import math
 
     fr = Friction(math.tan(math.radians(21.0)), math.tan(math.radians(33.0)))
@@ -42,7 +42,7 @@ def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
     first cell's weight w_0 ~ 8e-6 and dL/dq: N eps share/(w_0 dL/dq) ~ 4e-10), the rate and the band's diagonal
     to that of the Laplacian (weights up to ~1/h_0^2 on values O(1): measured 5e-9 of the largest rate), every
     entry to ROUND_OFF relative besides."""
-    from continuum.problems import first_cell
+    from granstokes.continuum.problems import first_cell
 
     pb, x = speed_state
     fr, n = pb.friction, len(x)
@@ -151,7 +151,7 @@ def test_newton_floor_carries_a_steady_state_past_its_round_off():
     collapsed at t~ = 9.244, measured on this machine; the collapse is chaotic in the round-off, so it is not
     replayed here), at its steady state mu_w^inf to the time error TIME_ERROR_PER_RTOL rtol (1.9e-8; measured
     1.3e-10 off, bench/speed_range.py)."""
-    from continuum.steady import mu_w_for_speed
+    from granstokes.continuum.steady import mu_w_for_speed
     from tests.continuum.reference import DISKS
 
     sol = solve_speed(DISKS, 0.05, [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0], Numerics(n_cells=512))

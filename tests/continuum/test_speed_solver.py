@@ -4,15 +4,15 @@ import functools
 import numpy as np
 import pytest
 
-from continuum.closed_forms import speed_short_time_mu
-from continuum.mesh import Mesh
-from continuum.problems import ImposedSpeed
-from continuum.rheology import Friction
-from continuum.solver import (INITIAL_STEP, MIN_ESTIMATED_CELLS, TIME_ERROR_PER_RTOL, WALL_STRETCH, Numerics, map_for,
+from granstokes.continuum.closed_forms import speed_short_time_mu
+from granstokes.continuum.mesh import Mesh
+from granstokes.continuum.problems import ImposedSpeed
+from granstokes.continuum.rheology import Friction
+from granstokes.continuum.solver import (INITIAL_STEP, MIN_ESTIMATED_CELLS, TIME_ERROR_PER_RTOL, WALL_STRETCH, Numerics, map_for,
                               solve_speed, solve_stress)
-from continuum.steady import mu_w_for_speed
+from granstokes.continuum.steady import mu_w_for_speed
 from tests.continuum.reference import PAPER as FR, SPEED_CASES
-from continuum.stepper import integrate
+from granstokes.continuum.stepper import integrate
 
 SPEEDS = (0.198, 1.334, 4.629)
 
@@ -74,9 +74,9 @@ def test_first_cell_integral_and_derivatives(q, b, compiled):
     from scipy.integrate import quad
 
     if compiled:
-        from continuum.speed_bdf import first_cell
+        from granstokes.continuum.speed_bdf import first_cell
     else:
-        from continuum.problems import first_cell
+        from granstokes.continuum.problems import first_cell
     a = np.exp(-q)
     ref = quad(lambda s: 1 / (a + (b - a) * s), 0, 1, epsabs=0, epsrel=1e-13, limit=200)[0]
     lam, dq, db = first_cell(q, b)
@@ -171,7 +171,7 @@ def test_a_stall_after_the_lift_off_hands_over_to_sdirk4(paper_friction, monkeyp
     """Where BDF's steps stay small (here every step counts as small: BDF_STALL = 1, STALL_STEPS = 5) after the
     lift-off (u~_w = 0.198: 0.39), the rest goes to SDIRK4 from BDF's state, and the result is BDF's own to the
     time error, TIME_ERROR_PER_RTOL rtol (measured 7.4e-9 in mu_w, 1.4e-9 in delta, at rtol 1e-8)."""
-    import continuum.stepper as stepper
+    import granstokes.continuum.stepper as stepper
 
     times, numerics = [0.1, 1.0, 10.0], Numerics(n_cells=64)
     alone = solve_speed(paper_friction, 0.198, times, numerics)
@@ -232,7 +232,7 @@ def default_speeds():
     converged to 1e-9 (tests/continuum/test_reference.py) at each: before and through the lift-off on its
     wall-clustered maps, after it on its exponential map (reference.pieces).  The paper's three speeds and the
     disks' u~_w = 1 (a second parameter set)."""
-    from continuum.cli import ACCURACY
+    from granstokes.continuum.cli import ACCURACY
     from tests.continuum.reference import assembled
 
     return ACCURACY, {label: (solve_speed(case.friction, case.u_w, case.times, accuracy=ACCURACY), assembled(label))
@@ -284,7 +284,7 @@ def test_bordered_newton_solves_match_scipys_lu(case, monkeypatch):             
     Jacobian to the time error (measured: 7e-8 relative at rtol 1e-8; held to TIME_ERROR_PER_RTOL rtol) with
     as many Newton iterations (a c read off 2x wrong: BDF fails at t~ = 1e-3).  The times are after
     solver.early_until: on the early times' deeper cluster scipy's LU fails on 64 cells (t~ = 8e-11)."""
-    import continuum.stepper as stepper
+    import granstokes.continuum.stepper as stepper
 
     fr, u_w, times = DEGENERATE if case.startswith("degenerate") else (FR, 1.334, [0.06, 0.3, 1.0])
     numerics = Numerics() if case.startswith("degenerate") else Numerics(n_cells=int(case.split()[0]))
@@ -300,7 +300,7 @@ def test_bordered_newton_solves_match_scipys_lu(case, monkeypatch):             
 def test_reduced_jacobian_dense_equals_sparse(paper_friction, monkeypatch):
     """The BDF path's reduced Jacobian (wall eliminated) is the same matrix whether built dense (up to
     DENSE_BDF_MAX unknowns) or sparse: entry by entry, to rounding."""
-    import continuum.stepper as stepper
+    import granstokes.continuum.stepper as stepper
 
     pb = ImposedSpeed(paper_friction, 1.334, Mesh.graded(64, 8.0), order=4)
     x = integrate(pb, [1e-2], method="bdf", rtol=1e-6, atol=1e-8)[0][0]
@@ -321,7 +321,7 @@ def test_bdf_wall_newton_keeps_bdf_out_of_the_order_one_trap(monkeypatch):
     each solve within 2300 steps (measured 1867-1934; with the wall's row and column frozen, stepper.
     BDF_WALL_NEWTON = False, 1910-3516, three of the five trapped at order 1 through the lift-off), and mu_w at
     t~ = 1 the same within WALL_NEWTON_SPREAD across them (measured 1.4e-9; frozen 1.3e-8)."""
-    import continuum.solver as solver
+    import granstokes.continuum.solver as solver
 
     mu_w = []
     for k in range(5):
@@ -335,7 +335,7 @@ def test_bdf_wall_newton_keeps_bdf_out_of_the_order_one_trap(monkeypatch):
 def test_an_accuracy_request_starts_where_the_error_model_points():
     """A speed's accuracy request starts on the cells ERROR_MODEL predicts (1e-6: 512, its companion on 256, not
     the 64- and 128-cell rungs), within [MIN_ESTIMATED_CELLS, MAX_CELLS]; the stress has no model."""
-    from continuum.solver import ERROR_MODEL, MAX_CELLS, first_cells
+    from granstokes.continuum.solver import ERROR_MODEL, MAX_CELLS, first_cells
 
     cells, error = ERROR_MODEL["speed"]
     assert first_cells("speed", error) == cells
@@ -349,8 +349,8 @@ def test_the_smallest_speed_tried_reaches_the_default_accuracy():
     """u~_w = 0.001 (beads, t~_mud = 1e-6): its delta is ill-conditioned (mu_w^inf - mu_s tiny) and BDF's time error
     there ~500 rtol; with the companion's rtol capped (COMPANION_MAX_RTOL, 4e-9 on 256 cells) the default accuracy is
     reached (measured worst estimate 5.7e-7; at the uncapped 1e-8 the request was refused, 1.0-1.1e-6)."""
-    from continuum.cli import ACCURACY
-    from continuum.solver import COMPANION_MAX_RTOL
+    from granstokes.continuum.cli import ACCURACY
+    from granstokes.continuum.solver import COMPANION_MAX_RTOL
 
     fine = Numerics(n_cells=512, method="bdf", rtol=6.25e-10, atol=6.25e-12)
     assert fine.coarser(16).rtol == COMPANION_MAX_RTOL["bdf"]
@@ -360,7 +360,7 @@ def test_the_smallest_speed_tried_reaches_the_default_accuracy():
 
 def test_the_reachable_accuracy_is_printed_rounded_up():
     """The refusal's bound, printed at two digits, is rounded up: 1.018e-6 must not read as a request of 1e-6."""
-    from continuum.solver import round_up
+    from granstokes.continuum.solver import round_up
 
     assert f"{round_up(1.018e-6):.1e}" == "1.1e-06" and f"{round_up(1e-6):.1e}" == "1.0e-06"
     assert f"{round_up(3.81e-7):.1e}" == "3.9e-07" and round_up(2.5e-12) == pytest.approx(2.5e-12, rel=1e-12)
@@ -369,7 +369,7 @@ def test_the_reachable_accuracy_is_printed_rounded_up():
 def test_unreachable_speed_accuracy_is_refused_with_what_can_be_reached():
     """1e-8 for a speed would need more than MAX_CELLS: refused after the estimate on them (ERROR_MODEL starts
     it there), naming the accuracy that 512 cells reach (measured 3.8e-7 at u~_w = 1.334)."""
-    from continuum.solver import MAX_CELLS
+    from granstokes.continuum.solver import MAX_CELLS
 
     with pytest.raises(ValueError, match=rf"accuracy must be >= \d\.\de-07 .*at most {MAX_CELLS['speed']} cells"):
         solve_speed(FR, 1.334, DECADES, accuracy=1e-8)
@@ -379,7 +379,7 @@ def test_speed_early_times_on_the_deeper_cluster(monkeypatch):
     """0.198's mu_w at t~ = 1e-3 (0.026 t~_mud, mu~_w ~ 1e-5) on 128 cells: within 1e-7 of the early reference
     with its early times apart (solver.EARLY_SPAN, measured 8e-9); on the solve's own map (EARLY_SPAN = 0, the
     control) 1.2e-6 off, an error that N does not change.  The joined series runs on in time."""
-    import continuum.solver as solver
+    import granstokes.continuum.solver as solver
     from tests.continuum.reference import cached
 
     times = [1e-4, 1e-3, 1e-2, 0.1]
@@ -399,7 +399,7 @@ def test_speed_from_a_late_first_time_meets_the_default_accuracy(u_w):
     """From t~_min = 0.1 the layer's stretch would be 0 and the map's cells crowd the bottom (solver.
     CLUSTER_MIN_STRETCH): 0.198 could not reach 1e-6 on 512 cells.  Now every speed reaches the CLI's default
     accuracy, and is within it of the independent reference at t~ = 0.1, 1 and 10, within its estimates."""
-    from continuum.cli import ACCURACY
+    from granstokes.continuum.cli import ACCURACY
     from tests.continuum.reference import assembled
 
     label = f"{u_w:g}"

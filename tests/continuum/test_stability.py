@@ -6,11 +6,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from continuum.mesh import Mesh
-from continuum.problems import ImposedStress
-from continuum.scales import Material
-from continuum.paper.stability import METHODS, explicit_bound, plot_maps, stability_table
-from continuum.stepper import explicit_euler
+from granstokes.continuum.mesh import Mesh
+from granstokes.continuum.problems import ImposedStress
+from granstokes.continuum.scales import Material
+from granstokes.continuum.paper.stability import METHODS, explicit_bound, plot_maps, stability_table
+from granstokes.continuum.stepper import explicit_euler
 
 FR = Material().friction
 

@@ -3,11 +3,11 @@ Newton matrix, and stepper.integrate's DIRK step for step (COMPILED_STRESS = Fal
 import numpy as np
 import pytest
 
-import continuum.stepper as stepper
-import continuum.stress_dirk as sd
-from continuum.problems import ImposedStress
-from continuum.solver import TIME_ERROR_PER_RTOL, Numerics, map_for, solve_stress
-from tests.continuum.reference import DISKS, PAPER
+import granstokes.continuum.stepper as stepper
+import granstokes.continuum.stress_dirk as sd
+from granstokes.continuum.problems import ImposedStress
+from granstokes.continuum.solver import Numerics, map_for, solve_stress
+from tests.continuum.reference import DISKS, PAPER, cached
 
 TIMES = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]
 
@@ -31,7 +31,7 @@ def test_rate_and_newton_matrix_are_imposed_stresses(stress_state):
     """The compiled rate equals ImposedStress.rate to the round-off of the Laplacian's sums (weights up to ~1/h_0^2
     on values O(1)), and the compiled LU of M - dh J solves as stepper.NewtonMatrix does (LAPACK on
     ImposedStress.jacobian's band), to 1e-12 relative, at a step's dh (1e-4) and a large one (1)."""
-    from continuum.stepper import NewtonMatrix
+    from granstokes.continuum.stepper import NewtonMatrix
 
     pb, x, _ = stress_state
     n = len(x)
@@ -72,16 +72,15 @@ def test_compiled_dirk_takes_the_python_steps(stress_state, monkeypatch, method)
 
 
 @pytest.mark.parametrize("friction, mu_w_tilde, cells", [(PAPER, 0.5, 96), (PAPER, 0.1, 256), (DISKS, 0.3, 128)])
-def test_compiled_solve_is_the_pythons_to_the_time_error(monkeypatch, friction, mu_w_tilde, cells):
-    """solve_stress compiled and in Python agree in u~_w and delta at t~ = 1e-4 ... 10 to the time error,
-    TIME_ERROR_PER_RTOL rtol (measured: 6e-8 at rtol 5e-7 on 96 cells, 6e-11 at 6.25e-10 on 512)."""
-    mu_w = friction.mu_w_from_tilde(mu_w_tilde)
-    ours = solve_stress(friction, mu_w, TIMES, Numerics(n_cells=cells))
-    monkeypatch.setattr(stepper, "COMPILED_STRESS", False)
-    python = solve_stress(friction, mu_w, TIMES, Numerics(n_cells=cells))
-    bound = TIME_ERROR_PER_RTOL["sdirk4"] * ours.numerics.rtol
+def test_compiled_solve_is_within_its_estimate_of_the_reference(friction, mu_w_tilde, cells):
+    """solve_stress compiled agrees with the independent reference (tests/continuum/reference.py) in u~_w and delta
+    at t~ = 1e-4 ... 10 within its estimated error, on meshes other than the default (measured: at most 0.73 of the
+    estimate).  The Python DIRK takes the same rules but parts from these steps where a Newton iteration count tips;
+    its time error at mu~_w = 0.1, t~ = 0.1 on 256 cells is 2.9 rtol, 6 % beyond its estimate (docs/numerics.md)."""
+    ref = cached(f"{'paper' if friction is PAPER else 'disks'}-{mu_w_tilde}")
+    sol = solve_stress(friction, friction.mu_w_from_tilde(mu_w_tilde), TIMES, Numerics(n_cells=cells), estimate=True)
     for q in ("u_w", "delta"):
-        assert np.max(np.abs(getattr(ours, q) / getattr(python, q) - 1)) < bound, q
+        assert np.all(np.abs(getattr(sol, q) - np.asarray(ref[q])) <= sol.errors[q]), q
 
 
 def test_a_step_limit_is_a_stepper_failure(stress_state):

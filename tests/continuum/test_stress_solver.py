@@ -2,12 +2,12 @@
 import numpy as np
 import pytest
 
-from continuum.closed_forms import SELF_SIMILAR_DELTA, WKB, self_similar_mu
-from continuum.mesh import Mesh
-from continuum.problems import ImposedStress
-from continuum.solver import Numerics, solve_stress
-from continuum.steady import steady_wall_speed
-from continuum.stepper import integrate
+from granstokes.continuum.closed_forms import SELF_SIMILAR_DELTA, WKB, self_similar_mu
+from granstokes.continuum.mesh import Mesh
+from granstokes.continuum.problems import ImposedStress
+from granstokes.continuum.solver import Numerics, solve_stress
+from granstokes.continuum.steady import steady_wall_speed
+from granstokes.continuum.stepper import integrate
 
 CASES = (0.9, 0.5, 0.1)
 
@@ -59,7 +59,7 @@ def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
     The loop is chaotic in the round-off: the compiled DIRK (continuum.stress_dirk, the same rules) falls into it
     less deeply (to t~ = 0.5 uncapped: 269 steps, 174 rejected, against the Python's 1250 and 1185), so the
     control runs the Python (stepper.COMPILED_STRESS = False)."""
-    import continuum.stepper as stepper
+    import granstokes.continuum.stepper as stepper
 
     mu_w, times = paper_friction.mu_w_from_tilde(0.1), [1e-4, 1e-2, 1.0, 10.0]
     loose = solve_stress(paper_friction, mu_w, times, Numerics(n_cells=64, rtol=1e-4))

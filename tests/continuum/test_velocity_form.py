@@ -4,15 +4,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import calibrate
-from continuum.rules import ShearLaw, YieldRule, well_posed_range, wellposedness
-from continuum.scales import Material, Scales
-from continuum.solver import Numerics, solve_stress
-from continuum.steady import steady_mu, steady_velocity
-from continuum.velocity import BedScene, solve_velocity
-from dem.config import preset
-from dem.scene import plate_geometry
-from dem.sizing import plan
+from granstokes.compare import calibrate
+from granstokes.continuum.rules import ShearLaw, YieldRule, well_posed_range, wellposedness
+from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.solver import Numerics, solve_stress
+from granstokes.continuum.steady import steady_mu, steady_velocity
+from granstokes.continuum.velocity import BedScene, solve_velocity
+from granstokes.dem.config import preset
+from granstokes.dem.scene import plate_geometry
+from granstokes.dem.sizing import plan
 
 M = Material()
 P_W = 10.0
@@ -110,7 +110,7 @@ def test_wellposedness_of_the_steady_layer():
 @pytest.fixture(scope="module", params=["stress", "speed"])
 def mid_run(request):
     """A velocity problem of each drive and its state at t~ = 0.1, the yield front inside the bed."""
-    from continuum.velocity import VELOCITY_NUMERICS, VelocityProblem
+    from granstokes.continuum.velocity import VELOCITY_NUMERICS, VelocityProblem
     scene = BedScene(M, P_W, 1.5 * SC.delta_s, plate_mass=0.5)
     load = dict(mu_w=MU_W) if request.param == "stress" else dict(u_w=SC.U)
     sol = solve_velocity(scene, [0.1 * SC.t_s], rule=YieldRule(eps=1e-3), **load)
@@ -145,7 +145,7 @@ def test_jacobian_is_the_derivative_of_the_rate(mid_run):
 def test_dissipative_newton_matrix_solves_the_newton_system(mid_run):
     """The L D L^T factors (LAPACK pttrf) solve (M - dh J) z = r as a dense solve does, to rounding
     (condition number x machine eps)."""
-    from continuum.stepper import NewtonMatrix
+    from granstokes.continuum.stepper import NewtonMatrix
     problem, x = mid_run
     dh = 1e-3 * SC.t_s
     r = np.random.default_rng(2).standard_normal(len(x))
@@ -183,7 +183,7 @@ TIGHT = dict(method="sdirk4", rtol=1e-8, atol=1e-11)
 def quick_stress():
     """u_w at 5 of compare's times on 1/2, 1, 2 times the default cells (tight) and the default run."""
     from dataclasses import replace
-    from continuum.velocity import VELOCITY_NUMERICS
+    from granstokes.continuum.velocity import VELOCITY_NUMERICS
     times = np.geomspace(QUICK_END / 300, QUICK_END, 5)
     rule = YieldRule.for_layer(Scales(QUICK, QUICK_SCENE.p_w, QUICK_MU_W))
     run = lambda num: solve_velocity(QUICK_SCENE, times, mu_w=QUICK_MU_W, rule=rule, compare_steady=False,
@@ -227,7 +227,7 @@ def test_imposed_speed_mu_w_is_second_order_once_the_wall_jump_is_resolved():
     first-order error still decaying); with that mass on the wall node (the plate) they were 0.96 and 0.78,
     first order.  Held to 2 - 0.45, above anything first order."""
     from dataclasses import replace
-    from continuum.velocity import VELOCITY_NUMERICS
+    from granstokes.continuum.velocity import VELOCITY_NUMERICS
     rule = YieldRule.for_layer(Scales.for_speed(QUICK, QUICK_SCENE.p_w, QUICK_U_W))
     a, b, c = (solve_velocity(QUICK_SCENE, RESOLVED_TIMES, u_w=QUICK_U_W, rule=rule, compare_steady=False,
                               numerics=replace(VELOCITY_NUMERICS, n_cells=k, **TIGHT)).mu_w for k in (200, 400, 800))

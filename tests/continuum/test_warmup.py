@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from continuum.compiled import DRIVES
+from granstokes.continuum.compiled import DRIVES
 
 NOTICES = [f"granstokes: compiling the {drive} solver's kernels once" for drive, _ in DRIVES.values()]
 BEADS = ["--mu-s", "0.3839", "--mu-d", "0.6494", "--times", "1"]
@@ -19,7 +19,7 @@ def run(cache, *args):
 
 @pytest.mark.slow
 def test_a_cold_cache_says_it_compiles_once_and_the_warm_up_leaves_nothing_to_compile(tmp_path):
-    warm_up = run(tmp_path, "-m", "continuum.warmup")  # numba's cache in an empty folder: both drives compile
+    warm_up = run(tmp_path, "-m", "granstokes.continuum.warmup")  # numba's cache in an empty folder: both drives compile
     assert [line.split(" (")[0] for line in warm_up.stderr.splitlines()] == NOTICES
     assert "solver kernels ready" in warm_up.stdout
     for case in (["--mu-w-tilde", "0.5"], ["--u-w", "1.334"]):  # the command's defaults: nothing left to compile

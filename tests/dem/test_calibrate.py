@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from dem import config, layout
-from dem.calibrate import plan_calibration
+from granstokes.dem import config, layout
+from granstokes.dem.calibrate import plan_calibration
 from granstokes.cli import main as granstokes_main
 
 

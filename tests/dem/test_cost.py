@@ -4,10 +4,10 @@ import json
 
 import pytest
 
-from dem import config, sizing
-from dem.calibrate import plan_calibration
-from dem.scene import free_fall_steps
-from dem.sizing import CONTENTION, OVERHEAD, THROUGHPUT, duration_text, makespan, plan, slowdown
+from granstokes.dem import config, sizing
+from granstokes.dem.calibrate import plan_calibration
+from granstokes.dem.scene import free_fall_steps
+from granstokes.dem.sizing import CONTENTION, OVERHEAD, THROUGHPUT, duration_text, makespan, plan, slowdown
 
 #: the estimate holds within this fraction of the measured wall time (bench/RESULTS.md, "Cost estimates")
 TOLERANCE = 0.3

@@ -4,11 +4,11 @@ import json
 import sys
 import textwrap
 
-from dem import config, layout
-from dem.calibrate import plan_calibration
-from dem.lammps_env import PLAIN_FRACTION, PLAIN_SECONDS
-from dem.runner import Lines, _Lammps
-from dem.sizing import plan
+from granstokes.dem import config, layout
+from granstokes.dem.calibrate import plan_calibration
+from granstokes.dem.lammps_env import PLAIN_FRACTION, PLAIN_SECONDS
+from granstokes.dem.runner import Lines, _Lammps
+from granstokes.dem.sizing import plan
 from granstokes.cli import main
 
 

@@ -9,8 +9,8 @@ import subprocess
 import numpy as np
 import pytest
 
-from dem import lammps_env, scene
-from dem.contact import Contact
+from granstokes.dem import lammps_env, scene
+from granstokes.dem.contact import Contact
 
 pytestmark = pytest.mark.slow
 THETA = math.radians(20.0)  # below the no-slip bound: rolling needs mu_p >= tan(theta)/3 (disk), 2/7 tan (sphere)

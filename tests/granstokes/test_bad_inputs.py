@@ -21,7 +21,7 @@ def _case(tmp_path, monkeypatch, capsys, argv, name):
     (tmp_path / "not_a_run").mkdir()
     (tmp_path / "a_run").mkdir()
     (tmp_path / "a_run" / "run.json").write_text(json.dumps({"status": "complete"}))
-    from dem import config
+    from granstokes.dem import config
     (tmp_path / "forever.toml").write_text(config.preset_text("smoke").replace("duration = 7.0", "duration = 1e9"))
     material = "[material]\nmu_s = 0.28\nmu_d = 0.58\nI0 = 0.3\nI_convention = \"dem\"\nphi = 0.8\n"
     assert material in config.preset_text("smoke")
@@ -126,8 +126,8 @@ def test_at_least_forty_cases_over_every_subcommand():
 
 
 def test_dry_run_prints_the_cost_and_writes_nothing(tmp_path, capsys):
-    from dem import config
-    from dem.sizing import duration_text, plan
+    from granstokes.dem import config
+    from granstokes.dem.sizing import duration_text, plan
 
     assert main(["dem", "run", "--preset", "quick", "--out", str(tmp_path / "r"), "--dry-run", "--np", "64"]) == 0
     err = capsys.readouterr().err

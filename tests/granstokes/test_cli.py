@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from granstokes.cli import main
-from continuum.steady import mu_w_for_speed
+from granstokes.continuum.steady import mu_w_for_speed
 
 BEADS = ["--mu-s", str(np.tan(np.radians(21))), "--mu-d", str(np.tan(np.radians(33)))]
 
@@ -119,10 +119,10 @@ def test_a_failed_solve_is_one_line_and_writes_nothing(capsys, tmp_path, monkeyp
     exit status 1, no table and no --save folder."""
     import functools
 
-    import continuum.solver
-    from continuum.stepper import integrate
+    import granstokes.continuum.solver
+    from granstokes.continuum.stepper import integrate
 
-    monkeypatch.setattr(continuum.solver, "integrate", functools.partial(integrate, max_steps=5))
+    monkeypatch.setattr(granstokes.continuum.solver, "integrate", functools.partial(integrate, max_steps=5))
     code, out, err = run(capsys, "--u-w", "1.334", "--times", "1", "--save", str(tmp_path / "out"))
     assert code == 1 and out == "" and len(err.strip().splitlines()) == 1
     assert err.startswith("granstokes: error: the time integration failed (max_steps = 5 reached")
@@ -131,12 +131,12 @@ def test_a_failed_solve_is_one_line_and_writes_nothing(capsys, tmp_path, monkeyp
 
 def test_a_failed_linear_solve_is_exit_1_not_bad_input(capsys, tmp_path, monkeypatch):
     """numpy's LinAlgError is a ValueError, the bad-input signal; it is reported as a failure (exit 1)."""
-    import continuum.solver
+    import granstokes.continuum.solver
 
     def singular(*args, **kwargs):
         raise np.linalg.LinAlgError("Singular matrix")
 
-    monkeypatch.setattr(continuum.solver, "integrate", singular)
+    monkeypatch.setattr(granstokes.continuum.solver, "integrate", singular)
     code, out, err = run(capsys, "--u-w", "1.334", "--times", "1", "--save", str(tmp_path / "out"))
     assert code == 1 and out == "" and len(err.strip().splitlines()) == 1
     assert err.startswith("granstokes: error: a linear solve failed (Singular matrix)")
@@ -167,7 +167,7 @@ def test_save_writes_pandas_readable_tables_and_metadata(capsys, tmp_path):
 
 def test_version_names_the_package_and_the_commit(capsys):
     from granstokes import __version__
-    from granstokes.provenance import git_hash
+    from granstokes.lib.provenance import git_hash
 
     with pytest.raises(SystemExit) as exit_:
         main(["--version"])
@@ -191,7 +191,7 @@ def test_layering_no_package_imports_the_one_above():
 def test_table_and_plot_of_a_speed(capsys, tmp_path):
     """An imposed speed at the default accuracy: the table names the wall-clustered map (solver.map_for), its
     u~_w column is the imposed speed and its mu_w, delta carry estimates below 1e-6 relative; the plot is drawn."""
-    from continuum.solver import map_for
+    from granstokes.continuum.solver import map_for
     from tests.continuum.reference import PAPER
 
     code, out, _ = run(capsys, "--u-w", "1.334", "--times", "1e-3", "3", "--plot", str(tmp_path / "p.png"))

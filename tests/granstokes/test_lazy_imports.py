@@ -18,10 +18,10 @@ def heavy_after(code: str) -> list[str]:
 def test_registering_the_light_subcommands_imports_nothing_heavy():
     code = """import argparse
 import granstokes.cli
-from compare.cli import register as a
-from continuum.paper.cli import register as b
-from continuum.predict_cli import register as c
-from dem.cli import register as d
+from granstokes.compare.cli import register as a
+from granstokes.continuum.paper.cli import register as b
+from granstokes.continuum.predict_cli import register as c
+from granstokes.dem.cli import register as d
 sub = argparse.ArgumentParser().add_subparsers()
 for register in (a, b, c, d):
     register(sub)"""
@@ -34,7 +34,7 @@ def test_building_the_parser_imports_nothing_heavy():
 
 def test_a_run_still_imports_its_solver():
     """The probe sees a command's imports (it would pass vacuously otherwise)."""
-    assert "pandas" in heavy_after("from continuum.predict_cli import predict\nimport continuum.velocity")
+    assert "pandas" in heavy_after("from granstokes.continuum.predict_cli import predict\nimport granstokes.continuum.velocity")
 
 
 def _run(code: str) -> str:
@@ -46,8 +46,8 @@ def test_the_solvers_import_neither_scipy_linalg_nor_numba_before_a_solve():
     scipy.linalg its compiled functions load) is imported by the solve (continuum.stress_dirk, continuum.speed_bdf):
     importing the solvers, as `granstokes continuum` does before it solves, costs neither."""
     code = """import sys
-from continuum.solver import solve_stress
-from continuum.rheology import Friction
+from granstokes.continuum.solver import solve_stress
+from granstokes.continuum.rheology import Friction
 fr = Friction(0.38, 0.64)
 print('scipy.linalg' in sys.modules, 'numba' in sys.modules, solve_stress(fr, fr.mu_w_from_tilde(0.5), [1.0]).u_w[0] > 0,
       'numba' in sys.modules)"""
@@ -55,11 +55,11 @@ print('scipy.linalg' in sys.modules, 'numba' in sys.modules, solve_stress(fr, fr
 
 
 def test_the_lapack_routines_are_scipy_linalg_lapacks_in_either_import_order():
-    for first, then in (("import continuum.stepper", "import scipy.linalg.lapack"),
-                        ("import scipy.linalg.lapack", "import continuum.stepper")):
+    for first, then in (("import granstokes.continuum.stepper", "import scipy.linalg.lapack"),
+                        ("import scipy.linalg.lapack", "import granstokes.continuum.stepper")):
         code = f"""{first}
 {then}
-import continuum.stepper as s, scipy.linalg.lapack as L
+import granstokes.continuum.stepper as s, scipy.linalg.lapack as L
 print(all(getattr(s, f) is getattr(L, f) for f in ('dgbtrf', 'dgbtrs', 'dpttrf', 'dpttrs')))"""
         assert _run(code).strip() == "True"
 
@@ -71,7 +71,7 @@ def test_lapack_falls_back_to_scipy_linalg_when_the_wrapper_file_is_not_found(mo
 
     import scipy.linalg.lapack
 
-    from continuum import lapack
+    from granstokes.continuum import lapack
 
     monkeypatch.delitem(sys.modules, lapack.WRAPPERS, raising=False)
     monkeypatch.setattr(importlib.machinery, "EXTENSION_SUFFIXES", [".no-such-suffix"])

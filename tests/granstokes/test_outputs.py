@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from granstokes import staging
+from granstokes.lib import staging
 from granstokes.cli import main
 
 BEADS = ["--mu-s", "0.3839", "--mu-d", "0.6494"]
