@@ -1,4 +1,4 @@
-"""scipy's BDF on an imposed speed with and without the wall's Newton (continuum.stepper.BDF_WALL_NEWTON): the
+"""scipy's BDF on an imposed speed with and without the wall's Newton (Numerics.wall_newton): the
 order-1 trap through the lift-off is chaotic in the step sequence (a first step 1 ulp away could enter or leave
 it), so each case runs over a spread of first steps.  Prints the table for bench/RESULTS.md "The order-1 trap".
 
@@ -17,7 +17,6 @@ import time
 import numpy as np
 
 import granstokes.continuum.solver as solver
-import granstokes.continuum.stepper as stepper
 from bench.speed_solver import TIMES
 from granstokes.continuum.solver import Numerics, solve_speed
 from tests.continuum.reference import DISKS, PAPER
@@ -28,19 +27,18 @@ FIRST_STEPS = 5
 
 
 def run(fr, u_w, n, rtol, wall_newton):
-    stepper.BDF_WALL_NEWTON = wall_newton
     steps, cpu, mu_w = [], [], []
     default_step = solver.INITIAL_STEP
     try:
         for k in range(FIRST_STEPS):
             solver.INITIAL_STEP = default_step * (1 + 1e-3 * k)
             start = time.process_time()
-            sol = solve_speed(fr, u_w, TIMES, Numerics(n_cells=n, rtol=rtol))
+            sol = solve_speed(fr, u_w, TIMES, Numerics(n_cells=n, rtol=rtol, wall_newton=wall_newton))
             cpu.append(time.process_time() - start)
             steps.append(sol.stats.steps)
             mu_w.append(sol.mu_w[TIMES.index(1.0)])
     finally:
-        solver.INITIAL_STEP, stepper.BDF_WALL_NEWTON = default_step, True
+        solver.INITIAL_STEP = default_step
     return np.array(steps), np.median(cpu), np.array(mu_w)
 
 

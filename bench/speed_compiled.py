@@ -1,5 +1,5 @@
 """The imposed speed's BDF compiled (continuum.speed_bdf) against scipy's BDF on the same system
-(continuum.stepper.COMPILED_SPEED = False), in one process, alternating.  Prints the table for bench/RESULTS.md
+(Numerics.compiled = False), in one process, alternating.  Prints the table for bench/RESULTS.md
 "The speed compiled".
 
     PYTHONPATH=. .venv/bin/python bench/speed_compiled.py
@@ -13,24 +13,20 @@ from __future__ import annotations
 
 import time
 
-import granstokes.continuum.stepper as stepper
 from bench.speed_solver import TIMES
 from granstokes.continuum.solver import Numerics, solve_speed
 from tests.continuum.reference import DISKS, PAPER
 
 CASES = [("paper", PAPER, 0.198), ("paper", PAPER, 1.334), ("paper", PAPER, 4.629), ("disks", DISKS, 1.0)]
-SETTINGS = {"accuracy 1e-6": dict(accuracy=1e-6), "64 cells": dict(numerics=Numerics(n_cells=64))}
+SETTINGS = {"accuracy 1e-6": dict(accuracy=1e-6), "64 cells": dict(n_cells=64)}
 ROUNDS = 2
 
 
 def timed(fr, u_w, compiled, kwargs):
-    stepper.COMPILED_SPEED = compiled
-    try:
-        start = time.process_time()
-        sol = solve_speed(fr, u_w, TIMES, **kwargs)
-        return time.process_time() - start, sol
-    finally:
-        stepper.COMPILED_SPEED = True
+    cells = {k: v for k, v in kwargs.items() if k == "n_cells"}
+    start = time.process_time()
+    sol = solve_speed(fr, u_w, TIMES, Numerics(compiled=compiled, **cells), accuracy=kwargs.get("accuracy"))
+    return time.process_time() - start, sol
 
 
 def main():

@@ -1,4 +1,4 @@
-"""An imposed stress's adaptive DIRK compiled (continuum.stress_dirk) against the Python (continuum.stepper.COMPILED_STRESS
+"""An imposed stress's adaptive DIRK compiled (continuum.stress_dirk) against the Python (Numerics.compiled
 = False), in one process, alternating.  Prints the table for bench/RESULTS.md "The stress compiled".
 
     PYTHONPATH=. .venv/bin/python bench/stress_compiled.py
@@ -13,9 +13,8 @@ import time
 
 import numpy as np
 
-import granstokes.continuum.stepper as stepper
 from bench.speed_solver import TIMES
-from granstokes.continuum.solver import solve_stress
+from granstokes.continuum.solver import Numerics, solve_stress
 from tests.continuum.reference import DISKS, PAPER
 
 CASES = [("paper", PAPER, 0.9), ("paper", PAPER, 0.5), ("paper", PAPER, 0.1), ("disks", DISKS, 0.3)]
@@ -23,13 +22,9 @@ ROUNDS = 2
 
 
 def timed(fr, mu_w_tilde, compiled):
-    stepper.COMPILED_STRESS = compiled
-    try:
-        start = time.process_time()
-        sol = solve_stress(fr, fr.mu_w_from_tilde(mu_w_tilde), TIMES, accuracy=1e-6)
-        return time.process_time() - start, sol
-    finally:
-        stepper.COMPILED_STRESS = True
+    start = time.process_time()
+    sol = solve_stress(fr, fr.mu_w_from_tilde(mu_w_tilde), TIMES, Numerics(compiled=compiled), accuracy=1e-6)
+    return time.process_time() - start, sol
 
 
 def main():

@@ -20,7 +20,7 @@ import numpy as np
 from .mesh import Mesh
 from .rheology import Friction, finite, require
 from .steady import mu_w_for_speed
-from .stepper import Jacobian
+from .jacobian import Jacobian
 
 
 class ShearStressDiffusion:

@@ -17,7 +17,8 @@ from .problems import ImposedSpeed, ImposedStress
 from .rheology import Friction, finite, require
 from .scales import UNITS
 from .steady import SELF_SIMILAR_DELTA, mu_w_for_speed, steady_delta, steady_wall_speed
-from .stepper import METHODS, TABLEAUX, StepStats, integrate
+from .integrators import integrate
+from .stepper import METHODS, TABLEAUX, StepStats
 
 #: the default time stepper of each drive (continuum.stepper: BDF keeps its order on the speed's DAE,
 #: the DIRKs' stage order 1 does not)
@@ -102,8 +103,10 @@ SAFETY = 3.0
 @dataclass(frozen=True)
 class Numerics:
     """Resolution and tolerances of one solve.  ``stretch=None``: the map follows the first output
-    time (``map_for``), else the exponential map of this stretch; ``order``: of the spatial discretisation (continuum.mesh); ``method``, ``rtol``,
-    ``atol`` = None: the drive's defaults (``for_drive``)."""
+    time (``map_for``), else the exponential map of this stretch; ``order``: of the spatial discretisation
+    (continuum.mesh); ``method``, ``rtol``, ``atol`` = None: the drive's defaults (``for_drive``); ``compiled``: run
+    the problem's compiled kernel where it has one (continuum.integrators), else the Python integrators;
+    ``bordered``, ``wall_newton``: bdf's Newton systems (continuum.stepper._integrate_bdf; False: baselines)."""
 
     n_cells: int = 64
     stretch: float | None = None
@@ -111,6 +114,9 @@ class Numerics:
     atol: float | None = None
     method: str | None = None
     order: int = 4
+    compiled: bool = True
+    bordered: bool = True
+    wall_newton: bool = True
 
     def __post_init__(self):
         Mesh.graded(self.n_cells, 0.0 if self.stretch is None else self.stretch)  # validates both
@@ -346,8 +352,10 @@ def first_cells(imposed: str, accuracy: float) -> int:
 
 def _run_one(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
     recorder = obs.SeriesRecorder(problem) if record else None
-    states, stats = integrate(problem, t, method=numerics.method, rtol=numerics.rtol, atol=numerics.atol,
-                              h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder)
+    bdf = {"bordered": numerics.bordered, "wall_newton": numerics.wall_newton} if numerics.method == "bdf" else {}
+    states, stats = integrate(problem, t, method=numerics.method, compiled=numerics.compiled, rtol=numerics.rtol,
+                              atol=numerics.atol, h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder,
+                              **bdf)
     tau = np.array([problem.full(x) for x in states])
     steps = recorder if record else np.empty((0, 4))
     return Solution(problem.imposed, problem.friction, problem.mu_w,

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from .jacobian import Jacobian
 from .lapack import dgbtrf, dgbtrs, dpttrf, dpttrs
 
 
@@ -125,6 +126,9 @@ NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE = 1.0, 0.99, 1e-3
 #: stretched onto it; the new step is STEP_SAFETY err^(-1/order) times the last, within [STEP_SHRINK, STEP_GROW];
 #: the error norm is floored at ERROR_FLOOR
 LANDING_SHARE, STEP_SAFETY, STEP_SHRINK, STEP_GROW, ERROR_FLOOR = 0.05, 0.9, 0.2, 4.0, 1e-10
+#: a stage's Newton is converged when its contraction-corrected update is below NEWTON_TOL (weighted RMS); an
+#: integration stops with StepperFailure after MAX_STEPS steps (accepted and rejected)
+NEWTON_TOL, MAX_STEPS = 0.03, 200_000
 #: a step ends on an output time within this relative distance of it
 OUTPUT_RTOL = 1e-13
 #: bdf hands over to HANDOVER when its step has stayed below BDF_STALL t for STALL_STEPS steps in a row after
@@ -136,27 +140,6 @@ BDF_STALL, STALL_STEPS, HANDOVER = 1e-3, 50, "sdirk4"
 #: SuperLU with its sparse bookkeeping there (measured, u~_w = 1.334: 64 cells 1.4x, 128 cells 1.4x less CPU;
 #: 256 cells 4x more), bench/RESULTS.md "The paper's figure set"
 DENSE_BDF_MAX = 128
-#: bdf solves its Newton systems I - c J by the bordered band of NewtonMatrix (the unreduced M - c J)
-#: instead of scipy's own LU of the reduced J (dense LAPACK or SuperLU, whose fill-in from the wall's dense
-#: rows dominated: 2.1 s of 7 s at 256 cells): measured 1.1-2x at 64-256 cells, 2.8x at 512 (False: the
-#: baseline of bench/speed_solver.py)
-BORDERED_BDF = True
-#: bdf's Newton takes the imposed speed's wall row and column (the constraint's gradient, and the first nodes'
-#: coupling to the wall unknown q) at each iterate, the band at the step's Jacobian: q(z), the wall unknown as a
-#: function of the interior, curves with a sensitivity ~1/h_0 once the first cell's share of u~_w is small, and
-#: with all of it frozen Newton contracted only 0.03-0.3 per iteration there, failed, and held BDF at order 1
-#: through the lift-off (measured: u~_w = 1.334 on 256 cells 3259 -> 1874 steps, on 512 at rtol 3.3e-9 4737 ->
-#: 2304; the row alone: 1890 and 4756); after the lift-off too (without it there the disks' u~_w = 0.001 on 512
-#: cells stalled BDF, which handed over to SDIRK4, which crawled), bench/RESULTS.md "The speed's cost and BDF's
-#: order-1 trap"
-BDF_WALL_NEWTON = True
-#: an imposed speed's bdf runs compiled (continuum.speed_bdf: the same algorithm and system, measured 5.6-7.5x less
-#: CPU at the default accuracy, 17-21x on 64 cells; False: scipy's BDF here, the reference of
-#: tests/continuum/test_speed_bdf.py)
-COMPILED_SPEED = True
-#: an imposed stress's adaptive DIRK runs compiled (continuum.stress_dirk: the same steps, rule for rule; False: the
-#: Python here, the reference of tests/continuum/test_stress_dirk.py)
-COMPILED_STRESS = True
 #: what the bordered bdf hands scipy for its Jacobian (``_integrate_bdf``)
 BORDERED_MARKER = -1.0
 
@@ -182,40 +165,6 @@ class StepperFailure(RuntimeError):
 
 class NewtonFailure(StepperFailure):
     pass
-
-
-@dataclass
-class Jacobian:
-    """dF/dx as a band, ``bands[ku + i - j, j] = J[i, j]`` (scipy's solve_banded layout), and
-    optionally a dense row 0 that replaces the band's row 0.  ``dissipative``: symmetric tridiagonal
-    with M - dh J positive definite for dh > 0, factorised as L D L^T (LAPACK pttrf, no pivoting)."""
-
-    bands: np.ndarray
-    kl: int
-    ku: int
-    row0: np.ndarray | None = None
-    dissipative: bool = False
-
-    def interior(self):
-        """The band's rows and columns 1..n-1 as a sparse matrix (CSC)."""
-        import scipy.sparse as sp
-
-        n = self.bands.shape[1] - 1
-        return sp.dia_matrix((self.bands[:, 1:], self.ku - np.arange(self.kl + self.ku + 1)), shape=(n, n)).tocsc()
-
-    @classmethod
-    def tridiagonal(cls, sub, diag, sup, row0=None) -> "Jacobian":
-        """From the sub-, main and super-diagonal (lengths n-1, n, n-1)."""
-        bands = np.zeros((3, len(diag)))
-        bands[0, 1:], bands[1], bands[2, :-1] = sup, diag, sub
-        return cls(bands, 1, 1, row0)
-
-    @classmethod
-    def dissipative_tridiagonal(cls, diag, off) -> "Jacobian":
-        """A symmetric tridiagonal J with -J positive semidefinite (a discrete diffusion)."""
-        bands = np.zeros((3, len(diag)))
-        bands[0, 1:], bands[1], bands[2, :-1] = off, diag, off
-        return cls(bands, 1, 1, dissipative=True)
 
 
 class NewtonMatrix:
@@ -364,30 +313,25 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
     return X, rates[-1], matrix.solve(est), eta
 
 
-def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=0.03,
-              fixed_times=None, observer=None, max_steps=200_000, resume=None):
+def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=NEWTON_TOL,
+              fixed_times=None, observer=None, max_steps=MAX_STEPS, resume=None, bordered=True, wall_newton=True):
     """Integrate ``problem`` from t = 0 (or from ``resume`` = (t0, x0)), returning the state at each time
     of the sorted ``t_out``.
 
     Adaptive steps keep the RMS local error over the differential rows, weighted by
     atol + rtol |x|, below 1; with ``fixed_times`` (an increasing array containing every t_out) the
     steps are those, with no error control (refinement studies, stability maps).
-    ``observer(t, x)`` is called after every accepted step.  Returns (states, stats), states of
-    shape (len(t_out), n).
+    ``observer(t, x)`` is called after every accepted step.  ``bordered``, ``wall_newton``: bdf's Newton systems
+    (``_integrate_bdf``).  Returns (states, stats), states of shape (len(t_out), n).
     """
     if method == "bdf":
         if fixed_times is not None:
             raise ValueError("method 'bdf' chooses its own steps: fixed_times needs a DIRK method")
         return _integrate_bdf(problem, t_out, rtol=rtol, atol=atol, h0=h0, observer=observer,
-                              max_steps=max_steps, resume=resume)
+                              max_steps=max_steps, resume=resume, bordered=bordered, wall_newton=wall_newton)
     tab = TABLEAUX[method]
     if fixed_times is None and tab.err is None:
         raise ValueError(f"method {method!r} has no error estimate: give fixed_times")
-    if COMPILED_STRESS and getattr(problem, "compiled_dirk", False) and fixed_times is None and resume is None:
-        from .stress_dirk import integrate_stress  # imports numba (~0.4 s)
-
-        return integrate_stress(problem, t_out, tab, rtol=rtol, atol=atol, h0=h0, newton_tol=newton_tol,
-                                observer=observer, max_steps=max_steps)
     t_out = np.asarray(t_out, dtype=float)
     differential = problem.mass > 0
     rows = mass_rows(problem.mass)
@@ -469,7 +413,8 @@ def _reduced_jacobian(problem, x):
     return (jac.interior() + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()
 
 
-def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resume=None):
+def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resume=None, bordered=True,
+                   wall_newton=True):
     """``integrate`` with scipy's BDF on z = x[1:] (``problem.interior_rate``), x[0] from ``problem.project``
     (unit mass rows).
 
@@ -479,14 +424,16 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     Near a steady state at tight tolerances the round-off of the rate (|tau~|/h^2 eps) stops scipy's
     Newton from converging and the steps shrink without end: once the step has stayed below BDF_STALL t
     for STALL_STEPS steps, after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is
-    needed), the rest goes to HANDOVER (whose Newton accepts an update at round-off)."""
+    needed), the rest goes to HANDOVER (whose Newton accepts an update at round-off).
+
+    ``bordered``: Newton's systems I - c J are solved by the bordered band of NewtonMatrix (the unreduced M - c J)
+    instead of scipy's own LU of the reduced J, whose fill-in from the wall's dense rows dominates (1.1-2.8x less
+    CPU at 64-512 cells; False: the baseline of bench/speed_solver.py).  ``wall_newton``: Newton takes the imposed
+    speed's wall row and column at each iterate and the band at the step's Jacobian: the wall unknown as a function
+    of the interior curves with a sensitivity ~1/h_0 once the first cell's share of u~_w is small, and with all of
+    it frozen Newton contracts too slowly and holds BDF at order 1 through the lift-off (bench/bdf_wall_newton.py)."""
     if not np.all(problem.mass[1:] == 1.0) or problem.mass[0] != 0.0:
         raise ValueError("method 'bdf' needs an algebraic row 0 and unit mass elsewhere")
-    compiled = COMPILED_SPEED and BORDERED_BDF and BDF_WALL_NEWTON and getattr(problem, "compiled_bdf", False)
-    if compiled and resume is None:
-        from .speed_bdf import integrate_speed  # imports numba (~0.4 s, once a process)
-
-        return integrate_speed(problem, t_out, rtol=rtol, atol=atol, h0=h0, observer=observer, max_steps=max_steps)
     from scipy.integrate import BDF
 
     t_out = np.asarray(t_out, dtype=float)
@@ -507,19 +454,19 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     t0, x0 = resume if resume is not None else (0.0, problem.initial())
     admissible = [state(x0[1:])]
 
-    bordered = []  # the last Jacobian of the unreduced problem (BORDERED_BDF)
+    unreduced = []  # the last Jacobian of the unreduced problem (``bordered``)
 
     def jacobian(t, z):
         x = state(z)
         if np.isfinite(x[0]):
             admissible[0] = x
-        if not BORDERED_BDF:
+        if not bordered:
             return _reduced_jacobian(problem, admissible[0])
-        bordered[:] = [problem.jacobian(admissible[0])]
+        unreduced[:] = [problem.jacobian(admissible[0])]
         return BORDERED_MARKER
 
     x = admissible[0]
-    if BORDERED_BDF:
+    if bordered:
         # scipy's BDF uses its Jacobian J only to hand I - c J to lu. Handed J = BORDERED_MARKER = -1 and I = 0 (after
         # its set-up has seen an empty sparse n x n), it hands over c itself, and lu factorises the unreduced M - c J
         # by the bordered band (NewtonMatrix): I - c J is never formed (sparse, with its CSC bookkeeping, it had cost
@@ -532,13 +479,13 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
 
         def lu(c):
             solver.nlu += 1
-            return NewtonMatrix(problem, None, float(c), jac=bordered[0])
+            return NewtonMatrix(problem, None, float(c), jac=unreduced[0])
 
         def solve_lu(factors, b):
             """Newton's correction; the wall's row and column (of an imposed speed) at the current iterate if
-            BDF_WALL_NEWTON."""
+            ``wall_newton``."""
             x = iterate[0]
-            if BDF_WALL_NEWTON and factors.dense and np.isfinite(x[0]):
+            if wall_newton and factors.dense and np.isfinite(x[0]):
                 factors.refresh_wall(problem.mass[0], *problem.wall_jacobian(x))
             return factors.solve(np.concatenate(([0.0], b)))[1:]
 

@@ -24,8 +24,9 @@ from .rheology import finite, require
 from .rules import ShearLaw, YieldRule
 from .scales import Material, Scales
 from .solver import Numerics, check_times
+from .jacobian import Jacobian
 from .steady import DELTA_THRESHOLD
-from .stepper import Jacobian, StepStats, integrate
+from .stepper import StepStats, integrate
 
 
 @dataclass(frozen=True)

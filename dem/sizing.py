@@ -52,6 +52,10 @@ def drive_scales(cfg: Config, drive: Drive) -> Scales:
     return Scales(m, cfg.p_w, mu_w)
 
 
+#: grain placement: insertion column filled to this fraction of the largest grain's volume
+INSERT_FRACTION = {2: 0.30, 3: 0.20}
+
+
 @dataclass(frozen=True)
 class DrivePlan:
     drive: Drive
@@ -94,13 +98,24 @@ class Plan:
         return self.depth / self.config.contact.shear_wave_speed
 
     @property
+    def box_top(self) -> int:
+        """Height of the box: the grains inserted loosely (INSERT_FRACTION) over the width, plus two grains."""
+        cfg, dim = self.config, self.dimension
+        dmax = 1.0 + cfg.grains.polydispersity
+        column = self.n_grains * grain_volume(dmax, dim) / (INSERT_FRACTION[dim] * cfg.box.width * (cfg.width_z or 1.0))
+        return math.ceil(column + 2 * dmax)
+
+    @property
+    def free_fall_steps(self) -> int:
+        """Steps of the first settling run: 1.5 times the free-fall time from the top of the box."""
+        return math.ceil(1.5 * math.sqrt(2 * self.box_top) / self.dt)
+
+    @property
     def prepare_steps(self) -> tuple[int, int]:
         """A preparation's expected and largest number of steps: the free fall, then settling and relaxing
         (SETTLE_RELAX_EXPECTED, each stage capped)."""
-        from .scene import free_fall_steps
-
         c = self.config.prepare
-        fall = free_fall_steps(self)
+        fall = self.free_fall_steps
         expected = fall + round(min(SETTLE_RELAX_EXPECTED, c.settle_max + c.relax_max) / self.dt)
         return expected, fall + round((c.settle_max + c.relax_max) / self.dt)
 

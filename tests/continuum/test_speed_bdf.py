@@ -7,6 +7,7 @@ from scipy.linalg import solve_banded
 import granstokes.continuum.compiled as compiled
 import granstokes.continuum.speed_bdf as sb
 import granstokes.continuum.stepper as stepper
+from granstokes.continuum.integrators import integrate
 from granstokes.continuum.problems import ImposedSpeed
 from granstokes.continuum.solver import TIME_ERROR_PER_RTOL, Numerics, map_for, solve_speed
 from granstokes.continuum.steady import mu_w_for_speed
@@ -26,7 +27,7 @@ def speed_state(request):
     fr = Friction(math.tan(math.radians(21.0)), math.tan(math.radians(33.0)))
     numerics = Numerics(n_cells=64).for_drive("speed")
     pb = ImposedSpeed(fr, 1.334, numerics.mesh(*map_for(fr, mu_w_for_speed(fr, 1.334), "speed", 1e-4)))
-    x = stepper.integrate(pb, [0.3], method="bdf", rtol=numerics.rtol, atol=numerics.atol)[0][0]
+    x = integrate(pb, [0.3], method="bdf", rtol=numerics.rtol, atol=numerics.atol)[0][0]
     return pb, x
 
 
@@ -112,9 +113,8 @@ def test_band_lu_solves_as_lapack_does(dominant):
 
 def _steps(monkeypatch, compiled: bool, pb, times, numerics):
     rows = []
-    monkeypatch.setattr(stepper, "COMPILED_SPEED", compiled)
-    stepper.integrate(pb, times, method="bdf", rtol=numerics.rtol, atol=numerics.atol, h0=1e-9,
-                      observer=lambda t, x: rows.append((t, x[0])))
+    integrate(pb, times, method="bdf", compiled=compiled, rtol=numerics.rtol, atol=numerics.atol, h0=1e-9,
+              observer=lambda t, x: rows.append((t, x[0])))
     return np.array(rows)
 
 
@@ -130,15 +130,14 @@ def test_compiled_bdf_takes_scipys_steps(speed_state, monkeypatch):
 
 
 def test_compiled_solve_is_scipys_to_the_time_error(monkeypatch):
-    """solve_speed compiled and with scipy's BDF (COMPILED_SPEED = False) agree in mu_w and delta at t~ = 1e-4 ... 10
+    """solve_speed compiled and with scipy's BDF (Numerics.compiled = False) agree in mu_w and delta at t~ = 1e-4 ... 10
     to the time error, TIME_ERROR_PER_RTOL rtol (their step sequences part by round-off after a few hundred steps:
     measured 6e-9 relative at rtol 1e-8)."""
     from tests.continuum.reference import DISKS
 
     times = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]
     ours = solve_speed(DISKS, 1.0, times, Numerics(n_cells=128))
-    monkeypatch.setattr(stepper, "COMPILED_SPEED", False)
-    scipys = solve_speed(DISKS, 1.0, times, Numerics(n_cells=128))
+    scipys = solve_speed(DISKS, 1.0, times, Numerics(n_cells=128, compiled=False))
     bound = TIME_ERROR_PER_RTOL["bdf"] * ours.numerics.rtol
     for q in ("mu_w", "delta"):
         assert np.max(np.abs(getattr(ours, q) / getattr(scipys, q) - 1)) < bound, q
@@ -163,7 +162,7 @@ def test_a_step_limit_is_a_stepper_failure(speed_state):
     limit and the time reached, as scipy's path does."""
     pb, _ = speed_state
     with pytest.raises(stepper.StepperFailure, match=r"max_steps = 20 reached at t = "):
-        stepper.integrate(pb, [1.0], method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9, max_steps=20)
+        integrate(pb, [1.0], method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9, max_steps=20)
 
 
 def test_a_repeated_output_time_is_landed_on_once(speed_state, monkeypatch):
@@ -172,8 +171,7 @@ def test_a_repeated_output_time_is_landed_on_once(speed_state, monkeypatch):
     (found by review: a division by the zero step)."""
     pb, _ = speed_state
     times = [1e-3, 1e-2, 1e-2, 0.1]
-    ours = stepper.integrate(pb, times, method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9)[0]
-    monkeypatch.setattr(stepper, "COMPILED_SPEED", False)
-    scipys = stepper.integrate(pb, times, method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9)[0]
+    ours = integrate(pb, times, method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9)[0]
+    scipys = integrate(pb, times, method="bdf", compiled=False, rtol=1e-8, atol=1e-10, h0=1e-9)[0]
     assert np.array_equal(ours[1], ours[2])
     assert np.max(np.abs(ours[:, 1:] - scipys[:, 1:])) < TIME_ERROR_PER_RTOL["bdf"] * 1e-8

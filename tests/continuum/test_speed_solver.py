@@ -1,6 +1,8 @@
 """Imposed wall speed (eq. GranularStokesEqn_muBIS with eq. GranularStokesEqn_muBIS_BCs)."""
 import functools
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -12,7 +14,7 @@ from granstokes.continuum.solver import (INITIAL_STEP, MIN_ESTIMATED_CELLS, TIME
                               solve_speed, solve_stress)
 from granstokes.continuum.steady import mu_w_for_speed
 from tests.continuum.reference import PAPER as FR, SPEED_CASES
-from granstokes.continuum.stepper import integrate
+from granstokes.continuum.integrators import integrate
 
 SPEEDS = (0.198, 1.334, 4.629)
 
@@ -175,11 +177,11 @@ def test_a_stall_after_the_lift_off_hands_over_to_sdirk4(paper_friction, monkeyp
 
     times, numerics = [0.1, 1.0, 10.0], Numerics(n_cells=64)
     alone = solve_speed(paper_friction, 0.198, times, numerics)
-    methods = []
+    methods, original = [], stepper.integrate
 
     def spy(*args, **kwargs):
         methods.append(kwargs.get("method"))
-        return integrate(*args, **kwargs)
+        return original(*args, **kwargs)
 
     monkeypatch.setattr(stepper, "integrate", spy)
     monkeypatch.setattr(stepper, "BDF_STALL", 1.0)
@@ -289,8 +291,7 @@ def test_bordered_newton_solves_match_scipys_lu(case, monkeypatch):             
     fr, u_w, times = DEGENERATE if case.startswith("degenerate") else (FR, 1.334, [0.06, 0.3, 1.0])
     numerics = Numerics() if case.startswith("degenerate") else Numerics(n_cells=int(case.split()[0]))
     ours = solve_speed(fr, u_w, times, numerics)
-    monkeypatch.setattr(stepper, "BORDERED_BDF", False)
-    scipys = solve_speed(fr, u_w, times, numerics)
+    scipys = solve_speed(fr, u_w, times, replace(numerics, bordered=False))
     bound = TIME_ERROR_PER_RTOL["bdf"] * ours.numerics.rtol
     for q in ("mu_w", "delta"):
         assert np.max(np.abs(getattr(ours, q) / getattr(scipys, q) - 1)) < bound, q

@@ -1,9 +1,10 @@
 """The compiled DIRK of an imposed stress (continuum.stress_dirk) against what it compiles: ImposedStress's rate and
-Newton matrix, and stepper.integrate's DIRK step for step (COMPILED_STRESS = False runs the Python)."""
+Newton matrix, and stepper.integrate's DIRK step for step (compiled=False runs the Python)."""
 import numpy as np
 import pytest
 
 import granstokes.continuum.stepper as stepper
+from granstokes.continuum.integrators import integrate
 import granstokes.continuum.stress_dirk as sd
 from granstokes.continuum.problems import ImposedStress
 from granstokes.continuum.solver import Numerics, map_for, solve_stress
@@ -18,7 +19,7 @@ def stress_state():
     mu_w = PAPER.mu_w_from_tilde(0.5)
     numerics = Numerics(n_cells=96).for_drive("stress")
     pb = ImposedStress(PAPER, mu_w, numerics.mesh(*map_for(PAPER, mu_w, "stress", 1e-4)))
-    x = stepper.integrate(pb, [1e-2], rtol=numerics.rtol, atol=numerics.atol)[0][0]
+    x = integrate(pb, [1e-2], rtol=numerics.rtol, atol=numerics.atol)[0][0]
     return pb, x, numerics
 
 
@@ -54,9 +55,8 @@ def test_rate_and_newton_matrix_are_imposed_stresses(stress_state):
 
 def _steps(monkeypatch, compiled, pb, numerics, method):
     rows = []
-    monkeypatch.setattr(stepper, "COMPILED_STRESS", compiled)
-    _, stats = stepper.integrate(pb, TIMES, method=method, rtol=numerics.rtol, atol=numerics.atol, h0=1e-9,
-                                 observer=lambda t, x: rows.append((t, x[1])))
+    _, stats = integrate(pb, TIMES, method=method, compiled=compiled, rtol=numerics.rtol, atol=numerics.atol,
+                         h0=1e-9, observer=lambda t, x: rows.append((t, x[1])))
     return np.array(rows), stats
 
 
@@ -88,4 +88,4 @@ def test_a_step_limit_is_a_stepper_failure(stress_state):
     and the time reached, as the Python does."""
     pb, _, numerics = stress_state
     with pytest.raises(stepper.StepperFailure, match=r"max_steps = 20 reached at t = "):
-        stepper.integrate(pb, [1.0], rtol=numerics.rtol, atol=numerics.atol, h0=1e-9, max_steps=20)
+        integrate(pb, [1.0], rtol=numerics.rtol, atol=numerics.atol, h0=1e-9, max_steps=20)

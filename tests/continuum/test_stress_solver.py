@@ -7,7 +7,7 @@ from granstokes.continuum.mesh import Mesh
 from granstokes.continuum.problems import ImposedStress
 from granstokes.continuum.solver import Numerics, solve_stress
 from granstokes.continuum.steady import steady_wall_speed
-from granstokes.continuum.stepper import integrate
+from granstokes.continuum.integrators import integrate
 
 CASES = (0.9, 0.5, 0.1)
 
@@ -58,7 +58,7 @@ def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
     solve on the same mesh (measured 4.2e-4 in u~_w, 2.2e-6 in delta: held to rtol-scaled bounds 1e-3, 1e-5).
     The loop is chaotic in the round-off: the compiled DIRK (continuum.stress_dirk, the same rules) falls into it
     less deeply (to t~ = 0.5 uncapped: 269 steps, 174 rejected, against the Python's 1250 and 1185), so the
-    control runs the Python (stepper.COMPILED_STRESS = False)."""
+    control runs the Python (Numerics.compiled = False)."""
     import granstokes.continuum.stepper as stepper
 
     mu_w, times = paper_friction.mu_w_from_tilde(0.1), [1e-4, 1e-2, 1.0, 10.0]
@@ -67,10 +67,10 @@ def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
     assert loose.stats.steps < 10_000
     assert np.max(np.abs(loose.u_w / tight.u_w - 1)) < 10 * 1e-4
     assert np.max(np.abs(loose.delta / tight.delta - 1)) < 0.1 * 1e-4
-    monkeypatch.setattr(stepper, "COMPILED_STRESS", False)
-    short = solve_stress(paper_friction, mu_w, [1e-4, 0.5], Numerics(n_cells=64, rtol=1e-4))
+    python = Numerics(n_cells=64, rtol=1e-4, compiled=False)
+    short = solve_stress(paper_friction, mu_w, [1e-4, 0.5], python)
     monkeypatch.setattr(stepper, "REPEAT_BAND", 0.0)  # the cap never set: the loop is back (to t~ = 0.5:
-    uncapped = solve_stress(paper_friction, mu_w, [1e-4, 0.5], Numerics(n_cells=64, rtol=1e-4))  # 1250 steps, 598 capped)
+    uncapped = solve_stress(paper_friction, mu_w, [1e-4, 0.5], python)  # 1250 steps, 598 capped)
     assert uncapped.stats.rejected > 0.9 * uncapped.stats.steps and uncapped.stats.steps > 1.5 * short.stats.steps
 
 

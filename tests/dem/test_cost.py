@@ -6,7 +6,6 @@ import pytest
 
 from granstokes.dem import config, sizing
 from granstokes.dem.calibrate import plan_calibration
-from granstokes.dem.scene import free_fall_steps
 from granstokes.dem.sizing import CONTENTION, OVERHEAD, THROUGHPUT, duration_text, makespan, plan, slowdown
 
 #: the estimate holds within this fraction of the measured wall time (bench/RESULTS.md, "Cost estimates")
@@ -41,8 +40,8 @@ def test_preparation_counts_its_expected_steps_not_its_cap():
     p = plan(config.preset("smoke")[0])
     c = p.config.prepare
     expected, most = p.prepare_steps
-    assert expected == free_fall_steps(p) + round(sizing.SETTLE_RELAX_EXPECTED / p.dt)
-    assert most == free_fall_steps(p) + round((c.settle_max + c.relax_max) / p.dt)
+    assert expected == p.free_fall_steps + round(sizing.SETTLE_RELAX_EXPECTED / p.dt)
+    assert most == p.free_fall_steps + round((c.settle_max + c.relax_max) / p.dt)
     rate = THROUGHPUT[2]
     assert p.stage_seconds("seed-1") == pytest.approx(p.n_grains * expected / rate["prepare"])
     assert p.stage_seconds("seed-1/speed") == pytest.approx(p.n_grains * p.drives[0].steps / rate["drive"])

@@ -120,7 +120,7 @@ def test_a_failed_solve_is_one_line_and_writes_nothing(capsys, tmp_path, monkeyp
     import functools
 
     import granstokes.continuum.solver
-    from granstokes.continuum.stepper import integrate
+    from granstokes.continuum.integrators import integrate
 
     monkeypatch.setattr(granstokes.continuum.solver, "integrate", functools.partial(integrate, max_steps=5))
     code, out, err = run(capsys, "--u-w", "1.334", "--times", "1", "--save", str(tmp_path / "out"))
