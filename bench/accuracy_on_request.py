@@ -17,6 +17,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.continuum.reference
 
 from granstokes.continuum.solver import solve_stress  # noqa: E402
+
 from tests.continuum import reference  # noqa: E402
 
 ACCURACIES = (1e-4, 1e-6)

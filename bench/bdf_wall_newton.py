@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
-
 import granstokes.continuum.solver as solver
-from bench.speed_solver import TIMES
+import numpy as np
 from granstokes.continuum.solver import Numerics, solve_speed
+
+from bench.speed_solver import TIMES
 from tests.continuum.reference import DISKS, PAPER
 
 CASES = [("paper", PAPER, 1.334, 256, None), ("paper", PAPER, 2.0, 256, None), ("paper", PAPER, 1.334, 512, None),

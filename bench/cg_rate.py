@@ -21,7 +21,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-
 from granstokes.compare.profiles import CGSettings, DepthProfiles
 from granstokes.compare.reader import find_drives
 
@@ -56,8 +55,9 @@ def main(argv=None) -> int:
     ap.add_argument("--append", action="store_true", help="append the result to bench/RESULTS.md")
     args = ap.parse_args(argv)
     if args.drive is None and not (DEFAULT / "run" / "run.json").exists():
-        from granstokes.cli import main as granstokes_main
         from granstokes.dem import config
+
+        from granstokes.cli import main as granstokes_main
 
         DEFAULT.mkdir(parents=True, exist_ok=True)
         text = config.preset_text("smoke").replace("atoms = 1.0", "atoms = 0.05")

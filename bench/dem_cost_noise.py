@@ -17,15 +17,14 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
-from matplotlib.ticker import LogFormatter
-
 from granstokes.compare.analysis import analyse_drive, drive_specs
 from granstokes.compare.plate import STEADY_WINDOW_LATEST
 from granstokes.compare.profiles import CGSettings
 from granstokes.dem import config
 from granstokes.dem.runner import run
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import LogFormatter
 
 HERE = Path(__file__).parent
 SMOKE = config.preset_text("smoke")
@@ -83,7 +82,8 @@ def measure(out: Path) -> pd.DataFrame:
         g = analyse_drive(spec, CGSettings())
         late = g.delta[g.delta.t >= STEADY_WINDOW_LATEST * g.delta.t.max()].delta_u
         rows.append({"variant": name, "grains": len(spec.folders[0].grains), "seeds": len(spec.folders),
-                     "grains_x_steps": spec.cost, "wall_s": wall, "stderr_over": g.steady["u_w"]["method"], "u_w_inf": g.steady["u_w"]["value"],
+                     "grains_x_steps": spec.cost, "wall_s": wall, "stderr_over": g.steady["u_w"]["method"],
+                     "u_w_inf": g.steady["u_w"]["value"],
                      "rel_stderr_u_w_inf": g.steady["u_w"]["stderr"] / g.steady["u_w"]["value"],
                      "delta_s": late.mean(), "rel_stderr_delta_s": late.std(ddof=1) / np.sqrt(len(late)) / late.mean()})
     return pd.DataFrame(rows)
@@ -100,7 +100,8 @@ def main():
         df = measure(args.out)
         df.to_csv(HERE / "dem_cost_noise.csv", index=False)
     plot(df, HERE / "dem_cost_noise.png")
-    print("| variant | grains | seeds | grains x steps | wall [s] | u_w_inf | rel. stderr (over) | delta_s [d] | rel. stderr |")
+    print("| variant | grains | seeds | grains x steps | wall [s] | u_w_inf | rel. stderr (over) | delta_s [d] "
+          "| rel. stderr |")
     print("|---|---|---|---|---|---|---|---|---|")
     for _, r in df.iterrows():
         print(f"| {r.variant} | {r.grains} | {r.seeds} | {r.grains_x_steps:.3g} | {r.wall_s:.0f} | {r.u_w_inf:.3g} | "

@@ -17,7 +17,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-
 from granstokes.continuum.steady import steady_wall_speed  # noqa: E402
 from granstokes.dem import config  # noqa: E402
 from granstokes.dem.runner import run  # noqa: E402

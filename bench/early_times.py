@@ -11,11 +11,11 @@ bench/speed_solver.py's REPEATS of the whole solve through t~ = 10.
 """
 from __future__ import annotations
 
-import numpy as np
-
 import granstokes.continuum.solver as solver
-from bench.speed_solver import QUANTITIES, timed  # timed: best of its REPEATS
+import numpy as np
 from granstokes.continuum.solver import Numerics, early_until, solve_speed
+
+from bench.speed_solver import QUANTITIES, timed  # timed: best of its REPEATS
 from tests.continuum.reference import PAPER, SPEED_CASES, cached
 
 CELLS = (64, 128, 256, 512)
@@ -23,7 +23,8 @@ CELLS = (64, 128, 256, 512)
 
 def main():
     default_span = solver.EARLY_SPAN
-    print("| u~_w | early times below | cells | one map: mu_w | delta | CPU [ms] | apart: mu_w | delta | CPU [ms] | CPU ratio |")
+    print("| u~_w | early times below | cells | one map: mu_w | delta | CPU [ms] | apart: mu_w | delta | CPU [ms] "
+          "| CPU ratio |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for label, case in SPEED_CASES.items():
         if case.friction != PAPER:

@@ -1,15 +1,17 @@
 """Before and after a restructure, the same inputs must give the same numbers.
 
-    python bench/restructure_check.py [--smoke-run DIR] [--save]
+    python bench/restructure_check.py [--smoke-run DIR] [--save] [--before CHECKOUT]
 
 Reruns ``granstokes continuum --json`` (the paper's three imposed stresses, one imposed speed), ``granstokes
 predict --json`` (local and NGF, steady and transient, both drives), the DEM sizing of every preset
-(``granstokes.dem.sizing.plan(...).as_dict()``) and, with ``--smoke-run DIR``, ``granstokes compare --json`` of that run with
-the committed quick calibration; compares every number with the JSON in bench/baseline/ and prints each whose
-relative change exceeds the tolerance (exit status 1 if any).  ``--save`` writes the baseline instead (run it
-before the restructure).  Timings and provenance are not compared.  Tolerances: 1e-9 for the continuum, sizing
-and predictions (same arithmetic), 1e-6 for the comparison (coarse-graining sums in another order may move the
-last digits).
+(``granstokes.dem.sizing.plan(...).as_dict()``) and, with ``--smoke-run DIR``, ``granstokes compare --json``
+of that run with the committed quick calibration; compares every number with the JSON in bench/baseline/ and
+prints each whose relative change exceeds the tolerance (exit status 1 if any).  ``--save`` writes the
+baseline instead (run it before the restructure).  ``--before CHECKOUT`` (a work tree of the commit before,
+e.g. ``git worktree add``) also times SPEED_CASES, each solve at the default accuracy 1e-6 in a fresh process,
+alternating between the two trees, best of REPEATS CPU seconds, and prints the ratio after/before.  Timings
+and provenance are not compared.  Tolerances: 1e-9 for the continuum, sizing and predictions (same
+arithmetic), 1e-6 for the comparison (coarse-graining sums in another order may move the last digits).
 """
 from __future__ import annotations
 
@@ -36,6 +38,9 @@ for model in ("local", "ngf"):
     CASES[f"predict_{model}_speed_steady"] = ["predict", "--model", model, *amplitude, *SCENE, "--u-w", "1.0",
                                               "--steady"]
 PRESETS = ("smoke", "quick", "spheres", "paper")
+SPEED_CASES = {"stress, mu~_w = 0.5": CASES["continuum_0.5"], "stress, mu~_w = 0.1": CASES["continuum_0.1"],
+               "speed, u~_w = 1.334": CASES["continuum_speed"]}
+REPEATS = 3
 #: keys whose numbers measure the machine, not the result
 NOT_COMPARED = re.compile(r"(cpu|wall|seconds|timing|provenance|started|finished)", re.IGNORECASE)
 TOLERANCE = {"compare": 1e-6}
@@ -91,11 +96,38 @@ def current(smoke_run: Path | None) -> dict:
     return out
 
 
+def cpu_seconds(tree: Path, argv) -> float:
+    """CPU seconds (user + system) of ``granstokes ARGV`` run from the source tree ``tree``."""
+    import os
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run([sys.executable, "-m", "granstokes.cli", *argv], cwd=tree, capture_output=True, check=True,
+                   env={**os.environ, "PYTHONPATH": str(tree)})
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+
+
+def speed(before: Path) -> None:
+    """The table of SPEED_CASES' CPU before and after (each tree's kernels compiled first, not timed)."""
+    trees = {"before": before.resolve(), "after": ROOT}
+    for tree in trees.values():
+        for argv in SPEED_CASES.values():
+            cpu_seconds(tree, argv)
+    print("| case | before [s CPU] | after [s CPU] | after / before |\n|---|---|---|---|")
+    for name, argv in SPEED_CASES.items():
+        best = {k: min(cpu_seconds(tree, argv) for _ in range(REPEATS)) for k, tree in trees.items()}
+        print(f"| {name} | {best['before']:.2f} | {best['after']:.2f} | {best['after'] / best['before']:.2f} |")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smoke-run", type=Path, help="a smoke run folder (granstokes dem run --preset smoke)")
     ap.add_argument("--save", action="store_true", help="write the baseline instead of comparing with it")
+    ap.add_argument("--before", type=Path, help="a work tree of the commit before: time both")
     args = ap.parse_args()
+    if args.before is not None:
+        speed(args.before)
     now = current(args.smoke_run)
     if args.save:
         BASE.mkdir(exist_ok=True)

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 import time
 
-from bench.speed_solver import TIMES
 from granstokes.continuum.solver import Numerics, solve_speed
+
+from bench.speed_solver import TIMES
 from tests.continuum.reference import DISKS, PAPER
 
 CASES = [("paper", PAPER, 0.198), ("paper", PAPER, 1.334), ("paper", PAPER, 4.629), ("disks", DISKS, 1.0)]

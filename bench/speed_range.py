@@ -14,11 +14,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
-from bench.speed_solver import QUANTITIES, TIMES
 from granstokes.continuum.cli import ACCURACY
 from granstokes.continuum.scales import UNITS
 from granstokes.continuum.solver import solve_speed
+
+from bench.speed_solver import QUANTITIES, TIMES
 from tests.continuum.reference import DISKS, PAPER
 
 FRICTIONS = {"paper": PAPER, "disks": DISKS}
@@ -26,7 +26,8 @@ SPEEDS = (0.001, 0.005, 0.02, 0.05, 0.1, 0.5, 2.0, 10.0, 30.0)
 
 
 def main():
-    print(f"accuracy asked: {ACCURACY:g}; t~ = {TIMES}; the paper's dimensionless variables: {UNITS['tilde_variables']}")
+    print(f"accuracy asked: {ACCURACY:g}; t~ = {TIMES}; the paper's dimensionless variables: "
+          f"{UNITS['tilde_variables']}")
     print("| friction | u~_w | t~_mud | cells | steps | CPU [s] | worst estimate | mu_w(10)/mu_w^inf - 1 |")
     print("|---|---|---|---|---|---|---|---|")
     for name, fr in FRICTIONS.items():

@@ -15,7 +15,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from granstokes.continuum.rheology import Friction
 from granstokes.continuum.solver import WALL_STRETCH, Numerics, solve_speed
 
@@ -54,7 +53,8 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     for u_w in SPEEDS:
         base = None
-        for name, stretch in (("wall cluster (default)", None), (f"exponential, stretch {WALL_STRETCH:g}", WALL_STRETCH)):
+        for name, stretch in (("wall cluster (default)", None),
+                              (f"exponential, stretch {WALL_STRETCH:g}", WALL_STRETCH)):
             for n in CELLS:
                 sol, cpu = timed(lambda: solve_speed(FR, u_w, TIMES, Numerics(n_cells=n, stretch=stretch)))
                 base = base or cpu

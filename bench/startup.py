@@ -22,11 +22,14 @@ COMMANDS = {
     "python -c pass": ["-c", "pass"],
     "granstokes --version": ["-m", "granstokes.cli", "--version"],
     # the parser's other subcommands, without continuum.cli (whose module imports its solver)
-    "register compare, dem, paper, predict": ["-c", "import argparse, granstokes.cli, granstokes.compare.cli, granstokes.dem.cli, "
-                                              "granstokes.continuum.paper.cli, granstokes.continuum.predict_cli as p; "
+    "register compare, dem, paper, predict": ["-c", "import argparse, granstokes.cli, granstokes.compare.cli, "
+                                              "granstokes.dem.cli, granstokes.continuum.paper.cli, "
+                                              "granstokes.continuum.predict_cli as p; "
                                               "s = argparse.ArgumentParser().add_subparsers(); "
-                                              "[m.register(s) for m in (granstokes.compare.cli, granstokes.dem.cli, granstokes.continuum.paper.cli, p)]"],
-    "granstokes continuum ... --json, up to the solve": ["-c", "import granstokes.cli as c; c.build_parser().parse_args("
+                                              "[m.register(s) for m in (granstokes.compare.cli, granstokes.dem.cli, "
+                                              "granstokes.continuum.paper.cli, p)]"],
+    "granstokes continuum ... --json, up to the solve": ["-c", "import granstokes.cli as c; "
+                                                         "c.build_parser().parse_args("
                                                          f"{CONTINUUM!r}); import granstokes.continuum.solver"],
     "granstokes continuum ... --json": ["-m", "granstokes.cli", *CONTINUUM],
 }
@@ -47,7 +50,8 @@ def timed(args, root: Path) -> tuple[float, float]:
 
 
 def main(roots) -> None:
-    print("| checkout | command | wall [s] | / python -c pass | CPU [s] | / python -c pass |\n|---|---|---|---|---|---|")
+    print("| checkout | command | wall [s] | / python -c pass | CPU [s] | / python -c pass |\n"
+          "|---|---|---|---|---|---|")
     for root in roots:
         times = {name: timed(args, root) for name, args in COMMANDS.items()}
         base = times["python -c pass"]

@@ -12,9 +12,9 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from granstokes.continuum.solver import Numerics, solve_stress
 
 from bench.speed_solver import TIMES
-from granstokes.continuum.solver import Numerics, solve_stress
 from tests.continuum.reference import DISKS, PAPER
 
 CASES = [("paper", PAPER, 0.9), ("paper", PAPER, 0.5), ("paper", PAPER, 0.1), ("disks", DISKS, 0.3)]

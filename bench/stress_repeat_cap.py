@@ -15,9 +15,9 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from granstokes.continuum import stepper
-from granstokes.continuum.paper.figures import DECADES, FIG4_CASES, FIG4_T, FRICTION as FR, STRESS_CASES
+from granstokes.continuum.paper.figures import DECADES, FIG4_CASES, FIG4_T, STRESS_CASES
+from granstokes.continuum.paper.figures import FRICTION as FR
 from granstokes.continuum.solver import Numerics, solve_stress
 
 TIMES = list(DECADES)

@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
 from granstokes.compare import calibrate
 from granstokes.compare.comparison import PREDICTION_SPAN, PREDICTION_TIMES
 from granstokes.compare.models import Drive, _series
@@ -54,7 +53,8 @@ def quick_drives():
     p = plan(cfg)
     mass = plate_geometry(p)["mass_per_area"]
     material = calibrate.load(ROOT / "results/quick-calibration/calibration.json").material()
-    drives = [(d.drive.name, Drive(d.drive.kind, d.tau_w if d.drive.kind == "stress" else d.u_w, cfg.p_w, p.depth, mass),
+    drives = [(d.drive.name,
+               Drive(d.drive.kind, d.tau_w if d.drive.kind == "stress" else d.u_w, cfg.p_w, p.depth, mass),
                np.geomspace(d.duration / PREDICTION_SPAN, d.duration, PREDICTION_TIMES)) for d in p.drives]
     return material, drives
 
@@ -113,7 +113,8 @@ def main() -> None:
     table = pd.DataFrame(rows)
     table.to_csv(HERE / "velocity_form.csv", index=False)
     base = table[table.numerics == next(iter(CANDIDATES))].set_index("drive").cpu_ms
-    print("| drive | numerics | CPU [ms] | / old default | u_w | mu_w | delta_u | u(y)/u_w |\n|---|---|---|---|---|---|---|---|")
+    print("| drive | numerics | CPU [ms] | / old default | u_w | mu_w | delta_u | u(y)/u_w |\n"
+          "|---|---|---|---|---|---|---|---|")
     for r in table.itertuples():
         print(f"| {r.drive} | {r.numerics} | {r.cpu_ms:.0f} | {r.cpu_ms / base[r.drive]:.2f} | {r.u_w:.1e} | "
               f"{r.mu_w:.1e} | {r.delta_u:.1e} | {r.u_profile:.1e} |")

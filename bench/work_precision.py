@@ -14,11 +14,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
-
 from granstokes.continuum.mol import solve_stress_mol
 from granstokes.continuum.rheology import Friction
 from granstokes.continuum.solver import Numerics, solve_stress
+from matplotlib.figure import Figure
 
 HERE = Path(__file__).parent
 FR = Friction(np.tan(np.radians(21.0)), np.tan(np.radians(33.0)))
@@ -69,7 +68,8 @@ def main():
                 runs = ({"sdirk4, fourth order (granstokes)": lambda: solve_stress(FR, MU_W, [1.0], num).u_w[0],
                          "solve_ivp BDF, fourth order": lambda: solve_stress_mol(FR, MU_W, [1.0], num, "BDF").u_w[0]}
                         if order == 4 else
-                        {"solve_ivp BDF, second order (baseline)": lambda: solve_stress_mol(FR, MU_W, [1.0], num, "BDF").u_w[0],
+                        {"solve_ivp BDF, second order (baseline)":
+                             lambda: solve_stress_mol(FR, MU_W, [1.0], num, "BDF").u_w[0],
                          "solve_ivp Radau, second order (baseline)":
                              lambda: solve_stress_mol(FR, MU_W, [1.0], num, "Radau").u_w[0]})
                 for name, run in runs.items():
@@ -93,7 +93,8 @@ def main():
     ax.set(xscale="log", yscale="log", xlabel="CPU time [s], one core",
            ylabel="relative error of u~_w(t~=1), mu~_w = 0.5",
            title="Work-precision (faint: every run; line: Pareto front)")
-    fig.legend(*ax.get_legend_handles_labels(), fontsize=8, loc="outside lower left", ncol=2)  # the fronts fill the panel
+    fig.legend(*ax.get_legend_handles_labels(), fontsize=8, loc="outside lower left",
+               ncol=2)  # the fronts fill the panel
     n = np.array([16, 1600])
     ax_space.loglog(n, 2.5e-5 * (n / 200.0) ** -2, "k:", label="slope -2")
     ax_space.loglog(n, 1e-5 * (n / 32.0) ** -4, "k--", label="slope -4")
@@ -119,7 +120,8 @@ def main():
                   f"speed-up > {g.cpu_s / ours:.1f}x")
     mine, base = (best.loc[m] for m in ("sdirk4, fourth order (granstokes)", "solve_ivp BDF, second order (baseline)"))
     (o_min, o_med), (b_min, b_med) = head_to_head(
-        lambda: solve_stress(FR, MU_W, [1.0], Numerics(n_cells=int(mine.n_cells), rtol=mine.rtol, atol=mine.rtol * 1e-2)).u_w[0],
+        lambda: solve_stress(FR, MU_W, [1.0], Numerics(n_cells=int(mine.n_cells), rtol=mine.rtol,
+                                                       atol=mine.rtol * 1e-2)).u_w[0],
         lambda: solve_stress_mol(FR, MU_W, [1.0], Numerics(n_cells=int(base.n_cells), rtol=base.rtol,
                                                            atol=base.rtol * 1e-2, order=2), "BDF").u_w[0])
     print(f"head to head ({ROUNDS} alternating rounds): sdirk4 {1e3 * o_min:.1f} ms (median {1e3 * o_med:.1f}), "

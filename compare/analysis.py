@@ -18,13 +18,22 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
 from granstokes.dem import layout
 
 from .calibrate import WALL_EXCLUSION
 from .models import Drive, depth_at_fraction
-from .plate import (STEADY_LAST, STEADY_WINDOW_LATEST, PlateRecord, block_estimate, pooled, slip, steady_state,
-                    steady_window_start, tail, window_values)
+from .plate import (
+    STEADY_LAST,
+    STEADY_WINDOW_LATEST,
+    PlateRecord,
+    block_estimate,
+    pooled,
+    slip,
+    steady_state,
+    steady_window_start,
+    tail,
+    window_values,
+)
 from .profiles import CGSettings, DepthProfiles, derive, ensemble
 from .reader import DriveFolder
 

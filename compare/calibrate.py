@@ -11,10 +11,19 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-from granstokes.continuum.calibration import (BOOTSTRAP_SEED, IN_DRIVE, LINEAR_I_MAX, N_BOOTSTRAP, PLANE_SHEAR, Calibration,
-                                   from_replicates, fit_laws, mu_law)
+from granstokes.continuum.calibration import (
+    BOOTSTRAP_SEED,
+    IN_DRIVE,
+    LINEAR_I_MAX,
+    N_BOOTSTRAP,
+    PLANE_SHEAR,
+    Calibration,
+    fit_laws,
+    from_replicates,
+    mu_law,
+)
 from granstokes.dem.layout import POINTS_CSV
+
 from granstokes.lib.validate import require
 
 WALL_EXCLUSION = 2.0  # d
@@ -63,7 +72,8 @@ def fit(pairs: pd.DataFrame, wall_exclusion: float = WALL_EXCLUSION, I_min: floa
         except RuntimeError:  # no convergence on this resample
             continue
         phi_bulk.append(float(sample.phi.mean()))
-    points = pd.DataFrame({"I": I, "mu": mu, "phi": phi, "drive": sel.get("drive", pd.Series([""] * len(I))).to_numpy()})
+    points = pd.DataFrame({"I": I, "mu": mu, "phi": phi,
+                           "drive": sel.get("drive", pd.Series([""] * len(I))).to_numpy()})
     rms = np.sqrt(np.mean((mu_law(I, *best[:3]) - mu) ** 2))
     cal = from_replicates(best, reps, points, IN_DRIVE, "fit on the steady windows of the runs compared", rms,
                           wall_exclusion=wall_exclusion, I_min=I_min)

@@ -46,7 +46,6 @@ from .kernels import KERNELS
 from .profiles import ADDITIVE, CGSettings, DepthProfiles, _nanmean, coarse_grain, derive
 from .reader import DriveFolder
 
-
 #: the cross-check's bulk: this far (d) above the lowest and below the highest grid point
 CROSSCHECK_MARGIN = 4.0
 

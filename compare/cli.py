@@ -46,7 +46,8 @@ def run_compare(args) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("compare", help="coarse-grain DEM runs, predict them from mu(I) (independent or fitted), write the report")
+    p = sub.add_parser("compare", help="coarse-grain DEM runs, predict them from mu(I) (independent or fitted), "
+                                       "write the report")
     p.add_argument("runs", type=Path, nargs="+", metavar="RUN_DIR", help="run folders of granstokes dem run")
     p.add_argument("--out", type=Path, required=True, help="report folder (index.html, CSV, metrics.json)")
     p.add_argument("--calibration", type=Path, help="calibration.json of granstokes dem calibrate (same grains): "

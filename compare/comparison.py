@@ -17,13 +17,13 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
-
 from granstokes.continuum.calibration import Calibration, mu_law
 from granstokes.continuum.crossing import crossing_depth
 from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.steady import DELTA_THRESHOLD
 from granstokes.dem.layout import RUN_JSON
+from tqdm import tqdm
+
 from granstokes.lib.validate import require
 
 from . import calibrate
@@ -125,8 +125,8 @@ def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.
         step = max(1, int(round(spacing / abs(np.diff(inside.y.to_numpy()[:2])[0]))))
         pick = inside.iloc[::step]
         rows.append(pick[["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(
-            drive=a.label, mu_err=(pick.mu_hi - pick.mu_lo) / (2 * Z95), phi_err=(pick.phi_hi - pick.phi_lo) / (2 * Z95),
-            I_err=(pick.I_dem_hi - pick.I_dem_lo) / (2 * Z95)))
+            drive=a.label, mu_err=(pick.mu_hi - pick.mu_lo) / (2 * Z95),
+            phi_err=(pick.phi_hi - pick.phi_lo) / (2 * Z95), I_err=(pick.I_dem_hi - pick.I_dem_lo) / (2 * Z95)))
     return pd.concat(rows, ignore_index=True)
 
 
@@ -148,12 +148,14 @@ def law_test(pairs: pd.DataFrame, cal: Calibration) -> dict:
     s_pair = np.nan_to_num(sel.mu_err.to_numpy())
     resid = sel.mu.to_numpy() - law
     z = resid / np.sqrt(s_pair**2 + s_law**2 + 1e-300)
-    out = {"n_pairs": int(len(I)), "mean_residual": float(resid.mean()), "rms_residual": float(np.sqrt(np.mean(resid**2))),
+    out = {"n_pairs": int(len(I)), "mean_residual": float(resid.mean()),
+           "rms_residual": float(np.sqrt(np.mean(resid**2))),
            "fraction_beyond": float(np.mean(np.abs(z) > LAW_TEST_Z)), "z_threshold": LAW_TEST_Z,
            "I_range": [float(I.min()), float(I.max())]}
     side = "above" if out["mean_residual"] > 0 else "below"
-    out["verdict"] = (f"{out['n_pairs']} steady (mu, I) pairs of the drives (I in [{I.min():.2g}, {I.max():.2g}]) lie on "
-                      f"average {abs(out['mean_residual']):.3f} {side} the {cal.kind} law (rms {out['rms_residual']:.3f}); "
+    out["verdict"] = (f"{out['n_pairs']} steady (mu, I) pairs of the drives (I in [{I.min():.2g}, {I.max():.2g}]) "
+                      f"lie on average {abs(out['mean_residual']):.3f} {side} the {cal.kind} law "
+                      f"(rms {out['rms_residual']:.3f}); "
                       f"{out['fraction_beyond']:.0%} differ by more than {LAW_TEST_Z:g} combined standard errors"
                       + (" -- a disagreement beyond errors" if out["fraction_beyond"] > 2 * LAW_TEST_CHANCE else
                          " -- consistent within errors"))
@@ -263,7 +265,8 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
         independent = calibrate.load(calibration)
         check_grains(independent, runs)
     specs = [spec for run in runs for spec in drive_specs(run)]
-    drives = [analyse_drive(spec, settings) for spec in tqdm(specs, desc="coarse-graining", disable=not progress or None)]
+    drives = [analyse_drive(spec, settings)
+              for spec in tqdm(specs, desc="coarse-graining", disable=not progress or None)]
     pairs = steady_pairs(drives)
     phi = float(pairs.phi.mean())
     if independent is None:

@@ -3,9 +3,9 @@ from a compare.comparison.Comparison.  DEM units; I0 in the named convention."""
 from __future__ import annotations
 
 import numpy as np
+from granstokes.continuum.scales import UNITS
 from scipy import stats
 
-from granstokes.continuum.scales import UNITS
 from granstokes.lib.provenance import provenance
 
 from .analysis import TRANSITS_BEFORE_COMPARISON
@@ -31,16 +31,18 @@ DEFINITIONS = {
                           f"down to {WALL_EXCLUSION:g} d above the base; local mu(I) is rigid there (0)"),
     "sigma": ("1", "(DEM - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical_err^2), band_sd = band width / 3.92; "
                    f"'consistent' when |sigma| <= {SIGMA_CONSISTENT:g}"),
-    "scored": ("-", "False where the scene cannot support the row (the flow reaches the base: the layer rows, and every "
-                    "row of the half-space model; a model not steady within the record: its steady rows); 'note' "
-                    "says why. Only scored rows with blind = true count for a model"),
+    "scored": ("-", "False where the scene cannot support the row (the flow reaches the base: the layer rows, and "
+                    "every row of the half-space model; a model not steady within the record: its steady rows); "
+                    "'note' says why. Only scored rows with blind = true count for a model"),
     "tally": ("-", "per model, over the scored blind rows every model has (same drive and observable): rows, "
                    "consistent rows, share, median |sigma|; the verdict ranks models by share, then median |sigma|"),
     "model_at_end": ("unit of the row", "the model's free response averaged over the DEM record's final quarter "
-                                        "(as the DEM's steady value): near 'predicted' when the model is steady by then"),
+                                        "(as the DEM's steady value): near 'predicted' when the model is steady by "
+                                        "then"),
     "band": ("unit of the row", "95 % band of the prediction from the calibration's uncertainty (compare.scorecard)"),
     "dem_err": ("unit of the row", f"standard error of the DEM value: spread over seeds (>= 2 seeds), else over "
-                                   f"{BLOCKS} blocks of the steady window, or the estimator's resolution; dem_how says"),
+                                   f"{BLOCKS} blocks of the steady window, or the estimator's resolution; dem_how "
+                                   "says"),
     "errors": ("-", f"the steady plate values' errors: the spread over the seeds (>= {MIN_SEEDS_SPREAD} seeds), else "
                     f"blocks of >= {BLOCK_TAUS:g} integrated autocorrelation times within each run (Sokal's window), "
                     "combined over the seeds; every *_err says how (*_how, *_method)"),

@@ -19,12 +19,11 @@ The layer thickness compared with the DEM is delta_u, the depth where u falls to
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 import pandas as pd
-
 from granstokes.continuum import ngf
 from granstokes.continuum.crossing import crossing_depth
 from granstokes.continuum.rules import YieldRule
@@ -174,7 +173,7 @@ class SceneModel:
     factory: Callable | None = None
     half_space: bool = False
 
-    def at(self, values) -> "SceneModel":
+    def at(self, values) -> SceneModel:
         """This model with its own parameter taken from ``values`` (a mapping), if it has one."""
         return self.factory(float(values[self.parameter])) if self.parameter else self
 

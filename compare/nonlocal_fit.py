@@ -15,11 +15,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
-from scipy.optimize import minimize_scalar
-
 from granstokes.continuum.ngf import NonlocalFluidity, solve_steady
 from granstokes.continuum.scales import Material
+from scipy import stats
+from scipy.optimize import minimize_scalar
 
 from .analysis import DriveAnalysis
 from .calibrate import PAIR_SPACING, WALL_EXCLUSION

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from granstokes.dem.layout import PLATE_CSV
 from scipy import stats
 
-from granstokes.dem.layout import PLATE_CSV
 from granstokes.lib.statistics import autocorrelation_time
 
 #: steady-state criterion (stated in every report): the running mean over 5 % of the record stays
@@ -60,7 +60,7 @@ class PlateRecord:
     n_c: np.ndarray    # mean number of them
 
     @classmethod
-    def read(cls, drive_dir: Path) -> "PlateRecord":
+    def read(cls, drive_dir: Path) -> PlateRecord:
         df = pd.read_csv(Path(drive_dir) / PLATE_CSV)
         return cls(df.t.to_numpy(), df.u_x.to_numpy(), -df.f_x.to_numpy(), df.f_y.to_numpy(), df.y.to_numpy(),
                    df.u_c.to_numpy(), df.n_c.to_numpy())

@@ -56,10 +56,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 import pandas as pd
+from granstokes.dem.layout import BED, CONTACT_COLUMNS
 from MDAnalysis.analysis.base import AnalysisBase
 from scipy import stats
 
-from granstokes.dem.layout import BED, CONTACT_COLUMNS
 from granstokes.lib.validate import finite, require
 
 from .kernels import Kernel

@@ -24,9 +24,16 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-from granstokes.dem.layout import (ATOMS, CONTACT_COLUMNS, CONTACTS, PLATE_CSV, PROFILES_CSV, RUN_JSON, SEGMENTS,
-                        grains_table)
+from granstokes.dem.layout import (
+    ATOMS,
+    CONTACT_COLUMNS,
+    CONTACTS,
+    PLATE_CSV,
+    PROFILES_CSV,
+    RUN_JSON,
+    SEGMENTS,
+    grains_table,
+)
 
 _MARK = b"ITEM: TIMESTEP"
 _CHUNK = 1 << 24

@@ -12,16 +12,16 @@ from pathlib import Path, PurePath
 
 import numpy as np
 import pandas as pd
+from granstokes.continuum import ngf
+from granstokes.continuum.calibration import LINEAR_I_MAX, mu_law
+from granstokes.continuum.scales import UNITS
+from granstokes.continuum.steady import steady_mu
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import LogFormatter, LogLocator
 
-from granstokes.continuum.calibration import LINEAR_I_MAX, mu_law
-from granstokes.continuum import ngf
-from granstokes.continuum.scales import UNITS
-from granstokes.continuum.steady import steady_mu
 from granstokes.lib.page import page
 
 from .analysis import nearest_frame, snapshot_times
@@ -299,8 +299,10 @@ def fluidity_figure(dc: DriveComparison, material, out: Path, name: str | None =
             ax.semilogx(pr.steady.g, pr.steady.y, label=pr.label, **MODEL_STYLE[pr.model])
     z = np.linspace(0, spec.depth, 400)
     pz = spec.p_w + material.phi * material.rho_p * material.g * z
-    local = ngf.local_fluidity(material, ngf.NonlocalFluidity(A=0.0), dc.predictions[0].steady.mu_w * spec.p_w / pz, pz)
-    ax.semilogx(np.where(local > 0, local, np.nan), z, label="local g_loc (rigid below delta_s)", **MODEL_STYLE["local"])
+    local = ngf.local_fluidity(material, ngf.NonlocalFluidity(A=0.0), dc.predictions[0].steady.mu_w * spec.p_w / pz,
+                               pz)
+    ax.semilogx(np.where(local > 0, local, np.nan), z, label="local g_loc (rigid below delta_s)",
+                **MODEL_STYLE["local"])
     ax.set(xlabel="fluidity g = |du/dy|/mu [sqrt(g/d)]", ylabel=DEPTH_LABEL, ylim=(spec.depth, 0))
     suptitle(fig, f"{name or display_label(g.label)} – steady fluidity; DEM units")
     figure_legend(fig, [ax], ncols=2)
@@ -369,7 +371,8 @@ def calibration_section(c: Comparison) -> str:
              ("b", "b"), ("phi_max", "phi_max"), ("a in phi = phi_max - a I", "phi_slope"))
     rows = [[name, fmt(getattr(cal, attr)), f"[{ci[attr][0]:.3g}, {ci[attr][1]:.3g}]"] for name, attr in names]
     pubs = "".join(f"<li>{html.escape(p['source'])}: {html.escape(p['system'])}; "
-                   + html.escape(", ".join(f"{k} = {p[k]:g}" for k in ("mu_s", "mu_d", "I0", "mu_1", "b", "phi_max", "a")
+                   + html.escape(", ".join(f"{k} = {p[k]:g}"
+                                           for k in ("mu_s", "mu_d", "I0", "mu_1", "b", "phi_max", "a")
                                            if k in p)) + f" (verified: {html.escape(p['verified'])})</li>"
                    for p in PUBLISHED)
     head = ("<p><b>Blind comparison</b>: mu(I) and phi come from an independent plane-shear calibration of the "
@@ -558,7 +561,7 @@ def conclusions(c: Comparison) -> list[str]:
     if rows.empty:  # every drive's prediction was refused or failed: each drive's note says why
         return out + ["No drive has a scored continuum prediction (each drive's section says why)."]
     scored = rows[rows.scored]
-    for model, g in scored.groupby("model", sort=False):
+    for _, g in scored.groupby("model", sort=False):
         ok = g[g.verdict == "consistent"]
         bad = g[g.verdict != "consistent"]
         text = f"<b>{html.escape(g.model_label.iloc[0])}</b>: {len(ok)} of {len(g)} predictions within 2 sigma"
@@ -576,11 +579,13 @@ def conclusions(c: Comparison) -> list[str]:
     fl = c.fluidity
     if fl is not None:
         lo, hi = fl.ci95
-        text = (f"The nonlocal amplitude A = {fmt(fl.A, fl.err)} (95 % interval [{lo:.3g}, {hi:.3g}], {fl.how}) was fitted "
-                f"on the shape of the steady creep profile of {name(fl.drive)} ({int(fl.points)} points, one per d); "
+        text = (f"The nonlocal amplitude A = {fmt(fl.A, fl.err)} (95 % interval [{lo:.3g}, {hi:.3g}], {fl.how}) was "
+                f"fitted on the shape of the steady creep profile of {name(fl.drive)} ({int(fl.points)} points, one "
+                "per d); "
                 "its rows for that drive are not blind, every other NGF row is.")
         if fl.at_bound:
-            text += " The fit ran into its search range: that profile does not determine A, and the NGF rows test little."
+            text += (" The fit ran into its search range: that profile does not determine A, and the NGF rows test "
+                     "little.")
         out.append(text)
     steady_rows = rows[np.isfinite(rows.model_at_end.astype(float))]
     late = steady_rows[~((steady_rows.model_at_end / steady_rows.predicted - 1).abs() <= MODEL_UNSTEADY)]
@@ -594,11 +599,13 @@ def conclusions(c: Comparison) -> list[str]:
     creep = rows[(rows.observable == "creep_length") & (rows.model == "local")]
     if len(creep):
         out.append(f"Below the layer the DEM creeps with an e-folding length of "
-                   f"{fmt(creep.dem.mean(), creep.dem_err.mean())} d, which local mu(I) cannot have (it is rigid there).")
+                   f"{fmt(creep.dem.mean(), creep.dem_err.mean())} d, which local mu(I) cannot have (it is rigid "
+                   "there).")
     scene = c.scorecard.scene
     for r in scene[scene.verdict.isin(["off", "slips"])].itertuples() if len(scene) else []:
         out.append(f"Scene check off: {html.escape(r.check)} = {fmt(r.value, r.err)} for {name(r.drive)} "
-                   f"(target {html.escape(r.target)}); differences in that drive may be the scene's, not the rheology's.")
+                   f"(target {html.escape(r.target)}); differences in that drive may be the scene's, not the "
+                   "rheology's.")
     if len(scene):
         slips = scene[scene.check == "slip at the plate"]
         lo, hi = f"{slips.value.min() * 100:.1f} %", f"{slips.value.max() * 100:.1f} %"
@@ -612,11 +619,11 @@ HOW_TO_READ = {
     "scorecard": "Each bar is one scorecard row, in its model's colour: how many combined standard errors the DEM "
                  "lies from the prediction. Inside the grey band the prediction is consistent with the DEM; each row's "
                  "label has its verdict's colour (green consistent, red disagrees, grey not scored).",
-    "drive": "Top left: the free response (u_w under an imposed stress, mu_w under an imposed speed), the DEM as a running "
-             "mean with its band over seeds, each model as a line with its 95 % band from the calibration's uncertainty "
-             "(linearised). Top right: the layer thickness delta_u on log axes "
-             "(sqrt(t) growth is a slope of 1/2). Bottom: the steady velocity profile, linear and log; on the log panel a "
-             "straight DEM tail below delta_s is creep, which local mu(I) cannot have.",
+    "drive": "Top left: the free response (u_w under an imposed stress, mu_w under an imposed speed), the DEM as a "
+             "running mean with its band over seeds, each model as a line with its 95 % band from the calibration's "
+             "uncertainty (linearised). Top right: the layer thickness delta_u on log axes "
+             "(sqrt(t) growth is a slope of 1/2). Bottom: the steady velocity profile, linear and log; on the log "
+             "panel a straight DEM tail below delta_s is creep, which local mu(I) cannot have.",
     "profiles": "Steady-window depth profiles of the DEM (band: seeds or frames) with the local model's steady state: "
                 "velocity, solid fraction, pressure, shear stress, friction and inertial number.",
     "transient": "Depth profiles at a few snapshot times, DEM solid and the local model dashed in the same colour.",
@@ -682,15 +689,16 @@ def write_report(c: Comparison, out_dir) -> dict:
         f"<p>Runs: {html.escape(', '.join(m['runs']))}. Calibration: {html.escape(c.calibration_source)}. "
         f"DEM units: {html.escape(UNITS['dem_units'])}. Inertial number: {html.escape(UNITS['inertial_number'])}.</p>",
         "<h2>Scorecard</h2>", scorecard_html(c),
-        f"<p>Bands: {c.scorecard.replicates} calibration replicates per steady prediction (band edges change by at most "
-        f"{c.scorecard.edge_stability:.0%} of the band width from half to all replicates); t90 by linearised "
+        f"<p>Bands: {c.scorecard.replicates} calibration replicates per steady prediction (band edges change by at "
+        f"most {c.scorecard.edge_stability:.0%} of the band width from half to all replicates); t90 by linearised "
         "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; 2.</p>",
         "<h2>Conclusions</h2><ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>",
         "<h2>The scene's own checks</h2>", scene_html(c),
         "<h2>Figures</h2>", figures,
         calibration_section(c),
         "<h2>Drives</h2>", _table(["drive", "kind", "imposed", "unit", "seeds", "u_w_inf [sqrt(g d)]", "mu_w_inf",
-                                   "t_steady [sqrt(d/g)]", "frames", "dropped frames", "flow reaches the base"], drive_rows),
+                                   "t_steady [sqrt(d/g)]", "frames", "dropped frames", "flow reaches the base"],
+                                  drive_rows),
         "<h2>Definitions</h2>", _table(["name", "unit", "definition"],
                                        [[html.escape(k), html.escape(u), html.escape(d)]
                                         for k, (u, d) in DEFINITIONS.items()]),

@@ -17,8 +17,9 @@ the block or seed error of compare.plate.steady_state.  Model: the band is the 2
 the calibration's replicates (joint samples of mu_s, mu_d, I0, phi) for the steady observables; for
 t90 (a transient solve per sample is too costly) the linearised propagation J C J^T of the
 replicates' covariance C, J by one-sided differences, band +-1.96 sd; the numerical error of t90 is its change
-when every other output time is dropped (interpolation), of the steady values the solver's estimate.  sigma = (dem - predicted) / sqrt(dem_err^2
-+ band_sd^2 + numerical^2), band_sd = band width / (2 x 1.96); verdict "consistent" when |sigma| <= 2.
+when every other output time is dropped (interpolation), of the steady values the solver's estimate.  sigma =
+(dem - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical^2), band_sd = band width / (2 x 1.96); verdict
+"consistent" when |sigma| <= 2.
 
 Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where
 the drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose
@@ -33,11 +34,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from scipy import stats
-from tqdm import tqdm
-
 from granstokes.continuum.crossing import crossing_depth
 from granstokes.continuum.scales import Material
+from scipy import stats
+from tqdm import tqdm
 
 from .analysis import DriveAnalysis
 from .calibrate import WALL_EXCLUSION
@@ -252,7 +252,7 @@ class Scorecard:
 
     @classmethod
     def of(cls, rows: pd.DataFrame, scene: list[dict], replicates: int, edge_stability: float,
-           bands: dict) -> "Scorecard":
+           bands: dict) -> Scorecard:
         return cls(rows, pd.DataFrame(scene), replicates, edge_stability, bands)
 
 

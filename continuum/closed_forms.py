@@ -6,7 +6,7 @@ Short time (eq. SolutionSS), long time (eq. SolutionLONG), steady wall-speed app
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from scipy.integrate import quad
@@ -14,7 +14,6 @@ from scipy.special import erfc
 
 from .rheology import Friction
 from .steady import DELTA_THRESHOLD, SELF_SIMILAR_DELTA  # noqa: F401 (re-exported)
-
 
 
 def self_similar_mu(fr: Friction, mu_w: float, y, t):
@@ -45,7 +44,7 @@ def self_similar_wall_speed(fr: Friction, mu_w: float, t: float) -> float:
 GAUSS_NODES_PER_MODE = 3
 
 
-@lru_cache(maxsize=None)
+@cache
 def _gauss_legendre(n: int):
     """Nodes and weights on [-1, 1] (numpy computes them by an n x n eigenproblem: cached, read-only)."""
     nodes, weights = np.polynomial.legendre.leggauss(n)

@@ -26,14 +26,14 @@ class Jacobian:
         return sp.dia_matrix((self.bands[:, 1:], self.ku - np.arange(self.kl + self.ku + 1)), shape=(n, n)).tocsc()
 
     @classmethod
-    def tridiagonal(cls, sub, diag, sup, row0=None) -> "Jacobian":
+    def tridiagonal(cls, sub, diag, sup, row0=None) -> Jacobian:
         """From the sub-, main and super-diagonal (lengths n-1, n, n-1)."""
         bands = np.zeros((3, len(diag)))
         bands[0, 1:], bands[1], bands[2, :-1] = sup, diag, sub
         return cls(bands, 1, 1, row0)
 
     @classmethod
-    def dissipative_tridiagonal(cls, diag, off) -> "Jacobian":
+    def dissipative_tridiagonal(cls, diag, off) -> Jacobian:
         """A symmetric tridiagonal J with -J positive semidefinite (a discrete diffusion)."""
         bands = np.zeros((3, len(diag)))
         bands[0, 1:], bands[1], bands[2, :-1] = off, diag, off

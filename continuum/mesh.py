@@ -20,7 +20,7 @@ discretisations of d2/dy~2 and of the quadrature:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property, lru_cache, wraps
+from functools import cache, cached_property, wraps
 from math import factorial
 
 import numpy as np
@@ -33,7 +33,7 @@ DENSE_UP_TO = 300
 CENTRED = (-2, -1, 0, 1, 2)
 
 
-@lru_cache(maxsize=None)
+@cache
 def fd_weights(offsets: tuple[int, ...], derivative: int) -> np.ndarray:
     """Weights w with sum_k w_k f(x + k h) = h^derivative f^(derivative)(x) + O(h^len(offsets)), for
     integer offsets k (the Taylor/Vandermonde conditions, exact in rationals up to round-off)."""
@@ -93,11 +93,12 @@ class Mesh:
     wall_folds: float = 0.0
 
     @classmethod
-    def graded(cls, n_cells: int = 200, stretch: float = 6.0, wall_folds: float = 0.0) -> "Mesh":
+    def graded(cls, n_cells: int = 200, stretch: float = 6.0, wall_folds: float = 0.0) -> Mesh:
         """The map's nodes; ``stretch`` = a, ``wall_folds`` = E: largest/smallest cell = exp(a + E) (about)."""
         require(isinstance(n_cells, (int, np.integer)) and n_cells >= 8, "n_cells", "an integer >= 8", n_cells)
         require(0 <= stretch <= MAX_STRETCH, "stretch", f"in [0, {MAX_STRETCH:g}]", stretch)
-        require(0 <= wall_folds <= MAX_STRETCH - stretch, "wall_folds", f"in [0, {MAX_STRETCH - stretch:g}]", wall_folds)
+        require(0 <= wall_folds <= MAX_STRETCH - stretch, "wall_folds", f"in [0, {MAX_STRETCH - stretch:g}]",
+                wall_folds)
         mesh = cls(np.empty(n_cells + 1), float(stretch), float(wall_folds))
         s = mesh._s(0)
         mesh.y[:] = np.linspace(0.0, 1.0, n_cells + 1) if s[-1] == 0 else np.expm1(s) / np.expm1(s[-1])
@@ -134,7 +135,7 @@ class Mesh:
                 break
         return np.clip(xi, 0.0, 1.0)
 
-    def resample(self, f, onto: "Mesh") -> np.ndarray:
+    def resample(self, f, onto: Mesh) -> np.ndarray:
         """Nodal values f on this mesh (last axis) at the nodes of ``onto``: the quintic spline in this
         map's xi (where f is smooth), error O(N^-6)."""
         from scipy.interpolate import make_interp_spline

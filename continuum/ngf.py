@@ -77,9 +77,9 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from scipy.sparse import lil_matrix
 
-from .mesh import Mesh
 from granstokes.lib.validate import finite, require
 
+from .mesh import Mesh
 from .rheology import convert_I
 from .scales import UNITS, Material
 from .solver import check_times
@@ -190,7 +190,7 @@ def steady_profile(scene: BedScene, fluidity: NonlocalFluidity, tau_w: float, n:
     A2 = (fluidity.A * m.d) ** 2
     pieces = [(a, b, *_cheb(n, a, b)) for a, b in _pieces(scene, tau_w)]
     ys, mus, glocs, cs = [], [], [], []
-    for a, b, y, d1, d2 in pieces:
+    for _a, _b, y, _d1, _d2 in pieces:
         p = scene.p_w + scene.weight_gradient * y
         mu = tau_w / p
         ys.append(y)
@@ -204,7 +204,7 @@ def steady_profile(scene: BedScene, fluidity: NonlocalFluidity, tau_w: float, n:
         size = k * len(pieces)
         M = np.zeros((size, size))
         rhs = np.zeros(size)
-        for i, (a, b, y, d1, d2) in enumerate(pieces):
+        for i, (_a, _b, _y, _d1, d2) in enumerate(pieces):
             sl = slice(i * k, (i + 1) * k)
             M[sl, sl] = A2 * d2 - np.diag(cs[i])
             rhs[sl] = -cs[i] * glocs[i]

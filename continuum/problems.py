@@ -17,10 +17,10 @@ import math
 
 import numpy as np
 
+from .jacobian import Jacobian
 from .mesh import Mesh
 from .rheology import Friction, finite, require
 from .steady import mu_w_for_speed
-from .jacobian import Jacobian
 
 
 class ShearStressDiffusion:
@@ -51,8 +51,8 @@ class ShearStressDiffusion:
         rows = np.broadcast_to(np.arange(1, n)[:, None], self.lap.cols.shape)
         on_unknowns = self.lap.cols < n
         self.kl = self.ku = int(np.max(np.abs(self.lap.cols - rows)))
-        self._band_at = np.ravel_multi_index(((self.ku + rows - self.lap.cols)[on_unknowns], self.lap.cols[on_unknowns]),
-                                             (self.kl + self.ku + 1, n))
+        self._band_at = np.ravel_multi_index(((self.ku + rows - self.lap.cols)[on_unknowns],
+                                              self.lap.cols[on_unknowns]), (self.kl + self.ku + 1, n))
         self._band_row, self._band_weights = np.nonzero(on_unknowns)[0], self.lap.weights[on_unknowns]
         wall = np.arange(min(self.ku + 1, n))
         self._wall_at = self.ku - wall, wall

@@ -67,7 +67,7 @@ class YieldRule:
         require(finite(self.eps) and self.eps > 0, "eps", "a finite number > 0 (a shear rate)", self.eps)
 
     @classmethod
-    def for_layer(cls, scales) -> "YieldRule":
+    def for_layer(cls, scales) -> YieldRule:
         """The regularised rule of the DEM-scene predictions: eps = EPS_FRACTION U/delta_s."""
         return cls(eps=EPS_FRACTION * scales.U / scales.delta_s)
 
@@ -110,7 +110,7 @@ class ShearLaw:
             return self.mu_and_slope(I)[0]
         return self.fr.mu_of_I(I, self.I0)
 
-    def on_faces(self, p) -> "FaceLaw":
+    def on_faces(self, p) -> FaceLaw:
         """This law on faces of fixed pressures p."""
         return FaceLaw(self, np.asarray(p, dtype=float))
 

@@ -86,7 +86,7 @@ class Scales:
         self.material.friction.check_mu_w(self.mu_w)
 
     @classmethod
-    def for_speed(cls, material: Material, p_w: float, u_w: float) -> "Scales":
+    def for_speed(cls, material: Material, p_w: float, u_w: float) -> Scales:
         """Scales of an imposed dimensional wall speed u_w: mu_w is the steady mu_w^inf, the root of
         U(mu_w) u~_w^inf(mu_w) = u_w (monotone in mu_w; paper section on imposed wall velocity)."""
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)

@@ -12,12 +12,12 @@ import numpy as np
 from granstokes.lib.provenance import provenance
 
 from . import observables as obs
+from .integrators import integrate
 from .mesh import MAX_STRETCH, ORDERS, Mesh
 from .problems import ImposedSpeed, ImposedStress
 from .rheology import Friction, finite, require
 from .scales import UNITS
 from .steady import SELF_SIMILAR_DELTA, mu_w_for_speed, steady_delta, steady_wall_speed
-from .integrators import integrate
 from .stepper import METHODS, TABLEAUX, StepStats
 
 #: the default time stepper of each drive (continuum.stepper: BDF keeps its order on the speed's DAE,
@@ -84,14 +84,14 @@ REFINEMENT = 2
 ORDER_GAIN = REFINEMENT ** CONVERGENCE_ORDER["stress"]
 
 
-def convergence_order(imposed: str, numerics: "Numerics") -> int:
+def convergence_order(imposed: str, numerics: Numerics) -> int:
     """The order in space of a drive solved with these numerics (CONVERGENCE_ORDER, UNGRADED_SPEED_ORDER)."""
     if imposed == "speed" and numerics.stretch is not None and numerics.stretch < WALL_STRETCH:
         return UNGRADED_SPEED_ORDER
     return CONVERGENCE_ORDER[imposed]
 
 
-def gain(imposed: str, numerics: "Numerics") -> int:
+def gain(imposed: str, numerics: Numerics) -> int:
     """The factor by which every error grows from a solve to its coarser companion."""
     return REFINEMENT ** convergence_order(imposed, numerics)
 
@@ -126,13 +126,14 @@ class Numerics:
             value = getattr(self, name)
             require(value is None or (finite(value) and 0 < value < 1), name, "in (0, 1)", value)
 
-    def for_drive(self, imposed: str) -> "Numerics":
+    def for_drive(self, imposed: str) -> Numerics:
         """These numerics with the drive's defaults filled in: its method, and a time tolerance matched
         to the space error of this mesh (MATCHED_RTOL, scaled as n_cells^-order)."""
         method = self.method or DEFAULT_METHOD[imposed]
         scale = (MATCHED_CELLS / self.n_cells) ** convergence_order(imposed, self)
         rtol = self.rtol if self.rtol is not None else min(MATCHED_RTOL[method] * scale, MAX_RTOL[method])
-        return replace(self, method=method, rtol=rtol, atol=self.atol if self.atol is not None else rtol * ATOL_PER_RTOL)
+        return replace(self, method=method, rtol=rtol,
+                       atol=self.atol if self.atol is not None else rtol * ATOL_PER_RTOL)
 
     def mesh(self, stretch: float = 0.0, wall_folds: float = 0.0) -> Mesh:
         """The mesh of ``n_cells`` with this stretch, else the map of ``stretch`` and ``wall_folds``."""
@@ -140,13 +141,13 @@ class Numerics:
             return Mesh.graded(self.n_cells, self.stretch)
         return Mesh.graded(self.n_cells, stretch, wall_folds)
 
-    def coarser(self, factor: float) -> "Numerics":
+    def coarser(self, factor: float) -> Numerics:
         """The estimate's companion: half the cells, ``factor`` times the tolerances up to COMPANION_MAX_RTOL (resolved
         numerics)."""
         rtol = min(self.rtol * factor, max(COMPANION_MAX_RTOL[self.method], self.rtol))
         return replace(self, n_cells=self.n_cells // REFINEMENT, rtol=rtol, atol=rtol * self.atol / self.rtol)
 
-    def finer(self, factor: float, asked: "Numerics", imposed: str) -> "Numerics":
+    def finer(self, factor: float, asked: Numerics, imposed: str) -> Numerics:
         """The next refinement: twice the cells, and the tolerances matched to them if ``asked`` (these
         numerics as given) left them to the defaults (a fixed factor would tighten a capped MAX_RTOL past
         the match: a speed on 512 cells at rtol 4e-11 stalls BDF near the steady state), else ``factor``
@@ -203,7 +204,8 @@ def check_times(times, name: str = "times") -> np.ndarray:
     """Output times: a non-empty, strictly increasing list of finite numbers > 0 (``name`` in the error)."""
     t = np.asarray(times, dtype=float).ravel()
     require(t.size > 0 and np.all(np.isfinite(t)) and np.all(t > 0) and np.all(np.diff(t) > 0),
-            name, "a non-empty, strictly increasing list of finite numbers > 0", [float(v) for v in np.atleast_1d(times)])
+            name, "a non-empty, strictly increasing list of finite numbers > 0",
+            [float(v) for v in np.atleast_1d(times)])
     return t
 
 

@@ -25,7 +25,7 @@ from .stepper import NewtonFailure, StepperFailure, StepStats
 
 #: compiled.digest(compiled, problems): these kernels build in code from both, and numba's cache checks only this
 #: file, so this line changes with them (tests/continuum/test_compiled_cache.py gives the new value)
-BUILT_FROM = "1ae891ef332b498c"
+BUILT_FROM = "2054a6b0a987425e"
 #: scipy.integrate.BDF's constants (scipy/integrate/_ivp/bdf.py): most order, Newton iterations, step factors
 MAX_ORDER, NEWTON_MAXITER, MIN_FACTOR, MAX_FACTOR = 5, 4, 0.2, 10.0
 KAPPA = np.array([0.0, -0.1850, -1 / 9, -0.0823, -0.0415, 0.0])

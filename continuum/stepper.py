@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from .jacobian import Jacobian
+
 from .lapack import dgbtrf, dgbtrs, dpttrf, dpttrs
 
 
@@ -152,7 +152,7 @@ class StepStats:
     newton_failures: int = 0
     cpu_seconds: float = 0.0
 
-    def add(self, other: "StepStats") -> "StepStats":
+    def add(self, other: StepStats) -> StepStats:
         """The counts of two consecutive integrations (rejected None if either did not report it)."""
         rejected = None if None in (self.rejected, other.rejected) else self.rejected + other.rejected
         return StepStats(self.steps + other.steps, rejected, self.newton_iterations + other.newton_iterations,

@@ -19,12 +19,12 @@ import numpy as np
 import pandas as pd
 
 from .crossing import crossing_depth
+from .jacobian import Jacobian
 from .mesh import Mesh
 from .rheology import finite, require
 from .rules import ShearLaw, YieldRule
 from .scales import Material, Scales
 from .solver import Numerics, check_times
-from .jacobian import Jacobian
 from .steady import DELTA_THRESHOLD
 from .stepper import StepStats, integrate
 
@@ -206,7 +206,8 @@ class VelocitySolution:
         tau_plate = -s[:, 0] if self.imposed == "speed" else np.full(len(s), problem.tau_w)
         mu_wall = tau_plate / self.scene.p_w
         return pd.DataFrame({"t": self.step_t, "u_w": problem.nodes(self.step_x)[:, 0], "tau_w": tau_plate,
-                             "mu_w": mu_wall, "delta": _layer_thickness(mu, self.y_face, mu_s, np.maximum(mu_wall, mu[:, 0])),
+                             "mu_w": mu_wall,
+                             "delta": _layer_thickness(mu, self.y_face, mu_s, np.maximum(mu_wall, mu[:, 0])),
                              "yield_front": _yield_front(mu, self.y_face, mu_s)})
 
 
@@ -278,7 +279,8 @@ def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRu
         steps_x.append(x)
 
     states, stats = integrate(problem, t, method=numerics.method or VELOCITY_METHOD,
-                              rtol=numerics.rtol or VELOCITY_NUMERICS.rtol, atol=numerics.atol or VELOCITY_NUMERICS.atol,
+                              rtol=numerics.rtol or VELOCITY_NUMERICS.rtol,
+                              atol=numerics.atol or VELOCITY_NUMERICS.atol,
                               h0=1e-9 * scales.t_s, fixed_times=fixed_times, observer=observe)
     return VelocitySolution(scene, rule, problem, problem.y, y_face, t, problem.nodes(states), problem.stress(states),
                             np.array(steps_t), np.array(steps_x), stats, scales)

@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
 from granstokes.continuum import calibration as fitting
+
 from granstokes.lib import staging
 from granstokes.lib.provenance import provenance
 from granstokes.lib.statistics import autocorrelation_time
@@ -49,8 +49,7 @@ from . import lammps_env, layout
 from .config import Config, parse
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .runner import Interrupted, RunError, _Lammps, _write_json
-from .shear import (COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, mean_grain_volume,
-                    shear_script)
+from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, mean_grain_volume, shear_script
 from .sizing import CONTENTION, OVERHEAD, PACKING, THROUGHPUT, count, duration_text, makespan
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)

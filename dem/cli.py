@@ -19,7 +19,6 @@ from granstokes.lib.validate import require
 from . import config as config_mod
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, PLAIN_FRACTION, PLAIN_SECONDS, LammpsNotFound
 
-
 QUIET_HELP = (f"no progress report (otherwise a bar per LAMMPS process on a terminal, or a line every "
               f"{PLAIN_FRACTION * 100:g} %% or {PLAIN_SECONDS:g} s when stderr is a file or a pipe)")
 

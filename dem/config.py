@@ -26,14 +26,14 @@ from __future__ import annotations
 
 import dataclasses
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import tomllib
+from granstokes.continuum.scales import Material
 
 from granstokes.lib.validate import finite, require
-from granstokes.continuum.scales import Material
 
 from .contact import Contact
 

@@ -12,7 +12,6 @@ import importlib.util
 import os
 from pathlib import Path
 
-
 #: 2D beds of a few hundred to a few thousand grains: one rank per bed and two beds side by side beat
 #: two ranks per bed on 2 cores (bench/RESULTS.md, bench/dem_concurrency.py)
 DEFAULT_NP, DEFAULT_JOBS = 1, 2

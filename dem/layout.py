@@ -26,8 +26,8 @@ fn (dx, dy, dz)/dist, (ft_x, ft_y, ft_z) the tangential force on grain 1).
 from __future__ import annotations
 
 import io
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Iterator
 
 import pandas as pd
 

@@ -1,8 +1,9 @@
 """Output files of a drive, assembled from its LAMMPS segments (one per start or resume).
 
-Segment k (its script kept as in.lammps, then in.resume<k>.lammps) starts at step S_k (the prepared bed, or the restart it resumed from) and is valid up to
-S_(k+1): whatever it wrote after that restart is dropped (it was redone by segment k+1), and every
-step appears once.  Files (all under the drive folder):
+Segment k (its script kept as in.lammps, then in.resume<k>.lammps) starts at step S_k (the prepared
+bed, or the restart it resumed from) and is valid up to S_(k+1): whatever it wrote after that
+restart is dropped (it was redone by segment k+1), and every step appears once.  Files (all under
+the drive folder):
 
 * ``plate.csv``: step, t, x (unwrapped), y (at the output step), u_x, u_y, f_x, f_y (force of the bed
   on the plate per plate area), u_c, n_c (x velocity and number of the bed grains touching a plate
@@ -13,11 +14,12 @@ step appears once.  Files (all under the drive folder):
   contacts included): id1 id2 dist dx dy dz fn ft_x ft_y ft_z, (dx, dy, dz) = x_1 - x_2 (branch
   vector), normal force on grain 1 = fn (dx, dy, dz)/dist, (ft_x, ft_y, ft_z) the tangential force
   (``pair granular`` single() values);
-* ``profiles.csv``: bed grains (not base, not plate) in 1 d bins in y, averaged over each output interval: step, t, y, count, n (number
-  density), phi, u_x, p = -(s_xx + s_yy [+ s_zz])/D and tau = -s_xy (contact stress from the per-atom
-  virial, kinetic part excluded), s_xx, s_yy, s_zz, s_xy; and at the plane y_plane = y - 1/2 the
-  method-of-planes stresses p_mop (normal) and tau_mop (shear): the contact force through the plane
-  per area, free of the bin-to-bin scatter that the virial estimator shows in a static packing.
+* ``profiles.csv``: bed grains (not base, not plate) in 1 d bins in y, averaged over each output
+  interval: step, t, y, count, n (number density), phi, u_x, p = -(s_xx + s_yy [+ s_zz])/D and
+  tau = -s_xy (contact stress from the per-atom virial, kinetic part excluded), s_xx, s_yy, s_zz,
+  s_xy; and at the plane y_plane = y - 1/2 the method-of-planes stresses p_mop (normal) and tau_mop
+  (shear): the contact force through the plane per area, free of the bin-to-bin scatter that the
+  virial estimator shows in a static packing.
 """
 from __future__ import annotations
 
@@ -27,8 +29,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .layout import (ATOMS, CONTACTS, LOG, PLATE_CSV, PROFILE_BIN, PROFILES_CSV, dump_snapshots,
-                     snapshot_table)
+from .layout import ATOMS, CONTACTS, LOG, PLATE_CSV, PROFILE_BIN, PROFILES_CSV, dump_snapshots, snapshot_table
 
 PROFILE_RAW = ["chunk", "y", "count", "n", "volume", "u_x", "s_xx", "s_yy", "s_zz", "s_xy", "fc_x", "fc_y"]
 

@@ -27,9 +27,9 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from granstokes.continuum.scales import UNITS
 from tqdm import tqdm
 
-from granstokes.continuum.scales import UNITS
 from granstokes.lib import staging
 from granstokes.lib.provenance import provenance
 from granstokes.lib.validate import require
@@ -460,7 +460,7 @@ def _now() -> str:
 
 
 def check_request(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
-                  launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> "Runner":
+                  launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> Runner:
     """Everything ``run`` checks before it touches the folder (ValueError / LammpsNotFound naming the
     parameter): ranks, jobs, the launcher, the sizing, the wheels, the folder and a resume's config."""
     require(isinstance(np, int) and np >= 1, "--np", "an integer >= 1 (MPI ranks per LAMMPS process)", np)

@@ -6,8 +6,9 @@ minimum extent (``boundary p m p``) so that no kicked grain is lost.  Atom types
 rotation, so the sphere inertia that fix rigid assigns its grains never enters).  The plate grains are
 spaced (``plate_pitch``) so that the bed grains nest between them: the plate grips the bed.  2D grains
 are integrated as disks (``fix nve/sphere disc``: I = m r^2/2; spheres I = 2 m r^2/5).  The plate is
-loaded by ``fix addforce`` (p_w A downwards; no gravity on the plate, so p_w is exactly the applied normal stress) and driven either by a constant x force tau_w A
-(imposed stress) or at a held x velocity u_w (imposed speed: rigid-body x force switched off).
+loaded by ``fix addforce`` (p_w A downwards; no gravity on the plate, so p_w is exactly the applied
+normal stress) and driven either by a constant x force tau_w A (imposed stress) or at a held x
+velocity u_w (imposed speed: rigid-body x force switched off).
 
 * ``prepare_script``: random insertion of polydisperse grains in a loose column, settle under
   gravity, freeze the bottom grains as a rough base, place the plate, relax under p_w until the
@@ -19,9 +20,24 @@ from __future__ import annotations
 
 import math
 
-from .contact import grain_mass, grain_volume
-from .layout import (ATOM_COLUMNS, ATOMS, BASE, BED, CONTACT_COLUMNS, CONTACTS, GRAINS_DUMP, GRAIN_COLUMNS,
-                     N_TYPES, PLATE, PLATE_COLUMNS, PLATE_CSV, PREPARED_RESTART, PROFILE_BIN, RESTART_DIR)
+from .contact import grain_mass
+from .layout import (
+    ATOM_COLUMNS,
+    ATOMS,
+    BASE,
+    BED,
+    CONTACT_COLUMNS,
+    CONTACTS,
+    GRAIN_COLUMNS,
+    GRAINS_DUMP,
+    N_TYPES,
+    PLATE,
+    PLATE_COLUMNS,
+    PLATE_CSV,
+    PREPARED_RESTART,
+    PROFILE_BIN,
+    RESTART_DIR,
+)
 from .sizing import DrivePlan, Plan
 
 SKIN = 0.3  # neighbor skin in d
@@ -129,10 +145,11 @@ group plate type {PLATE}
 
 def _pair(plan: Plan) -> str:
     c = plan.config.contact
-    return f"""
-# --- contact law: {c.model}, Coulomb friction mu_p = {c.mu_p:g} (bed-plate {PLATE_FRICTION:g}), restitution e = {c.restitution:g} ---
+    return (f"""
+# --- contact law: {c.model}, Coulomb friction mu_p = {c.mu_p:g} (bed-plate {PLATE_FRICTION:g}), """
+            f"""restitution e = {c.restitution:g} ---
 {_pair_coeffs(plan)}
-"""
+""")
 
 
 def _pair_coeffs(plan: Plan) -> str:
@@ -188,10 +205,12 @@ def _place_plate(plan: Plan) -> str:
     dim = plan.dimension
     nx, nz, ax, az = plate_layout(plan)
     atoms = "\n".join(
-        f"create_atoms {PLATE} single {(i + 0.5) * ax:.10g} ${{y_plate}} {0.0 if dim == 2 else (k + 0.5) * az:.10g} units box"
+        f"create_atoms {PLATE} single {(i + 0.5) * ax:.10g} ${{y_plate}} "
+        f"{0.0 if dim == 2 else (k + 0.5) * az:.10g} units box"
         for k in range(nz) for i in range(nx))
-    return f"""
-# --- plate: {nx * nz} unit grains {ax:.4g} d apart (a {'row' if dim == 2 else 'ridges along z'}) glued into one rigid body just above the highest grain ---
+    return (f"""
+# --- plate: {nx * nz} unit grains {ax:.4g} d apart (a {'row' if dim == 2 else 'ridges along z'}) glued into """
+            f"""one rigid body just above the highest grain ---
 variable top_atom atom y+radius
 compute top bed reduce max v_top_atom
 thermo_style custom step v_t c_ke_bed atoms c_top
@@ -202,20 +221,21 @@ group plate type {PLATE}
 set group plate diameter {PLATE_DIAMETER:g}
 {_density("plate", dim)}
 velocity plate set 0.0 0.0 0.0 units box
-"""
+""")
 
 
 def _load_plate(plan: Plan) -> str:
     cfg, area = plan.config, plan.area
     nx, nz, ax, _ = plate_layout(plan)
-    return f"""
-# --- load: p_w = {cfg.p_w:g} on the plate (area {area:g}), y motion only, viscous drag (terminal speed 1) while relaxing ---
+    return (f"""
+# --- load: p_w = {cfg.p_w:g} on the plate (area {area:g}), y motion only, viscous drag (terminal speed 1) """
+            f"""while relaxing ---
 fix plate plate rigid single force * off on off torque * off off off
 fix load plate addforce 0.0 {-cfg.p_w * area / (nx * nz):.10g} 0.0
 fix plate_drag plate viscous {cfg.p_w * ax:.10g}
 {_enforce(plan.dimension, after_rigid=True)}
 variable plate_y equal f_plate[1][2]
-"""
+""")
 
 
 def _save_prepared() -> str:
@@ -336,7 +356,7 @@ def _profiles_output(plan: Plan) -> str:
     nrep = iv["profiles"] // iv["plate"]
     ybound = plan.depth + plan.config.box.base_thickness + BIN_HEADROOM
     vol = "PI*radius^2" if plan.dimension == 2 else "4.0/3.0*PI*radius^3"
-    return f"""
+    return (f"""
 # --- depth profiles of the bed grains in {PROFILE_BIN:g} d bins (per-atom averages; times density/number gives
 #     per-volume values): number density, grain volume, vx, contact stress (virial), and the contact
 #     force on the grains (f + m g), whose sum over the grains above a plane is the force through it ---
@@ -344,8 +364,9 @@ compute bins bed chunk/atom bin/1d y 0.0 {PROFILE_BIN:g} bound y 0.0 {ybound:.10
 compute stress bed stress/atom NULL pair
 variable volume atom {vol}
 variable contact_fy atom fy+mass
-fix profiles bed ave/chunk {iv["plate"]} {nrep} {iv["profiles"]} bins density/number v_volume vx c_stress[1] c_stress[2] c_stress[3] c_stress[4] fx v_contact_fy file profiles.txt
-"""
+fix profiles bed ave/chunk {iv["plate"]} {nrep} {iv["profiles"]} bins density/number v_volume vx """
+            """c_stress[1] c_stress[2] c_stress[3] c_stress[4] fx v_contact_fy file profiles.txt
+""")
 
 
 def drive_script(plan: Plan, drive: DrivePlan, restart: str, fresh: bool, outputs: bool = True) -> str:
@@ -415,5 +436,5 @@ def plate_geometry(plan: Plan) -> dict:
             "surface_offset": nest - 0.5,
             "design": "one rigid body of unit grains spaced so that the largest grain fitting through a gap is "
                       f"{PLATE_GAP_FRACTION:g} of the smallest bed grain (2D row; 3D ridges along z); unit bed "
-                      "grains nest nesting_depth below the plate grains' centres; bed-plate contacts have Coulomb friction "
-                      "`friction`"}
+                      "grains nest nesting_depth below the plate grains' centres; bed-plate contacts have Coulomb "
+                      "friction `friction`"}

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 from granstokes.continuum.scales import Scales
 from granstokes.continuum.steady import steady_wall_speed
+
 from granstokes.lib.validate import require
 
 from .config import Config, Drive

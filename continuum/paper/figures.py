@@ -18,8 +18,17 @@ from matplotlib.figure import Figure
 from scipy.integrate import cumulative_trapezoid
 from scipy.special import erfc
 
-from ..closed_forms import (SELF_SIMILAR_DELTA, UWALL_MUS_PRINTED_B2, WKB, self_similar_mu, self_similar_wall_speed,
-                           speed_short_time_mu, speed_time_scales, uwall_asymp, uwall_mus)
+from ..closed_forms import (
+    SELF_SIMILAR_DELTA,
+    UWALL_MUS_PRINTED_B2,
+    WKB,
+    self_similar_mu,
+    self_similar_wall_speed,
+    speed_short_time_mu,
+    speed_time_scales,
+    uwall_asymp,
+    uwall_mus,
+)
 from ..rheology import Friction
 from ..scales import UNITS
 from ..solver import Numerics, Solution, solve_speed, solve_stress, stretch_for

@@ -9,14 +9,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..closed_forms import SELF_SIMILAR_DELTA, UWALL_MUS_PRINTED_B2, WKB, uwall_asymp, uwall_mus
-from .figures import FRICTION, paper_figures
-from ..scales import UNITS
-from ..solver import solve_speed, solve_stress
-from ..steady import steady_wall_speed
 from granstokes.lib.page import page
 from granstokes.lib.provenance import provenance
 
+from ..closed_forms import SELF_SIMILAR_DELTA, UWALL_MUS_PRINTED_B2, WKB, uwall_asymp, uwall_mus
+from ..scales import UNITS
+from ..solver import solve_speed, solve_stress
+from ..steady import steady_wall_speed
+from .figures import FRICTION, paper_figures
 
 
 def table_html(df: pd.DataFrame, caption: str) -> str:
@@ -60,7 +60,8 @@ def discrepancies() -> pd.DataFrame:
          "numerics / derivation": "factor 2: the only one with U = g delta_s^2/(beta_w nu_g) consistent "
                                   "with eq. IreWritten (tests/test_steady_and_scales.py)"},
         {"item": "delta/(Dmu sqrt t~), imposed stress, mu~_w = 0.9", "printed": "4.66",
-         "numerics / derivation": f"{coeff_stress.mean():.3f} at t~ = 1e-4..1e-3; erfc gives 2 erfcinv(1e-3) = {SELF_SIMILAR_DELTA:.3f}"},
+         "numerics / derivation": f"{coeff_stress.mean():.3f} at t~ = 1e-4..1e-3; erfc gives 2 erfcinv(1e-3) = "
+                                  f"{SELF_SIMILAR_DELTA:.3f}"},
         {"item": "delta/(Dmu sqrt t~), imposed speed u~_w = 1.334", "printed": "3.66 (with eq. TimeScaleMu)",
          "numerics / derivation": f"{coeff_speed.mean():.3f} at t~ = 1e-4..1e-3 (same 1e-3 threshold)"},
         {"item": "eq. TimeScaleMu prefactor of u~_w/sqrt(t~)", "printed": f"1/(3.66 Dmu) = {1 / (3.66 * fr.dmu):.2f}",
@@ -91,7 +92,8 @@ def write_continuum_report(out_dir) -> Path:
             f"Computation of the figure set: {result['timing']['compute']['cpu_s']:.2f} s CPU; "
             f"plotting {result['timing']['plot']['cpu_s']:.2f} s.</p>",
             "<h2>Where the numerics disagree with printed numbers</h2>", table_html(notes, "Printed vs computed"),
-            "<h2>Steady wall speed</h2>", table_html(steady, "u~_w^inf: exact quadrature vs the paper's approximations"),
+            "<h2>Steady wall speed</h2>",
+            table_html(steady, "u~_w^inf: exact quadrature vs the paper's approximations"),
             "<h2>The paper's figures, regenerated</h2>"]
     body.append("<p>Every figure is in the paper's dimensionless tilde variables (above); each PNG has its data "
                 "beside it as CSV.</p>")
@@ -100,7 +102,7 @@ def write_continuum_report(out_dir) -> Path:
                     f"<img src='{figs_dir.name}/{png.name}' alt='{html.escape(figure_heading(name))}'>")
     index = out / "index.html"
     index.write_text(page("granstokes continuum", "".join(body)))
-    (out / "continuum_report.json").write_text(json.dumps({"figures": {k: f"{figs_dir.name}/{v.name}" for k, v in pngs.items()},
-                                                           "timing": result["timing"], "units": UNITS,
-                                                           "provenance": provenance()}, indent=2))
+    (out / "continuum_report.json").write_text(json.dumps(
+        {"figures": {k: f"{figs_dir.name}/{v.name}" for k, v in pngs.items()}, "timing": result["timing"],
+         "units": UNITS, "provenance": provenance()}, indent=2))
     return index

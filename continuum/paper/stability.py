@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -121,7 +121,8 @@ def _velocity(fr, mu_w, rule, n, t_tilde=VELOCITY_T_TILDE) -> Outcome:
     sol = solve_velocity(scene, [t_tilde * sc.t_s], mu_w=mu_w, rule=rule, initial="yield",
                          numerics=replace(VELOCITY_NUMERICS, n_cells=n))
     mu = sol.mu[-1]
-    return Outcome(float(sol.u_w[-1] / sc.U), np.abs(sol.s[-1]) / (mu_w * scene.p_w), (float(mu.min()), float(mu.max())))
+    return Outcome(float(sol.u_w[-1] / sc.U), np.abs(sol.s[-1]) / (mu_w * scene.p_w),
+                   (float(mu.min()), float(mu.max())))
 
 
 TIGHT = dict(rtol=1e-8, atol=1e-10)
@@ -325,7 +326,8 @@ def plot_maps(table: pd.DataFrame, out: Path) -> list[Path]:
         ax.set(xlim=(-0.5, len(params) - 0.5), ylim=(-0.5, len(values) - 0.5),
                xticks=range(len(params)), yticks=range(len(values)),
                xlabel={"mu_w_tilde": "mu~_w = (mu_d - mu_w)/Dmu", "u_w": "u~_w"}[g.param.iloc[0]],
-               ylabel=g.axis.iloc[0], title=f"{name}\nnumbers: observed order; ref: errors at the reference's accuracy (no order)")
+               ylabel=g.axis.iloc[0],
+               title=f"{name}\nnumbers: observed order; ref: errors at the reference's accuracy (no order)")
         ax.set_xticklabels([f"{p:g}" for p in params])
         ax.set_yticklabels([f"{v:g}" for v in values])
         present = [c for c in CLASSES if c in set(g["class"])]
@@ -363,7 +365,8 @@ def plot_wellposedness(df: pd.DataFrame, path: Path) -> Path:
             ax.plot(g.criterion, g.y, label=f"mu~_w = {mt:g}")
         ax.axvline(0.0, color="k", lw=0.8)
         ax.axvspan(0.0, max(df.criterion.max(), 0.01), color="r", alpha=0.08, label="ill posed (> 0)")
-        ax.set(xlabel="4nu^2 - 4nu + mu^2(1 - nu/2)^2, nu = I mu'/mu", title=f"{label}\nBarker et al. 2015 eq. 3.9: > 0 ill posed")
+        ax.set(xlabel="4nu^2 - 4nu + mu^2(1 - nu/2)^2, nu = I mu'/mu",
+               title=f"{label}\nBarker et al. 2015 eq. 3.9: > 0 ill posed")
     axes[0].set_ylabel("y~ = y/delta_s (steady layer)")
     axes[0].invert_yaxis()
     axes[0].legend(fontsize=8)

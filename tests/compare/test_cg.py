@@ -4,12 +4,11 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from scipy.integrate import quad
-
 from granstokes.compare.kernels import Kernel
 from granstokes.compare.profiles import ADDITIVE, CGSettings, DepthProfiles, Grid, coarse_grain, derive, ensemble
 from granstokes.compare.reader import DriveFolder, Frame, find_drives
 from granstokes.dem.layout import BASE, BED, CONTACT_COLUMNS
+from scipy.integrate import quad
 
 KERNELS = [Kernel("lucy", 0.5), Kernel("gaussian", 0.5), Kernel("lucy", 1.3), Kernel("gaussian", 0.2)]
 

@@ -18,13 +18,13 @@ import warnings
 
 import numpy as np
 import pytest
-
 from granstokes.compare.checks import lammps_crosscheck, width_check
 from granstokes.compare.profiles import CGSettings, DepthProfiles
 from granstokes.compare.reader import find_drives
-from granstokes.cli import main as granstokes_main
 from granstokes.dem import config
 from granstokes.dem.layout import plate_surface
+
+from granstokes.cli import main as granstokes_main
 
 pytestmark = pytest.mark.slow
 T0, T1 = 3.5, 7.0  # the second half of the 7-time-unit drive

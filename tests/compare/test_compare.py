@@ -4,12 +4,12 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-
 from granstokes.compare.calibrate import fit, load
 from granstokes.compare.comparison import check_grains
-from granstokes.continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
 from granstokes.compare.models import depth_at_fraction
-from granstokes.compare.plate import block_estimate, friction, power_law, pooled, steady_state
+from granstokes.compare.plate import block_estimate, friction, pooled, power_law, steady_state
+from granstokes.continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
+
 from granstokes.cli import main as granstokes_main
 from granstokes.lib.statistics import autocorrelation_time
 
@@ -121,8 +121,8 @@ def test_friction_is_a_ratio_of_means_and_the_mean_of_ratios_is_biased():
 def test_block_errors_follow_the_autocorrelation_time():
     """AR(1) noise y_t = a y_(t-1) + e_t: integrated autocorrelation time (1 + a)/(2 (1 - a)) samples and
     standard error of the mean sigma_y sqrt(2 tau/N); both recovered within 10 % (blocks of 10 tau: the
-    neighbouring blocks' correlation lowers the error by 5 %; its own scatter is ~1/sqrt(2 blocks) = 2 %).  Pooling: with >= 3 seeds the error is their
-    spread, with fewer the combined block errors."""
+    neighbouring blocks' correlation lowers the error by 5 %; its own scatter is ~1/sqrt(2 blocks) = 2 %).
+    Pooling: with >= 3 seeds the error is their spread, with fewer the combined block errors."""
     rng = np.random.default_rng(4)
     a, n = 0.9, 100_000
     e = rng.normal(0, 1, n)

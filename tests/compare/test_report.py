@@ -9,13 +9,13 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from granstokes.compare.comparison import build
+from granstokes.compare.report import display_label, fmt, fmt_band, nearest_frame, suptitle, write_report
+from granstokes.continuum.paper.report import write_continuum_report
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.text import Text
 
-from granstokes.compare.comparison import build
-from granstokes.compare.report import display_label, fmt, fmt_band, nearest_frame, suptitle, write_report
-from granstokes.continuum.paper.report import write_continuum_report
 from granstokes.cli import main
 from granstokes.demo import write_index
 

@@ -6,7 +6,6 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 import pytest
-
 from granstokes.compare.models import LOCAL, PAPER
 from granstokes.compare.scorecard import _not_scored, base_reach, headline, tally
 from granstokes.continuum.calibration import IN_DRIVE, JOP_BOUNDS, from_replicates

@@ -31,12 +31,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from granstokes.continuum.rheology import Friction
+from granstokes.continuum.steady import DELTA_THRESHOLD, mu_w_for_speed
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from threadpoolctl import threadpool_limits
-
-from granstokes.continuum.rheology import Friction
-from granstokes.continuum.steady import DELTA_THRESHOLD, mu_w_for_speed
 
 #: reference degree and time tolerance, and those of its refinement companion
 DEGREE, RTOL = 160, 1e-12
@@ -401,7 +400,8 @@ def main(only: list[str]) -> None:
                for label in SPEED_CASES for degree in (SPEED_COARSE_DEGREE, SPEED_DEGREE)]
     solves += [(f"speed-early-{label}", degree, lambda label=label, degree=degree: speed_early_case(label, degree))
                for label in SPEED_CASES for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
-    solves += [(f"speed-lift-off-{label}", degree, lambda label=label, degree=degree: speed_lift_off_case(label, degree))
+    solves += [(f"speed-lift-off-{label}", degree,
+                lambda label=label, degree=degree: speed_lift_off_case(label, degree))
                for label, case in SPEED_CASES.items() if case.lift_off_times
                for degree in (EARLY_COARSE_DEGREE, EARLY_DEGREE)]
     solves = [solve for solve in solves if not only or solve[0].startswith(tuple(only))]

@@ -6,9 +6,9 @@ import sys
 
 import numpy as np
 import pytest
-
 from granstokes.continuum.closed_forms import SmallTimeLimit
 from granstokes.continuum.solver import Numerics, solve_stress
+
 from tests.continuum import reference
 
 TIMES = list(reference.TIMES)

@@ -1,12 +1,11 @@
 """numba's on-disk cache of a kernel is keyed to its own source file only: a kernel module that builds in code from
 other modules records their digest (BUILT_FROM), so that editing them changes its file too and its stale machine
 code is recompiled (found by review: a caller kept the old callee's code after the callee's file changed)."""
-import pytest
-
 import granstokes.continuum.compiled as compiled
 import granstokes.continuum.problems as problems
 import granstokes.continuum.speed_bdf as speed_bdf
 import granstokes.continuum.stress_dirk as stress_dirk
+import pytest
 
 
 @pytest.mark.parametrize("module, built_from", [(speed_bdf, (compiled, problems)), (stress_dirk, (compiled,))],

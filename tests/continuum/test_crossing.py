@@ -1,10 +1,9 @@
 """The threshold crossing that reads delta off a profile (continuum.crossing)."""
 import numpy as np
 import pytest
+from granstokes.continuum.crossing import crossing_depth
 from scipy.optimize import brentq
 from scipy.special import erfc
-
-from granstokes.continuum.crossing import crossing_depth
 
 LEVEL = 1e-3
 
@@ -23,8 +22,9 @@ def test_cubic_log_crossing_is_fourth_order_on_an_erfc_tail():
 @pytest.mark.parametrize("n", [128, 160, 192])
 def test_end_zero_crossing_near_a_vanishing_end(n):
     """A profile that vanishes linearly at the last node, f = (1 - y) exp(-y/L) (the continuum's mu - mu_s
-    at y~ = 1), crossing the level two to four cells from it (the cubic's nodes short of the end): with end_zero, log(f/(1 - y)) is linear, so
-    the crossing is exact to rounding; without it, log f's singularity at the end costs > 1e-6 (the control)."""
+    at y~ = 1), crossing the level two to four cells from it (the cubic's nodes short of the end): with
+    end_zero, log(f/(1 - y)) is linear, so the crossing is exact to rounding; without it, log f's singularity
+    at the end costs > 1e-6 (the control)."""
     L = 0.33
     f = lambda y: (1 - y) * np.exp(-y / L)
     exact = brentq(lambda y: f(y) - LEVEL, 0.5, 1.0, xtol=1e-15)

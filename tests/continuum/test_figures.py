@@ -3,12 +3,12 @@ import json
 
 import numpy as np
 import pandas as pd
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.text import Text
-
 from granstokes.continuum.closed_forms import SELF_SIMILAR_DELTA
 from granstokes.continuum.paper.figures import FIGURES, FRICTION, SPEED_CASES, T_MIN, Sheet, paper_figures
 from granstokes.continuum.steady import mu_w_for_speed, steady_delta
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.text import Text
+
 from tests.continuum import reference
 
 

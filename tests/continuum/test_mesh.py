@@ -2,7 +2,6 @@
 output times from their deeper wall cluster onto the solve's mesh (continuum.solver.EARLY_SPAN)."""
 import numpy as np
 import pytest
-
 from granstokes.continuum.mesh import RESAMPLE_DEGREE, Mesh
 
 

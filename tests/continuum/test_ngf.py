@@ -11,15 +11,21 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import quad
-
-from granstokes.continuum.ngf import (NonlocalFluidity, TransientNumerics, solve_steady, solve_transient, steady_profile,
-                           yield_depth)
+from granstokes.continuum.ngf import (
+    NonlocalFluidity,
+    TransientNumerics,
+    solve_steady,
+    solve_transient,
+    steady_profile,
+    yield_depth,
+)
 from granstokes.continuum.predict_cli import register, run_predict
-from granstokes.cli import main
 from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.steady import steady_velocity
 from granstokes.continuum.velocity import BedScene
+from scipy.integrate import quad
+
+from granstokes.cli import main
 
 MAT = Material(mu_s=0.28, mu_d=0.58, I0=0.3, I_convention="dem", phi=0.8)
 P_W, MU_W, H = 20.0, 0.43, 24.0
@@ -31,7 +37,8 @@ def local_closed_form(y, scene=SCENE, mu_w=MU_W):
     """Local steady u(y) from the paper's closed form, scaled (I0 converted by Scales)."""
     sc = Scales(scene.material, scene.p_w, mu_w)
     fr = scene.material.friction
-    return sc.U * (steady_velocity(fr, mu_w, np.asarray(y) / sc.delta_s) - steady_velocity(fr, mu_w, scene.depth / sc.delta_s))
+    return sc.U * (steady_velocity(fr, mu_w, np.asarray(y) / sc.delta_s)
+                   - steady_velocity(fr, mu_w, scene.depth / sc.delta_s))
 
 
 def test_steady_converges_spectrally():

@@ -4,8 +4,8 @@ imposed speed's (eq. GranularStokesEqn_muBIS) at every time by pieces: on the wa
 through the lift-off of mu_w from mu_d, on the exponential map after it (reference.pieces)."""
 import numpy as np
 import pytest
-
 from granstokes.continuum.solver import Numerics, solve_stress
+
 from tests.continuum import reference as ref
 
 #: the recomputation of a cached case matches it to this (relative): a tenth of the claimed accuracy

@@ -1,16 +1,15 @@
 """The compiled BDF of an imposed speed (continuum.speed_bdf) against what it compiles: ImposedSpeed's rate,
 Jacobian, wall row and projection, LAPACK's banded LU (through scipy), and scipy's BDF step for step."""
-import numpy as np
-import pytest
-from scipy.linalg import solve_banded
-
 import granstokes.continuum.compiled as compiled
 import granstokes.continuum.speed_bdf as sb
 import granstokes.continuum.stepper as stepper
+import numpy as np
+import pytest
 from granstokes.continuum.integrators import integrate
 from granstokes.continuum.problems import ImposedSpeed
 from granstokes.continuum.solver import TIME_ERROR_PER_RTOL, Numerics, map_for, solve_speed
 from granstokes.continuum.steady import mu_w_for_speed
+from scipy.linalg import solve_banded
 
 #: the compiled arithmetic differs from numpy's in the order of additions only: relative round-off of a few
 #: operations, besides the cancellations bounded in each test
@@ -21,8 +20,9 @@ ROUND_OFF = 1e-13
 def speed_state(request):
     """An imposed speed (u~_w = 1.334, 64 cells on its solve's map) and its state in the lift-off, t~ = 0.3
     (q = 2.5: mu~_w = 0.08)."""
-    from granstokes.continuum.rheology import Friction
     import math
+
+    from granstokes.continuum.rheology import Friction
 
     fr = Friction(math.tan(math.radians(21.0)), math.tan(math.radians(33.0)))
     numerics = Numerics(n_cells=64).for_drive("speed")
@@ -151,6 +151,7 @@ def test_newton_floor_carries_a_steady_state_past_its_round_off():
     replayed here), at its steady state mu_w^inf to the time error TIME_ERROR_PER_RTOL rtol (1.9e-8; measured
     1.3e-10 off, bench/speed_range.py)."""
     from granstokes.continuum.steady import mu_w_for_speed
+
     from tests.continuum.reference import DISKS
 
     sol = solve_speed(DISKS, 0.05, [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0], Numerics(n_cells=512))

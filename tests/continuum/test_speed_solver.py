@@ -1,20 +1,28 @@
 """Imposed wall speed (eq. GranularStokesEqn_muBIS with eq. GranularStokesEqn_muBIS_BCs)."""
 import functools
-
 from dataclasses import replace
 
 import numpy as np
 import pytest
-
 from granstokes.continuum.closed_forms import speed_short_time_mu
+from granstokes.continuum.integrators import integrate
 from granstokes.continuum.mesh import Mesh
 from granstokes.continuum.problems import ImposedSpeed
 from granstokes.continuum.rheology import Friction
-from granstokes.continuum.solver import (INITIAL_STEP, MIN_ESTIMATED_CELLS, TIME_ERROR_PER_RTOL, WALL_STRETCH, Numerics, map_for,
-                              solve_speed, solve_stress)
+from granstokes.continuum.solver import (
+    INITIAL_STEP,
+    MIN_ESTIMATED_CELLS,
+    TIME_ERROR_PER_RTOL,
+    WALL_STRETCH,
+    Numerics,
+    map_for,
+    solve_speed,
+    solve_stress,
+)
 from granstokes.continuum.steady import mu_w_for_speed
-from tests.continuum.reference import PAPER as FR, SPEED_CASES
-from granstokes.continuum.integrators import integrate
+
+from tests.continuum.reference import PAPER as FR
+from tests.continuum.reference import SPEED_CASES
 
 SPEEDS = (0.198, 1.334, 4.629)
 
@@ -130,7 +138,7 @@ SPEED_PESSIMISM = 10
 DECADES = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def speed_run(u_w: float, n_cells: int, estimate: bool = False):
     """The paper's speed cases at the decades on the solver's default map."""
     return solve_speed(FR, u_w, DECADES, Numerics(n_cells=n_cells), estimate=estimate)
@@ -235,6 +243,7 @@ def default_speeds():
     wall-clustered maps, after it on its exponential map (reference.pieces).  The paper's three speeds and the
     disks' u~_w = 1 (a second parameter set)."""
     from granstokes.continuum.cli import ACCURACY
+
     from tests.continuum.reference import assembled
 
     return ACCURACY, {label: (solve_speed(case.friction, case.u_w, case.times, accuracy=ACCURACY), assembled(label))
@@ -286,7 +295,6 @@ def test_bordered_newton_solves_match_scipys_lu(case, monkeypatch):             
     Jacobian to the time error (measured: 7e-8 relative at rtol 1e-8; held to TIME_ERROR_PER_RTOL rtol) with
     as many Newton iterations (a c read off 2x wrong: BDF fails at t~ = 1e-3).  The times are after
     solver.early_until: on the early times' deeper cluster scipy's LU fails on 64 cells (t~ = 8e-11)."""
-    import granstokes.continuum.stepper as stepper
 
     fr, u_w, times = DEGENERATE if case.startswith("degenerate") else (FR, 1.334, [0.06, 0.3, 1.0])
     numerics = Numerics() if case.startswith("degenerate") else Numerics(n_cells=int(case.split()[0]))
@@ -381,6 +389,7 @@ def test_speed_early_times_on_the_deeper_cluster(monkeypatch):
     with its early times apart (solver.EARLY_SPAN, measured 8e-9); on the solve's own map (EARLY_SPAN = 0, the
     control) 1.2e-6 off, an error that N does not change.  The joined series runs on in time."""
     import granstokes.continuum.solver as solver
+
     from tests.continuum.reference import cached
 
     times = [1e-4, 1e-3, 1e-2, 0.1]
@@ -401,6 +410,7 @@ def test_speed_from_a_late_first_time_meets_the_default_accuracy(u_w):
     CLUSTER_MIN_STRETCH): 0.198 could not reach 1e-6 on 512 cells.  Now every speed reaches the CLI's default
     accuracy, and is within it of the independent reference at t~ = 0.1, 1 and 10, within its estimates."""
     from granstokes.continuum.cli import ACCURACY
+
     from tests.continuum.reference import assembled
 
     label = f"{u_w:g}"

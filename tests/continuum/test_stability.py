@@ -1,15 +1,13 @@
 """Stability map: the explicit scheme's derived bound, and the classification of runs."""
 import math
-
 from dataclasses import replace
 
 import numpy as np
 import pytest
-
 from granstokes.continuum.mesh import Mesh
+from granstokes.continuum.paper.stability import METHODS, explicit_bound, plot_maps, stability_table
 from granstokes.continuum.problems import ImposedStress
 from granstokes.continuum.scales import Material
-from granstokes.continuum.paper.stability import METHODS, explicit_bound, plot_maps, stability_table
 from granstokes.continuum.stepper import explicit_euler
 
 FR = Material().friction

@@ -3,12 +3,11 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import quad
-
 from granstokes.continuum.closed_forms import UWALL_MUS_PRINTED_B2, uwall_asymp, uwall_mus
 from granstokes.continuum.rheology import Friction, convert_I
 from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.steady import mu_w_for_speed, steady_delta, steady_velocity, steady_wall_speed
+from scipy.integrate import quad
 
 
 @pytest.mark.parametrize("mu_w_tilde, expected", [(0.9, 0.19940), (0.5, 1.34039), (0.1, 4.62788)])

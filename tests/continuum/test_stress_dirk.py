@@ -1,13 +1,13 @@
 """The compiled DIRK of an imposed stress (continuum.stress_dirk) against what it compiles: ImposedStress's rate and
 Newton matrix, and stepper.integrate's DIRK step for step (compiled=False runs the Python)."""
+import granstokes.continuum.stepper as stepper
+import granstokes.continuum.stress_dirk as sd
 import numpy as np
 import pytest
-
-import granstokes.continuum.stepper as stepper
 from granstokes.continuum.integrators import integrate
-import granstokes.continuum.stress_dirk as sd
 from granstokes.continuum.problems import ImposedStress
 from granstokes.continuum.solver import Numerics, map_for, solve_stress
+
 from tests.continuum.reference import DISKS, PAPER, cached
 
 TIMES = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]

@@ -1,13 +1,12 @@
 """Imposed wall stress (eq. GranularStokesEqn): convergence, growth laws, bounds, closed forms."""
 import numpy as np
 import pytest
-
 from granstokes.continuum.closed_forms import SELF_SIMILAR_DELTA, WKB, self_similar_mu
+from granstokes.continuum.integrators import integrate
 from granstokes.continuum.mesh import Mesh
 from granstokes.continuum.problems import ImposedStress
 from granstokes.continuum.solver import Numerics, solve_stress
 from granstokes.continuum.steady import steady_wall_speed
-from granstokes.continuum.integrators import integrate
 
 CASES = (0.9, 0.5, 0.1)
 

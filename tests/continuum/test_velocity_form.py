@@ -3,7 +3,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from granstokes.compare import calibrate
 from granstokes.continuum.rules import ShearLaw, YieldRule, well_posed_range, wellposedness
 from granstokes.continuum.scales import Material, Scales
@@ -183,6 +182,7 @@ TIGHT = dict(method="sdirk4", rtol=1e-8, atol=1e-11)
 def quick_stress():
     """u_w at 5 of compare's times on 1/2, 1, 2 times the default cells (tight) and the default run."""
     from dataclasses import replace
+
     from granstokes.continuum.velocity import VELOCITY_NUMERICS
     times = np.geomspace(QUICK_END / 300, QUICK_END, 5)
     rule = YieldRule.for_layer(Scales(QUICK, QUICK_SCENE.p_w, QUICK_MU_W))
@@ -227,6 +227,7 @@ def test_imposed_speed_mu_w_is_second_order_once_the_wall_jump_is_resolved():
     first-order error still decaying); with that mass on the wall node (the plate) they were 0.96 and 0.78,
     first order.  Held to 2 - 0.45, above anything first order."""
     from dataclasses import replace
+
     from granstokes.continuum.velocity import VELOCITY_NUMERICS
     rule = YieldRule.for_layer(Scales.for_speed(QUICK, QUICK_SCENE.p_w, QUICK_U_W))
     a, b, c = (solve_velocity(QUICK_SCENE, RESOLVED_TIMES, u_w=QUICK_U_W, rule=rule, compare_steady=False,

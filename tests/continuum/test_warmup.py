@@ -5,7 +5,6 @@ import subprocess
 import sys
 
 import pytest
-
 from granstokes.continuum.compiled import DRIVES
 
 NOTICES = [f"granstokes: compiling the {drive} solver's kernels once" for drive, _ in DRIVES.values()]
@@ -19,7 +18,8 @@ def run(cache, *args):
 
 @pytest.mark.slow
 def test_a_cold_cache_says_it_compiles_once_and_the_warm_up_leaves_nothing_to_compile(tmp_path):
-    warm_up = run(tmp_path, "-m", "granstokes.continuum.warmup")  # numba's cache in an empty folder: both drives compile
+    # numba's cache in an empty folder: both drives compile
+    warm_up = run(tmp_path, "-m", "granstokes.continuum.warmup")
     assert [line.split(" (")[0] for line in warm_up.stderr.splitlines()] == NOTICES
     assert "solver kernels ready" in warm_up.stdout
     for case in (["--mu-w-tilde", "0.5"], ["--u-w", "1.334"]):  # the command's defaults: nothing left to compile

@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-
 from granstokes.dem import config, layout
 from granstokes.dem.calibrate import plan_calibration
+
 from granstokes.cli import main as granstokes_main
 
 

@@ -3,7 +3,6 @@ resume has left, and the estimate against a measured smoke run."""
 import json
 
 import pytest
-
 from granstokes.dem import config, sizing
 from granstokes.dem.calibrate import plan_calibration
 from granstokes.dem.sizing import CONTENTION, OVERHEAD, THROUGHPUT, duration_text, makespan, plan, slowdown

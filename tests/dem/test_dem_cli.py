@@ -9,6 +9,7 @@ from granstokes.dem.calibrate import plan_calibration
 from granstokes.dem.lammps_env import PLAIN_FRACTION, PLAIN_SECONDS
 from granstokes.dem.runner import Lines, _Lammps
 from granstokes.dem.sizing import plan
+
 from granstokes.cli import main
 
 

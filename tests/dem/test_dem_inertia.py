@@ -8,7 +8,6 @@ import subprocess
 
 import numpy as np
 import pytest
-
 from granstokes.dem import lammps_env, scene
 from granstokes.dem.contact import Contact
 

@@ -9,10 +9,10 @@ import time
 import numpy as np
 import pandas as pd
 import pytest
-
 from granstokes.compare.plate import PlateRecord
 from granstokes.compare.plate import slip as plate_slip
 from granstokes.dem import config, lammps_env, layout, outputs
+
 from granstokes.cli import main as granstokes_main  # the `granstokes` console script
 
 pytestmark = pytest.mark.slow

@@ -5,9 +5,9 @@ import sys
 
 import numpy as np
 import pytest
+from granstokes.continuum.steady import mu_w_for_speed
 
 from granstokes.cli import main
-from granstokes.continuum.steady import mu_w_for_speed
 
 BEADS = ["--mu-s", str(np.tan(np.radians(21))), "--mu-d", str(np.tan(np.radians(33)))]
 
@@ -192,6 +192,7 @@ def test_table_and_plot_of_a_speed(capsys, tmp_path):
     """An imposed speed at the default accuracy: the table names the wall-clustered map (solver.map_for), its
     u~_w column is the imposed speed and its mu_w, delta carry estimates below 1e-6 relative; the plot is drawn."""
     from granstokes.continuum.solver import map_for
+
     from tests.continuum.reference import PAPER
 
     code, out, _ = run(capsys, "--u-w", "1.334", "--times", "1e-3", "3", "--plot", str(tmp_path / "p.png"))

@@ -3,7 +3,6 @@ matplotlib and LAMMPS are imported by the command that runs (checked in a fresh 
 import subprocess
 import sys
 
-
 #: what building the parser must not import: pandas, matplotlib, MDAnalysis, LAMMPS, scipy (its linalg alone
 #: costs a start-up ~0.18 s), numba (~0.4 s) and importlib.metadata (20-80 ms: the version is looked up when printed)
 HEAVY = ("pandas", "matplotlib", "MDAnalysis", "lammps", "scipy", "numba", "importlib.metadata")
@@ -34,7 +33,8 @@ def test_building_the_parser_imports_nothing_heavy():
 
 def test_a_run_still_imports_its_solver():
     """The probe sees a command's imports (it would pass vacuously otherwise)."""
-    assert "pandas" in heavy_after("from granstokes.continuum.predict_cli import predict\nimport granstokes.continuum.velocity")
+    assert "pandas" in heavy_after("from granstokes.continuum.predict_cli import predict\n"
+                                   "import granstokes.continuum.velocity")
 
 
 def _run(code: str) -> str:
@@ -45,12 +45,13 @@ def test_the_solvers_import_neither_scipy_linalg_nor_numba_before_a_solve():
     """The steppers' LAPACK routines come from scipy's wrapper module alone (continuum.lapack), and numba (with the
     scipy.linalg its compiled functions load) is imported by the solve (continuum.stress_dirk, continuum.speed_bdf):
     importing the solvers, as `granstokes continuum` does before it solves, costs neither."""
-    code = """import sys
+    code = ("""import sys
 from granstokes.continuum.solver import solve_stress
 from granstokes.continuum.rheology import Friction
 fr = Friction(0.38, 0.64)
-print('scipy.linalg' in sys.modules, 'numba' in sys.modules, solve_stress(fr, fr.mu_w_from_tilde(0.5), [1.0]).u_w[0] > 0,
-      'numba' in sys.modules)"""
+print('scipy.linalg' in sys.modules, 'numba' in sys.modules, """
+            """solve_stress(fr, fr.mu_w_from_tilde(0.5), [1.0]).u_w[0] > 0,
+      'numba' in sys.modules)""")
     assert _run(code).split() == ["False", "False", "True", "True"]
 
 
@@ -70,7 +71,6 @@ def test_lapack_falls_back_to_scipy_linalg_when_the_wrapper_file_is_not_found(mo
     import sys
 
     import scipy.linalg.lapack
-
     from granstokes.continuum import lapack
 
     monkeypatch.delitem(sys.modules, lapack.WRAPPERS, raising=False)

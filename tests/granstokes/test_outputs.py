@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from granstokes.lib import staging
 from granstokes.cli import main
+from granstokes.lib import staging
 
 BEADS = ["--mu-s", "0.3839", "--mu-d", "0.6494"]
 SOLVE = ["continuum", *BEADS, "--mu-w-tilde", "0.5", "--times", "1"]
@@ -79,7 +79,8 @@ def test_a_second_save_keeps_the_first_and_a_repeat_replaces_only_its_own_files(
         {k: v for k, v in first.items() if k != staging.MANIFEST}
     assert len(both) == 2 * (len(first) - 1) + 1  # each solve's three files, one manifest
     manifest = json.loads((out / staging.MANIFEST).read_text())
-    assert manifest["command"] == "continuum" and sorted(manifest["files"]) == sorted(k for k in both if k != staging.MANIFEST)
+    assert (manifest["command"] == "continuum"
+            and sorted(manifest["files"]) == sorted(k for k in both if k != staging.MANIFEST))
     (out / "my_plot.png").write_bytes(b"user")
     assert _run([*SOLVE, "--save", "saved"], capsys)[0] == 0  # the same case again: its own files replaced
     assert (out / "my_plot.png").read_bytes() == b"user"
