@@ -56,7 +56,7 @@ def main() -> None:
         else:
             ax[0, 0].plot(smooth["t"], smooth["mu_w"] * 10, colour, lw=0.8,
                           label=f"{dp.drive.name}: 10 x mu_w (0.5 time-unit mean)")
-        steady = s.U * steady_wall_speed(cfg.material.friction, s.mu_w) if dp.u_w is None else 10 * s.mu_w
+        steady = s.U * steady_wall_speed(cfg.material.friction, s.mu_w) if dp.load.u_w is None else 10 * s.mu_w
         ax[0, 0].axhline(steady, color=colour, ls=":")
         surface = plate["y"].mean() - 0.5
         for t in (1.0, 3.0, 10.0, p.drives[0].duration):

@@ -53,16 +53,15 @@ def quick_drives():
     p = plan(cfg)
     mass = plate_geometry(p)["mass_per_area"]
     material = calibrate.load(ROOT / "results/quick-calibration/calibration.json").material()
-    drives = [(d.drive.name,
-               Drive(d.drive.kind, d.tau_w if d.drive.kind == "stress" else d.u_w, cfg.p_w, p.depth, mass),
+    drives = [(d.drive.name, Drive(d.load, p.depth, mass),
                np.geomspace(d.duration / PREDICTION_SPAN, d.duration, PREDICTION_TIMES)) for d in p.drives]
     return material, drives
 
 
 def predict(material, drive, times, numerics):
     """What compare.models' local transient computes: the series (u_w, mu_w, delta_u) and u(y)."""
-    vel = solve_velocity(drive.scene(material), times, rule=YieldRule.for_layer(drive.scales(material)),
-                         initial="rest", numerics=numerics, compare_steady=False, **drive.load)
+    vel = solve_velocity(drive.scene(material), times, rule=YieldRule.for_layer(drive.load.scales(material)),
+                         initial="rest", numerics=numerics, compare_steady=False, **drive.load.imposed)
     s = _series(times, vel.y, vel.u, vel.mu_w)
     return {"u_w": s.u_w.to_numpy(), "mu_w": s.mu_w.to_numpy(), "delta_u": s.delta_u.to_numpy(),
             "y": vel.y, "u": vel.u}

@@ -18,10 +18,12 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from granstokes.continuum.crossing import depth_at_fraction
+from granstokes.continuum.load import Load
 from granstokes.dem import layout
 
 from .calibrate import WALL_EXCLUSION
-from .models import Drive, depth_at_fraction
+from .models import Drive
 from .plate import (
     STEADY_LAST,
     STEADY_WINDOW_LATEST,
@@ -45,9 +47,7 @@ class DriveSpec:
 
     run: Path
     name: str
-    kind: str                    # "stress" or "speed"
-    value: float                 # tau_w (stress) or u_w (speed)
-    p_w: float
+    load: Load                   # what the plate imposed, at which pressure
     depth: float                 # bed depth below the plate
     plate_mass: float            # per unit plate area
     surface_offset: float        # plate centre of mass above its contact plane
@@ -56,9 +56,17 @@ class DriveSpec:
     folders: tuple[DriveFolder, ...]
 
     @property
+    def kind(self) -> str:
+        return self.load.kind
+
+    @property
+    def p_w(self) -> float:
+        return self.load.p_w
+
+    @property
     def drive(self) -> Drive:
         """What the continuum models need of this drive (compare.models)."""
-        return Drive(self.kind, self.value, self.p_w, self.depth, self.plate_mass)
+        return Drive(self.load, self.depth, self.plate_mass)
 
     @property
     def compared_from(self) -> float:
@@ -87,9 +95,8 @@ def drive_specs(run_dir: Path) -> list[DriveSpec]:
     specs = []
     for d in meta["sizing"]["drives"]:
         folders = tuple(DriveFolder(layout.drive_dir(run_dir, s, d["name"])) for s in meta["seeds"])
-        value = d["tau_w"] if d["kind"] == "stress" else d["u_w"]
-        specs.append(DriveSpec(run_dir, d["name"], d["kind"], float(value), float(meta["config"]["p_w"]),
-                               float(meta["sizing"]["depth"]), float(plate["mass_per_area"]),
+        load = Load.from_record(d, float(meta["config"]["p_w"]))
+        specs.append(DriveSpec(run_dir, d["name"], load, float(meta["sizing"]["depth"]), float(plate["mass_per_area"]),
                                float(plate["surface_offset"]), int(d["steps"]),
                                float(meta["sizing"].get("elastic_start", {}).get("transit_time", np.nan)), folders))
     return specs

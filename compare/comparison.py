@@ -214,8 +214,7 @@ def _predict(a: DriveAnalysis, material: Material, models, failure: str) -> Driv
     if failure:
         return DriveComparison(a, None, (), f"no continuum prediction: the mu(I) calibration failed ({failure})", dm)
     try:
-        scales = (Scales(material, s.p_w, s.value / s.p_w) if s.kind == "stress"
-                  else Scales.for_speed(material, s.p_w, s.value))
+        scales = s.load.scales(material)
     except ValueError as err:  # e.g. tau_w >= mu_d p_w: local mu(I) has no steady state at all
         return DriveComparison(a, None, (), f"no continuum prediction: {err} (the calibrated mu(I) cannot sustain "
                                             "this drive: the plate would accelerate forever)", dm)
@@ -302,7 +301,7 @@ def _fit_fluidity(drives: list[DriveAnalysis], material: Material) -> FluidityFi
     """A of the NGF model, fitted on the creep of the first imposed-stress drive that local mu(I) can
     sustain (compare.nonlocal_fit); None when there is none."""
     for a in drives:
-        if a.spec.kind == "stress" and a.spec.value / a.spec.p_w < material.mu_d:
+        if a.spec.kind == "stress" and a.spec.load.mu_w < material.mu_d:
             return fit_amplitude(a, material)
     return None
 

@@ -75,7 +75,7 @@ def drive_metrics(dc: DriveComparison) -> dict:
     slope = stats.linregress(whole.depth, whole.p)
     expo = early_exponents(g)
     out = {
-        "kind": spec.kind, "imposed": spec.value, "imposed_unit": "tau_w [rho_p g d]" if spec.kind == "stress"
+        "kind": spec.kind, "imposed": spec.load.value, "imposed_unit": "tau_w [rho_p g d]" if spec.kind == "stress"
         else "u_w [sqrt(g d)]", "p_w": spec.p_w, "depth": spec.depth, "seeds": len(spec.folders),
         "grains_x_steps": spec.cost, "t_steady": g.steady["t_steady"], "t_window": g.t_window,
         "pressure_slope": slope.slope, "pressure_slope_err": slope.stderr,

@@ -25,45 +25,26 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 from granstokes.continuum import ngf
-from granstokes.continuum.crossing import crossing_depth
+from granstokes.continuum.crossing import depth_at_fraction
+from granstokes.continuum.load import Load
 from granstokes.continuum.rules import YieldRule
-from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.scales import Material
 from granstokes.continuum.scene import scene_steady
 from granstokes.continuum.solver import solve_speed, solve_stress
 from granstokes.continuum.steady import steady_velocity
 from granstokes.continuum.velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
 
-U_FRACTION = 0.05
-
-
-def depth_at_fraction(depth: np.ndarray, u: np.ndarray, u_w: float, frac: float = U_FRACTION) -> float:
-    """delta_u: the first depth (from the plate) where u falls below frac u_w (continuum.crossing,
-    linear); nan if never or if u_w is not a positive number."""
-    if not (np.isfinite(u_w) and u_w > 0):
-        return np.nan
-    return crossing_depth(depth, np.asarray(u) / u_w, frac)
-
 
 @dataclass(frozen=True)
 class Drive:
-    """What a model needs of a DEM drive: the scene and what is imposed (value = tau_w or u_w)."""
+    """What a model needs of a DEM drive: what the plate imposes (continuum.load.Load) and the scene."""
 
-    kind: str
-    value: float
-    p_w: float
+    load: Load
     depth: float
     plate_mass: float
 
     def scene(self, material: Material) -> BedScene:
-        return BedScene(material, self.p_w, self.depth, plate_mass=self.plate_mass)
-
-    @property
-    def load(self) -> dict:
-        return {"mu_w": self.value / self.p_w} if self.kind == "stress" else {"u_w": self.value}
-
-    def scales(self, material: Material) -> Scales:
-        return (Scales(material, self.p_w, self.value / self.p_w) if self.kind == "stress"
-                else Scales.for_speed(material, self.p_w, self.value))
+        return BedScene(material, self.load.p_w, self.depth, plate_mass=self.plate_mass)
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,13 +85,13 @@ def _profiles(times, y, u, mu) -> pd.DataFrame:
 # --- local mu(I) on the DEM's scene ------------------------------------------------------------------
 
 def _local_steady(material: Material, drive: Drive) -> Steady:
-    st = scene_steady(drive.scene(material), **drive.load)
+    st = scene_steady(drive.scene(material), **drive.load.imposed)
     return Steady(st.y, st.u, st.u_w, st.mu_w, st.delta_s)
 
 
 def _local_transient(material: Material, drive: Drive, times) -> tuple[pd.DataFrame, pd.DataFrame]:
-    vel = solve_velocity(drive.scene(material), times, rule=YieldRule.for_layer(drive.scales(material)),
-                         initial="rest", numerics=VELOCITY_NUMERICS, compare_steady=False, **drive.load)
+    vel = solve_velocity(drive.scene(material), times, rule=YieldRule.for_layer(drive.load.scales(material)),
+                         initial="rest", numerics=VELOCITY_NUMERICS, compare_steady=False, **drive.load.imposed)
     mu = np.array([np.interp(vel.y, vel.y_face, m) for m in vel.mu])
     return _series(times, vel.y, vel.u, vel.mu_w), _profiles(times, vel.y, vel.u, mu)
 
@@ -118,17 +99,17 @@ def _local_transient(material: Material, drive: Drive, times) -> tuple[pd.DataFr
 # --- the paper's stress-diffusion model --------------------------------------------------------------
 
 def _paper_steady(material: Material, drive: Drive) -> Steady:
-    sc, fr = drive.scales(material), material.friction
+    sc, fr = drive.load.scales(material), material.friction
     y = np.linspace(0.0, sc.delta_s, 201)
     u = sc.U * steady_velocity(fr, sc.mu_w, y / sc.delta_s)
     return Steady(y, u, float(u[0]), sc.mu_w, sc.delta_s)
 
 
 def _paper_transient(material: Material, drive: Drive, times) -> tuple[pd.DataFrame, pd.DataFrame]:
-    sc, fr = drive.scales(material), material.friction
+    sc, fr = drive.load.scales(material), material.friction
     t_tilde = sc.t_tilde(times)
-    sol = (solve_stress(fr, sc.mu_w, t_tilde) if drive.kind == "stress"
-           else solve_speed(fr, sc.u_tilde(drive.value), t_tilde))
+    sol = (solve_stress(fr, sc.mu_w, t_tilde) if drive.load.kind == "stress"
+           else solve_speed(fr, sc.u_tilde(drive.load.u_w), t_tilde))
     y, u = sc.y(sol.mesh.y), sc.u(sol.velocity)
     return _series(times, y, u, sol.mu_w), _profiles(times, y, u, sol.mu)
 
@@ -141,7 +122,7 @@ NGF_STEADY_N = 32
 
 
 def _ngf_steady(fluidity: ngf.NonlocalFluidity, material: Material, drive: Drive) -> Steady:
-    st = ngf.solve_steady(drive.scene(material), fluidity, n=NGF_STEADY_N, **drive.load)
+    st = ngf.solve_steady(drive.scene(material), fluidity, n=NGF_STEADY_N, **drive.load.imposed)
     return Steady(st.y, st.u, st.u_w, st.mu_w, st.delta_s, st.g)
 
 
@@ -153,7 +134,7 @@ NGF_NUMERICS = ngf.TransientNumerics(n_cells=80, rtol=1e-4)
 def _ngf_transient(fluidity: ngf.NonlocalFluidity, material: Material, drive: Drive,
                    times) -> tuple[pd.DataFrame, pd.DataFrame]:
     tr = ngf.solve_transient(drive.scene(material), fluidity, times, numerics=NGF_NUMERICS, error_estimate=False,
-                             **drive.load)
+                             **drive.load.imposed)
     mu = np.array([np.interp(tr.y, tr.y_cell, m) for m in tr.mu])
     return _series(times, tr.y, tr.u, tr.mu_w), _profiles(times, tr.y, tr.u, mu)
 

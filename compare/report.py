@@ -201,7 +201,8 @@ def drive_figure(dc: DriveComparison, bands: dict, out: Path, name: str | None =
         if scale == "log":
             a_.set_xlim(1e-4 * max(p.u_x.max(), 1e-6), 2 * max(p.u_x.max(), 1e-6))
     figure_legend(fig, ax)
-    imposed = f"tau_w = {spec.value:.4g} rho_p g d" if spec.kind == "stress" else f"u_w = {spec.value:.4g} sqrt(g d)"
+    imposed = (f"tau_w = {spec.load.tau_w:.4g} rho_p g d" if spec.kind == "stress"
+               else f"u_w = {spec.load.u_w:.4g} sqrt(g d)")
     suptitle(fig, f"{name or display_label(g.label)} – imposed {spec.kind} ({imposed}), p_w = {spec.p_w:g} rho_p g d; "
              "DEM units")
     path = out / f"drive_{slug(name or g.label)}.png"

@@ -34,14 +34,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from granstokes.continuum.crossing import crossing_depth
+from granstokes.continuum.crossing import crossing_depth, depth_at_fraction
 from granstokes.continuum.scales import Material
 from scipy import stats
 from tqdm import tqdm
 
 from .analysis import DriveAnalysis
 from .calibrate import WALL_EXCLUSION
-from .models import Drive, Prediction, SceneModel, Steady, depth_at_fraction
+from .models import Drive, Prediction, SceneModel, Steady
 from .plate import STEADY_LAST
 
 OBSERVABLES = {

@@ -83,3 +83,15 @@ def _cubic_crossing(y, f2, jj, level, log, guess, end_zero):
                  - np.where(use_log & end_zero, scale / at, 0.0))
         s = np.clip(s - value / np.where(slope != 0, slope, np.inf), 0.0, 1.0)
     return np.where(np.isfinite(s), lo + s * scale, guess)
+
+
+#: the layer thickness compared between models and DEM, delta_u: the depth where u falls to U_FRACTION of u_w
+U_FRACTION = 0.05
+
+
+def depth_at_fraction(depth, u, u_w: float, frac: float = U_FRACTION) -> float:
+    """delta_u: the first depth (from the plate) where u falls below frac u_w (linear crossing); nan if never or
+    if u_w is not a positive number."""
+    if not (np.isfinite(u_w) and u_w > 0):
+        return np.nan
+    return crossing_depth(depth, np.asarray(u) / u_w, frac)

@@ -15,7 +15,8 @@ DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rh
 
 Every output gives the plate's speed and friction with their errors (u_w_err, mu_w_err; the imposed one's
 is 0) and the layer depth in d: the steady state's delta_s (where tau/p falls to mu_s), a transient's
-delta_u at each time (where u falls to DELTA_U_FRACTION of u_w, the depth compare/ measures in the DEM).
+delta_u at each time (where u falls to continuum.crossing.U_FRACTION of u_w, the depth compare/ measures in the
+DEM).
 
 Bad input raises ValueError naming the parameter and its range (the root parser, granstokes.cli, prints
 one line and exits 2).  The solvers are imported when a prediction runs, not when the parser is built
@@ -33,8 +34,6 @@ from granstokes.lib.validate import finite, require
 
 MODELS = ("local", "ngf")
 BOUNDARIES = ("neumann", "dirichlet")
-#: delta_u: the depth below the plate where u falls to this fraction of u_w (compare.models.U_FRACTION)
-DELTA_U_FRACTION = 0.05
 #: second order in space: the error of the N-cell solution is |x_N - x_N/2| / (2^2 - 1)
 RICHARDSON = 3
 STEADY_LAYER = "delta_s [d]: the steady yield depth, where tau/p falls to mu_s"
@@ -90,21 +89,23 @@ def _scene(args):
     return BedScene(m, args.p_w, args.depth, plate_mass=args.plate_mass)
 
 
-def _drive(args, mu_top: float, top_name: str = "mu_d") -> dict:
+def _load(args, p_w: float, mu_top: float, top_name: str = "mu_d"):
+    """The plate's load (continuum.load.Load) from --mu-w or --u-w."""
+    from .load import Load
+
     if args.mu_w is not None:
         require(finite(args.mu_w) and args.mu_s < args.mu_w < mu_top, "--mu-w",
                 f"in the open interval (mu_s, {top_name}) = ({args.mu_s:.6g}, {mu_top:.6g})", args.mu_w)
-        return {"mu_w": float(args.mu_w)}
+        return Load("stress", p_w, mu_w=float(args.mu_w))
     require(finite(args.u_w) and args.u_w > 0, "--u-w", "a finite number > 0", args.u_w)
-    return {"u_w": float(args.u_w)}
+    return Load("speed", p_w, u_w=float(args.u_w))
 
 
 def _delta_u(y, u) -> np.ndarray:
-    """delta_u at each time: the first depth where u falls below DELTA_U_FRACTION of u_w (u[:, 0])."""
-    from .crossing import crossing_depth
+    """delta_u at each time (continuum.crossing.depth_at_fraction of u_w = u[:, 0])."""
+    from .crossing import depth_at_fraction
 
-    u = np.asarray(u)
-    return np.array([crossing_depth(y, uk / uk[0], DELTA_U_FRACTION) if uk[0] > 0 else np.nan for uk in u])
+    return np.array([depth_at_fraction(y, uk, uk[0]) for uk in np.asarray(u)])
 
 
 def _fine_and_coarse(solve, numerics) -> tuple[tuple, dict]:
@@ -117,29 +118,27 @@ def _fine_and_coarse(solve, numerics) -> tuple[tuple, dict]:
     return fine, err
 
 
-def _local_transient(scene, t, drive: dict):
+def _local_transient(scene, t, load):
     from .rules import YieldRule
-    from .scales import Scales
     from .velocity import VELOCITY_NUMERICS, solve_velocity
 
-    m = scene.material
-    sc = Scales(m, scene.p_w, drive["mu_w"]) if "mu_w" in drive else Scales.for_speed(m, scene.p_w, drive["u_w"])
-    rule = YieldRule.for_layer(sc)
+    rule = YieldRule.for_layer(load.scales(scene.material))
 
     def solve(numerics):
-        vel = solve_velocity(scene, t, rule=rule, initial="rest", numerics=numerics, compare_steady=False, **drive)
+        vel = solve_velocity(scene, t, rule=rule, initial="rest", numerics=numerics, compare_steady=False,
+                             **load.imposed)
         return vel.y, vel.u, vel.mu_w
 
     return _fine_and_coarse(solve, VELOCITY_NUMERICS)
 
 
-def _ngf_transient(scene, fluidity, t, drive: dict):
+def _ngf_transient(scene, fluidity, t, load):
     from .ngf import TransientNumerics, solve_transient
 
     cells = {}
 
     def solve(numerics):
-        tr = solve_transient(scene, fluidity, t, numerics=numerics, error_estimate=False, **drive)
+        tr = solve_transient(scene, fluidity, t, numerics=numerics, error_estimate=False, **load.imposed)
         cells[numerics.n_cells] = tr
         return tr.y, tr.u, tr.mu_w
 
@@ -154,6 +153,7 @@ def _g_at_nodes(y, y_cell, g):
 
 def predict(args) -> dict:
     """The prediction as a JSON-ready dict (lists and floats)."""
+    from .crossing import U_FRACTION
     from .ngf import NonlocalFluidity, mu_max, solve_steady
     from .rules import EPS_FRACTION
     from .scales import UNITS
@@ -165,28 +165,28 @@ def predict(args) -> dict:
     if args.model == "local":
         require(args.A is None, "--A", "given only with --model ngf", args.A)
         fluidity = None
-        drive = _drive(args, m.mu_d)
+        load = _load(args, scene.p_w, m.mu_d)
     else:
         require(args.A is not None, "--A", "a finite number >= 0, required with --model ngf", args.A)
         require(finite(args.A) and args.A >= 0, "--A", "a finite number >= 0", args.A)
         require(args.boundary in BOUNDARIES, "--boundary", f"one of {BOUNDARIES}", args.boundary)
         require(finite(args.t0_hat) and args.t0_hat > 0, "--t0-hat", "a finite number > 0", args.t0_hat)
         fluidity = NonlocalFluidity(A=args.A, boundary=args.boundary, t0_hat=args.t0_hat)
-        drive = _drive(args, mu_max(m, fluidity), "mu(I_max = 10), just below mu_d")
-    out = {"model": args.model, "imposed": "stress" if "mu_w" in drive else "speed", "units": UNITS["dem_units"],
+        load = _load(args, scene.p_w, mu_max(m, fluidity), "mu(I_max = 10), just below mu_d")
+    out = {"model": args.model, "imposed": load.kind, "units": UNITS["dem_units"],
            "I_convention": "dem: I = |du/dy| d/sqrt(p/rho_p)",
            "parameters": {"mu_s": m.mu_s, "mu_d": m.mu_d, "I0": m.I0, "phi": m.phi, "p_w": scene.p_w,
-                          "depth": scene.depth, "plate_mass": scene.plate_mass, **drive}}
+                          "depth": scene.depth, "plate_mass": scene.plate_mass, **load.imposed}}
     if fluidity is not None:
         out["parameters"].update({"A": fluidity.A, "boundary": fluidity.boundary, "t0_hat": fluidity.t0_hat})
     if args.steady:
         if args.model == "local":
-            st = scene_steady(scene, **drive)
+            st = scene_steady(scene, **load.imposed)
             out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": 0.0, "mu_w_err": 0.0,
                         "delta_s": st.delta_s, "layer": STEADY_LAYER, "y": st.y.tolist(), "u": st.u.tolist(),
                         "method": "closed form (continuum.steady) scaled with continuum.scales"})
         else:
-            st = solve_steady(scene, fluidity, **drive)
+            st = solve_steady(scene, fluidity, **load.imposed)
             out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": st.u_w_err, "mu_w_err": st.mu_w_err,
                         "delta_s": st.delta_s, "layer": STEADY_LAYER, "y": st.y.tolist(), "u": st.u.tolist(),
                         "g": st.g.tolist(),
@@ -194,16 +194,16 @@ def predict(args) -> dict:
         return out
     t = check_times(args.times, "--times")
     if args.model == "local":
-        (y, u, mw), err = _local_transient(scene, t, drive)
+        (y, u, mw), err = _local_transient(scene, t, load)
         out["method"] = (f"velocity form (continuum.velocity), eps = {EPS_FRACTION:g} U/delta_s; "
                          "errors: Richardson from N/2")
     else:
-        (y, u, mw), err, tr = _ngf_transient(scene, fluidity, t, drive)
+        (y, u, mw), err, tr = _ngf_transient(scene, fluidity, t, load)
         out["g"] = [_g_at_nodes(y, tr.y_cell, gk).tolist() for gk in tr.g]
         out["method"] = "finite volumes (u, ln g), scipy Radau; errors: Richardson from N/2"
     out.update({"t": t.tolist(), "u_w": u[:, 0].tolist(), "mu_w": np.asarray(mw).tolist(),
                 "delta_u": _delta_u(y, u).tolist(), **{k: v.tolist() for k, v in err.items()},
-                "layer": f"delta_u [d]: the depth below the plate where u falls to {DELTA_U_FRACTION:g} u_w",
+                "layer": f"delta_u [d]: the depth below the plate where u falls to {U_FRACTION:g} u_w",
                 "y": np.asarray(y).tolist(), "u": np.asarray(u).tolist()})
     return out
 

@@ -283,13 +283,13 @@ def _drive_forces(plan: Plan, drive: DrivePlan, fresh: bool) -> tuple[str, str, 
     """(description, integration block, applied x force on the plate) of a drive."""
     area, n_plate = plan.area, plate_grains(plan)
     if drive.drive.kind == "stress":
-        flags, fx = "force * on on off", drive.tau_w * area
-        what = f"imposed stress: x force tau_w A = {fx:.6g} (tau_w = {drive.tau_w:.6g})"
+        flags, fx = "force * on on off", drive.load.tau_w * area
+        what = f"imposed stress: x force tau_w A = {fx:.6g} (tau_w = {drive.load.tau_w:.6g})"
         set_speed = ""
     else:
         flags, fx = "force * off on off", 0.0
-        what = f"imposed speed: plate x velocity held at u_w = {drive.u_w:.6g} (rigid-body x force off)"
-        set_speed = f"velocity plate set {drive.u_w:.10g} NULL NULL units box" if fresh else ""
+        what = f"imposed speed: plate x velocity held at u_w = {drive.load.u_w:.6g} (rigid-body x force off)"
+        set_speed = f"velocity plate set {drive.load.u_w:.10g} NULL NULL units box" if fresh else ""
     block = f"""
 # --- integration: bed grains free, base frozen, plate rigid without rotation ---
 variable t equal step*{plan.dt:.10g}

@@ -12,6 +12,7 @@ import math
 import os
 from dataclasses import dataclass
 
+from granstokes.continuum.load import Load
 from granstokes.continuum.scales import Scales
 from granstokes.continuum.steady import steady_wall_speed
 
@@ -59,17 +60,18 @@ INSERT_FRACTION = {2: 0.30, 3: 0.20}
 
 @dataclass(frozen=True)
 class DrivePlan:
+    """One drive as run: its config entry, the paper's scales, duration and steps, and what the plate imposes."""
+
     drive: Drive
     scales: Scales
     duration: float
     steps: int
-    tau_w: float | None  # imposed shear stress (stress drive)
-    u_w: float | None  # imposed plate speed (speed drive)
+    load: Load
     reason: str
 
     def as_dict(self) -> dict:
-        return {"name": self.drive.name, "kind": self.drive.kind, "duration": self.duration, "steps": self.steps,
-                "tau_w": self.tau_w, "u_w": self.u_w, "expected": self.scales.as_dict(), "reason": self.reason}
+        return {"name": self.drive.name, **self.load.as_record(), "duration": self.duration, "steps": self.steps,
+                "expected": self.scales.as_dict(), "reason": self.reason}
 
 
 @dataclass(frozen=True)
@@ -182,17 +184,18 @@ def plan(cfg: Config) -> Plan:
         else:
             duration = max(d.duration_ts * s.t_s, d.min_duration)
             why = f"max({d.duration_ts:g} t_s, min_duration {d.min_duration:g}), t_s = {s.t_s:.4g}"
-        tau_w = s.mu_w * cfg.p_w if d.kind == "stress" else None
-        u_w = None
-        if d.kind == "speed":
+        if d.kind == "stress":
+            load = Load("stress", cfg.p_w, mu_w=s.mu_w)
+        else:
             u_w = d.u_w if d.u_w is not None else s.U * steady_wall_speed(cfg.material.friction, s.mu_w)
+            load = Load("speed", cfg.p_w, u_w=u_w)
         steps = max(1, round(duration / dt))
         require(steps <= MAX_STEPS, f"drive[{d.name}] duration", f"at most {MAX_STEPS * dt:.4g} time units "
                 f"({MAX_STEPS} steps of dt = {dt:.4g}, LAMMPS's limit)", duration)
         reason = (f"drive {d.name}: mu_w = {s.mu_w:.4g} (mu~_w = {s.mu_w_tilde:.3g}), delta_s = {s.delta_s:.3g} d, "
                   f"t_s = {s.t_s:.3g}, U = {s.U:.3g}; duration {duration:.4g} ({why}); "
-                  + (f"tau_w = {tau_w:.4g}" if tau_w is not None else f"u_w = {u_w:.4g}"))
-        drives.append(DrivePlan(d, s, duration, steps, tau_w, u_w, reason))
+                  + (f"tau_w = {load.tau_w:.4g}" if d.kind == "stress" else f"u_w = {load.u_w:.4g}"))
+        drives.append(DrivePlan(d, s, duration, steps, load, reason))
         reasons.append(reason)
     delta_max = max(p.scales.delta_s for p in drives)
     if cfg.box.depth is not None:

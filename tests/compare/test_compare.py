@@ -6,9 +6,9 @@ import pandas as pd
 import pytest
 from granstokes.compare.calibrate import fit, load
 from granstokes.compare.comparison import check_grains
-from granstokes.compare.models import depth_at_fraction
 from granstokes.compare.plate import block_estimate, friction, pooled, power_law, steady_state
 from granstokes.continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
+from granstokes.continuum.crossing import depth_at_fraction
 
 from granstokes.cli import main as granstokes_main
 from granstokes.lib.statistics import autocorrelation_time

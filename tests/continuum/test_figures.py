@@ -3,6 +3,7 @@ import json
 
 import numpy as np
 import pandas as pd
+import pytest
 from granstokes.continuum.closed_forms import SELF_SIMILAR_DELTA
 from granstokes.continuum.paper.figures import FIGURES, FRICTION, SPEED_CASES, T_MIN, Sheet, paper_figures
 from granstokes.continuum.steady import mu_w_for_speed, steady_delta
@@ -12,6 +13,7 @@ from matplotlib.text import Text
 from tests.continuum import reference
 
 
+@pytest.mark.slow
 def test_paper_figures(tmp_path):
     result = paper_figures(tmp_path)
     pngs = {name: path for name, path in result.items() if name != "timing"}

@@ -89,6 +89,7 @@ def test_speed_pieces_cover_every_time_once(label):
     assert sorted(times) == list(ref.SPEED_CASES[label].times) == list(ref.TIMES)
 
 
+@pytest.mark.slow
 def test_speed_reference_recomputed_is_converged_after_lift_off(cache):
     """The convergence above with the companion recomputed, not read from the cache: u~_w = 0.198 at degree 64
     (~13 s; degree 96 takes ~53 s), carried to REMAP_STRETCH at t~ = 1, is within CONVERGED of the cached

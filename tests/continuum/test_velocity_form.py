@@ -171,7 +171,7 @@ QUICK_DRIVES = {d.drive.kind: d for d in QUICK_PLAN.drives}
 QUICK = calibrate.load(Path(__file__).resolve().parents[2] / "results/quick-calibration/calibration.json").material()
 QUICK_SCENE = BedScene(QUICK, QUICK_PLAN.config.p_w, QUICK_PLAN.depth,
                        plate_mass=plate_geometry(QUICK_PLAN)["mass_per_area"])
-QUICK_MU_W, QUICK_END = QUICK_DRIVES["stress"].tau_w / QUICK_SCENE.p_w, QUICK_DRIVES["stress"].duration
+QUICK_MU_W, QUICK_END = QUICK_DRIVES["stress"].load.mu_w, QUICK_DRIVES["stress"].duration
 #: issue 11's target for the velocity-form prediction of a quick drive
 TARGET = 1e-4
 #: the tight references: SDIRK4 (order 4 in time) at rtol 1e-8, so that their time error is negligible
@@ -215,7 +215,7 @@ def test_velocity_form_default_reaches_the_target(quick_stress):
 # --- the imposed speed's wall treatment (bench/RESULTS.md "Velocity form: speed at 1e-4") -------------
 #: the quick preset's speed drive: the steady u_w of mu~_w = 0.5 in the preset's nominal material, as dem.sizing
 #: sets the DEM plate's speed
-QUICK_U_W = QUICK_DRIVES["speed"].u_w
+QUICK_U_W = QUICK_DRIVES["speed"].load.u_w
 #: times after the impulsive start's wall jump is resolved (the first cell's share of the velocity drop falls
 #: from 39 % at t = 0.1 to 0.4 % at t = 1, 400 cells)
 RESOLVED_TIMES = [1.0, 3.0]

@@ -1,0 +1,61 @@
+"""What a drive imposes at the plate, defined once for every layer: the plate pressure p_w and either the wall
+friction mu_w (an imposed shear stress tau_w = mu_w p_w) or the plate speed u_w.  DEM units (rho_p g d,
+sqrt(g d)).  dem's sizing builds it, run.json stores it (``as_record``: kind, tau_w, u_w), compare reads it back
+(``from_record``) and the models take it (``imposed``: the solvers' keyword)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from granstokes.lib.validate import finite, require
+
+from .scales import Material, Scales
+
+KINDS = ("stress", "speed")
+
+
+@dataclass(frozen=True)
+class Load:
+    kind: str
+    p_w: float
+    mu_w: float | None = None
+    u_w: float | None = None
+
+    def __post_init__(self):
+        require(self.kind in KINDS, "load kind", f"one of {KINDS}", self.kind)
+        require(finite(self.p_w) and self.p_w > 0, "p_w", "a finite number > 0", self.p_w)
+        given = "mu_w" if self.kind == "stress" else "u_w"
+        other = "u_w" if self.kind == "stress" else "mu_w"
+        value = getattr(self, given)
+        require(finite(value) and value > 0, given, f"a finite number > 0 for an imposed {self.kind}", value)
+        require(getattr(self, other) is None, other, f"left out of an imposed {self.kind}", getattr(self, other))
+
+    @property
+    def tau_w(self) -> float | None:
+        """The imposed wall shear stress (an imposed stress), else None."""
+        return self.mu_w * self.p_w if self.kind == "stress" else None
+
+    @property
+    def value(self) -> float:
+        """The imposed number in DEM units: tau_w or u_w."""
+        return self.tau_w if self.kind == "stress" else self.u_w
+
+    @property
+    def imposed(self) -> dict:
+        """The solvers' keyword: {"mu_w": ...} or {"u_w": ...}."""
+        return {"mu_w": self.mu_w} if self.kind == "stress" else {"u_w": self.u_w}
+
+    def scales(self, material: Material) -> Scales:
+        """The paper's scales of this load on ``material`` (for a speed: at its steady mu_w^inf)."""
+        return (Scales(material, self.p_w, self.mu_w) if self.kind == "stress"
+                else Scales.for_speed(material, self.p_w, self.u_w))
+
+    def as_record(self) -> dict:
+        """run.json's drive keys: the imposed stress or speed in DEM units (None for the other)."""
+        return {"kind": self.kind, "tau_w": self.tau_w, "u_w": self.u_w}
+
+    @classmethod
+    def from_record(cls, record: dict, p_w: float) -> Load:
+        """The load of a run.json drive record (``as_record``) at plate pressure ``p_w``."""
+        if record["kind"] == "stress":
+            return cls("stress", p_w, mu_w=record["tau_w"] / p_w)
+        return cls("speed", p_w, u_w=record["u_w"])
