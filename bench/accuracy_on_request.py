@@ -1,4 +1,4 @@
-"""Accuracy on request against the independent reference (issue 11): for each imposed-stress case of
+"""Accuracy on request against the independent reference: for each imposed-stress case of
 tests/continuum/reference.STRESS_CASES, ``solve_stress(..., accuracy=TOL)`` at TOL = 1e-4 and 1e-6; prints a
 markdown row per run: cells reached, CPU of the whole refinement, the worst relative error against the
 cached reference, the range over the times of estimate / true error (>= 1: the estimate bounds it) and the

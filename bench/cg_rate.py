@@ -78,7 +78,7 @@ def main(argv=None) -> int:
     cmd = "bench/cg_rate.py" + (f" {args.drive}" if args.drive else "")
     cmd += f" --width {args.width}" if args.width != 0.5 else ""
     lines = [
-        "", "## Coarse-graining (issue 4)", "",
+        "", "## Coarse-graining", "",
         f"Command: `.venv/bin/python {cmd}`; machine: 2 cores ({platform.machine()}), one process, CPU time "
         "(`time.process_time()`), minimum of 3 repeats.",
         "",

@@ -1,7 +1,7 @@
 """Seeds side by side: the demo's DEM wall time (quick + smoke presets) run one bed at a time on 2 MPI
-ranks (the old default, ``--jobs 1 --np 2``) against independent beds run concurrently as separate
-LAMMPS processes (``--jobs 2 --np 1``, the new default).  ``--keep DIR`` keeps the new default's run
-folders (DIR/quick, DIR/smoke: the demo's DEM, for its comparison report).
+ranks (``--jobs 1 --np 2``) against independent beds run concurrently as separate LAMMPS processes
+(``--jobs 2 --np 1``, the default).  ``--keep DIR`` keeps the default's run folders (DIR/quick, DIR/smoke:
+the demo's DEM, for its comparison report).
 
     .venv/bin/python bench/dem_concurrency.py [--out FILE] [--keep DIR]
 
@@ -40,7 +40,7 @@ def demo_dem(root: Path, jobs: int, np_: int) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, default=HERE / "dem_concurrency.json")
-    ap.add_argument("--keep", type=Path, help="keep the new default's run folders here")
+    ap.add_argument("--keep", type=Path, help="keep the default's run folders here")
     args = ap.parse_args()
     best = {}
     with tempfile.TemporaryDirectory() as tmp:

@@ -1,4 +1,4 @@
-"""An imposed speed's early output times on the deeper wall cluster (issue 11; continuum.solver.EARLY_SPAN):
+"""An imposed speed's early output times on the deeper wall cluster (continuum.solver.EARLY_SPAN):
 error and CPU with the early times apart (the default) against the solve's one map (EARLY_SPAN = 0), in one
 run.  Prints the table for bench/RESULTS.md "The early times on a deeper cluster".
 

@@ -1,4 +1,4 @@
-"""An imposed speed at the CLI's default accuracy over the admissible range (issue 11: "any admissible u~_w"):
+"""An imposed speed at the CLI's default accuracy over the admissible range (any admissible u~_w):
 for each friction and speed, the cells the refinement reached, the steps, the CPU, the worst estimated
 relative error of mu_w and delta, and mu_w at t~ = 10 against the exact steady mu_w^inf.  A robustness
 survey, not a timing: a failure is printed as such and the survey goes on.

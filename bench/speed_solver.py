@@ -1,4 +1,4 @@
-"""Imposed-speed solves (issue 11): CPU and error of the speed's default map, the wall cluster
+"""Imposed-speed solves: CPU and error of the speed's default map, the wall cluster
 (``continuum.solver.map_for``: the layer's stretch plus WALL_FOLDS e-folds packed at the wall), against
 one exponential map of stretch WALL_STRETCH (the wall-graded map without the cluster), in one run; then
 the cost of an accuracy request.  Prints the tables for bench/RESULTS.md.

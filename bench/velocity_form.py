@@ -33,7 +33,8 @@ ROOT = HERE.parent
 TARGET = 1e-4
 REFINE = (400, 800, 1600)
 REFERENCE_TOL = dict(stretch=2.0, rtol=1e-8, atol=1e-11)
-#: the former default (200 cells, stretch 2, SDIRK4): the CPU ratios are against it, in the same run
+#: the baseline (200 cells, stretch 2, SDIRK4; "old default" in the table): the CPU ratios are against it, in the
+#: same run
 OLD_DEFAULT = Numerics(n_cells=200, stretch=2.0, rtol=1e-5, atol=1e-9)
 CANDIDATES = {"old default (200 cells, stretch 2, sdirk4)": OLD_DEFAULT,
               "default (400 cells, stretch 4, tr-bdf2, atol 1e-8)": VELOCITY_NUMERICS,

@@ -90,7 +90,7 @@ def load(path: str | Path) -> Calibration:
     except json.JSONDecodeError as exc:
         raise ValueError(f"--calibration {path} is not valid JSON: {exc}") from None
     missing = sorted({"mu_s", "mu_d", "I0", "I_convention", "ci95", "linear", "phi", "replicates", "grains"} - set(doc))
-    require(not missing, f"--calibration {path}", "a calibration.json with the issue-10 keys", f"missing {missing}")
+    require(not missing, f"--calibration {path}", "a complete calibration.json", f"missing {missing}")
     require(doc["I_convention"] == "dem", f"--calibration {path}: I_convention", "'dem'", doc["I_convention"])
     lin, ph, ci = doc["linear"], doc["phi"], doc["ci95"]
     rep = doc["replicates"]

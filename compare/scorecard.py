@@ -148,7 +148,7 @@ def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
     return (table.depth > WALL_EXCLUSION) & (table.depth < bed_depth - WALL_EXCLUSION)
 
 
-#: the plate grips when at most this fraction of its speed is lost to slip (issue: a plate that grips)
+#: the plate grips when at most this fraction of its speed is lost to slip
 SLIP_MAX = 0.05
 #: the pressure slope's least-squares error counts correlated depths as independent (a lower bound): the
 #: check passes within this relative tolerance as well (the smoke CG test's 10 %)

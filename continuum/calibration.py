@@ -37,7 +37,7 @@ JOP_BOUNDS = ([0.0, 0.0, 1e-6], [2.0, 3.0, 50.0])
 #: BOUND_TOLERANCE of a bound of JOP_BOUNDS, or its interval covers more than SPAN_MAX of that range (both as
 #: fractions of the range; of its logarithm for I0)
 BOUND_TOLERANCE, SPAN_MAX = 1e-3, 0.5
-#: replicate keys of calibration.json (the issue-10 contract) and the parameter each one samples
+#: replicate keys of calibration.json (its contract with compare) and the parameter each one samples
 REPLICATE_KEYS = {"mu_s": "mu_s", "mu_d": "mu_d", "I0": "I0_dem", "phi_max": "phi_max", "a": "phi_slope"}
 
 
@@ -129,7 +129,7 @@ class Calibration:
                        f"on I <= {LINEAR_I_MAX:g} (I_dem)"}
 
     def contract(self) -> dict:
-        """calibration.json's keys as issue 10 specifies them (the caller adds grains and provenance)."""
+        """calibration.json's keys, its contract with compare (the caller adds grains and provenance)."""
         ci = {k: list(v) for k, v in self.ci95.items()}
         return {"mu_s": self.mu_s, "mu_d": self.mu_d, "I0": self.I0_dem, "I_convention": "dem",
                 "ci95": {"mu_s": ci["mu_s"], "mu_d": ci["mu_d"], "I0": ci["I0_dem"]},

@@ -13,8 +13,8 @@ where f falls below ``level``, interpolated between the bracketing nodes j-1 and
   (a profile that vanishes linearly at y[-1], the continuum's mu = mu_s at y~ = 1): the cubic in
   log(f/(y[-1] - y)), smooth up to that end where log f is not (measured: delta at u~_w = 1.334, t~ = 1,
   0.989, erratic by 4e-5 between meshes whose stencil neared the end); there f[-1] is taken as 0 (its
-  round-off, 5.6e-17 from mu_w/p~(1) - mu_s, had put log(f/0) into a cubic through the end node: delta of
-  u~_w = 0.02 at t~ = 10 read 0.979 on 256 cells, 0.989 on 512, for 0.999): a crossing in the last two
+  round-off, 5.6e-17 from mu_w/p~(1) - mu_s, would put log(f/0) into a cubic through the end node: delta of
+  u~_w = 0.02 at t~ = 10 would read 0.979 on 256 cells, 0.989 on 512, for 0.999): a crossing in the last two
   cells then takes the cubic in f (through that 0), fourth order as well;
 * ``first=True``: j is the first node below ``level`` (nan where f never falls below it, y[0] where
   f[0] already does); ``first=False``: j - 1 is the last node at or above ``level`` (y[0] where none is,

@@ -52,8 +52,8 @@ Numerics
   the cell centres (g > 0 by construction; the bed "at rest" starts from g = g_rest, tiny), stress and
   mu at the cells; 2N coupled ODEs integrated with scipy's Radau (solve_ivp, L-stable, order 5) and a
   sparse Jacobian pattern (the package's DIRK stepper takes tridiagonal systems only; this one is
-  block-banded).  BDF was tried: on the impulsive imposed-speed start (mu ~ 1e7 in the first cell) its
-  Newton iterations land on a spurious branch (g far above the capped g_loc); Radau does not, and its
+  block-banded).  Radau, not BDF: on the impulsive imposed-speed start (mu ~ 1e7 in the first cell) BDF's
+  Newton iterations land on a spurious branch (g far above the capped g_loc); Radau's do not, and its
   transient is the same for g_rest = 1e-8 and 1e-4.  The mesh has a face at the steady yield depth
   (``aligned_mesh``), which makes the O(h^2) error smooth in h (measured ratios 3.9-4.1 per halving);
   the error estimate of u_w is Richardson's, |u_N - u_N/2|/3.

@@ -284,7 +284,7 @@ def wall_unknown(target: float, b: float) -> float:
     return math.nan
 
 
-#: ImposedSpeed's exp(-q) is capped here (math.exp overflows above it, where numpy gave inf)
+#: ImposedSpeed's exp(-q) is capped here (math.exp raises OverflowError above it, where numpy's exp gives inf)
 EXP_MAX = 709.0
 #: first_cell switches to its series below this |b - a|/(b + a)
 SERIES_BELOW = 1e-4

@@ -71,8 +71,8 @@ MAX_RTOL = {**dict.fromkeys(TABLEAUX, 1e-3), "bdf": 1e-8}
 #: the loosest time tolerance of an estimate's companion (``Numerics.coarser``): its time error enters the estimate
 #: (x SAFETY/(gain - 1)), and bdf's in a small speed's delta is ~500 rtol, not TIME_ERROR_PER_RTOL's 30 (delta is
 #: read where mu - mu_s is 1e-3 of mu_w - mu_s, which is tiny: u~_w = 0.001 (beads), 256 cells at rtol 1e-8 and
-#: 1e-10 differ by 4.9e-6 in delta at t~ = 0.1), so at MAX_RTOL it alone put that speed's estimate at 1.0-1.1e-6
-#: against 1e-6 asked; at 4e-9 5.7e-7, for 7 % more CPU at u~_w = 1.334 (bench/RESULTS.md "The speed's cost ...")
+#: 1e-10 differ by 4.9e-6 in delta at t~ = 0.1), so at MAX_RTOL it alone puts that speed's estimate at 1.0-1.1e-6
+#: against 1e-6 asked; at 4e-9 at 5.7e-7, for 7 % more CPU at u~_w = 1.334 (bench/RESULTS.md "The speed's cost ...")
 COMPANION_MAX_RTOL = {**MAX_RTOL, "bdf": 4e-9}
 #: atol = ATOL_PER_RTOL rtol (tau~ is O(1))
 ATOL_PER_RTOL = 1e-2
@@ -321,17 +321,17 @@ ACCURACY_RANGE = (1e-10, 1e-2)
 #: refinement stops here (a request that needs more is refused with the accuracy reached): a speed on
 #: 512 cells takes 0.2-0.6 s (compiled, its companion on 256 included); on 1024 its wall cells (7.6e-8) stall BDF by
 #: round-off near the steady state (measured: u~_w = 0.198 not at t~ = 10 after 400 s, bench/RESULTS.md "One map
-#: with a wall cluster"; compiled, 1.334 and the disks' 1.0 still fail there, "The speed compiled")
+#: with a wall cluster"; compiled, 1.334 and the disks' 1.0 fail there too, "The speed compiled")
 MAX_CELLS = {"stress": 2048, "speed": 512}
 #: an estimated solve has at least this many cells: the companion of a speed on 64 cells (32) is
 #: pre-asymptotic through the lift-off (measured: mu_w at u~_w = 1.334, t~ = 1 underestimated 1.5x)
 MIN_ESTIMATED_CELLS = {"stress": 8, "speed": 128}
 #: an accuracy request on the drive's own map, method and order starts from the cells that its error model (cells,
 #: worst relative estimate there) predicts for it (``first_cells``), not from MIN_ESTIMATED_CELLS: the speed's worst
-#: estimate on 512 cells over bench/speed_range.py's survey is 8.3e-7 (stop 22; 7.4e-7 in stop 23), so 1e-6
-#: starts there (its companion on 256), and the 64- and 128-cell rungs that all but one of the survey's solves
-#: climbed through are skipped (1.2 s of 4.6 at u~_w = 1.334); a request beyond MAX_CELLS is then refused after
-#: the solve on them
+#: estimate on 512 cells over bench/speed_range.py's survey is 7.4-8.3e-7 (two runs of it), so 1e-6 starts there
+#: (its companion on 256), and the 64- and 128-cell rungs that all but one of the survey's solves would climb
+#: through from MIN_ESTIMATED_CELLS are skipped (1.2 s of 4.6 at u~_w = 1.334); a request beyond MAX_CELLS is
+#: then refused after the solve on them
 ERROR_MODEL = {"speed": (512, 1e-6)}
 
 
@@ -393,7 +393,7 @@ def _estimate(fine: Solution, coarse: Solution) -> dict:
     floor at the time error,
     TIME_ERROR_PER_RTOL rtol |fine| (below it the two solves' difference no longer measures the error;
     measured against the independent reference, u~_w at t~ = 0.1 for mu~_w = 0.5 on 128 cells, error
-    1.6e-8 relative where rtol = 1.6e-7, was underestimated 1.2x without it); the imposed quantity
+    1.6e-8 relative where rtol = 1.6e-7: without the floor the estimate falls 1.2x short); the imposed quantity
     (IMPOSED) is exact (a speed's constraint holds to round-off)."""
     g = gain(fine.imposed, fine.numerics)
     floor = TIME_ERROR_PER_RTOL[fine.numerics.method] * fine.numerics.rtol

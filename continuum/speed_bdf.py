@@ -5,7 +5,7 @@ Same algorithm, step for step: scipy.integrate.BDF (variable order 1-5 with the 
 step size, Shampine & Reichelt 1997; its constants and update rules) on the same system, the interior z = x[1:]
 with the wall unknown q = x[0] from the constraint (ImposedSpeed.project, by the compiled ``wall_unknown`` and
 ``first_cell`` of continuum.problems: the same functions), Newton's systems by the bordered band (stepper.NewtonMatrix)
-with the wall's row and column at each iterate (stepper.BDF_WALL_NEWTON).  Profiled, the Python solve spent its
+with the wall's row and column at each iterate (stepper.BDF_WALL_NEWTON).  Profiled, the Python solve spends its
 ~0.55 ms a step in call overhead: the band solves of ~256 values (12 us each, f2py), the projection's scalar
 Newton, scipy's bookkeeping (bench/RESULTS.md "The speed compiled").  The rate and Jacobian here are the
 stencil sums of ImposedSpeed.interior_rate and .jacobian, asserted equal to them (tests/continuum).  One
@@ -25,7 +25,7 @@ from .stepper import NewtonFailure, StepperFailure, StepStats
 
 #: compiled.digest(compiled, problems): these kernels build in code from both, and numba's cache checks only this
 #: file, so this line changes with them (tests/continuum/test_compiled_cache.py gives the new value)
-BUILT_FROM = "2054a6b0a987425e"
+BUILT_FROM = "10b58db385d61979"
 #: scipy.integrate.BDF's constants (scipy/integrate/_ivp/bdf.py): most order, Newton iterations, step factors
 MAX_ORDER, NEWTON_MAXITER, MIN_FACTOR, MAX_FACTOR = 5, 4, 0.2, 10.0
 KAPPA = np.array([0.0, -0.1850, -1 / 9, -0.0823, -0.0415, 0.0])
@@ -233,8 +233,8 @@ def advance(state, d, ints, jband, ab, piv, units, t_bound, rtol, atol, max_step
                     if rate >= 0 and (rate >= 1 or rate ** (NEWTON_MAXITER - k) / (1 - rate) * dy_norm > newton_tol):
                         # NOT scipy's: after the lift-off, an iteration that stalls within the wall unknown's round-off
                         # (felt by z through zb) is converged. There q is fixed by u~_w less the interior's share over
-                        # w_0 ~ 1e-9, and its noise kept Newton from converging at the steady state's tight tolerances:
-                        # the step collapsed
+                        # w_0 ~ 1e-9, and its noise keeps scipy's Newton from converging at the steady state's tight
+                        # tolerances: the step would collapse
                         if t > lift_off_end and dy_norm <= ROUND_OFF_UPDATES * EPS * (u_w + share) / abs(
                                 row0[0]) * rms(zb, scale):
                             y_new += dy

@@ -62,7 +62,7 @@ class Tableau:
         M x_n + h S_i @ K (the explicit stage sum), its Newton guess  M X_i = M x_n + h P_i @ K: the
         stage sum plus a_ii times a predicted F_i.  Implicit first stage: F_i interpolated in c
         through the PREDICTOR_POINTS known (0, F(x_n)), (c_j, F_j) nearest to c_i (the least
-        amplification of their errors; three points made wild guesses at large steps).  Explicit
+        amplification of their errors; three points make wild guesses at large steps).  Explicit
         first stage (F_1 = F(x_n)): F_i ~ F_{i-1}, and no prediction for stage 2 (after CN steps
         F(x_n) carries the undamped stiff modes and would make a wild guess)."""
         A = self.matrix
@@ -134,7 +134,7 @@ OUTPUT_RTOL = 1e-13
 #: bdf hands over to HANDOVER when its step has stayed below BDF_STALL t for STALL_STEPS steps in a row after
 #: the problem's lift-off (``_integrate_bdf``), counted afresh after each output time: scipy cuts the step that
 #: lands on one and keeps that size for order + 1 steps before it may grow, no stall (a handover there, SDIRK4
-#: on the speed's DAE, crawled: u~_w = 0.02 on 256 cells, 199 000 steps to t~ = 1.1; BDF goes on to 10 in 77)
+#: on the speed's DAE, crawls: u~_w = 0.02 on 256 cells, 199 000 steps to t~ = 1.1; BDF goes on to 10 in 77)
 BDF_STALL, STALL_STEPS, HANDOVER = 1e-3, 50, "sdirk4"
 #: bdf's reduced Jacobian is dense up to this many unknowns: scipy's dense LU path costs less than
 #: SuperLU with its sparse bookkeeping there (measured, u~_w = 1.334: 64 cells 1.4x, 128 cells 1.4x less CPU;
@@ -419,8 +419,8 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     (unit mass rows).
 
     BDF steps onto every output time (its bound moved on to the next one, no restart: scipy cuts the
-    last step to the bound): its dense output had been ~1e4 rtol off through an imposed speed's lift-off,
-    where the landed steps are within ~1-20 rtol (bench/RESULTS.md "Remeshing the speed in time").
+    last step to the bound): its dense output is ~1e4 rtol off through an imposed speed's lift-off, where
+    the landed steps are within ~1-20 rtol (bench/RESULTS.md "Remeshing the speed in time").
     Near a steady state at tight tolerances the round-off of the rate (|tau~|/h^2 eps) stops scipy's
     Newton from converging and the steps shrink without end: once the step has stayed below BDF_STALL t
     for STALL_STEPS steps, after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is
@@ -469,8 +469,8 @@ def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resum
     if bordered:
         # scipy's BDF uses its Jacobian J only to hand I - c J to lu. Handed J = BORDERED_MARKER = -1 and I = 0 (after
         # its set-up has seen an empty sparse n x n), it hands over c itself, and lu factorises the unreduced M - c J
-        # by the bordered band (NewtonMatrix): I - c J is never formed (sparse, with its CSC bookkeeping, it had cost
-        # ~0.3 ms a factorisation, a quarter of a 64-cell solve)
+        # by the bordered band (NewtonMatrix): I - c J is never formed (sparse, with its CSC bookkeeping, it would
+        # cost ~0.3 ms a factorisation, a quarter of a 64-cell solve)
         import scipy.sparse as sp
 
         solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, first_step=h0,

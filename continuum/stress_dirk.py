@@ -6,7 +6,7 @@ solve_stage's simplified Newton (the contraction estimate carried between stages
 fresh Jacobian), the embedded estimate filtered through (M - h a_ss J)^-1, and integrate's step control (the
 Newton-failure cut, the repeat cap, landing on the output times), with the constants read from continuum.stepper at
 each call.  The rate and the Newton matrix are the stencil sums of ImposedStress.rate and .jacobian (tests/continuum
-hold them equal); the band LU is continuum.compiled's.  Profiled, the Python solve spent its ~22 us a Newton
+hold them equal); the band LU is continuum.compiled's.  Profiled, the Python solve spends its ~22 us a Newton
 iteration in call overhead on 96 values (bench/RESULTS.md "Continuum: work-precision").
 """
 from __future__ import annotations

@@ -62,7 +62,7 @@ class BedScene:
 #: the velocity form's defaults: a milder wall grading than the paper's (no singular wall layer),
 #: tolerances for dimensional velocities of O(1-10) in DEM units, and TR-BDF2 (2 implicit stages a step to
 #: SDIRK4's 5).  bench/velocity_form.py: 400 cells at stretch 4 put the quick stress drive within 1e-4
-#: (the former 200-cell, stretch-2 SDIRK4 default was at 2-4e-4); atol 1e-8 instead of 1e-9 stops resolving
+#: (200 cells at stretch 2 with SDIRK4: 2-4e-4); atol 1e-8 instead of 1e-9 stops resolving
 #: to 1e-5 relative the creep (|g| ~ eps) that runs ahead of the yield front through the whole bed in the
 #: first ~0.01 time units (0.7x the steps, errors equal to 2 digits; 1e-7 and 1e-6 raise delta_u's error)
 VELOCITY_NUMERICS = Numerics(n_cells=400, stretch=4.0, rtol=1e-5, atol=1e-8, method="tr-bdf2")
@@ -77,7 +77,7 @@ class VelocityProblem:
 
     #: the simplified Newton contracts unevenly as faces cross the regularised law's kink |g| ~ eps, so a
     #: stage's contraction estimate says nothing about the next stage's (carried over, the quick stress
-    #: drive took 785 step attempts instead of 304, bench/RESULTS.md)
+    #: drive takes 785 step attempts instead of 304, bench/RESULTS.md)
     carries_contraction = False
     dense_wall = False
 

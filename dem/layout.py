@@ -48,7 +48,8 @@ PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y", "u_c", "n_c"
 ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "radius")
 CONTACT_COLUMNS = ("id1", "id2", "dist", "dx", "dy", "dz", "fn", "ft_x", "ft_y", "ft_z")
 GRAIN_COLUMNS = ("id", "type", "radius", "mass")
-#: calibration: the issue-10 contract of points.csv, and a point's time series (stresses compressive positive)
+#: calibration: points.csv's columns (its contract with compare), and a point's time series (stresses compressive
+#: positive)
 POINT_COLUMNS = ("I", "I_err", "mu", "mu_err", "phi", "phi_err", "p", "strain", "seed")
 SHEAR_SERIES_COLUMNS = ("step", "t", "lx", "ly", "xy", "p_xx", "p_yy", "p_xy", "phi", "T")
 BLOCK_COLUMNS = ("block", "tau", "p", "phi", "rate", "seed", "point")

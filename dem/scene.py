@@ -394,7 +394,7 @@ def plate_pitch(dim: int, d_min: float) -> float:
     PLATE_GAP_FRACTION of the smallest bed grain ``d_min``: 2D, the gap between neighbours; 3D, ridges
     along z (grains PLATE_RIDGE_PITCH apart, overlapping: one rigid body) whose rectangular holes have a
     half-diagonal of (D_p + f d_min)/2.  The grooves between the ridges hold the bed grains against the
-    flow as the 2D gaps do (a square lattice of holes held them 20 % slower than the plate)."""
+    flow as the 2D gaps do (a square lattice of holes holds them 20 % slower than the plate)."""
     opening = PLATE_DIAMETER + PLATE_GAP_FRACTION * d_min
     return opening if dim == 2 else math.sqrt(opening ** 2 - PLATE_RIDGE_PITCH ** 2)
 

@@ -64,7 +64,8 @@ class FigureNumerics:
     solver's defaults on 64 cells; the speeds on 64 cells of the exponential map of the layer at T_MIN (the
     speed's, solver.map_for, without its wall cluster: stretch 6.02) at rtol 1e-5: within 3e-4 in mu_w and 5e-4
     in delta of 256 clustered cells at the output times, in 220-250 BDF steps (~850 at the defaults, whose map
-    follows the first output time, 1e-3, and left fig. 7's per-step delta 4.2 % low at t~ = 1e-4; now 0.2 %);
+    follows the first output time, 1e-3, and leaves fig. 7's per-step delta 4.2 % low at t~ = 1e-4, against
+    0.2 % here);
     bench/RESULTS.md "The paper's figure set"."""
 
     stress: Numerics = Numerics()

@@ -1,4 +1,4 @@
-"""Stability map: where each method stops being trustworthy (issue: velocity form + stability map).
+"""Stability map: where each method stops being trustworthy.
 
 For each method, a grid of the physical parameter (mu~_w for an imposed stress, u~_w for an imposed
 speed) against a numerical one (cells, time step or eps); every cell runs the method at that

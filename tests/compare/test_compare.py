@@ -104,7 +104,7 @@ def test_friction_is_a_ratio_of_means_and_the_mean_of_ratios_is_biased():
     """Single-step plate forces: p = p_w G with G ~ Gamma(k, 1/k) (relative spread 1/sqrt(k) = 50 %, as
     when the plate rests on a few grains), tau = mu p_w (rho G + (1 - rho) G') with G' independent.
     The true friction <tau>/<p> is mu; the mean of tau/p is mu (rho + (1 - rho) E[1/G]) =
-    mu (rho + (1 - rho) k/(k - 1)): +16.7 % here.  The old estimator misses by ~100 standard errors,
+    mu (rho + (1 - rho) k/(k - 1)): +16.7 % here.  The mean of the ratios misses by ~100 standard errors,
     the ratio of means is within 3."""
     rng = np.random.default_rng(3)
     mu, p_w, k, rho, n = 0.4, 20.0, 4.0, 0.5, 200_000
@@ -167,11 +167,11 @@ def test_compare_report_on_a_smoke_run(smoke_run, tmp_path, capsys):
     assert d["u_w_inf"]["dem"] > 0 and "steady_local" not in d and "calibration failed" in d["prediction"]
     # the steady window's coarse-grained bulk tau is the plate's <tau_w> within 2 standard errors of the
     # difference (block errors of the frames and of the plate record over the same window: ~10 % of tau
-    # for the smoke's 3 time units; the pre-issue-9 estimators missed by 18 %)
+    # for the smoke's 3 time units)
     tb = d["tau_bulk"]
     assert tb["agree"] and abs(tb["cg"] - tb["plate"]) <= 2 * tb["difference_err"]
     assert tb["difference_err"] < 0.15 * tb["plate"]
-    # the plate grips: slip consistent with <= 5 % (the old plate of touching grains: 46 %)
+    # the plate grips: slip consistent with <= 5 % (a plate of touching grains: 46 %)
     assert 0 < d["slip_err"] and d["slip"] - 2 * d["slip_err"] < 0.05 and "autocorrelation" in d["slip_how"]
     assert d["mu_w_inf"]["dem_err"] > 0 and d["mu_w_inf"]["dem_how"]  # u_w_inf is the imposed speed here
     assert 0 < d["elastic_start"]["transit_time"] < d["elastic_start"]["compared_from"]

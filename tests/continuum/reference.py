@@ -1,4 +1,4 @@
-"""Independent converged reference for the continuum solver (issue 11): test-only code.
+"""Independent converged reference for the continuum solver: test-only code.
 
 Imposed stress: eq. GranularStokesEqn_mu (the paper's equation for mu, not the solver's tau~ form)
 for v = (mu - mu_s)/(mu_w - mu_s), the quantity that defines delta,
@@ -51,7 +51,7 @@ WALL_SHARE = 0.036
 UNIFORM_STRETCH = 1e-3
 #: Radau's first step (t~ = 0 is an incompatible start: v jumps from 0 to 1 at the wall)
 FIRST_STEP = 1e-14
-#: the paper's times (section 3) and the cases of issue 11: (name, mu_s, mu_d, mu~_w)
+#: the paper's times (section 3) and the stress cases, the paper's three and the disks': (name, mu_s, mu_d, mu~_w)
 TIMES = (1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0)
 PAPER = Friction(math.tan(math.radians(21.0)), math.tan(math.radians(33.0)))
 DISKS = Friction(0.28, 0.77)
@@ -65,8 +65,8 @@ SPEED_DEGREE, SPEED_COARSE_DEGREE = 96, 64
 #: before and through the lift-off (``speed_early_case``): the map of SPEED_STRETCH plus a wall cluster of
 #: EARLY_WALL_FOLDS e-folds within CLUSTER_WIDTH of the wall (the solver's map, continuum.mesh); the degrees of
 #: the reference and its companion (8-200 s of CPU per solve).  Measured, degree 128 against 160: u~_w, mu_w,
-#: delta within 2e-10 (with 14 e-folds delta moved 1.4e-7 at t~ = 1e-4), through the lift-off too (1.334 and
-#: the disks at t~ = 0.1, 4.629 at 1: within 2.7e-11), where the map of SPEED_STRETCH alone was off by 2e-8-8e-8
+#: delta within 2e-10 (with 14 e-folds delta moves 1.4e-7 at t~ = 1e-4), through the lift-off too (1.334 and
+#: the disks at t~ = 0.1, 4.629 at 1: within 2.7e-11), where the map of SPEED_STRETCH alone is off by 2e-8-8e-8
 EARLY_WALL_FOLDS, CLUSTER_WIDTH = 12.0, 0.1
 EARLY_DEGREE, EARLY_COARSE_DEGREE = 160, 128
 #: u~_w = 0.198's lift-off (t~_mud = 0.039) is a solve apart on a shallower cluster (``speed_lift_off_case``):

@@ -1,4 +1,4 @@
-"""Issue 11: fourth-order space, accuracy on request with error estimates that bound the true
+"""Fourth-order space, accuracy on request with error estimates that bound the true
 error, any time t~ > 0 (the small-time similarity limit), refusal of what cannot be met."""
 import json
 import subprocess

@@ -1,6 +1,6 @@
 """numba's on-disk cache of a kernel is keyed to its own source file only: a kernel module that builds in code from
 other modules records their digest (BUILT_FROM), so that editing them changes its file too and its stale machine
-code is recompiled (found by review: a caller kept the old callee's code after the callee's file changed)."""
+code is recompiled (without it a caller keeps the old callee's code after the callee's file changes)."""
 import granstokes.continuum.compiled as compiled
 import granstokes.continuum.problems as problems
 import granstokes.continuum.speed_bdf as speed_bdf

@@ -39,7 +39,8 @@ def test_end_zero_crossing_near_a_vanishing_end(n):
 def test_end_zero_crossing_in_the_last_cell_ignores_the_ends_round_off():
     """Crossing in the last cell, the end node at round-off (5.6e-17, as mu_w/p~(1) - mu_s gives) rather than
     0: the end is taken as 0 and the cubic through it is in f, exact for this linear end (f = 1 - y);
-    the end's round-off had put log(f/0) into the cubic (delta of u~_w = 0.02 at t~ = 10 read 0.979 for 0.999)."""
+    keeping the end's round-off would put log(f/0) into the cubic (delta of u~_w = 0.02 at t~ = 10: 0.979 for
+    0.999)."""
     y = np.linspace(0.0, 1.0, 257)
     exact = 1 - LEVEL
     f = 1 - y

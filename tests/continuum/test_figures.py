@@ -41,7 +41,7 @@ def test_paper_figures(tmp_path):
     # fig. 7: its per-step delta near T_MIN, before the speeds' first output time (1e-3), is the independent
     # reference's there (tests/continuum/reference.py, converged to 2e-10) within 5e-3, scaled as sqrt(t~) over
     # the step's distance from T_MIN: the figures' speed numerics are within 5e-4 at their output times, and the
-    # steps before the first one are at BDF's loosest (measured 0.18 %; on the defaults' map it was 4.2 % low)
+    # steps before the first one are at BDF's loosest (measured 0.18 %; on the defaults' map it is 4.2 % low)
     u_w = SPEED_CASES[0]
     times = reference.SPEED_CASES[f"{u_w:g}"].early_times
     assert times[0] == T_MIN

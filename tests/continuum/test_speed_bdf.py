@@ -147,7 +147,7 @@ def test_newton_floor_carries_a_steady_state_past_its_round_off():
     """After the lift-off, where scipy's Newton would give up, an update within the wall unknown's round-off is
     accepted (speed_bdf.ROUND_OFF_UPDATES):
     the disks' u~_w = 0.05 on 512 cells at the matched rtol (6.25e-10) reaches t~ = 10 (without the floor its step
-    collapsed at t~ = 9.244, measured on this machine; the collapse is chaotic in the round-off, so it is not
+    collapses at t~ = 9.244, measured on this machine; the collapse is chaotic in the round-off, so it is not
     replayed here), at its steady state mu_w^inf to the time error TIME_ERROR_PER_RTOL rtol (1.9e-8; measured
     1.3e-10 off, bench/speed_range.py)."""
     from granstokes.continuum.steady import mu_w_for_speed
@@ -168,8 +168,8 @@ def test_a_step_limit_is_a_stepper_failure(speed_state):
 
 def test_a_repeated_output_time_is_landed_on_once(speed_state, monkeypatch):
     """stepper.integrate's output times may repeat (solve_speed refuses that, direct callers may not): the compiled
-    BDF returns the same state twice, as scipy's path does (its solver is already there), instead of a zero step
-    (found by review: a division by the zero step)."""
+    BDF returns the same state twice, as scipy's path does (its solver is already there), instead of taking a zero
+    step (and dividing by it)."""
     pb, _ = speed_state
     times = [1e-3, 1e-2, 1e-2, 0.1]
     ours = integrate(pb, times, method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9)[0]

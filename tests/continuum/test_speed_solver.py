@@ -66,7 +66,7 @@ def test_steady_wall_friction_matches_the_imposed_stress_case(paper_friction, u_
 
 def test_wall_friction_is_mu_d_before_t_mud_on_any_mesh(paper_friction):
     """For t~ << t_mud = u~_w^2 the continuum has mu_w -> mu_d exponentially: the first cell, exact for
-    a linear mu~, shows it on every mesh (the former trapezoidal cell gave mu~_w = h_0/(2 Dmu u~_w),
+    a linear mu~, shows it on every mesh (a trapezoidal first cell would give mu~_w = h_0/(2 Dmu u~_w),
     1e-5 here), and mu_w has left mu_d by t~ = t_mud."""
     fr, u_w = paper_friction, 1.334
     for n in (64, 128):
@@ -153,7 +153,7 @@ def test_speed_converges_at_fourth_order(u_w):
     """On the speed's wall-clustered map (solver.map_for) delta converges at fourth order wherever its
     differences are above the time error (TIME_ERROR_PER_RTOL rtol = 3e-7): measured 4.0-4.5 at t~ <= 0.1,
     3.4-3.6 at t~ = 1.  mu_w, its lift-off included, changes by less than that time error from 128 to 256
-    cells at every decade (measured <= 1.9e-7; on an exponential map that does not grade the wall it was
+    cells at every decade (measured <= 1.9e-7; on an exponential map that does not grade the wall it is
     first order, 4.3e-6 at u~_w = 0.198)."""
     runs = [speed_run(u_w, n) for n in (64, 128, 256)]
     floor = TIME_ERROR_PER_RTOL["bdf"] * runs[-1].numerics.rtol
@@ -170,7 +170,7 @@ def test_speed_converges_at_fourth_order(u_w):
 def test_bdf_lands_on_every_output_time():
     """An output time between others is stepped onto, not read from BDF's dense output: mu_w at t~ = 1
     (u~_w = 1.334, in its lift-off, on the same map) is the same whether t~ = 1e-4 ... 10 are asked or
-    t~ = 1 alone, to the time error (30 rtol; the dense output had been 2.5e-5 off, 1e4 rtol)."""
+    t~ = 1 alone, to the time error (30 rtol; the dense output is 2.5e-5 off, 1e4 rtol)."""
     numerics = Numerics(n_cells=256, stretch=WALL_STRETCH)
     many, alone = (solve_speed(FR, 1.334, times, numerics) for times in (DECADES, [1.0]))
     rtol = many.numerics.rtol
@@ -203,9 +203,9 @@ def test_a_stall_after_the_lift_off_hands_over_to_sdirk4(paper_friction, monkeyp
 
 def test_a_small_speed_steps_on_past_an_output_time(paper_friction):
     """BDF keeps the steps it cut to land on an output time for order + 1 steps: no stall, no handover to
-    SDIRK4 (which crawled on the speed's DAE). u~_w = 0.02 on 256 cells, as solve_speed runs it, reaches
+    SDIRK4 (which crawls on the speed's DAE). u~_w = 0.02 on 256 cells, as solve_speed runs it, reaches
     t~ = 10 within 3000 steps (measured 961; with a single small step setting off the handover, STALL_STEPS = 1,
-    SDIRK4 reached 3000 at t~ = 1.001), where mu_w is the steady mu_w^inf to BDF's time error
+    SDIRK4 reaches 3000 at t~ = 1.001), where mu_w is the steady mu_w^inf to BDF's time error
     (TIME_ERROR_PER_RTOL rtol): the approach's remainder (its slowest mode decays as e^(-2.7 t~)) and the mesh's
     O(h^4) are below 1e-10."""
     fr, u_w = paper_friction, 0.02
@@ -264,7 +264,7 @@ def test_speed_default_accuracy_against_the_independent_reference(default_speeds
 def test_speed_default_estimates_bound_the_independent_reference(default_speeds, case):
     """At the default accuracy the estimates of mu_w and delta bound their errors against the reference at
     every time, the lift-off's included (the early times on the deeper cluster, solver.EARLY_SPAN: on the solve's
-    own map the cluster's depth left errors that mesh halving cannot see, delta at t~ = 1e-4 3.2e-7 true against
+    own map the cluster's depth leaves errors that mesh halving cannot see, delta at t~ = 1e-4 3.2e-7 true against
     2.6e-7 estimated, 0.198's mu_w at t~ = 1e-3 1.35e-6)."""
     _, runs = default_speeds
     sol, ref = runs[case]
@@ -275,7 +275,7 @@ def test_speed_default_estimates_bound_the_independent_reference(default_speeds,
 def test_speed_estimate_bounds_the_lift_off_peak(paper_friction):
     """Between the decades, at t~ = 2-3e-3 (u~_w = 0.198, t_mud = 0.039) the sub-layer lifts off the wall:
     against a strongly graded reference (256 cells, stretch 12, rtol 1e-10) the estimate bounds the difference
-    in mu_w (on the layer's map alone it was first order, 1.1e-3 true against 2.3e-4 estimated).  Before
+    in mu_w (on the layer's map alone it is first order, 1.1e-3 true against 2.3e-4 estimated).  Before
     solver.early_until (1.6e-3 here) the sub-layer is thinner than the reference's first cell."""
     times = [2e-3, 3e-3]
     ref = solve_speed(paper_friction, 0.198, times, Numerics(n_cells=256, stretch=12.0, rtol=1e-10, atol=1e-12))
@@ -284,7 +284,7 @@ def test_speed_estimate_bounds_the_lift_off_peak(paper_friction):
 
 
 #: a smoke run's in-drive calibration (mu_s ~ 1e-14): its DEM times are t~ ~ 1e-20 ... 1e-17, where BDF's c
-#: ~ 1e-25 vanishes from 1 - c J_nn (the first read-off of c, from the diagonal, divided by zero there)
+#: ~ 1e-25 vanishes from 1 - c J_nn (c read off that diagonal would divide by zero there: lu is handed c itself)
 DEGENERATE = (Friction(1.1829808188478833e-14, 0.4233339402935836), 3.157465774452083e-09,
               np.geomspace(4.074607634010895e-20, 1.2223822902032684e-17, 8))
 
@@ -357,7 +357,7 @@ def test_an_accuracy_request_starts_where_the_error_model_points():
 def test_the_smallest_speed_tried_reaches_the_default_accuracy():
     """u~_w = 0.001 (beads, t~_mud = 1e-6): its delta is ill-conditioned (mu_w^inf - mu_s tiny) and BDF's time error
     there ~500 rtol; with the companion's rtol capped (COMPANION_MAX_RTOL, 4e-9 on 256 cells) the default accuracy is
-    reached (measured worst estimate 5.7e-7; at the uncapped 1e-8 the request was refused, 1.0-1.1e-6)."""
+    reached (measured worst estimate 5.7e-7; at the uncapped 1e-8 the request is refused, 1.0-1.1e-6)."""
     from granstokes.continuum.cli import ACCURACY
     from granstokes.continuum.solver import COMPANION_MAX_RTOL
 
@@ -406,9 +406,10 @@ def test_speed_early_times_on_the_deeper_cluster(monkeypatch):
 
 @pytest.mark.parametrize("u_w", [0.198, 1.334, 4.629])
 def test_speed_from_a_late_first_time_meets_the_default_accuracy(u_w):
-    """From t~_min = 0.1 the layer's stretch would be 0 and the map's cells crowd the bottom (solver.
-    CLUSTER_MIN_STRETCH): 0.198 could not reach 1e-6 on 512 cells.  Now every speed reaches the CLI's default
-    accuracy, and is within it of the independent reference at t~ = 0.1, 1 and 10, within its estimates."""
+    """From t~_min = 0.1 the layer's stretch alone would be 0 and the map's cells would crowd the bottom (0.198
+    cannot reach 1e-6 on 512 cells there); with the least stretch solver.CLUSTER_MIN_STRETCH every speed reaches
+    the CLI's default accuracy, and is within it of the independent reference at t~ = 0.1, 1 and 10, within its
+    estimates."""
     from granstokes.continuum.cli import ACCURACY
 
     from tests.continuum.reference import assembled

@@ -51,8 +51,8 @@ def test_time_convergence_matches_design_order(paper_friction, method, order):
 
 
 def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
-    """mu~_w = 0.1 on 64 cells at rtol 1e-4: every accepted step used to be followed by a Newton failure at
-    the size the error control grows it back to (41 886 steps without the repeat cap, stepper.REPEAT_BAND);
+    """mu~_w = 0.1 on 64 cells at rtol 1e-4: without the repeat cap (stepper.REPEAT_BAND) every accepted step is
+    followed by a Newton failure at the size the error control grows it back to (41 886 steps);
     the cap breaks the loop (measured 4 986 steps) and the answer stays within its time error of a tight
     solve on the same mesh (measured 4.2e-4 in u~_w, 2.2e-6 in delta: held to rtol-scaled bounds 1e-3, 1e-5).
     The loop is chaotic in the round-off: the compiled DIRK (continuum.stress_dirk, the same rules) falls into it
@@ -68,7 +68,7 @@ def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
     assert np.max(np.abs(loose.delta / tight.delta - 1)) < 0.1 * 1e-4
     python = Numerics(n_cells=64, rtol=1e-4, compiled=False)
     short = solve_stress(paper_friction, mu_w, [1e-4, 0.5], python)
-    monkeypatch.setattr(stepper, "REPEAT_BAND", 0.0)  # the cap never set: the loop is back (to t~ = 0.5:
+    monkeypatch.setattr(stepper, "REPEAT_BAND", 0.0)  # the cap never set: the loop (to t~ = 0.5:
     uncapped = solve_stress(paper_friction, mu_w, [1e-4, 0.5], python)  # 1250 steps, 598 capped)
     assert uncapped.stats.rejected > 0.9 * uncapped.stats.steps and uncapped.stats.steps > 1.5 * short.stats.steps
 

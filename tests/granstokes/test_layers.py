@@ -82,10 +82,17 @@ def test_no_import_circle(graph):
             visit(node)
 
 
+def _subcommand(module: str) -> bool:
+    """A package's command-line module (its subcommand), part of the command layer."""
+    return module.endswith((".cli", "_cli"))
+
+
 def test_layers_point_down(graph):
     for name, imported in graph.items():
         if name not in COMMANDS:
             assert not imported & COMMANDS, f"{name} imports the command layer"
+        if name not in COMMANDS and not _subcommand(name):
+            assert not [m for m in imported if _subcommand(m)], f"{name} imports a subcommand's module"
         if name.startswith("granstokes.lib"):
             assert all(_ground(m) for m in imported), f"{name} imports {imported}"
         package = next((p for p in ALLOWED if name == p or name.startswith(p + ".")), None)
