@@ -1,7 +1,7 @@
 """The SDIRK4 stress stepper with and without the repeat cap (``continuum.stepper`` REPEAT_BAND: a Newton
 failure at the step size of the previous one caps the steps), in one run: Newton iterations, steps,
 rejections, CPU, and the change of u~_w and delta (max over the times, relative).  Prints the table for
-bench/RESULTS.md ("The paper's figure set").  "before" is REPEAT_BAND = 0 (the cap never set).
+bench/RESULTS.md ("The paper's figure set").  "before" is Numerics(repeat_cap=False).
 
     .venv/bin/python bench/stress_repeat_cap.py
 
@@ -13,9 +13,9 @@ set's ten stress solves (default numerics).  Times t~ = 1e-4 ... 10 unless said.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
-from granstokes.continuum import stepper
 from granstokes.continuum.paper.figures import DECADES, FIG4_CASES, FIG4_T, STRESS_CASES
 from granstokes.continuum.paper.figures import FRICTION as FR
 from granstokes.continuum.solver import Numerics, solve_stress
@@ -35,13 +35,12 @@ CASES = {
 }
 
 
-def run(solves, band):
-    stepper.REPEAT_BAND = band
+def run(solves, cap: bool):
     it = steps = rejected = 0
     cpu, values = 0.0, []
     for mt, times, num in solves:
         start = time.process_time()
-        sol = solve_stress(FR, FR.mu_w_from_tilde(mt), times, num)
+        sol = solve_stress(FR, FR.mu_w_from_tilde(mt), times, replace(num, repeat_cap=cap))
         cpu += time.process_time() - start
         s = sol.stats
         it, steps, rejected = it + s.newton_iterations, steps + s.steps, rejected + s.rejected
@@ -50,16 +49,14 @@ def run(solves, band):
 
 
 def main():
-    band = stepper.REPEAT_BAND
     print("| case | Newton iterations before -> after | steps | rejected | CPU [s] | change of u~_w, delta |")
     print("|---|---|---|---|---|---|")
     for name, solves in CASES.items():
-        b, a = run(solves, 0.0), run(solves, band)
+        b, a = run(solves, False), run(solves, True)
         du = max(np.max(np.abs(x[0] / y[0] - 1)) for x, y in zip(a[4], b[4]))
         dd = max(np.max(np.abs(x[1] / y[1] - 1)) for x, y in zip(a[4], b[4]))
         print(f"| {name} | {b[0]} -> {a[0]} ({a[0] / b[0] - 1:+.1%}) | {b[1]} -> {a[1]} | {b[2]} -> {a[2]} "
               f"| {b[3]:.2f} -> {a[3]:.2f} | {du:.1e}, {dd:.1e} |", flush=True)
-    stepper.REPEAT_BAND = band
 
 
 if __name__ == "__main__":

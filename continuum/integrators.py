@@ -30,7 +30,8 @@ def integrate(problem, t_out, *, method: str = "sdirk4", compiled: bool = True, 
     if compiled and _compiled_dirk(problem, method, options):
         from .stress_dirk import integrate_stress
 
-        return integrate_stress(problem, t_out, TABLEAUX[method], newton_tol=newton_tol, **common)
+        return integrate_stress(problem, t_out, TABLEAUX[method], newton_tol=newton_tol,
+                                repeat_cap=options.get("repeat_cap", True), **common)
     if compiled and _compiled_bdf(problem, method, options):
         from .speed_bdf import integrate_speed
 

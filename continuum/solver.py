@@ -106,7 +106,8 @@ class Numerics:
     time (``map_for``), else the exponential map of this stretch; ``order``: of the spatial discretisation
     (continuum.mesh); ``method``, ``rtol``, ``atol`` = None: the drive's defaults (``for_drive``); ``compiled``: run
     the problem's compiled kernel where it has one (continuum.integrators), else the Python integrators;
-    ``bordered``, ``wall_newton``: bdf's Newton systems (continuum.stepper._integrate_bdf; False: baselines)."""
+    ``bordered``, ``wall_newton``: bdf's Newton systems (continuum.stepper._integrate_bdf; False: baselines);
+    ``repeat_cap``: the DIRKs' step cap after a repeated Newton failure (continuum.stepper; False: the baseline)."""
 
     n_cells: int = 64
     stretch: float | None = None
@@ -117,6 +118,7 @@ class Numerics:
     compiled: bool = True
     bordered: bool = True
     wall_newton: bool = True
+    repeat_cap: bool = True
 
     def __post_init__(self):
         Mesh.graded(self.n_cells, 0.0 if self.stretch is None else self.stretch)  # validates both
@@ -354,10 +356,11 @@ def first_cells(imposed: str, accuracy: float) -> int:
 
 def _run_one(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
     recorder = obs.SeriesRecorder(problem) if record else None
-    bdf = {"bordered": numerics.bordered, "wall_newton": numerics.wall_newton} if numerics.method == "bdf" else {}
+    options = ({"bordered": numerics.bordered, "wall_newton": numerics.wall_newton} if numerics.method == "bdf"
+               else {"repeat_cap": numerics.repeat_cap})
     states, stats = integrate(problem, t, method=numerics.method, compiled=numerics.compiled, rtol=numerics.rtol,
                               atol=numerics.atol, h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder,
-                              **bdf)
+                              **options)
     tau = np.array([problem.full(x) for x in states])
     steps = recorder if record else np.empty((0, 4))
     return Solution(problem.imposed, problem.friction, problem.mu_w,

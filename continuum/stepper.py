@@ -314,7 +314,8 @@ def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.
 
 
 def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=NEWTON_TOL,
-              fixed_times=None, observer=None, max_steps=MAX_STEPS, resume=None, bordered=True, wall_newton=True):
+              fixed_times=None, observer=None, max_steps=MAX_STEPS, resume=None, bordered=True, wall_newton=True,
+              repeat_cap=True):
     """Integrate ``problem`` from t = 0 (or from ``resume`` = (t0, x0)), returning the state at each time
     of the sorted ``t_out``.
 
@@ -322,7 +323,8 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
     atol + rtol |x|, below 1; with ``fixed_times`` (an increasing array containing every t_out) the
     steps are those, with no error control (refinement studies, stability maps).
     ``observer(t, x)`` is called after every accepted step.  ``bordered``, ``wall_newton``: bdf's Newton systems
-    (``_integrate_bdf``).  Returns (states, stats), states of shape (len(t_out), n).
+    (``_integrate_bdf``); ``repeat_cap``: the DIRKs' cap after a repeated Newton failure (REPEAT_BAND; False:
+    none).  Returns (states, stats), states of shape (len(t_out), n).
     """
     if method == "bdf":
         if fixed_times is not None:
@@ -363,7 +365,7 @@ def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9,
                 raise
             eta = 1.0
             stats.rejected += 1
-            if abs(h_try / h_fail - 1.0) < REPEAT_BAND:
+            if repeat_cap and abs(h_try / h_fail - 1.0) < REPEAT_BAND:
                 cap = CAP_START * h_try
             h, h_fail = NEWTON_CUT * h_try, h_try
             continue

@@ -213,7 +213,7 @@ def advance(x, f, state, counters, t_bound, rtol, atol, newton_tol, max_steps, c
             return RECORDS_FULL
 
 
-def integrate_stress(problem, t_out, tab, *, rtol, atol, h0, newton_tol, observer, max_steps):
+def integrate_stress(problem, t_out, tab, *, rtol, atol, h0, newton_tol, observer, max_steps, repeat_cap=True):
     """stepper.integrate for an ImposedStress with an adaptive DIRK ``tab``, compiled: (states at t_out, StepStats)."""
     t_out = np.asarray(t_out, dtype=float)
     start = time.process_time()
@@ -221,8 +221,9 @@ def integrate_stress(problem, t_out, tab, *, rtol, atol, h0, newton_tol, observe
     data = (np.ascontiguousarray(problem.lap.cols), np.ascontiguousarray(problem.lap.weights), problem._mud_p,
             problem._p32, float(problem.mu_w))
     tableau = (tab.matrix, tab.stage_weights, tab.error_weights, tab.explicit_first, int(tab.err_order))
-    control = (stepper.NEWTON_CUT, stepper.REPEAT_BAND, stepper.CAP_START, stepper.CAP_GROWTH, stepper.OUTPUT_RTOL,
-               stepper.LANDING_SHARE, stepper.STEP_SAFETY, stepper.STEP_SHRINK, stepper.STEP_GROW, stepper.ERROR_FLOOR)
+    control = (stepper.NEWTON_CUT, stepper.REPEAT_BAND if repeat_cap else 0.0, stepper.CAP_START, stepper.CAP_GROWTH,
+               stepper.OUTPUT_RTOL, stepper.LANDING_SHARE, stepper.STEP_SAFETY, stepper.STEP_SHRINK, stepper.STEP_GROW,
+               stepper.ERROR_FLOOR)
     newton = (stepper.NO_CONTRACTION, stepper.NO_CONTRACTION_FULL, stepper.SMALL_UPDATE, stepper.ETA_FLOOR,
               stepper.ETA_DECAY, stepper.NEWTON_ITERATIONS, stepper.FULL_NEWTON_ITERATIONS)
     x = problem.initial().astype(float)

@@ -1,4 +1,6 @@
 """Imposed wall stress (eq. GranularStokesEqn): convergence, growth laws, bounds, closed forms."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from granstokes.continuum.closed_forms import SELF_SIMILAR_DELTA, WKB, self_similar_mu
@@ -50,16 +52,14 @@ def test_time_convergence_matches_design_order(paper_friction, method, order):
     assert observed_orders(uw) == pytest.approx([order, order], abs=0.3)
 
 
-def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
-    """mu~_w = 0.1 on 64 cells at rtol 1e-4: without the repeat cap (stepper.REPEAT_BAND) every accepted step is
+def test_loose_tolerance_does_not_break_down(paper_friction):
+    """mu~_w = 0.1 on 64 cells at rtol 1e-4: without the repeat cap (Numerics.repeat_cap) every accepted step is
     followed by a Newton failure at the size the error control grows it back to (41 886 steps);
     the cap breaks the loop (measured 4 986 steps) and the answer stays within its time error of a tight
     solve on the same mesh (measured 4.2e-4 in u~_w, 2.2e-6 in delta: held to rtol-scaled bounds 1e-3, 1e-5).
     The loop is chaotic in the round-off: the compiled DIRK (continuum.stress_dirk, the same rules) falls into it
     less deeply (to t~ = 0.5 uncapped: 269 steps, 174 rejected, against the Python's 1250 and 1185), so the
     control runs the Python (Numerics.compiled = False)."""
-    import granstokes.continuum.stepper as stepper
-
     mu_w, times = paper_friction.mu_w_from_tilde(0.1), [1e-4, 1e-2, 1.0, 10.0]
     loose = solve_stress(paper_friction, mu_w, times, Numerics(n_cells=64, rtol=1e-4))
     tight = solve_stress(paper_friction, mu_w, times, Numerics(n_cells=64, rtol=1e-9, atol=1e-11))
@@ -68,8 +68,8 @@ def test_loose_tolerance_does_not_break_down(paper_friction, monkeypatch):
     assert np.max(np.abs(loose.delta / tight.delta - 1)) < 0.1 * 1e-4
     python = Numerics(n_cells=64, rtol=1e-4, compiled=False)
     short = solve_stress(paper_friction, mu_w, [1e-4, 0.5], python)
-    monkeypatch.setattr(stepper, "REPEAT_BAND", 0.0)  # the cap never set: the loop (to t~ = 0.5:
-    uncapped = solve_stress(paper_friction, mu_w, [1e-4, 0.5], python)  # 1250 steps, 598 capped)
+    # without the cap the loop is back (to t~ = 0.5: 1250 steps against 598 capped)
+    uncapped = solve_stress(paper_friction, mu_w, [1e-4, 0.5], replace(python, repeat_cap=False))
     assert uncapped.stats.rejected > 0.9 * uncapped.stats.steps and uncapped.stats.steps > 1.5 * short.stats.steps
 
 
