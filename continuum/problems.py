@@ -100,6 +100,12 @@ class ShearStressDiffusion:
         bands[self._wall_at] = row0[self._wall_at[1]]
         return Jacobian(bands, self.kl, self.ku, row0 if self.dense_wall else None)
 
+    def stencil(self) -> tuple:
+        """The interior rate's data as the compiled kernels take it: the Laplacian's columns and weights per
+        interior node (contiguous), mu_d p~ and p~^(3/2) at the interior nodes, and mu_w."""
+        return (np.ascontiguousarray(self.lap.cols), np.ascontiguousarray(self.lap.weights), self._mud_p, self._p32,
+                self.mu_w)
+
     def mu(self, x: np.ndarray) -> np.ndarray:
         """Local friction mu = mu_w tau~/p~ at all nodes."""
         return self.mu_w * self.full(x) / self.p
@@ -211,6 +217,12 @@ class ImposedSpeed(ShearStressDiffusion):
         mu = self.mu_w * x[1:] / self.p[1:-1]
         gap = self.friction.mu_d - mu
         return gap, gap[0] / self.friction.dmu, self._wq[1:].dot((mu - self.friction.mu_s) / gap)
+
+    def wall_terms(self) -> tuple:
+        """The integral condition's data as the compiled kernels take it: the Laplacian's column on the wall unknown
+        (rows 1..kl), p~ at the nodes, the quadrature weights of nodes 0..N-1 (times sqrt(p~)/Dmu), u~_w and the
+        first cell's weight."""
+        return self._lap_wall, self.p, self._wq, self.u_w, self._w_first
 
     def wall_residual(self, x: np.ndarray) -> float:
         _, b, integral = self._interior(x)

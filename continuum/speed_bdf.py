@@ -25,7 +25,7 @@ from .stepper import NewtonFailure, StepperFailure, StepStats
 
 #: compiled.digest(compiled, problems): these kernels build in code from both, and numba's cache checks only this
 #: file, so this line changes with them (tests/continuum/test_compiled_cache.py gives the new value)
-BUILT_FROM = "10b58db385d61979"
+BUILT_FROM = "b850fe3c5913fb5c"
 #: scipy.integrate.BDF's constants (scipy/integrate/_ivp/bdf.py): most order, Newton iterations, step factors
 MAX_ORDER, NEWTON_MAXITER, MIN_FACTOR, MAX_FACTOR = 5, 4, 0.2, 10.0
 KAPPA = np.array([0.0, -0.1850, -1 / 9, -0.0823, -0.0415, 0.0])
@@ -320,8 +320,9 @@ def integrate_speed(problem, t_out, *, rtol, atol, h0, observer, max_steps):
     n = len(x0)
     m = n - 1
     pb, fr = problem, problem.friction
-    args = (np.ascontiguousarray(pb.lap.cols), np.ascontiguousarray(pb.lap.weights), pb._lap_wall, pb._mud_p,
-            pb._p32, pb.p, pb._wq, pb.u_w, pb._w_first, pb.mu_w, fr.mu_d, fr.mu_s, fr.dmu, pb.kl, pb.ku)
+    cols, weights, mud_p, p32, mu_w = pb.stencil()
+    lap_wall, p, wq, u_w, w_first = pb.wall_terms()
+    args = (cols, weights, lap_wall, mud_p, p32, p, wq, u_w, w_first, mu_w, fr.mu_d, fr.mu_s, fr.dmu, pb.kl, pb.ku)
     cols, weights, lap_wall, mud_p, p32, p, wq, u_w, w_first, mu_w, mu_d, mu_s, dmu, kl, ku = args
     x = np.empty(n)
     _project(x0[1:].copy(), x, u_w, w_first, mu_w, mu_d, mu_s, dmu, p, wq)

@@ -218,8 +218,8 @@ def integrate_stress(problem, t_out, tab, *, rtol, atol, h0, newton_tol, observe
     t_out = np.asarray(t_out, dtype=float)
     start = time.process_time()
     n = problem.mesh.n_cells
-    data = (np.ascontiguousarray(problem.lap.cols), np.ascontiguousarray(problem.lap.weights), problem._mud_p,
-            problem._p32, float(problem.mu_w))
+    cols, weights, mud_p, p32, mu_w = problem.stencil()
+    data = (cols, weights, mud_p, p32, float(mu_w))
     tableau = (tab.matrix, tab.stage_weights, tab.error_weights, tab.explicit_first, int(tab.err_order))
     control = (stepper.NEWTON_CUT, stepper.REPEAT_BAND if repeat_cap else 0.0, stepper.CAP_START, stepper.CAP_GROWTH,
                stepper.OUTPUT_RTOL, stepper.LANDING_SHARE, stepper.STEP_SAFETY, stepper.STEP_SHRINK, stepper.STEP_GROW,

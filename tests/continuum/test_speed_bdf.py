@@ -33,8 +33,8 @@ def speed_state(request):
 
 def _kernel_args(pb):
     fr = pb.friction
-    return dict(cols=np.ascontiguousarray(pb.lap.cols), weights=np.ascontiguousarray(pb.lap.weights),
-                mud_p=pb._mud_p, p32=pb._p32, mu_w=pb.mu_w, mu_d=fr.mu_d, dmu=fr.dmu, p0=pb.p[0])
+    cols, weights, mud_p, p32, mu_w = pb.stencil()
+    return dict(cols=cols, weights=weights, mud_p=mud_p, p32=p32, mu_w=mu_w, mu_d=fr.mu_d, dmu=fr.dmu, p0=pb.p[0])
 
 
 def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
@@ -47,28 +47,30 @@ def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
 
     pb, x = speed_state
     fr, n = pb.friction, len(x)
+    _, _, mud_p, p32, _ = pb.stencil()
+    lap_wall, p, wq, u_w, w_first = pb.wall_terms()
     projected = np.empty(n)
-    sb._project(x[1:].copy(), projected, pb.u_w, pb._w_first, pb.mu_w, fr.mu_d, fr.mu_s, fr.dmu, pb.p, pb._wq)
+    sb._project(x[1:].copy(), projected, u_w, w_first, pb.mu_w, fr.mu_d, fr.mu_s, fr.dmu, p, wq)
     _, b, share = pb._interior(x)
     q = pb.project(x.copy())[0]
-    bound = n * np.finfo(float).eps * share / (pb._w_first * first_cell(q, b)[1])
+    bound = n * np.finfo(float).eps * share / (w_first * first_cell(q, b)[1])
     assert abs(projected[0] - q) <= bound and 2 < q < 3
     # the Laplacian's sums cancel (weights up to ~1/h_0^2 on values O(1)): their round-off, row by row
     tau = pb.full(x)
     cancel = 8 * np.finfo(float).eps * np.sum(np.abs(pb.lap.weights * tau[pb.lap.cols]), axis=1)
-    s = pb._mud_p - pb.mu_w * x[1:]
+    s = mud_p - pb.mu_w * x[1:]
     args = _kernel_args(pb)
     f = np.empty(n - 1)
     sb._rate(x, f, np.empty(n + 1), **args)
     ref = pb.interior_rate(x)
-    assert np.all(np.abs(f - ref) <= s * s / pb._p32 * cancel + ROUND_OFF * np.abs(ref))
+    assert np.all(np.abs(f - ref) <= s * s / p32 * cancel + ROUND_OFF * np.abs(ref))
     band = np.zeros((pb.kl + pb.ku + 1, n - 1))
     sb._jacobian_band(x, band, pb.ku, np.empty(n + 1), np.empty(n - 1), **args)
     full = pb.jacobian(x).bands[:, 1:]  # columns 1..N-1; its entries of row 0 (the dense wall row) are masked
     rows = np.arange(band.shape[0])[:, None] - pb.ku + np.arange(1, n)[None, :]  # the row i of each band entry
     interior = (rows >= 1) & (rows <= n - 1)
     allowed = ROUND_OFF * np.abs(full)
-    allowed[pb.ku] += 2 * pb.mu_w * np.abs(s) / pb._p32 * cancel  # the diagonal's d D/d tau~ times the Laplacian
+    allowed[pb.ku] += 2 * pb.mu_w * np.abs(s) / p32 * cancel  # the diagonal's d D/d tau~ times the Laplacian
     assert np.all(np.where(interior, np.abs(band - full) <= allowed, True))
     assert np.all(band[~interior] == 0.0)
 
@@ -78,9 +80,10 @@ def test_wall_row_and_column_are_imposed_speeds(speed_state):
     ImposedSpeed.wall_jacobian's to ROUND_OFF relative."""
     pb, x = speed_state
     fr, n = pb.friction, len(x)
-    row0, column = np.empty(n), np.empty(len(pb._lap_wall))
-    sb._wall(x, row0, column, np.ascontiguousarray(pb.lap.cols), np.ascontiguousarray(pb.lap.weights),
-             pb._lap_wall, pb.u_w, pb._w_first, pb.mu_w, fr.mu_d, fr.dmu, pb.p, pb._wq, pb._mud_p, pb._p32)
+    cols, weights, mud_p, p32, mu_w = pb.stencil()
+    lap_wall, p, wq, u_w, w_first = pb.wall_terms()
+    row0, column = np.empty(n), np.empty(len(lap_wall))
+    sb._wall(x, row0, column, cols, weights, lap_wall, u_w, w_first, mu_w, fr.mu_d, fr.dmu, p, wq, mud_p, p32)
     ref_row, ref_column = pb.wall_jacobian(x)
     assert np.max(np.abs(row0 - ref_row)) <= ROUND_OFF * np.max(np.abs(ref_row))
     assert np.max(np.abs(column - ref_column)) <= ROUND_OFF * np.max(np.abs(ref_column))

@@ -24,8 +24,8 @@ def stress_state():
 
 
 def _data(pb):
-    return (np.ascontiguousarray(pb.lap.cols), np.ascontiguousarray(pb.lap.weights), pb._mud_p, pb._p32,
-            float(pb.mu_w))
+    cols, weights, mud_p, p32, mu_w = pb.stencil()
+    return cols, weights, mud_p, p32, float(mu_w)
 
 
 def test_rate_and_newton_matrix_are_imposed_stresses(stress_state):
@@ -40,8 +40,9 @@ def test_rate_and_newton_matrix_are_imposed_stresses(stress_state):
     sd._rate(x, f, tau, lap, *_data(pb))
     ref = pb.rate(x)
     cancel = 8 * np.finfo(float).eps * np.sum(np.abs(pb.lap.weights * pb.full(x)[pb.lap.cols]), axis=1)
-    s = pb._mud_p - pb.mu_w * x[1:]
-    assert f[0] == ref[0] and np.all(np.abs(f[1:] - ref[1:]) <= s * s / pb._p32 * cancel + 1e-13 * np.abs(ref[1:]))
+    _, _, mud_p, p32, _ = pb.stencil()
+    s = mud_p - pb.mu_w * x[1:]
+    assert f[0] == ref[0] and np.all(np.abs(f[1:] - ref[1:]) <= s * s / p32 * cancel + 1e-13 * np.abs(ref[1:]))
     rhs = np.random.default_rng(3).uniform(-1, 1, n)
     for dh in (1e-4, 1.0):
         ab, piv = np.zeros((n, 2 * pb.kl + pb.ku + 1)).T, np.zeros(n, dtype=np.int64)
