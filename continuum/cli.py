@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from granstokes.lib.staging import claim, staged
+from granstokes.lib.staging import claim, new_file, staged
 from granstokes.lib.validate import finite, output_file, require
 
 #: the CLI's default relative accuracy of every number (both drives; an imposed speed reaches it on 512
@@ -103,8 +103,8 @@ def plot_profiles(sol, path: Path) -> None:
     axes[0].invert_yaxis()
     axes[-1].legend()
     fig.suptitle(f"imposed {sol.imposed}, mu_w_inf = {sol.mu_w_inf:.4f} (paper's dimensionless variables)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    with new_file(path) as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
 
 
 def register(sub) -> None:

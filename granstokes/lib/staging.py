@@ -12,7 +12,10 @@ An all-at-once output (a report, figures, a saved solve) is then written through
 goes into a hidden folder inside the target; on success each file moves into place with ``os.replace``
 (atomic per file), files the previous manifest listed and the new output lacks are removed, and the new
 manifest is written last.  On failure only the hidden folder goes.  A file no manifest lists is never
-touched, and a new output that would overwrite one is refused.
+touched, and a new output that would overwrite one (or need one out of the way to make a folder) is refused.
+A manifest names only paths inside its folder: an entry that is absolute, climbs with ``..`` or resolves
+outside the folder through a link is ignored.  Concurrent commits into one folder take turns (a lock on
+the folder), so neither loses the other's entries.
 
 A progressive output (a DEM run, a calibration, the demo: written as it goes, resumed with
 ``--resume``) writes its manifest when it starts (``start``), so that a resumed or repeated command
@@ -21,6 +24,7 @@ recognises the folder as its own.
 from __future__ import annotations
 
 import datetime as _dt
+import fcntl
 import json
 import os
 import shutil
@@ -44,6 +48,23 @@ def read_manifest(folder) -> dict | None:
     except (OSError, ValueError):
         return None
     return doc if isinstance(doc, dict) and isinstance(doc.get("command"), str) else None
+
+
+def _inside(folder: Path, rel: str) -> bool:
+    """Whether the manifest entry ``rel`` names a path inside ``folder`` (links followed)."""
+    parts = Path(rel).parts
+    if not parts or Path(rel).is_absolute() or ".." in parts:
+        return False
+    top = folder.resolve()
+    return top in (folder / rel).resolve().parents
+
+
+def _owned(folder: Path, command: str) -> set[str]:
+    """The files of ``folder``'s manifest when ``command`` wrote it, those that are safely inside it."""
+    doc = read_manifest(folder)
+    if doc is None or doc.get("command") != command or not isinstance(doc.get("files"), list):
+        return set()
+    return {rel for rel in doc["files"] if isinstance(rel, str) and _inside(folder, rel)}
 
 
 def _content(folder: Path) -> list[Path]:
@@ -81,8 +102,9 @@ def _manifest(command: str, files, inputs, progressive: bool) -> dict:
 
 
 def _write_manifest(folder: Path, doc: dict) -> None:
-    tmp = folder / f"{MANIFEST}.tmp"
-    tmp.write_text(json.dumps(doc, indent=2))
+    fd, tmp = tempfile.mkstemp(prefix=STAGE_PREFIX, dir=folder)
+    with os.fdopen(fd, "w") as f:
+        f.write(json.dumps(doc, indent=2))
     os.replace(tmp, folder / MANIFEST)
 
 
@@ -117,24 +139,51 @@ def staged(target, command: str, inputs=(), keep: bool = False):
             target.rmdir()
 
 
+@contextmanager
+def _locked(folder: Path):
+    """Hold an exclusive lock on ``folder`` (the directory itself: no file is added) while in the block."""
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
+
+
+def _blocked(target: Path, rel: str, owned: set[str]) -> bool:
+    """Whether writing ``rel`` would replace or move aside something ``owned`` does not list: the path
+    itself (a file, a link, even a dangling one, or a folder) or a non-folder where a parent must be."""
+    dest = target / rel
+    if os.path.lexists(dest) and (rel not in owned or dest.is_dir()):
+        return True
+    parent = dest.parent
+    while parent != target:
+        if os.path.lexists(parent) and not (parent.is_dir() and not parent.is_symlink()):
+            return True
+        parent = parent.parent
+    return not _inside(target, rel)
+
+
 def _commit(work: Path, target: Path, command: str, inputs, keep: bool) -> None:
-    old = read_manifest(target)
-    owned = set(old["files"]) if old is not None and old.get("command") == command else set()
-    new = _files(work)
-    foreign = [rel for rel in new if (target / rel).exists() and (rel not in owned or (target / rel).is_dir())]
-    require(not foreign, "output", f"free of files granstokes {command} did not write (it would replace them)",
-            f"{target}: {', '.join(foreign[:3])}")
-    for rel in new:
-        dest = target / rel
-        dest.parent.mkdir(parents=True, exist_ok=True)
-        os.replace(work / rel, dest)
-    kept = owned - set(new) if keep else set()
-    for rel in sorted(owned - set(new) - kept):
-        stale = target / rel
-        if stale.is_file() or stale.is_symlink():
-            stale.unlink()
-        _prune(stale.parent, target)
-    _write_manifest(target, _manifest(command, set(new) | kept, inputs, progressive=False))
+    with _locked(target):
+        owned = _owned(target, command)
+        new = _files(work)
+        foreign = [rel for rel in new if _blocked(target, rel, owned)]
+        require(not foreign, "output", f"free of files granstokes {command} did not write (it would replace "
+                "them)", f"{target}: {', '.join(foreign[:3])}")
+        # listed before they move: an interruption between the moves leaves every file owned, none foreign
+        _write_manifest(target, _manifest(command, owned | set(new), inputs, progressive=False))
+        for rel in new:
+            dest = target / rel
+            dest.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(work / rel, dest)
+        kept = owned - set(new) if keep else set()
+        for rel in sorted(owned - set(new) - kept):
+            stale = target / rel
+            if stale.is_file() or stale.is_symlink():
+                stale.unlink()
+            _prune(stale.parent, target)
+        _write_manifest(target, _manifest(command, set(new) | kept, inputs, progressive=False))
 
 
 def _prune(folder: Path, top: Path) -> None:
@@ -142,3 +191,21 @@ def _prune(folder: Path, top: Path) -> None:
     while folder != top and top in folder.parents and not any(folder.iterdir()):
         folder.rmdir()
         folder = folder.parent
+
+
+@contextmanager
+def new_file(path):
+    """Yield a hidden path beside ``path`` to write into; on success it becomes ``path`` by a hard link, which
+    fails rather than replace a file that appeared meanwhile (``ValueError``)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=STAGE_PREFIX, suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            raise ValueError(f"output must be a file that does not exist yet, got {str(path)!r}") from None
+    finally:
+        os.unlink(tmp)

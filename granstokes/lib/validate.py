@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import tempfile
 from pathlib import Path
 
@@ -45,10 +46,13 @@ def _can_write(folder: Path) -> bool:
 
 
 def output_file(path, name: str, suffix: str) -> Path:
-    """``path`` as an output file with ``suffix`` whose folder can be created; not an existing folder."""
+    """``path`` as a new output file with ``suffix`` whose folder can be created: not an existing folder,
+    and not an existing file (or link), which granstokes never replaces."""
     path = Path(path)
     require(path.suffix.lower() == suffix, name, f"a file name ending in {suffix}", str(path))
     require(not path.is_dir(), name, "a file (this path is an existing folder)", str(path))
+    require(not os.path.lexists(path), name, "a file that does not exist yet (granstokes replaces no file)",
+            str(path))
     output_dir(path.parent, name)
     return path
 
