@@ -275,10 +275,28 @@ def _not_scored(obs: str, model: SceneModel, base: str, end_value: float, steady
     """Why a row is not scored, or "" (see the module's docstring)."""
     if base and (obs in LAYER_OBSERVABLES or model.half_space):
         return "not scored: " + base + (" (the model's bed is a half-space)" if model.half_space else "")
-    change = end_value / steady_value - 1 if steady_value else np.nan
-    if obs in STEADY_OBSERVABLES and not abs(change) <= MODEL_UNSTEADY:
+    if obs not in STEADY_OBSERVABLES:
+        return ""
+    if steady_value == 0:  # the model's steady state is at rest (no flow): steady once its response is at rest too
+        if end_value != 0:
+            return ("not scored: over the DEM's final quarter the model still moves while its steady state is at "
+                    "rest (the record is shorter than the model's time scale)")
+        return ""
+    change = end_value / steady_value - 1
+    if not abs(change) <= MODEL_UNSTEADY:
         return (f"not scored: over the DEM's final quarter the model is still {change:+.0%} from its steady value "
                 "(the record is shorter than the model's time scale)")
+    return ""
+
+
+def _unmeasurable(measured: Measured, lo: float, hi: float, combined: float) -> str:
+    """Why a row's sigma cannot be formed, or "": no DEM error, no band, or no error at all."""
+    if not np.isfinite(measured.err):
+        return f"not scored: the DEM's error is not measurable ({measured.how} gives none)"
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return "not scored: no calibration replicate sustains this drive, so the prediction has no band"
+    if not (np.isfinite(combined) and combined > 0):
+        return "not scored: the DEM's error, the band and the numerical error are all zero, so sigma is undefined"
     return ""
 
 
@@ -321,16 +339,19 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                 else:
                     s = np.array([x[obs] for x in samples], dtype=float)
                     s = s[np.isfinite(s)]
-                    lo, hi = np.percentile(s, [2.5, 97.5])
-                    lo, hi = min(lo, value), max(hi, value)
+                    lo = hi = np.nan
+                    if len(s):
+                        lo, hi = np.percentile(s, [2.5, 97.5])
+                        lo, hi = min(lo, value), max(hi, value)
                     numerical = 0.0
-                    if half >= 2 and abs(hi - lo) > 0:
+                    if half >= 2 and len(s) > half and abs(hi - lo) > 0:
                         lo2, hi2 = np.percentile(s[:half], [2.5, 97.5])
                         edges.append(max(abs(lo2 - lo), abs(hi2 - hi)) / abs(hi - lo))
                 band_sd = (hi - lo) / (2 * Z95)
-                combined = np.sqrt(np.nan_to_num(measured.err) ** 2 + band_sd**2 + numerical**2)
-                sigma = (measured.value - value) / combined if combined > 0 else np.inf
-                note = _not_scored(obs, model, base, end_value, central[f"{a.response}_inf"])
+                combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
+                note = (_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"])
+                        or _unmeasurable(measured, lo, hi, combined))
+                sigma = (measured.value - value) / combined if combined > 0 else np.nan
                 rows.append({"drive": a.label, "observable": obs, "unit": OBSERVABLES[obs][0],
                              "dem": measured.value, "dem_err": measured.err, "dem_how": measured.how,
                              "model": model.key, "model_label": model.label, "predicted": value,
@@ -371,13 +392,18 @@ def headline(rows: pd.DataFrame, blind: bool, failure: str, n_drives: int) -> st
     aside = f"; {skipped} row(s) not scored (the scene cannot support them: see each row's note)" if skipped else ""
     if t.empty:
         return f"No verdict: no blind row is shared by the models over {n_drives} drive(s){aside}."
+    unranked = sorted(set(rows.model_label) - set(t.label))
+    if unranked:
+        aside += f"; not ranked (no scored blind row shared with the others): {', '.join(unranked)}"
     parts = ", ".join(f"{r.label} consistent on {r.consistent} of {r.n} (median |sigma| {r.median_abs_sigma:.1f})"
                       for r in t.itertuples())
     best = t.iloc[0]
     if len(t) == 1:
         return (f"Blind test over {n_drives} drive(s), one model scored: {parts}; no ranking, since no other model "
                 f"has a scored row{aside}.")
-    ranking = (f"the DEM supports {best.label} best" if best.share >= 0.5 else
-               "no model is consistent on most of them")
+    tied = t[(t.share == best.share) & (t.median_abs_sigma == best.median_abs_sigma)]
+    ranking = ("no model is consistent on most of them" if best.share < 0.5 else
+               f"the DEM does not separate {' and '.join(tied.label)} (a tie)" if len(tied) > 1 else
+               f"the DEM supports {best.label} best")
     return (f"Blind test on the {int(best.n)} row(s) the models share over {n_drives} drive(s): {parts}; "
             f"{ranking}{aside}.")

@@ -95,13 +95,16 @@ class Calibration:
     @property
     def failure(self) -> str:
         """Why this fit cannot be used, in one line, or "" when it can: a Jop parameter at a bound of its
-        admissible range (JOP_BOUNDS) or with a 95 % interval reaching one or spanning most of it."""
+        admissible range (JOP_BOUNDS) or with a 95 % interval reaching one or spanning most of it, or a value
+        or interval end that is not finite."""
         for k, name in enumerate(("mu_s", "mu_d", "I0_dem")):
             scale = np.log10 if name == "I0_dem" else float
             lo, hi = scale(JOP_BOUNDS[0][k]), scale(JOP_BOUNDS[1][k])
             value, (c_lo, c_hi) = getattr(self, name), self.ci95[name]
             where = [scale(max(x, JOP_BOUNDS[0][k])) for x in (value, c_lo, c_hi)]
             stated = f"{name} = {value:.3g} (95 % interval [{c_lo:.3g}, {c_hi:.3g}])"
+            if not np.all(np.isfinite([value, c_lo, c_hi])):
+                return f"{stated} is not a finite number: the fit did not determine it"
             if any(min(x - lo, hi - x) <= BOUND_TOLERANCE * (hi - lo) for x in where):
                 return (f"{stated} reaches a bound of its admissible range [{JOP_BOUNDS[0][k]:g}, "
                         f"{JOP_BOUNDS[1][k]:g}]: the data do not determine it")

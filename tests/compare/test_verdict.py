@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from granstokes.compare.models import LOCAL, PAPER
-from granstokes.compare.scorecard import _not_scored, base_reach, headline, tally
+from granstokes.compare.scorecard import Measured, _not_scored, _unmeasurable, base_reach, headline, tally
 from granstokes.continuum.calibration import IN_DRIVE, JOP_BOUNDS, from_replicates
 
 
@@ -78,3 +78,33 @@ def test_a_drive_whose_layer_reaches_the_base_is_flagged_and_its_layer_rows_unsc
     short = _not_scored("u_w_inf", LOCAL, "", 0.9, 1.0)
     assert "-10%" in short and "shorter than the model's time scale" in short
     assert _not_scored("t90", LOCAL, "", 0.9, 1.0) == ""
+
+
+def test_an_exact_tie_is_called_a_tie_and_a_model_without_shared_rows_is_named():
+    rows = pd.DataFrame([_row("a", "u_w_inf", "local", 0.5), _row("a", "u_w_inf", "ngf", -0.5),
+                         _row("a", "u_w_inf", "paper", 0.4, scored=False)])
+    text = headline(rows, blind=True, failure="", n_drives=1)
+    assert "does not separate" in text and "a tie" in text and "supports" not in text
+    assert "not ranked (no scored blind row shared with the others): paper model" in text
+    rows.loc[1, "sigma"] = -0.6  # no longer a tie: the smaller median |sigma| wins
+    assert "the DEM supports local model best;" in headline(rows, blind=True, failure="", n_drives=1)
+
+
+def test_a_fit_with_a_non_finite_value_or_interval_is_a_failed_fit():
+    reps = np.column_stack([np.full(50, x) for x in (0.28, 0.62, 0.3, 0.3, 1.0, 0.8, 0.3)])
+    reps[:, 1] = np.nan  # every replicate of mu_d undefined: its interval is nan
+    cal = from_replicates([0.28, 0.62, 0.3, 0.3, 1.0, 0.8, 0.3], reps, pd.DataFrame(), IN_DRIVE, "test", 0.01)
+    assert cal.failure.startswith("mu_d = 0.62") and "not a finite number" in cal.failure
+
+
+def test_a_model_at_rest_in_its_steady_state_is_judged_without_dividing_by_zero():
+    assert _not_scored("u_w_inf", LOCAL, "", 0.0, 0.0) == ""
+    moving = _not_scored("u_w_inf", LOCAL, "", 0.2, 0.0)
+    assert "still moves" in moving and "nan" not in moving
+
+
+def test_a_row_without_a_dem_error_or_a_band_is_not_scored():
+    assert _unmeasurable(Measured(1.0, 0.1, "seeds"), 0.9, 1.1, 0.1) == ""
+    assert "DEM's error is not measurable" in _unmeasurable(Measured(1.0, np.nan, "one seed"), 0.9, 1.1, np.nan)
+    assert "no calibration replicate" in _unmeasurable(Measured(1.0, 0.1, "seeds"), np.nan, np.nan, np.nan)
+    assert "sigma is undefined" in _unmeasurable(Measured(1.0, 0.0, "seeds"), 1.0, 1.0, 0.0)

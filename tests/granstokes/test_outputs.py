@@ -136,3 +136,120 @@ def test_another_commands_output_is_refused(tmp_path):
     with pytest.raises(ValueError, match="did not write"):
         staging.claim(out, "--out", "stability")
     assert staging.claim(out, "--out", "paper-figures") == out
+
+
+def _write(out, files, command="cmd"):
+    with staging.staged(out, command) as work:
+        for rel, text in files.items():
+            (work / rel).parent.mkdir(parents=True, exist_ok=True)
+            (work / rel).write_text(text)
+
+
+def test_a_plot_file_that_exists_is_refused_and_a_new_one_is_written(user_folder, capsys):
+    before = _snapshot(user_folder)
+    code, err = _run([*SOLVE, "--plot", "notes.png"], capsys)
+    assert code == 0 and (user_folder / "notes.png").read_bytes()[:4] == b"\x89PNG"
+    (user_folder / "mine.png").write_text("the user's figure")
+    code, err = _run([*SOLVE, "--plot", "mine.png"], capsys)
+    assert code == 2 and "--plot" in err and "does not exist yet" in err
+    assert (user_folder / "mine.png").read_text() == "the user's figure"
+    assert {k: v for k, v in _snapshot(user_folder).items() if k != "notes.png"} == {**before, "mine.png": b"the user's figure"}
+
+
+def test_a_rerun_never_deletes_through_a_link_an_owned_folder_became(tmp_path):
+    out, elsewhere = tmp_path / "report", tmp_path / "elsewhere"
+    _write(out, {"figs/a.png": "1"})
+    elsewhere.mkdir()
+    (elsewhere / "a.png").write_text("the user's, outside the output")
+    (out / "figs" / "a.png").unlink()
+    (out / "figs").rmdir()
+    (out / "figs").symlink_to(elsewhere)
+    _write(out, {"b.csv": "2"})
+    assert (elsewhere / "a.png").read_text() == "the user's, outside the output"
+    with pytest.raises(ValueError, match="figs/a.png"):
+        _write(out, {"figs/a.png": "would write through the link"})
+    assert (elsewhere / "a.png").read_text() == "the user's, outside the output"
+
+
+@pytest.mark.parametrize("entry", ["../victim.txt", "/ABS/victim.txt"])
+def test_a_manifest_entry_outside_its_folder_is_ignored(tmp_path, entry):
+    out, victim = tmp_path / "report", tmp_path / "victim.txt"
+    victim.write_text("the user's")
+    _write(out, {"a.csv": "1"})
+    doc = staging.read_manifest(out)
+    doc["files"].append(entry.replace("/ABS", str(tmp_path)))
+    (out / staging.MANIFEST).write_text(json.dumps(doc))
+    _write(out, {"a.csv": "2"})
+    assert victim.read_text() == "the user's" and staging.read_manifest(out)["files"] == ["a.csv"]
+
+
+def test_the_manifest_is_written_beside_a_user_file_of_its_temporary_name(tmp_path):
+    out = tmp_path / "report"
+    out.mkdir()
+    (out / f"{staging.MANIFEST}.tmp").write_text("the user's")
+    _write(out, {"a.csv": "1"})
+    assert (out / f"{staging.MANIFEST}.tmp").read_text() == "the user's"
+    assert [p.name for p in out.iterdir() if p.name.startswith(staging.STAGE_PREFIX)] == []
+
+
+def test_a_user_file_where_an_output_folder_must_go_is_refused_before_any_move(tmp_path):
+    out = tmp_path / "report"
+    _write(out, {"a.csv": "1"})
+    (out / "figs").write_text("the user's file named figs")
+    before = _snapshot(out)
+    with pytest.raises(ValueError, match="figs/b.png"):
+        _write(out, {"a.csv": "2", "figs/b.png": "2"})
+    assert _snapshot(out) == before
+
+
+def test_a_dangling_user_link_is_not_replaced(tmp_path):
+    out = tmp_path / "report"
+    _write(out, {"a.csv": "1"})
+    (out / "b.csv").symlink_to(tmp_path / "nowhere")
+    with pytest.raises(ValueError, match="b.csv"):
+        _write(out, {"b.csv": "2"})
+    assert (out / "b.csv").is_symlink() and not (tmp_path / "nowhere").exists()
+
+
+def test_an_interrupted_commit_leaves_every_moved_file_owned(tmp_path, monkeypatch):
+    out = tmp_path / "report"
+    _write(out, {"a.csv": "1"})
+    moves = []
+
+    def replace_then_fail(src, dst):
+        if len(moves) == 1 and staging.MANIFEST not in str(dst):
+            raise KeyboardInterrupt
+        moves.append(dst) if staging.MANIFEST not in str(dst) else None
+        return real(src, dst)
+
+    real = staging.os.replace
+    monkeypatch.setattr(staging.os, "replace", replace_then_fail)
+    with pytest.raises(KeyboardInterrupt):
+        _write(out, {"a.csv": "2", "b.csv": "2"})
+    monkeypatch.undo()
+    assert set(staging.read_manifest(out)["files"]) == {"a.csv", "b.csv"}
+    _write(out, {"a.csv": "3", "b.csv": "3"})  # the rerun recognises both as its own
+    assert (out / "b.csv").read_text() == "3"
+
+
+def test_concurrent_commits_into_one_folder_keep_each_others_entries(tmp_path):
+    import threading
+
+    out = tmp_path / "report"
+    _write(out, {"first.csv": "0"})
+    errors = []
+
+    def save(name):
+        try:
+            with staging.staged(out, "cmd", keep=True) as work:
+                (work / name).write_text(name)
+        except Exception as err:  # noqa: BLE001 - collected for the assertion
+            errors.append(err)
+
+    threads = [threading.Thread(target=save, args=(f"s{k}.csv",)) for k in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert set(staging.read_manifest(out)["files"]) == {"first.csv", *(f"s{k}.csv" for k in range(8))}
