@@ -153,7 +153,8 @@ def test_a_plot_file_that_exists_is_refused_and_a_new_one_is_written(user_folder
     code, err = _run([*SOLVE, "--plot", "mine.png"], capsys)
     assert code == 2 and "--plot" in err and "does not exist yet" in err
     assert (user_folder / "mine.png").read_text() == "the user's figure"
-    assert {k: v for k, v in _snapshot(user_folder).items() if k != "notes.png"} == {**before, "mine.png": b"the user's figure"}
+    after = {k: v for k, v in _snapshot(user_folder).items() if k != "notes.png"}
+    assert after == {**before, "mine.png": b"the user's figure"}
 
 
 def test_a_rerun_never_deletes_through_a_link_an_owned_folder_became(tmp_path):
