@@ -1,5 +1,5 @@
-"""An imposed speed's early output times on the deeper wall cluster (continuum.solver.EARLY_SPAN):
-error and CPU with the early times apart (the default) against the solve's one map (EARLY_SPAN = 0), in one
+"""An imposed speed's early output times on the deeper wall cluster (Numerics.early_span):
+error and CPU with the early times apart (the default) against the solve's one map (early_span = 0), in one
 run.  Prints the table for bench/RESULTS.md "The early times on a deeper cluster".
 
     PYTHONPATH=. .venv/bin/python bench/early_times.py
@@ -11,9 +11,8 @@ bench/speed_solver.py's REPEATS of the whole solve through t~ = 10.
 """
 from __future__ import annotations
 
-import granstokes.continuum.solver as solver
 import numpy as np
-from granstokes.continuum.solver import Numerics, early_until, solve_speed
+from granstokes.continuum.solver import EARLY_SPAN, Numerics, early_until, solve_speed
 
 from bench.speed_solver import QUANTITIES, timed  # timed: best of its REPEATS
 from tests.continuum.reference import PAPER, SPEED_CASES, cached
@@ -22,7 +21,6 @@ CELLS = (64, 128, 256, 512)
 
 
 def main():
-    default_span = solver.EARLY_SPAN
     print("| u~_w | early times below | cells | one map: mu_w | delta | CPU [ms] | apart: mu_w | delta | CPU [ms] "
           "| CPU ratio |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -35,12 +33,10 @@ def main():
         times = [*early, 10.0]
         for n in CELLS:
             row = []
-            for span in (0.0, default_span):
-                solver.EARLY_SPAN = span
-                sol, cpu = timed(lambda: solve_speed(PAPER, u_w, times, Numerics(n_cells=n)))
+            for span in (0.0, EARLY_SPAN):
+                sol, cpu = timed(lambda: solve_speed(PAPER, u_w, times, Numerics(n_cells=n, early_span=span)))
                 row += [f"{np.max(np.abs(getattr(sol, q)[:len(early)] / ref[q] - 1)):.1e}" for q in QUANTITIES]
                 row.append(cpu)
-            solver.EARLY_SPAN = default_span
             print(f"| {u_w} | {early_until(u_w):.3g} | {n} | {row[0]} | {row[1]} | {1e3 * row[2]:.0f} | {row[3]} | "
                   f"{row[4]} | {1e3 * row[5]:.0f} | {row[5] / row[2]:.2f} |", flush=True)
 

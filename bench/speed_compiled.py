@@ -1,52 +1,58 @@
-"""The imposed speed's BDF compiled (continuum.speed_bdf) against scipy's BDF on the same system
-(Numerics.compiled = False), in one process, alternating.  Prints the table for bench/RESULTS.md
+"""The imposed speed's BDF loop compiled (continuum.bdf) against scipy's own BDF on the same system
+(tests/continuum/bdf_oracle.py), in one process, alternating.  Prints the table for bench/RESULTS.md
 "The speed compiled".
 
     PYTHONPATH=. .venv/bin/python bench/speed_compiled.py
 
 Cases: the paper's three wall speeds and the disks' u~_w = 1 (tests/continuum/reference.py), t~ = 1e-4 ... 10
-(bench/speed_solver.py TIMES), at the default accuracy 1e-6 (the solve on 512 cells and its companion on 256) and
-one solve on 64 cells at the solver's defaults.  CPU time (time.process_time), best of ROUNDS; the first compiled
-solve of the process (numba's import and its cache's load, ~0.4-0.6 s) is run and reported apart.
+(bench/speed_solver.py TIMES), one solve on CELLS cells on the solve's map at the solver's default tolerances.
+CPU time (time.process_time), best of ROUNDS; the first compiled solve of the process (numba's import and its
+cache's load, ~0.4-0.6 s) is run and reported apart.
 """
 from __future__ import annotations
 
 import time
 
-from granstokes.continuum.solver import Numerics, solve_speed
+from granstokes.continuum.integrators import integrate
+from granstokes.continuum.problems import ImposedSpeed
+from granstokes.continuum.solver import Numerics, map_for
+from granstokes.continuum.steady import mu_w_for_speed
 
 from bench.speed_solver import TIMES
+from tests.continuum import bdf_oracle
 from tests.continuum.reference import DISKS, PAPER
 
 CASES = [("paper", PAPER, 0.198), ("paper", PAPER, 1.334), ("paper", PAPER, 4.629), ("disks", DISKS, 1.0)]
-SETTINGS = {"accuracy 1e-6": dict(accuracy=1e-6), "64 cells": dict(n_cells=64)}
+CELLS = (64, 256, 512)
 ROUNDS = 2
 
 
-def timed(fr, u_w, compiled, kwargs):
-    cells = {k: v for k, v in kwargs.items() if k == "n_cells"}
+def timed(fr, u_w, n, ours):
+    numerics = Numerics(n_cells=n).for_drive("speed")
+    pb = ImposedSpeed(fr, u_w, numerics.mesh(*map_for(fr, mu_w_for_speed(fr, u_w), "speed", TIMES[0])))
+    options = dict(rtol=numerics.rtol, atol=numerics.atol, h0=numerics.initial_step * TIMES[0])
     start = time.process_time()
-    sol = solve_speed(fr, u_w, TIMES, Numerics(compiled=compiled, **cells), accuracy=kwargs.get("accuracy"))
-    return time.process_time() - start, sol
+    states, stats = (integrate(pb, TIMES, method="bdf", **options) if ours
+                     else bdf_oracle.integrate(pb, TIMES, **options))
+    return time.process_time() - start, [pb.mu(x)[0] for x in states], stats.steps
 
 
 def main():
-    first, _ = timed(PAPER, 1.334, True, SETTINGS["64 cells"])
+    first = timed(PAPER, 1.334, 64, True)[0]
     print(f"first compiled solve of the process (numba import, cache load, 64 cells): {first:.2f} s CPU\n")
-    print("| case | u~_w | setting | scipy's BDF [s] | compiled [s] | ratio | steps scipy / compiled | "
-          "max rel. difference mu_w, delta |")
+    print("| case | u~_w | cells | scipy's BDF [s] | compiled [s] | ratio | steps scipy / compiled | "
+          "max rel. difference mu_w |")
     print("|---|---|---|---|---|---|---|---|")
     for name, fr, u_w in CASES:
-        for label, kwargs in SETTINGS.items():
-            best = {True: (float("inf"), None), False: (float("inf"), None)}
+        for n in CELLS:
+            best = {True: (float("inf"),), False: (float("inf"),)}
             for _ in range(ROUNDS):
-                for compiled in (False, True):
-                    cpu, sol = timed(fr, u_w, compiled, kwargs)
-                    best[compiled] = min(best[compiled], (cpu, sol), key=lambda pair: pair[0])
-            (slow, ref), (fast, ours) = best[False], best[True]
-            diff = max(float(abs(getattr(ours, q) / getattr(ref, q) - 1).max()) for q in ("mu_w", "delta"))
-            print(f"| {name} | {u_w:g} | {label} | {slow:.3f} | {fast:.3f} | {slow / fast:.1f} | "
-                  f"{ref.stats.steps} / {ours.stats.steps} | {diff:.1e} |", flush=True)
+                for ours in (False, True):
+                    best[ours] = min(best[ours], timed(fr, u_w, n, ours), key=lambda row: row[0])
+            (slow, ref, ref_steps), (fast, mu_w, steps) = best[False], best[True]
+            diff = max(abs(a / b - 1) for a, b in zip(mu_w, ref))
+            print(f"| {name} | {u_w:g} | {n} | {slow:.3f} | {fast:.3f} | {slow / fast:.1f} | {ref_steps} / {steps} | "
+                  f"{diff:.1e} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
-"""An imposed stress's adaptive DIRK compiled (continuum.stress_dirk) against the Python (Numerics.compiled
-= False), in one process, alternating.  Prints the table for bench/RESULTS.md "The stress compiled".
+"""An imposed stress's adaptive DIRK loop compiled against the same loop run as Python (Numerics.compiled = False;
+continuum.stepper), in one process, alternating.  Prints the table for bench/RESULTS.md "The stress compiled".
 
     PYTHONPATH=. .venv/bin/python bench/stress_compiled.py
 

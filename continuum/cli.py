@@ -75,8 +75,8 @@ def format_table(sol) -> str:
              f"units: {UNITS['tilde_variables']}",
              f"numerics: {sol.numerics.n_cells} cells, order {sol.numerics.order}, {sol.mesh.label}, "
              f"rtol {sol.numerics.rtol:.2g}; {asked}; +- are estimated absolute errors",
-             *([f"early times: t~ < {early_until(sol.u_w_imposed):.3g} solved on {sol.early_mesh.label}, "
-                f"resampled"] if sol.early_mesh is not None else []),
+             *([f"early times: t~ < {early_until(sol.u_w_imposed, sol.numerics.early_span):.3g} solved on "
+                f"{sol.early_mesh.label}, resampled"] if sol.early_mesh is not None else []),
              f"{'t~':>12} {'u~_w':>24} {'mu_w':>24} {'delta/delta_s':>24}"]
     err = sol.errors
     for k, t in enumerate(sol.t):

@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from .jacobian import Jacobian
+from .kernels import BdfKernels, DirkKernels, band_lu, band_solve, jitable, laplacians
 from .mesh import Mesh
 from .rheology import Friction, finite, require
 from .steady import mu_w_for_speed
@@ -116,8 +117,20 @@ class ImposedStress(ShearStressDiffusion):
 
     imposed = "stress"
     dense_wall = False
-    #: stepper.integrate runs its adaptive DIRKs compiled (continuum.stress_dirk)
-    compiled_dirk = True
+
+    def dirk_kernels(self):
+        """The DIRK loop's kernels of this problem (continuum.kernels.DirkKernels), their data, and a factory of the
+        Newton matrix's factors (a band LU's storage, columns contiguous)."""
+        n = self.mesh.n_cells
+        cols, weights, mud_p, p32, mu_w = self.stencil()
+        data = (cols, weights, mud_p, p32, float(mu_w), self.kl, self.ku, np.empty(n + 1), np.empty(n - 1))
+
+        def factors():
+            return (np.empty((n, 2 * self.kl + self.ku + 1)).T, np.zeros(n, dtype=np.int64),
+                    np.zeros(1, dtype=np.int64))
+
+        return DirkKernels(stress_rate, stress_factor, no_refresh, band_factors_solve, stress_project, whole_update), \
+            data, factors
 
     def wall_residual(self, x: np.ndarray) -> float:
         return x[0] - 1.0
@@ -154,8 +167,6 @@ class ImposedSpeed(ShearStressDiffusion):
 
     imposed = "speed"
     dense_wall = True
-    #: stepper's bdf runs compiled on it (continuum.speed_bdf)
-    compiled_bdf = True
 
     def __init__(self, friction: Friction, u_w: float, mesh: Mesh, order: int = 4):
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
@@ -198,7 +209,7 @@ class ImposedSpeed(ShearStressDiffusion):
 
     def wall_jacobian(self, x: np.ndarray):
         """dF/dx's row 0 (wall_gradient) and column 0 at rows 1..kl (the first nodes' coupling to q), the parts
-        of the Jacobian the wall unknown's curvature changes fastest (stepper.BDF_WALL_NEWTON)."""
+        of the Jacobian the wall unknown's curvature changes fastest (refreshed at every Newton iterate by BDF)."""
         k = len(self._lap_wall)
         s = self._mud_p[:k] - self.mu_w * x[1:k + 1]
         return self.wall_gradient(x), s * s / self._p32[:k] * self._lap_wall * self._dtau0_dq(x[0])
@@ -223,6 +234,15 @@ class ImposedSpeed(ShearStressDiffusion):
         (rows 1..kl), p~ at the nodes, the quadrature weights of nodes 0..N-1 (times sqrt(p~)/Dmu), u~_w and the
         first cell's weight."""
         return self._lap_wall, self.p, self._wq, self.u_w, self._w_first
+
+    def bdf_kernels(self):
+        """The BDF loop's kernels of this problem (continuum.kernels.BdfKernels), their data, and the number of rows of
+        the wall's column."""
+        fr, n = self.friction, self.mesh.n_cells
+        cols, weights, mud_p, p32, mu_w = self.stencil()
+        data = (cols, weights, self._lap_wall, mud_p, p32, self.p, self._wq, self.u_w, self._w_first, float(mu_w),
+                fr.mu_d, fr.mu_s, fr.dmu, self.kl, self.ku, np.empty(n + 1), np.empty(n - 1))
+        return BdfKernels(speed_project, speed_rate, speed_jacobian, speed_wall), data, len(self._lap_wall)
 
     def wall_residual(self, x: np.ndarray) -> float:
         _, b, integral = self._interior(x)
@@ -258,9 +278,10 @@ class ImposedSpeed(ShearStressDiffusion):
         return float(min(1.0, np.min(-0.5 * mt[falling] / dmt[falling]))) if falling.any() else 1.0
 
 
+@jitable
 def first_cell(q: float, b: float):
-    """L = int_0^1 ds/(a + (b - a) s) = ln(b/a)/(b - a) with a = exp(-q), and dL/dq, dL/db (plain math:
-    continuum.speed_bdf compiles this same function)."""
+    """L = int_0^1 ds/(a + (b - a) s) = ln(b/a)/(b - a) with a = exp(-q), and dL/dq, dL/db (plain math: a
+    compiled loop compiles it, continuum.kernels)."""
     if not b > 0:  # an inadmissible Newton iterate
         return math.nan, math.nan, math.nan
     a = math.exp(min(-q, EXP_MAX))  # scalars by math: this runs a few times per rate evaluation
@@ -274,10 +295,11 @@ def first_cell(q: float, b: float):
     return lam, (1.0 - a * lam) / d, (1.0 / b - lam) / d
 
 
+@jitable
 def wall_unknown(target: float, b: float) -> float:
     """The q with L(q) = target (``first_cell``; L increases with q) by Newton kept inside the bracket of the
-    iterates so far (bisection when it leaves it); NaN if it fails.  Plain math, so that continuum.speed_bdf
-    compiles this same function."""
+    iterates so far (bisection when it leaves it); NaN if it fails (plain math: a compiled loop
+    compiles it, continuum.kernels)."""
     q = max(target * b - math.log(b), math.log(target))  # L's limits for a << b and a >> b
     lo, hi = -math.inf, math.inf
     for _ in range(PROJECTION_ITERATIONS):
@@ -306,3 +328,146 @@ ATANH_BELOW = 0.5
 PROJECTION_ITERATIONS, PROJECTION_TOL = 100, 1e-13
 #: the lift-off of mu_w from mu_d is over by this many t_mud = u~_w^2 (continuum.closed_forms)
 LIFT_OFF_SPAN = 10.0
+
+
+# --- the imposed stress's kernels (continuum.kernels): data = (cols, weights, mud_p, p32, mu_w, kl, ku, tau, lap),
+# tau and lap workspaces of N + 1 and N - 1 values
+
+@jitable
+def stress_rate(x, f, data):
+    """ImposedStress.rate: the wall row x_0 - 1, then D(tau~) d2 tau~/dy~2 at nodes 1..N-1."""
+    cols, weights, mud_p, p32, mu_w, tau, lap = data[0], data[1], data[2], data[3], data[4], data[7], data[8]
+    laplacians(x, x[0], tau, lap, cols, weights)
+    f[0] = x[0] - 1.0
+    for i in range(len(lap)):
+        s = mud_p[i] - mu_w * x[i + 1]
+        f[i + 1] = s * s / p32[i] * lap[i]
+
+
+@jitable
+def stress_factor(x, dh, lu, data):
+    """LU of M - dh J(x) into lu = (ab, piv, [U's upper bandwidth]) (ImposedStress.jacobian, whose wall row is e_0
+    with mass 0; kernels.band_lu); False if singular."""
+    cols, weights, mud_p, p32, mu_w, kl, ku, tau, lap = data
+    ab, piv, info = lu
+    laplacians(x, x[0], tau, lap, cols, weights)
+    n = len(x)
+    kv = kl + ku
+    ab[:] = 0.0
+    ab[kv, 0] = -dh
+    for i in range(1, n):
+        s = mud_p[i - 1] - mu_w * x[i]
+        diff = s * s / p32[i - 1]
+        for k in range(cols.shape[1]):
+            c = cols[i - 1, k]
+            if c < n:
+                ab[kv + i - c, c] -= dh * diff * weights[i - 1, k]
+        ab[kv, i] += 1.0 + dh * 2 * mu_w * s / p32[i - 1] * lap[i - 1]
+    info[0] = band_lu(ab, piv, kl, ku)
+    return info[0] >= 0
+
+
+@jitable
+def band_factors_solve(lu, r, data):
+    """r = (M - dh J)^-1 r from ``stress_factor``'s factors."""
+    ab, piv, info = lu
+    band_solve(ab, piv, data[5], data[6], info[0], r)
+
+
+@jitable
+def no_refresh(lu, x, data):
+    """Nothing in the factors changes with the Newton iterate."""
+
+
+@jitable
+def stress_project(x, data):
+    """ImposedStress.project: the wall row exactly."""
+    x[0] = 1.0
+
+
+@jitable
+def whole_update(x, dx, data):
+    """ImposedStress.step_fraction: the whole Newton update."""
+    return 1.0
+
+
+# --- the imposed speed's kernels for the BDF loop (continuum.kernels): data = (cols, weights, lap_wall, mud_p, p32, p,
+# wq, u_w, w_first, mu_w, mu_d, mu_s, dmu, kl, ku, tau, lap), tau and lap workspaces of N + 1 and N - 1 values
+
+@jitable
+def speed_project(z, x, data):
+    """x = (q, z) with q from the constraint (ImposedSpeed.project); q = NaN where inadmissible.  Returns u~_w plus
+    the interior's share of it summed in absolute value (the scale of q's round-off)."""
+    p, wq, u_w, w_first, mu_w, mu_d, mu_s, dmu = (data[5], data[6], data[7], data[8], data[9], data[10], data[11],
+                                                  data[12])
+    integral, magnitude, admissible = 0.0, 0.0, True
+    for j in range(len(z)):
+        mu = mu_w * z[j] / p[j + 1]
+        gap = mu_d - mu
+        admissible = admissible and gap > 0
+        term = wq[j + 1] * ((mu - mu_s) / gap)
+        integral += term
+        magnitude += abs(term)
+        x[j + 1] = z[j]
+    b = (mu_d - mu_w * z[0] / p[1]) / dmu
+    target = (u_w + w_first - integral) / w_first
+    x[0] = wall_unknown(target, b) if admissible and target > 0 else math.nan
+    return u_w + magnitude
+
+
+@jitable
+def wall_tau(q, mu_w, mu_d, dmu, p0):
+    """tau~ at the wall from q = ln(1/mu~_w)."""
+    return (mu_d - dmu * math.exp(min(-q, EXP_MAX))) * p0 / mu_w
+
+
+@jitable
+def speed_rate(x, f, data):
+    """ImposedSpeed.interior_rate: f = D(tau~) d2 tau~/dy~2 at nodes 1..N-1."""
+    cols, weights, mud_p, p32, p, mu_w, mu_d, dmu, tau = (data[0], data[1], data[3], data[4], data[5], data[9],
+                                                          data[10], data[12], data[15])
+    laplacians(x, wall_tau(x[0], mu_w, mu_d, dmu, p[0]), tau, f, cols, weights)
+    for i in range(len(f)):
+        s = mud_p[i] - mu_w * x[i + 1]
+        f[i] *= s * s / p32[i]
+
+
+@jitable
+def speed_jacobian(x, band, data):
+    """ImposedSpeed.jacobian's rows and columns 1..N-1, band[ku + i - j, j] = dF_i/dz_j (z = x[1:])."""
+    cols, weights, mud_p, p32, p, mu_w, mu_d, dmu, ku, tau, lap = (data[0], data[1], data[3], data[4], data[5],
+                                                                   data[9], data[10], data[12], data[14], data[15],
+                                                                   data[16])
+    laplacians(x, wall_tau(x[0], mu_w, mu_d, dmu, p[0]), tau, lap, cols, weights)
+    n = len(x)
+    band[:] = 0.0
+    for i in range(n - 1):
+        s = mud_p[i] - mu_w * x[i + 1]
+        diff = s * s / p32[i]
+        for k in range(cols.shape[1]):
+            c = cols[i, k]
+            if 0 < c < n:
+                band[ku + i - (c - 1), c - 1] += diff * weights[i, k]
+        band[ku, i] -= 2 * mu_w * s / p32[i] * lap[i]
+
+
+@jitable
+def speed_wall(x, row0, column, data):
+    """ImposedSpeed.wall_jacobian: the constraint's gradient (row0) and dF_i/dq at rows 1..kl (column)."""
+    lap_wall, mud_p, p32, p, wq, w_first, mu_w, mu_d, dmu = (data[2], data[3], data[4], data[5], data[6], data[8],
+                                                             data[9], data[10], data[12])
+    n = len(x)
+    mt1 = 0.0
+    for j in range(1, n):
+        mt = (mu_d - mu_w * x[j] / p[j]) / dmu
+        dmt = -mu_w / (p[j] * dmu)
+        row0[j] = -wq[j] / (mt * mt) * dmt
+        if j == 1:
+            mt1 = mt
+    _, dq, db = first_cell(x[0], mt1)
+    row0[0] = w_first * dq
+    row0[1] += w_first * db * (-mu_w / (p[1] * dmu))
+    dtau0 = dmu * math.exp(min(-x[0], EXP_MAX)) * p[0] / mu_w
+    for k in range(len(column)):
+        s = mud_p[k] - mu_w * x[k + 1]
+        column[k] = s * s / p32[k] * lap_wall[k] * dtau0

@@ -12,14 +12,17 @@ import numpy as np
 from granstokes.lib.provenance import provenance
 
 from . import observables as obs
+from .bdf import STALL_FRACTION, STALL_STEPS
 from .integrators import integrate
 from .mesh import MAX_STRETCH, ORDERS, Mesh
 from .problems import ImposedSpeed, ImposedStress
 from .rheology import Friction, finite, require
 from .scales import UNITS
 from .steady import SELF_SIMILAR_DELTA, mu_w_for_speed, steady_delta, steady_wall_speed
-from .stepper import METHODS, TABLEAUX, StepStats
+from .stepper import TABLEAUX, StepStats
 
+#: the methods a solve may name (continuum.integrators)
+METHODS = (*TABLEAUX, "bdf")
 #: the default time stepper of each drive (continuum.stepper: BDF keeps its order on the speed's DAE,
 #: the DIRKs' stage order 1 does not)
 DEFAULT_METHOD = {"stress": "sdirk4", "speed": "bdf"}
@@ -51,9 +54,10 @@ EARLY_SPAN, EARLY_WALL_FOLDS = 0.04, 18.0
 EARLY_MIN_CELLS = 128
 
 
-def early_until(u_w: float) -> float:
-    """The imposed speed's output times below this are solved on the map of EARLY_WALL_FOLDS (EARLY_SPAN)."""
-    return EARLY_SPAN * u_w**2 / max(1.0, u_w)
+def early_until(u_w: float, span: float = EARLY_SPAN) -> float:
+    """The imposed speed's output times below this are solved on the map of EARLY_WALL_FOLDS (``span``: EARLY_SPAN,
+    Numerics.early_span)."""
+    return span * u_w**2 / max(1.0, u_w)
 
 
 #: the least stretch of a speed's map: the map's slope at the bottom is ~a/N (the cluster's e^(-xi/w) has
@@ -106,8 +110,10 @@ class Numerics:
     time (``map_for``), else the exponential map of this stretch; ``order``: of the spatial discretisation
     (continuum.mesh); ``method``, ``rtol``, ``atol`` = None: the drive's defaults (``for_drive``); ``compiled``: run
     the problem's compiled kernel where it has one (continuum.integrators), else the Python integrators;
-    ``bordered``, ``wall_newton``: bdf's Newton systems (continuum.stepper._integrate_bdf; False: baselines);
-    ``repeat_cap``: the DIRKs' step cap after a repeated Newton failure (continuum.stepper; False: the baseline)."""
+    ``repeat_cap``: the DIRKs' step cap after a repeated Newton failure (continuum.stepper; False: the baseline);
+    ``initial_step``: the first time step as a fraction of the first output time; ``early_span``: an imposed speed's
+    output times before early_span t~_mud/max(1, u~_w) are solved on the deeper wall cluster (0: none, EARLY_SPAN);
+    ``stall``: bdf's (fraction, steps) that hand over to the DIRK (continuum.bdf)."""
 
     n_cells: int = 64
     stretch: float | None = None
@@ -116,9 +122,10 @@ class Numerics:
     method: str | None = None
     order: int = 4
     compiled: bool = True
-    bordered: bool = True
-    wall_newton: bool = True
     repeat_cap: bool = True
+    initial_step: float = INITIAL_STEP
+    early_span: float = EARLY_SPAN
+    stall: tuple[float, int] = (STALL_FRACTION, STALL_STEPS)
 
     def __post_init__(self):
         Mesh.graded(self.n_cells, 0.0 if self.stretch is None else self.stretch)  # validates both
@@ -293,7 +300,8 @@ class Solution:
         return {**self.summary(), "u_w_imposed": self.u_w_imposed, "numerics": asdict(self.numerics),
                 "stats": asdict(self.stats), "units": UNITS, "map": self.mesh.label,
                 "early_map": None if self.early_mesh is None else {
-                    "label": self.early_mesh.label, "times_below": early_until(self.u_w_imposed)},
+                    "label": self.early_mesh.label,
+                    "times_below": early_until(self.u_w_imposed, self.numerics.early_span)},
                 "delta_definition": "depth where mu - mu_s falls to 1e-3 of mu_w(t) - mu_s",
                 "provenance": provenance()}
 
@@ -356,11 +364,10 @@ def first_cells(imposed: str, accuracy: float) -> int:
 
 def _run_one(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
     recorder = obs.SeriesRecorder(problem) if record else None
-    options = ({"bordered": numerics.bordered, "wall_newton": numerics.wall_newton} if numerics.method == "bdf"
-               else {"repeat_cap": numerics.repeat_cap})
+    options = {"stall": numerics.stall} if numerics.method == "bdf" else {"repeat_cap": numerics.repeat_cap}
     states, stats = integrate(problem, t, method=numerics.method, compiled=numerics.compiled, rtol=numerics.rtol,
-                              atol=numerics.atol, h0=INITIAL_STEP * t[0], fixed_times=fixed_times, observer=recorder,
-                              **options)
+                              atol=numerics.atol, h0=numerics.initial_step * t[0], fixed_times=fixed_times,
+                              observer=recorder, **options)
     tau = np.array([problem.full(x) for x in states])
     steps = recorder if record else np.empty((0, 4))
     return Solution(problem.imposed, problem.friction, problem.mu_w,
@@ -457,4 +464,4 @@ def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics | None
     eq. GranularStokesEqn_muBIS_BCs (``accuracy``, ``estimate`` as for solve_stress)."""
     mu_w = mu_w_for_speed(friction, u_w)
     return _solve(lambda mesh, order: ImposedSpeed(friction, u_w, mesh, order), "speed", mu_w, friction, times,
-                  numerics, accuracy, estimate, fixed_times, early_until(u_w))
+                  numerics, accuracy, estimate, fixed_times, early_until(u_w, (numerics or Numerics()).early_span))

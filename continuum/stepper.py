@@ -23,6 +23,7 @@ lift-off of mu_w); BDF has no stages and keeps its order: the imposed speed's de
 """
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -30,6 +31,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .kernels import DirkKernels, jitable, rms, source_key
 from .lapack import dgbtrf, dgbtrs, dpttrf, dpttrs
 
 
@@ -106,8 +108,6 @@ TABLEAUX = {
         err_order=3),
     "crank-nicolson": Tableau("crank-nicolson", ((0, 0), (0.5, 0.5)), order=2),
 }
-#: every method of ``integrate``
-METHODS = (*TABLEAUX, "bdf")
 #: the first Newton iterate of a stage is judged with the previous stage's contraction estimate,
 #: eta_0 = max(eta, ETA_FLOOR)^ETA_DECAY (Hairer & Wanner 1996, IV.8)
 ETA_FLOOR, ETA_DECAY = 1e-16, 0.8
@@ -131,19 +131,6 @@ LANDING_SHARE, STEP_SAFETY, STEP_SHRINK, STEP_GROW, ERROR_FLOOR = 0.05, 0.9, 0.2
 NEWTON_TOL, MAX_STEPS = 0.03, 200_000
 #: a step ends on an output time within this relative distance of it
 OUTPUT_RTOL = 1e-13
-#: bdf hands over to HANDOVER when its step has stayed below BDF_STALL t for STALL_STEPS steps in a row after
-#: the problem's lift-off (``_integrate_bdf``), counted afresh after each output time: scipy cuts the step that
-#: lands on one and keeps that size for order + 1 steps before it may grow, no stall (a handover there, SDIRK4
-#: on the speed's DAE, crawls: u~_w = 0.02 on 256 cells, 199 000 steps to t~ = 1.1; BDF goes on to 10 in 77)
-BDF_STALL, STALL_STEPS, HANDOVER = 1e-3, 50, "sdirk4"
-#: bdf's reduced Jacobian is dense up to this many unknowns: scipy's dense LU path costs less than
-#: SuperLU with its sparse bookkeeping there (measured, u~_w = 1.334: 64 cells 1.4x, 128 cells 1.4x less CPU;
-#: 256 cells 4x more), bench/RESULTS.md "The paper's figure set"
-DENSE_BDF_MAX = 128
-#: what the bordered bdf hands scipy for its Jacobian (``_integrate_bdf``)
-BORDERED_MARKER = -1.0
-
-
 @dataclass
 class StepStats:
     steps: int = 0
@@ -227,305 +214,360 @@ class NewtonMatrix:
         return np.concatenate(([x0], zr - x0 * self.zb))
 
 
-def solve_stage(problem, matrix, x, rhs, weights, tol, stats, eta=1.0, max_iter=NEWTON_ITERATIONS, full=False):
-    """Solve M X - dh F(X) = rhs by simplified Newton from the guess x.
-
-    Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta); at the
-    first iterate the given ``eta``, carried from the previous stage) is below ``tol`` (Hairer & Wanner
-    1996, IV.8), then applies the problem's exact projection onto its algebraic constraints (if any);
-    returns (X, F(X), eta).  ``full``: refactorise at every iterate (full Newton, the fallback when the
-    frozen matrix does not contract)."""
-    x = x.copy()
-    mass, dh = problem.mass, matrix.dh
-    rate = problem.rate(x)
-    previous = None
-    for _ in range(max_iter):
-        stats.newton_iterations += 1
-        if full:
-            matrix = NewtonMatrix(problem, x, dh)
-        elif problem.dense_wall:  # the integral condition's row changes fast: keep it current
-            matrix.refresh_row0(mass[0], problem.wall_gradient(x))
-        residual = rhs - mass * x
-        residual += dh * rate
-        dx = matrix.solve(residual)
-        scaled = dx / weights
-        size = math.sqrt(scaled @ scaled / len(scaled))
-        if not math.isfinite(size):
-            break
-        fraction = problem.step_fraction(x, dx)
-        if fraction == 1.0:
-            x += dx
-        else:
-            x += fraction * dx
-        if previous is not None:
-            theta = size / previous
-            if theta >= (NO_CONTRACTION_FULL if full else NO_CONTRACTION):  # give up (the caller tries full Newton)
-                break
-            eta = theta / (1.0 - theta)
-        if eta * size < tol or size < SMALL_UPDATE * tol:
-            x = problem.project(x)
-            return x, problem.rate(x), eta
-        rate = problem.rate(x)
-        previous = size
-    stats.newton_failures += 1
-    raise NewtonFailure("Newton did not converge")
-
-
 def mass_rows(mass):
     """The algebraic rows (indices) and 1/M on the differential rows (0 on the algebraic ones)."""
     return np.flatnonzero(mass == 0), np.divide(1.0, mass, out=np.zeros(len(mass)), where=mass != 0)
 
 
-def dirk_step(problem, tab: Tableau, x, f, h, weights, newton_tol, stats, eta=1.0, rows=None):
-    """One step of size h from (x, f = F(x)).  Returns x_{n+1}, F(x_{n+1}), the local error
-    estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) or None, and the Newton
-    contraction estimate ``eta`` to carry to the next step.  ``rows``: ``mass_rows(problem.mass)``.
-    A problem with ``carries_contraction = False`` (its Newton contracts unevenly from one stage to the
-    next) judges every stage's first iterate with eta = 1 instead."""
-    matrix = NewtonMatrix(problem, x, h * tab.A[-1][-1])
-    mass, A, hW = problem.mass, tab.matrix, h * tab.stage_weights
-    algebraic, inverse_mass = rows if rows is not None else mass_rows(mass)
-    carry = problem.carries_contraction
-    rates = np.empty((len(A) + 1, len(x)))  # F(x_n), then the stages' F_i
-    rates[0] = f
-    first = 1 if tab.explicit_first else 0
-    if first:
-        rates[1] = f
-    base = mass * x
-    X = x
-    for i in range(first, len(A)):
-        rhs, guess = hW[i, :, :i + 1] @ rates[:i + 1]
-        rhs += base
-        rhs[algebraic] = 0.0
-        guess += base
-        guess *= inverse_mass
-        guess[algebraic] = X[algebraic]  # from the last stage
-        try:
-            X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
-                                               max(eta, ETA_FLOOR) ** ETA_DECAY if carry else 1.0)
-        except NewtonFailure:
-            X, rates[i + 1], eta = solve_stage(problem, matrix, guess, rhs, weights, newton_tol, stats,
-                                               max_iter=FULL_NEWTON_ITERATIONS, full=True)
-    if tab.err is None:
-        return X, rates[-1], None, eta
-    est = h * (tab.error_weights @ rates[1:])
-    est[algebraic] = 0.0
-    return X, rates[-1], matrix.solve(est), eta
+def _numpy_rate(x, f, problem):
+    f[:] = problem.rate(x)
 
 
-def integrate(problem, t_out, *, method="sdirk4", rtol=1e-6, atol=1e-8, h0=1e-9, newton_tol=NEWTON_TOL,
-              fixed_times=None, observer=None, max_steps=MAX_STEPS, resume=None, bordered=True, wall_newton=True,
+def _numpy_factor(x, dh, lu, problem):
+    try:
+        lu[0] = NewtonMatrix(problem, x, dh)
+    except NewtonFailure:
+        return False
+    return True
+
+
+def _numpy_refresh(lu, x, problem):
+    if problem.dense_wall:  # the integral condition's row changes fast: keep it current
+        lu[0].refresh_row0(problem.mass[0], problem.wall_gradient(x))
+
+
+def _numpy_solve(lu, r, problem):
+    r[:] = lu[0].solve(r)
+
+
+def _numpy_project(x, problem):
+    problem.project(x)
+
+
+def _numpy_fraction(x, dx, problem):
+    return problem.step_fraction(x, dx)
+
+
+#: the kernels of a problem that has none of its own: its rate, jacobian (factorised by NewtonMatrix), project and
+#: step_fraction methods, with the problem itself as the data
+NUMPY_KERNELS = DirkKernels(_numpy_rate, _numpy_factor, _numpy_refresh, _numpy_solve, _numpy_project, _numpy_fraction)
+
+
+def problem_kernels(problem, compiled: bool):
+    """(Kernels, data, a factors factory) of ``problem``: its own (``dirk_kernels``) if it has them, else
+    NUMPY_KERNELS; and whether they compile."""
+    own = getattr(problem, "dirk_kernels", None)
+    if own is not None:
+        kernels, data, factors = own()
+        return kernels, data, factors, compiled
+    return NUMPY_KERNELS, problem, lambda: [None], False
+
+
+# --- the vector operations of the loop, in two summation orders -------------------------------------------------
+# The compiled loop sums in index order (element loops); the Python one by numpy and BLAS, as fast as Python gets.
+# The two orders round differently: the velocity form (continuum.velocity, Python only) moves by 1e-7 relative at its
+# rtol 1e-5 if summed in index order, so each backend keeps its own.
+
+def _numpy_stage_sums(hw, count, rates, base, rhs, guess):
+    sums = hw[:, :count] @ rates[:count]
+    rhs[:] = sums[0]
+    rhs += base
+    guess[:] = sums[1]
+    guess += base
+
+
+def _numpy_error_sum(h, err, rates, est):
+    est[:] = h * (err @ rates[1:])
+
+
+def _numpy_norm(v, scale):
+    scaled = v / scale
+    return math.sqrt(scaled @ scaled / len(scaled))
+
+
+def _numpy_residual(rhs, mass, x, dh, f, out):
+    np.subtract(rhs, mass * x, out=out)
+    out += dh * f
+
+
+@jitable
+def _loop_stage_sums(hw, count, rates, base, rhs, guess):
+    rhs[:] = base
+    guess[:] = base
+    for j in range(count):
+        hs, hp = hw[0, j], hw[1, j]
+        for m in range(len(base)):
+            rhs[m] += hs * rates[j, m]
+            guess[m] += hp * rates[j, m]
+
+
+@jitable
+def _loop_error_sum(h, err, rates, est):
+    est[:] = 0.0
+    for j in range(len(err)):
+        he = h * err[j]
+        for m in range(len(est)):
+            est[m] += he * rates[j + 1, m]
+
+
+@jitable
+def _loop_residual(rhs, mass, x, dh, f, out):
+    for i in range(len(x)):
+        out[i] = rhs[i] - mass[i] * x[i] + dh * f[i]
+
+
+NUMPY_OPS = (_numpy_stage_sums, _numpy_error_sum, _numpy_norm, _numpy_residual)
+LOOP_OPS = (_loop_stage_sums, _loop_error_sum, rms, _loop_residual)
+
+#: the loop's exits
+LANDED, RECORDS_FULL, MAX_STEPS_REACHED, FIXED_STEP_FAILED, FIXED_STEP_PASSED = range(5)
+#: state slots between calls: time, next step, Newton contraction, the last Newton failure's step, the step cap,
+#: the next fixed step
+T, H, ETA, H_FAIL, CAP, NEXT_FIXED = range(6)
+#: counters: accepted steps, rejected steps, Newton iterations, Newton failures, rows recorded in this call
+STEPS, REJECTED, ITERATIONS, FAILURES, RECORDED = range(5)
+#: per-step rows kept between two returns to Python (the observer's), per loop call
+RECORD_ROWS = 1024
+
+
+@functools.cache
+def dirk_loop(kernels: DirkKernels, compiled: bool):
+    """The DIRK loop on ``kernels``: ``advance(...)`` steps until an output time, a full record or a limit (its exits).
+    Written once; ``compiled``: numba compiles it with the kernels (continuum.compiled), else it runs as Python."""
+    rate, factor, refresh, solve, project, fraction = kernels
+    stage_sums, error_sum, norm, residual = LOOP_OPS if compiled else NUMPY_OPS
+    sources = source_key(*kernels, dirk_loop)
+
+    def solve_stage(x, f, rhs, weights, tol, eta, max_iter, full, dh, lu, full_lu, mass, dx, counters, rules,
+                    data):
+        """Solve M X - dh F(X) = rhs by simplified Newton from the guess x (in place; f gets F(X)).
+
+        Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta); at the first
+        iterate the given ``eta``, carried from the previous stage) is below ``tol`` (Hairer & Wanner 1996, IV.8), then
+        projects onto the algebraic constraints.  ``full``: refactorise at every iterate (full Newton, the fallback
+        when the frozen matrix does not contract).  Returns (converged, eta)."""
+        no_contraction, no_contraction_full, small_update = rules[0], rules[1], rules[2]
+        rate(x, f, data)
+        previous = -1.0
+        for _ in range(max_iter):
+            counters[ITERATIONS] += 1
+            if full:
+                if not factor(x, dh, full_lu, data):  # a failed step; no Newton failure counted
+                    return False, eta
+            else:
+                refresh(lu, x, data)
+            residual(rhs, mass, x, dh, f, dx)
+            solve(full_lu if full else lu, dx, data)
+            size = norm(dx, weights)
+            if not math.isfinite(size):
+                break
+            share = fraction(x, dx, data)
+            if share == 1.0:
+                x += dx
+            else:
+                x += share * dx
+            if previous >= 0:
+                theta = size / previous
+                if theta >= (no_contraction_full if full else no_contraction):  # no contraction
+                    break
+                eta = theta / (1.0 - theta)
+            if eta * size < tol or size < small_update * tol:
+                project(x, data)
+                rate(x, f, data)
+                return True, eta
+            rate(x, f, data)
+            previous = size
+        counters[FAILURES] += 1
+        return False, eta
+
+    def dirk_step(x, f, h, weights, newton_tol, eta, tableau, rows, work, lu, full_lu, counters, rules, data):
+        """One step of size h from (x, f = F(x)): the stages into work (the last one, x_{n+1}, in ``stage``, its rate
+        in rates[-1]), the local error estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) in ``est``.
+        Returns (ok, eta): ok False if a stage's Newton failed."""
+        a, w, err, explicit_first = tableau[0], tableau[1], tableau[2], tableau[3]
+        mass, inverse_mass, algebraic = rows[0], rows[1], rows[2]
+        rates, est, stage, guess, start, rhs, base, dx = work
+        carry, newton_iterations, full_iterations, eta_floor, eta_decay = (rules[3], rules[4], rules[5], rules[6],
+                                                                         rules[7])
+        s = a.shape[0]
+        dh = h * a[s - 1, s - 1]
+        if not factor(x, dh, lu, data):
+            return False, eta
+        rates[0] = f
+        first = 1 if explicit_first else 0
+        if first:
+            rates[1] = f
+        stage[:] = x
+        np.multiply(mass, x, base)
+        for i in range(first, s):
+            stage_sums(h * w[i], i + 1, rates, base, rhs, guess)
+            for r in algebraic:
+                rhs[r] = 0.0
+            guess *= inverse_mass
+            for r in algebraic:
+                guess[r] = stage[r]  # from the last stage
+            start[:] = guess  # the full-Newton fallback's guess
+            ok, eta = solve_stage(guess, rates[i + 1], rhs, weights, newton_tol,
+                                  max(eta, eta_floor) ** eta_decay if carry else 1.0, newton_iterations, False, dh,
+                                  lu, full_lu, mass, dx, counters, rules, data)
+            if not ok:
+                guess[:] = start
+                ok, eta = solve_stage(guess, rates[i + 1], rhs, weights, newton_tol, 1.0, full_iterations, True, dh,
+                                      lu, full_lu, mass, dx, counters, rules, data)
+                if not ok:
+                    return False, eta
+            stage[:] = guess
+        if tableau[5]:
+            error_sum(h, err, rates, est)
+            for r in algebraic:
+                est[r] = 0.0
+            solve(lu, est, data)
+        return True, eta
+
+    def advance(x, f, state, counters, t_bound, fixed, tableau, control, rules, rows, work, lu, full_lu, record,
+                data):
+        """Step from (t = state[T], x, f = F(x)) until t_bound is reached (LANDED, within control's output rtol), the
+        record is full, or max_steps.  Adaptive steps keep the RMS local error over the differential rows, weighted
+        by atol + rtol |x|, below 1; ``fixed`` (not empty): the steps end at those times, with no error control.
+        control = (rtol, atol, newton_tol, max_steps, NEWTON_CUT, repeat band, CAP_START, CAP_GROWTH, OUTPUT_RTOL,
+        LANDING_SHARE, STEP_SAFETY, STEP_SHRINK, STEP_GROW, ERROR_FLOOR), rules the Newton's (``_rules``)."""
+        sources  # noqa: B018 -- the cache key (kernels.source_key): numba hashes a closure's cells
+        rtol, atol, newton_tol, max_steps = control[0], control[1], control[2], control[3]
+        newton_cut, repeat_band, cap_start, cap_growth, output_rtol = (control[4], control[5], control[6],
+                                                                       control[7], control[8])
+        landing, safety, shrink, grow, floor = control[9], control[10], control[11], control[12], control[13]
+        differential = rows[3]
+        rates, est, stage, weights = work[0], work[1], work[2], work[8]
+        err_order = tableau[4]
+        s = tableau[0].shape[0]
+        t, h, eta, h_fail, cap = state[T], state[H], state[ETA], state[H_FAIL], state[CAP]
+        rec_t, rec_x = record
+        counters[RECORDED] = 0
+        while True:
+            if counters[STEPS] + counters[REJECTED] >= max_steps:
+                state[T], state[H], state[ETA], state[H_FAIL], state[CAP] = t, h, eta, h_fail, cap
+                return MAX_STEPS_REACHED
+            if len(fixed):
+                h_try = fixed[int(state[NEXT_FIXED])] - t
+            else:
+                h_try = min(h, t_bound - t)
+                if t_bound - (t + h_try) < landing * h_try:
+                    h_try = t_bound - t
+            weights[:] = atol + rtol * np.abs(x)
+            ok, eta_step = dirk_step(x, f, h_try, weights, newton_tol, eta, tableau, rows, work[:8], lu, full_lu,
+                                     counters, rules, data)
+            if not ok:
+                if len(fixed):
+                    state[T] = t
+                    return FIXED_STEP_FAILED
+                eta = 1.0
+                counters[REJECTED] += 1
+                if abs(h_try / h_fail - 1.0) < repeat_band:
+                    cap = cap_start * h_try
+                h, h_fail = newton_cut * h_try, h_try
+                continue
+            eta = eta_step
+            if len(fixed):
+                state[NEXT_FIXED] += 1
+            else:
+                err = max(norm(est[differential], weights[differential]), floor)
+                factor_ = safety * err ** (-1.0 / err_order)
+                if err > 1.0:
+                    counters[REJECTED] += 1
+                    h = h_try * max(shrink, factor_)
+                    continue
+                h = min(h_try * min(grow, max(shrink, factor_)), cap)
+                cap *= cap_growth
+            counters[STEPS] += 1
+            x[:] = stage
+            f[:] = rates[s]
+            t += h_try
+            rec_t[counters[RECORDED]] = t
+            rec_x[counters[RECORDED]] = x
+            counters[RECORDED] += 1
+            state[T], state[H], state[ETA], state[H_FAIL], state[CAP] = t, h, eta, h_fail, cap
+            if abs(t - t_bound) <= output_rtol * abs(t_bound):
+                return LANDED
+            if len(fixed) and t > t_bound:
+                return FIXED_STEP_PASSED
+            if counters[RECORDED] == len(rec_t):
+                return RECORDS_FULL
+
+    if not compiled:
+        return advance
+    from .compiled import compile_loop
+
+    return compile_loop(advance, solve_stage, dirk_step)
+
+
+def _rules(problem, full_newton=FULL_NEWTON_ITERATIONS):
+    """The Newton's rules as the loop takes them."""
+    return (NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE, bool(problem.carries_contraction), NEWTON_ITERATIONS,
+            full_newton, ETA_FLOOR, ETA_DECAY)
+
+
+def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol=1e-8, h0=1e-9,
+              newton_tol=NEWTON_TOL, fixed_times=None, observer=None, max_steps=MAX_STEPS, resume=None,
               repeat_cap=True):
-    """Integrate ``problem`` from t = 0 (or from ``resume`` = (t0, x0)), returning the state at each time
-    of the sorted ``t_out``.
+    """Integrate ``problem`` by the DIRK ``method`` from t = 0 (or from ``resume`` = (t0, x0)), returning the state at
+    each time of the sorted ``t_out``.
 
-    Adaptive steps keep the RMS local error over the differential rows, weighted by
-    atol + rtol |x|, below 1; with ``fixed_times`` (an increasing array containing every t_out) the
-    steps are those, with no error control (refinement studies, stability maps).
-    ``observer(t, x)`` is called after every accepted step.  ``bordered``, ``wall_newton``: bdf's Newton systems
-    (``_integrate_bdf``); ``repeat_cap``: the DIRKs' cap after a repeated Newton failure (REPEAT_BAND; False:
-    none).  Returns (states, stats), states of shape (len(t_out), n).
+    Adaptive steps keep the RMS local error over the differential rows, weighted by atol + rtol |x|, below 1; with
+    ``fixed_times`` (an increasing array containing every t_out) the steps are those, with no error control
+    (refinement studies, stability maps).  ``observer(t, x)`` is called after every accepted step.  ``compiled``:
+    the loop and the problem's kernels compiled by numba, if the problem has its own (``dirk_kernels``); ``repeat_cap``:
+    the cap after a repeated Newton failure (REPEAT_BAND; False: none).  Returns (states, stats), states of shape
+    (len(t_out), n).
     """
-    if method == "bdf":
-        if fixed_times is not None:
-            raise ValueError("method 'bdf' chooses its own steps: fixed_times needs a DIRK method")
-        return _integrate_bdf(problem, t_out, rtol=rtol, atol=atol, h0=h0, observer=observer,
-                              max_steps=max_steps, resume=resume, bordered=bordered, wall_newton=wall_newton)
     tab = TABLEAUX[method]
     if fixed_times is None and tab.err is None:
         raise ValueError(f"method {method!r} has no error estimate: give fixed_times")
     t_out = np.asarray(t_out, dtype=float)
-    differential = problem.mass > 0
-    rows = mass_rows(problem.mass)
-    stats = StepStats()
-    start = time.process_time()
-    t, x = resume if resume is not None else (0.0, problem.initial())
-    f = problem.rate(x)
-    h, eta = h0, 1.0
-    h_fail, cap = math.inf, math.inf  # the last Newton failure's step, the step cap after a repeat
-    states = np.empty((len(t_out), len(x)))
+    start_cpu = time.process_time()
+    kernels, data, factors, compiled = problem_kernels(problem, compiled)
+    advance = dirk_loop(kernels, compiled)
+    t0, x = resume if resume is not None else (0.0, problem.initial())
+    x = np.array(x, dtype=float)
+    n = len(x)
+    f = np.empty(n)
+    kernels.rate(x, f, data)
+    mass = np.asarray(problem.mass, dtype=float)
+    algebraic, inverse_mass = mass_rows(mass)
+    rows = (mass, inverse_mass, algebraic, np.flatnonzero(mass > 0))
+    s = len(tab.A)
+    tableau = (tab.matrix, tab.stage_weights, tab.error_weights if tab.err is not None else np.zeros(s),
+               tab.explicit_first, int(tab.err_order), tab.err is not None)
+    control = (float(rtol), float(atol), float(newton_tol), int(max_steps), NEWTON_CUT,
+               REPEAT_BAND if repeat_cap else 0.0, CAP_START, CAP_GROWTH, OUTPUT_RTOL, LANDING_SHARE, STEP_SAFETY,
+               STEP_SHRINK, STEP_GROW, ERROR_FLOOR)
+    work = (np.empty((s + 1, n)), *(np.empty(n) for _ in range(8)))
+    fixed = np.asarray(fixed_times if fixed_times is not None else [], dtype=float)
+    state = np.array([t0, h0, 1.0, math.inf, math.inf, 0.0])
+    counters = np.zeros(5, dtype=np.int64)
+    record = (np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n)))
+    if observer is not None and resume is None:
+        observer(t0, x.copy())
+    states = np.empty((len(t_out), n))
     k = 0
-    schedule = None if fixed_times is None else iter(np.asarray(fixed_times, dtype=float))
-    if observer is not None and resume is None:
-        observer(t, x)
+    rules = _rules(problem)
+    lu, full_lu = factors(), factors()
     while k < len(t_out):
-        if stats.steps + stats.rejected >= max_steps:
-            raise StepperFailure(f"max_steps = {max_steps} reached at t = {t:.3e}")
-        if schedule is not None:
-            h_try = next(schedule) - t
-        else:
-            h_try = min(h, t_out[k] - t)
-            if t_out[k] - (t + h_try) < LANDING_SHARE * h_try:
-                h_try = t_out[k] - t
-        weights = atol + rtol * np.abs(x)
-        try:
-            x1, f1, err_vec, eta = dirk_step(problem, tab, x, f, h_try, weights, newton_tol, stats, eta, rows)
-        except NewtonFailure:
-            if schedule is not None:
-                raise
-            eta = 1.0
-            stats.rejected += 1
-            if repeat_cap and abs(h_try / h_fail - 1.0) < REPEAT_BAND:
-                cap = CAP_START * h_try
-            h, h_fail = NEWTON_CUT * h_try, h_try
-            continue
-        if schedule is None:
-            scaled = err_vec[differential] / weights[differential]
-            err = max(np.sqrt(scaled @ scaled / len(scaled)), ERROR_FLOOR)
-            factor = STEP_SAFETY * err ** (-1.0 / tab.err_order)
-            if err > 1.0:
-                stats.rejected += 1
-                h = h_try * max(STEP_SHRINK, factor)
-                continue
-            h = min(h_try * min(STEP_GROW, max(STEP_SHRINK, factor)), cap)
-            cap *= CAP_GROWTH
-        stats.steps += 1
-        x, f, t = x1, f1, t + h_try
+        exit_ = advance(x, f, state, counters, t_out[k], fixed, tableau, control, rules, rows, work, lu, full_lu,
+                        record, data)
         if observer is not None:
-            observer(t, x)
-        while k < len(t_out) and abs(t - t_out[k]) <= OUTPUT_RTOL * abs(t_out[k]):
-            states[k] = x
-            k += 1
-        if schedule is not None and k < len(t_out) and t > t_out[k]:
+            for row in range(counters[RECORDED]):
+                observer(record[0][row], record[1][row].copy())
+        if exit_ == MAX_STEPS_REACHED:
+            raise StepperFailure(f"max_steps = {max_steps} reached at t = {state[T]:.3e}")
+        if exit_ == FIXED_STEP_FAILED:
+            raise NewtonFailure(f"Newton did not converge at the fixed step from t = {state[T]:.3e}")
+        if exit_ == FIXED_STEP_PASSED:
             raise ValueError("fixed_times must contain every output time")
-    stats.cpu_seconds = time.process_time() - start
-    return states, stats
-
-
-def _reduced_jacobian(problem, x):
-    """d/dz of the rate of the differential rows z = x[1:] with the wall x[0] = x0(z) eliminated by
-    the constraint g(x0, z) = 0: J_zz - J_z0 (dg/dz)/(dg/dx0), a band plus kl dense rows; a dense
-    array up to DENSE_BDF_MAX rows (scipy's BDF then factorises it by LAPACK getrf), else CSC (SuperLU)."""
-    jac = problem.jacobian(x)
-    n = len(x) - 1
-    grad = problem.wall_gradient(x)
-    coupling = jac.bands[jac.ku + 1:, 0][:n]  # J[1..kl, 0]
-    dense = -coupling[:, None] * (grad[1:] / grad[0])[None, :]
-    if n <= DENSE_BDF_MAX:
-        out = np.zeros((n, n))
-        for k in range(-jac.kl, jac.ku + 1):  # diagonal k = column - row, band row ku - k
-            values = jac.bands[jac.ku - k, 1:]
-            np.fill_diagonal(out[:, k:] if k >= 0 else out[-k:, :], values[k:] if k >= 0 else values[:n + k])
-        out[:len(coupling)] += dense
-        return out
-    import scipy.sparse as sp
-
-    rows = np.repeat(np.arange(len(coupling)), n)
-    cols = np.tile(np.arange(n), len(coupling))
-    return (jac.interior() + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()
-
-
-def _integrate_bdf(problem, t_out, *, rtol, atol, h0, observer, max_steps, resume=None, bordered=True,
-                   wall_newton=True):
-    """``integrate`` with scipy's BDF on z = x[1:] (``problem.interior_rate``), x[0] from ``problem.project``
-    (unit mass rows).
-
-    BDF steps onto every output time (its bound moved on to the next one, no restart: scipy cuts the
-    last step to the bound): its dense output is ~1e4 rtol off through an imposed speed's lift-off, where
-    the landed steps are within ~1-20 rtol (bench/RESULTS.md "Remeshing the speed in time").
-    Near a steady state at tight tolerances the round-off of the rate (|tau~|/h^2 eps) stops scipy's
-    Newton from converging and the steps shrink without end: once the step has stayed below BDF_STALL t
-    for STALL_STEPS steps, after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is
-    needed), the rest goes to HANDOVER (whose Newton accepts an update at round-off).
-
-    ``bordered``: Newton's systems I - c J are solved by the bordered band of NewtonMatrix (the unreduced M - c J)
-    instead of scipy's own LU of the reduced J, whose fill-in from the wall's dense rows dominates (1.1-2.8x less
-    CPU at 64-512 cells; False: the baseline of bench/speed_solver.py).  ``wall_newton``: Newton takes the imposed
-    speed's wall row and column at each iterate and the band at the step's Jacobian: the wall unknown as a function
-    of the interior curves with a sensitivity ~1/h_0 once the first cell's share of u~_w is small, and with all of
-    it frozen Newton contracts too slowly and holds BDF at order 1 through the lift-off (bench/bdf_wall_newton.py)."""
-    if not np.all(problem.mass[1:] == 1.0) or problem.mass[0] != 0.0:
-        raise ValueError("method 'bdf' needs an algebraic row 0 and unit mass elsewhere")
-    from scipy.integrate import BDF
-
-    t_out = np.asarray(t_out, dtype=float)
-    stats = StepStats(rejected=None)
-    start = time.process_time()
-
-    def state(z):
-        return problem.project(np.concatenate(([0.0], z)))
-
-    lift_off_end = getattr(problem, "lift_off_end", 0.0)
-    iterate = [None]  # the state of the last rate evaluation: in scipy's Newton, the iterate the next solve is at
-
-    def rate(t, z):
-        x = state(z)
-        iterate[0] = x
-        return problem.interior_rate(x) if np.isfinite(x[0]) else np.full(len(z), np.nan)
-
-    t0, x0 = resume if resume is not None else (0.0, problem.initial())
-    admissible = [state(x0[1:])]
-
-    unreduced = []  # the last Jacobian of the unreduced problem (``bordered``)
-
-    def jacobian(t, z):
-        x = state(z)
-        if np.isfinite(x[0]):
-            admissible[0] = x
-        if not bordered:
-            return _reduced_jacobian(problem, admissible[0])
-        unreduced[:] = [problem.jacobian(admissible[0])]
-        return BORDERED_MARKER
-
-    x = admissible[0]
-    if bordered:
-        # scipy's BDF uses its Jacobian J only to hand I - c J to lu. Handed J = BORDERED_MARKER = -1 and I = 0 (after
-        # its set-up has seen an empty sparse n x n), it hands over c itself, and lu factorises the unreduced M - c J
-        # by the bordered band (NewtonMatrix): I - c J is never formed (sparse, with its CSC bookkeeping, it would
-        # cost ~0.3 ms a factorisation, a quarter of a 64-cell solve)
-        import scipy.sparse as sp
-
-        solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, first_step=h0,
-                     jac=lambda t, z: sp.csc_matrix((len(z), len(z))))
-        solver.jac, solver.I, solver.J = jacobian, 0.0, jacobian(t0, x[1:])
-
-        def lu(c):
-            solver.nlu += 1
-            return NewtonMatrix(problem, None, float(c), jac=unreduced[0])
-
-        def solve_lu(factors, b):
-            """Newton's correction; the wall's row and column (of an imposed speed) at the current iterate if
-            ``wall_newton``."""
-            x = iterate[0]
-            if wall_newton and factors.dense and np.isfinite(x[0]):
-                factors.refresh_wall(problem.mass[0], *problem.wall_jacobian(x))
-            return factors.solve(np.concatenate(([0.0], b)))[1:]
-
-        solver.lu, solver.solve_lu = lu, solve_lu
-    else:
-        solver = BDF(rate, t0, x[1:], t_out[0], rtol=rtol, atol=atol, jac=jacobian, first_step=h0)
-    states = np.empty((len(t_out), len(x)))
-    if observer is not None and resume is None:
-        observer(t0, x)
-    k = small = 0  # the output times reached, the small steps in a row
-    while k < len(t_out):
-        if stats.steps >= max_steps:
-            raise StepperFailure(f"max_steps = {max_steps} reached at t = {solver.t:.3e}")
-        message = solver.step()
-        if solver.status == "failed":
-            raise NewtonFailure(f"BDF failed at t = {solver.t:.3e}: {message}")
-        stats.steps += 1
-        x = state(solver.y)
-        if observer is not None:
-            observer(solver.t, x)
-        if solver.status == "finished":  # the step was cut to land on t_out[k]: the next bound, no restart
+        while exit_ == LANDED and k < len(t_out) and abs(state[T] - t_out[k]) <= OUTPUT_RTOL * abs(t_out[k]):
             states[k] = x
             k += 1
-            if k < len(t_out):
-                solver.t_bound, solver.status = t_out[k], "running"
-            small = 0  # the landing's cut steps are no stall
-            continue
-        after = solver.t > lift_off_end
-        small = small + 1 if after and solver.step_size < BDF_STALL * solver.t else 0
-        if small >= STALL_STEPS:
-            states[k:], rest = integrate(problem, t_out[k:], method=HANDOVER, rtol=rtol, atol=atol,
-                                         h0=solver.step_size, observer=observer, max_steps=max_steps - stats.steps,
-                                         resume=(solver.t, x))
-            stats.steps += rest.steps
-            stats.newton_iterations += rest.newton_iterations
-            break
-    stats.newton_iterations += solver.nfev
-    stats.cpu_seconds = time.process_time() - start
+    stats = StepStats(int(counters[STEPS]), int(counters[REJECTED]), int(counters[ITERATIONS]),
+                      int(counters[FAILURES]), time.process_time() - start_cpu)
     return states, stats
 
 

@@ -1,7 +1,8 @@
-"""The compiled BDF of an imposed speed (continuum.speed_bdf) against what it compiles: ImposedSpeed's rate,
-Jacobian, wall row and projection, LAPACK's banded LU (through scipy), and scipy's BDF step for step."""
-import granstokes.continuum.compiled as compiled
-import granstokes.continuum.speed_bdf as sb
+"""The BDF loop of an imposed speed (continuum.bdf) against what it is built from: the speed's kernels against
+ImposedSpeed's rate, Jacobian, wall row and projection, the band LU against LAPACK's (through scipy), and the loop
+against scipy's own BDF step for step (tests/continuum/bdf_oracle.py)."""
+import granstokes.continuum.kernels as kernels
+import granstokes.continuum.problems as problems
 import granstokes.continuum.stepper as stepper
 import numpy as np
 import pytest
@@ -10,6 +11,8 @@ from granstokes.continuum.problems import ImposedSpeed
 from granstokes.continuum.solver import TIME_ERROR_PER_RTOL, Numerics, map_for, solve_speed
 from granstokes.continuum.steady import mu_w_for_speed
 from scipy.linalg import solve_banded
+
+from tests.continuum import bdf_oracle
 
 #: the compiled arithmetic differs from numpy's in the order of additions only: relative round-off of a few
 #: operations, besides the cancellations bounded in each test
@@ -31,14 +34,8 @@ def speed_state(request):
     return pb, x
 
 
-def _kernel_args(pb):
-    fr = pb.friction
-    cols, weights, mud_p, p32, mu_w = pb.stencil()
-    return dict(cols=cols, weights=weights, mud_p=mud_p, p32=p32, mu_w=mu_w, mu_d=fr.mu_d, dmu=fr.dmu, p0=pb.p[0])
-
-
 def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
-    """The compiled projection, rate and Jacobian band equal ImposedSpeed's at a state in the lift-off, to the
+    """The kernels' projection, rate and Jacobian band equal ImposedSpeed's at a state in the lift-off, to the
     round-off of the sums they make in another order: q to that of its constraint (the interior's share over the
     first cell's weight w_0 ~ 8e-6 and dL/dq: N eps share/(w_0 dL/dq) ~ 4e-10), the rate and the band's diagonal
     to that of the Laplacian (weights up to ~1/h_0^2 on values O(1): measured 5e-9 of the largest rate), every
@@ -46,11 +43,12 @@ def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
     from granstokes.continuum.problems import first_cell
 
     pb, x = speed_state
-    fr, n = pb.friction, len(x)
+    n = len(x)
     _, _, mud_p, p32, _ = pb.stencil()
-    lap_wall, p, wq, u_w, w_first = pb.wall_terms()
+    _, _, _, _, w_first = pb.wall_terms()
+    _, data, _ = pb.bdf_kernels()
     projected = np.empty(n)
-    sb._project(x[1:].copy(), projected, u_w, w_first, pb.mu_w, fr.mu_d, fr.mu_s, fr.dmu, p, wq)
+    problems.speed_project(x[1:].copy(), projected, data)
     _, b, share = pb._interior(x)
     q = pb.project(x.copy())[0]
     bound = n * np.finfo(float).eps * share / (w_first * first_cell(q, b)[1])
@@ -59,13 +57,12 @@ def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
     tau = pb.full(x)
     cancel = 8 * np.finfo(float).eps * np.sum(np.abs(pb.lap.weights * tau[pb.lap.cols]), axis=1)
     s = mud_p - pb.mu_w * x[1:]
-    args = _kernel_args(pb)
     f = np.empty(n - 1)
-    sb._rate(x, f, np.empty(n + 1), **args)
+    problems.speed_rate(x, f, data)
     ref = pb.interior_rate(x)
     assert np.all(np.abs(f - ref) <= s * s / p32 * cancel + ROUND_OFF * np.abs(ref))
     band = np.zeros((pb.kl + pb.ku + 1, n - 1))
-    sb._jacobian_band(x, band, pb.ku, np.empty(n + 1), np.empty(n - 1), **args)
+    problems.speed_jacobian(x, band, data)
     full = pb.jacobian(x).bands[:, 1:]  # columns 1..N-1; its entries of row 0 (the dense wall row) are masked
     rows = np.arange(band.shape[0])[:, None] - pb.ku + np.arange(1, n)[None, :]  # the row i of each band entry
     interior = (rows >= 1) & (rows <= n - 1)
@@ -76,14 +73,12 @@ def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
 
 
 def test_wall_row_and_column_are_imposed_speeds(speed_state):
-    """The compiled wall row (the constraint's gradient) and column (dF_i/dq, rows 1..kl) equal
+    """The kernels' wall row (the constraint's gradient) and column (dF_i/dq, rows 1..kl) equal
     ImposedSpeed.wall_jacobian's to ROUND_OFF relative."""
     pb, x = speed_state
-    fr, n = pb.friction, len(x)
-    cols, weights, mud_p, p32, mu_w = pb.stencil()
-    lap_wall, p, wq, u_w, w_first = pb.wall_terms()
-    row0, column = np.empty(n), np.empty(len(lap_wall))
-    sb._wall(x, row0, column, cols, weights, lap_wall, u_w, w_first, mu_w, fr.mu_d, fr.dmu, p, wq, mud_p, p32)
+    _, data, n_wall = pb.bdf_kernels()
+    row0, column = np.empty(len(x)), np.empty(n_wall)
+    problems.speed_wall(x, row0, column, data)
     ref_row, ref_column = pb.wall_jacobian(x)
     assert np.max(np.abs(row0 - ref_row)) <= ROUND_OFF * np.max(np.abs(ref_row))
     assert np.max(np.abs(column - ref_column)) <= ROUND_OFF * np.max(np.abs(ref_column))
@@ -91,7 +86,7 @@ def test_wall_row_and_column_are_imposed_speeds(speed_state):
 
 @pytest.mark.parametrize("dominant", [False, True], ids=["rows swapped", "no swaps"])
 def test_band_lu_solves_as_lapack_does(dominant):
-    """compiled.band_lu/band_solve solve a random band system (kl = 3, ku = 2) as LAPACK's gbsv through scipy's
+    """kernels.band_lu/band_solve solve a random band system (kl = 3, ku = 2) as LAPACK's gbsv through scipy's
     solve_banded, to 1e-12: with its first sub-diagonal the largest (rows are swapped; U's upper bandwidth kl + ku)
     and with a dominant diagonal (none; ku, and the solve skips the fill's bands)."""
     rng = np.random.default_rng(7)
@@ -105,50 +100,53 @@ def test_band_lu_solves_as_lapack_does(dominant):
     ab = np.zeros((2 * kl + ku + 1, n), order="F")
     ab[kl:] = band
     piv = np.zeros(n, dtype=np.int64)
-    upper = compiled.band_lu(ab, piv, kl, ku)
+    upper = kernels.band_lu(ab, piv, kl, ku)
     assert upper == (ku if dominant else kl + ku)
     assert np.any(piv != np.arange(n)) != dominant
     x = rhs.copy()
-    compiled.band_solve(ab, piv, kl, ku, upper, x)
+    kernels.band_solve(ab, piv, kl, ku, upper, x)
     ref = solve_banded((kl, ku), band, rhs)
     assert np.max(np.abs(x - ref)) <= 1e-12 * np.max(np.abs(ref))
 
 
-def _steps(monkeypatch, compiled: bool, pb, times, numerics):
+def _steps(ours: bool, pb, times, numerics):
     rows = []
-    integrate(pb, times, method="bdf", compiled=compiled, rtol=numerics.rtol, atol=numerics.atol, h0=1e-9,
-              observer=lambda t, x: rows.append((t, x[0])))
+    run = integrate if ours else bdf_oracle.integrate
+    run(pb, times, **({"method": "bdf"} if ours else {}), rtol=numerics.rtol, atol=numerics.atol, h0=1e-9,
+        observer=lambda t, x: rows.append((t, x[0])))
     return np.array(rows)
 
 
-def test_compiled_bdf_takes_scipys_steps(speed_state, monkeypatch):
+def test_bdf_takes_scipys_steps(speed_state):
     """Step for step scipy's BDF: the first 50 steps land on the times of scipy's to 1e-9 relative (measured 8e-11:
     round-off of the sums, growing by the step control's feedback; a wrong coefficient or control rule moves
     them by O(1)), and their wall unknowns q agree as well."""
     pb, _ = speed_state
     numerics = Numerics(n_cells=64).for_drive("speed")
     times = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]
-    ours, scipys = (_steps(monkeypatch, compiled, pb, times, numerics) for compiled in (True, False))
+    ours, scipys = (_steps(ours, pb, times, numerics) for ours in (True, False))
     assert np.max(np.abs(ours[1:51] / scipys[1:51] - 1)) < 1e-9
 
 
-def test_compiled_solve_is_scipys_to_the_time_error(monkeypatch):
-    """solve_speed compiled and with scipy's BDF (Numerics.compiled = False) agree in mu_w and delta at t~ = 1e-4 ... 10
-    to the time error, TIME_ERROR_PER_RTOL rtol (their step sequences part by round-off after a few hundred steps:
-    measured 6e-9 relative at rtol 1e-8)."""
+def test_bdf_is_scipys_to_the_time_error():
+    """The BDF loop and scipy's BDF on the same system agree in mu_w at t~ = 1e-4 ... 10 to the time error,
+    TIME_ERROR_PER_RTOL rtol (their step sequences part by round-off after a few hundred steps: measured 6e-9
+    relative at rtol 1e-8)."""
     from tests.continuum.reference import DISKS
 
     times = [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0]
-    ours = solve_speed(DISKS, 1.0, times, Numerics(n_cells=128))
-    scipys = solve_speed(DISKS, 1.0, times, Numerics(n_cells=128, compiled=False))
-    bound = TIME_ERROR_PER_RTOL["bdf"] * ours.numerics.rtol
-    for q in ("mu_w", "delta"):
-        assert np.max(np.abs(getattr(ours, q) / getattr(scipys, q) - 1)) < bound, q
+    numerics = Numerics(n_cells=128).for_drive("speed")
+    pb = ImposedSpeed(DISKS, 1.0, numerics.mesh(*map_for(DISKS, mu_w_for_speed(DISKS, 1.0), "speed", times[0])))
+    options = dict(rtol=numerics.rtol, atol=numerics.atol, h0=numerics.initial_step * times[0])
+    ours = integrate(pb, times, method="bdf", **options)[0]
+    scipys = bdf_oracle.integrate(pb, times, **options)[0]
+    bound = TIME_ERROR_PER_RTOL["bdf"] * numerics.rtol
+    assert np.max(np.abs([pb.mu(a)[0] / pb.mu(b)[0] - 1 for a, b in zip(ours, scipys)])) < bound
 
 
 def test_newton_floor_carries_a_steady_state_past_its_round_off():
     """After the lift-off, where scipy's Newton would give up, an update within the wall unknown's round-off is
-    accepted (speed_bdf.ROUND_OFF_UPDATES):
+    accepted (bdf.ROUND_OFF_UPDATES):
     the disks' u~_w = 0.05 on 512 cells at the matched rtol (6.25e-10) reaches t~ = 10 (without the floor its step
     collapses at t~ = 9.244, measured on this machine; the collapse is chaotic in the round-off, so it is not
     replayed here), at its steady state mu_w^inf to the time error TIME_ERROR_PER_RTOL rtol (1.9e-8; measured
@@ -162,20 +160,20 @@ def test_newton_floor_carries_a_steady_state_past_its_round_off():
 
 
 def test_a_step_limit_is_a_stepper_failure(speed_state):
-    """The compiled BDF stops at max_steps with stepper.StepperFailure (the CLI's exit 1, one line), naming the
-    limit and the time reached, as scipy's path does."""
+    """The BDF loop stops at max_steps with stepper.StepperFailure (the CLI's exit 1, one line), naming the limit
+    and the time reached."""
     pb, _ = speed_state
     with pytest.raises(stepper.StepperFailure, match=r"max_steps = 20 reached at t = "):
         integrate(pb, [1.0], method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9, max_steps=20)
 
 
-def test_a_repeated_output_time_is_landed_on_once(speed_state, monkeypatch):
-    """stepper.integrate's output times may repeat (solve_speed refuses that, direct callers may not): the compiled
-    BDF returns the same state twice, as scipy's path does (its solver is already there), instead of taking a zero
-    step (and dividing by it)."""
+def test_a_repeated_output_time_is_landed_on_once(speed_state):
+    """integrate's output times may repeat (solve_speed refuses that, direct callers may not): the BDF loop returns
+    the same state twice, as scipy's BDF does (its solver is already there), instead of taking a zero step (and
+    dividing by it)."""
     pb, _ = speed_state
     times = [1e-3, 1e-2, 1e-2, 0.1]
     ours = integrate(pb, times, method="bdf", rtol=1e-8, atol=1e-10, h0=1e-9)[0]
-    scipys = integrate(pb, times, method="bdf", compiled=False, rtol=1e-8, atol=1e-10, h0=1e-9)[0]
+    scipys = bdf_oracle.integrate(pb, times, rtol=1e-8, atol=1e-10, h0=1e-9)[0]
     assert np.array_equal(ours[1], ours[2])
     assert np.max(np.abs(ours[:, 1:] - scipys[:, 1:])) < TIME_ERROR_PER_RTOL["bdf"] * 1e-8

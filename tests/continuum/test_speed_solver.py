@@ -4,6 +4,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from granstokes.continuum.bdf import HANDOVER
 from granstokes.continuum.closed_forms import speed_short_time_mu
 from granstokes.continuum.integrators import integrate
 from granstokes.continuum.mesh import Mesh
@@ -80,13 +81,14 @@ def test_wall_friction_is_mu_d_before_t_mud_on_any_mesh(paper_friction):
 def test_first_cell_integral_and_derivatives(q, b, compiled):
     """The first cell's int_0^1 ds/(a + (b - a) s), a = exp(-q), against adaptive quadrature (to 1e-13) in
     each of its three forms (series, atanh, logarithms), and its derivatives against central differences; as
-    ImposedSpeed runs it and as continuum.speed_bdf compiles it."""
+    ImposedSpeed runs it and as numba compiles it (continuum.kernels)."""
+    from granstokes.continuum.problems import first_cell
     from scipy.integrate import quad
 
     if compiled:
-        from granstokes.continuum.speed_bdf import first_cell
-    else:
-        from granstokes.continuum.problems import first_cell
+        from numba import njit
+
+        first_cell = njit(error_model="numpy")(first_cell)
     a = np.exp(-q)
     ref = quad(lambda s: 1 / (a + (b - a) * s), 0, 1, epsabs=0, epsrel=1e-13, limit=200)[0]
     lam, dq, db = first_cell(q, b)
@@ -178,7 +180,7 @@ def test_bdf_lands_on_every_output_time():
 
 
 def test_a_stall_after_the_lift_off_hands_over_to_sdirk4(paper_friction, monkeypatch):
-    """Where BDF's steps stay small (here every step counts as small: BDF_STALL = 1, STALL_STEPS = 5) after the
+    """Where BDF's steps stay small (here every step counts as small: Numerics.stall = (1, 5)) after the
     lift-off (u~_w = 0.198: 0.39), the rest goes to SDIRK4 from BDF's state, and the result is BDF's own to the
     time error, TIME_ERROR_PER_RTOL rtol (measured 7.4e-9 in mu_w, 1.4e-9 in delta, at rtol 1e-8)."""
     import granstokes.continuum.stepper as stepper
@@ -191,11 +193,9 @@ def test_a_stall_after_the_lift_off_hands_over_to_sdirk4(paper_friction, monkeyp
         methods.append(kwargs.get("method"))
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(stepper, "integrate", spy)
-    monkeypatch.setattr(stepper, "BDF_STALL", 1.0)
-    monkeypatch.setattr(stepper, "STALL_STEPS", 5)
-    handed = solve_speed(paper_friction, 0.198, times, numerics)
-    assert methods == [stepper.HANDOVER]
+    monkeypatch.setattr(stepper, "integrate", spy)  # observes the handover
+    handed = solve_speed(paper_friction, 0.198, times, replace(numerics, stall=(1.0, 5)))
+    assert methods == [HANDOVER]
     tolerance = TIME_ERROR_PER_RTOL["bdf"] * alone.numerics.rtol
     for q in ("mu_w", "delta"):
         assert np.all(np.abs(getattr(handed, q) / getattr(alone, q) - 1) <= tolerance), q
@@ -290,32 +290,34 @@ DEGENERATE = (Friction(1.1829808188478833e-14, 0.4233339402935836), 3.1574657744
 
 
 @pytest.mark.parametrize("case", ["64 cells", "160 cells", "degenerate calibration"])  # scipy's dense and
-def test_bordered_newton_solves_match_scipys_lu(case, monkeypatch):                     # sparse paths, t ~ 1e-20
-    """bdf's Newton systems by NewtonMatrix's bordered band give the solution of scipy's own LU of the reduced
-    Jacobian to the time error (measured: 7e-8 relative at rtol 1e-8; held to TIME_ERROR_PER_RTOL rtol) with
-    as many Newton iterations (a c read off 2x wrong: BDF fails at t~ = 1e-3).  The times are after
-    solver.early_until: on the early times' deeper cluster scipy's LU fails on 64 cells (t~ = 8e-11)."""
+def test_bordered_newton_solves_match_scipys_lu(case):                     # sparse paths, t ~ 1e-20
+    """bdf's Newton systems by the bordered band give the solution of scipy's own LU of the reduced Jacobian
+    (tests/continuum/bdf_oracle.py) to the time error (measured: 7e-8 relative at rtol 1e-8; held to
+    TIME_ERROR_PER_RTOL rtol) with as many Newton iterations (a c read off 2x wrong: BDF fails at t~ = 1e-3).  The
+    times are after solver.early_until: on the early times' deeper cluster scipy's LU fails on 64 cells."""
+    from tests.continuum import bdf_oracle
 
     fr, u_w, times = DEGENERATE if case.startswith("degenerate") else (FR, 1.334, [0.06, 0.3, 1.0])
-    numerics = Numerics() if case.startswith("degenerate") else Numerics(n_cells=int(case.split()[0]))
-    ours = solve_speed(fr, u_w, times, numerics)
-    scipys = solve_speed(fr, u_w, times, replace(numerics, bordered=False))
-    bound = TIME_ERROR_PER_RTOL["bdf"] * ours.numerics.rtol
-    for q in ("mu_w", "delta"):
-        assert np.max(np.abs(getattr(ours, q) / getattr(scipys, q) - 1)) < bound, q
-    assert ours.stats.newton_iterations <= 1.2 * scipys.stats.newton_iterations  # measured 2514 vs 2531, 2600 vs 2593
+    numerics = (Numerics() if case.startswith("degenerate") else Numerics(n_cells=int(case.split()[0])))
+    numerics = numerics.for_drive("speed")
+    pb = ImposedSpeed(fr, u_w, numerics.mesh(*map_for(fr, mu_w_for_speed(fr, u_w), "speed", times[0])))
+    options = dict(rtol=numerics.rtol, atol=numerics.atol, h0=numerics.initial_step * times[0])
+    ours, our_stats = integrate(pb, times, method="bdf", **options)
+    scipys, scipy_stats = bdf_oracle.integrate(pb, times, bordered=False, **options)
+    bound = TIME_ERROR_PER_RTOL["bdf"] * numerics.rtol
+    assert np.max(np.abs([pb.mu(a)[0] / pb.mu(b)[0] - 1 for a, b in zip(ours, scipys)])) < bound
+    assert our_stats.newton_iterations <= 1.2 * scipy_stats.newton_iterations  # measured 2514 vs 2531, 2600 vs 2593
 
 
-def test_reduced_jacobian_dense_equals_sparse(paper_friction, monkeypatch):
-    """The BDF path's reduced Jacobian (wall eliminated) is the same matrix whether built dense (up to
+def test_reduced_jacobian_dense_equals_sparse(paper_friction):
+    """The scipy BDF oracle's reduced Jacobian (wall eliminated) is the same matrix whether built dense (up to
     DENSE_BDF_MAX unknowns) or sparse: entry by entry, to rounding."""
-    import granstokes.continuum.stepper as stepper
+    from tests.continuum import bdf_oracle
 
     pb = ImposedSpeed(paper_friction, 1.334, Mesh.graded(64, 8.0), order=4)
     x = integrate(pb, [1e-2], method="bdf", rtol=1e-6, atol=1e-8)[0][0]
-    dense = stepper._reduced_jacobian(pb, x)
-    monkeypatch.setattr(stepper, "DENSE_BDF_MAX", 0)
-    sparse = stepper._reduced_jacobian(pb, x).toarray()
+    dense = bdf_oracle.reduced_jacobian(pb, x)
+    sparse = bdf_oracle.reduced_jacobian(pb, x, dense_max=0).toarray()
     assert isinstance(dense, np.ndarray) and dense.shape == sparse.shape == (63, 63)  # nodes 1..63 (tau~_64 = 1 fixed)
     assert np.max(np.abs(dense - sparse)) <= 1e-15 * np.max(np.abs(sparse))
 
@@ -325,17 +327,14 @@ def test_reduced_jacobian_dense_equals_sparse(paper_friction, monkeypatch):
 WALL_NEWTON_SPREAD = 5e-9
 
 
-def test_bdf_wall_newton_keeps_bdf_out_of_the_order_one_trap(monkeypatch):
+def test_bdf_wall_newton_keeps_bdf_out_of_the_order_one_trap():
     """u~_w = 1.334 on 256 cells from five first steps 1e-3 apart (the trap is chaotic in the step sequence):
-    each solve within 2300 steps (measured 1867-1934; with the wall's row and column frozen, stepper.
-    BDF_WALL_NEWTON = False, 1910-3516, three of the five trapped at order 1 through the lift-off), and mu_w at
-    t~ = 1 the same within WALL_NEWTON_SPREAD across them (measured 1.4e-9; frozen 1.3e-8)."""
-    import granstokes.continuum.solver as solver
-
+    each solve within 2300 steps (measured 1867-1934; with the wall's row and column frozen, scipy's BDF with
+    wall_newton=False in tests/continuum/bdf_oracle.py, 1910-3516, three of the five trapped at order 1 through the
+    lift-off), and mu_w at t~ = 1 the same within WALL_NEWTON_SPREAD across them (measured 1.4e-9; frozen 1.3e-8)."""
     mu_w = []
     for k in range(5):
-        monkeypatch.setattr(solver, "INITIAL_STEP", INITIAL_STEP * (1 + 1e-3 * k))
-        sol = solve_speed(FR, 1.334, DECADES, Numerics(n_cells=256))
+        sol = solve_speed(FR, 1.334, DECADES, Numerics(n_cells=256, initial_step=INITIAL_STEP * (1 + 1e-3 * k)))
         assert sol.stats.steps <= 2300, k
         mu_w.append(sol.mu_w[list(DECADES).index(1.0)])
     assert np.ptp(mu_w) <= WALL_NEWTON_SPREAD * np.median(mu_w)
@@ -384,20 +383,19 @@ def test_unreachable_speed_accuracy_is_refused_with_what_can_be_reached():
         solve_speed(FR, 1.334, DECADES, accuracy=1e-8)
 
 
-def test_speed_early_times_on_the_deeper_cluster(monkeypatch):
+def test_speed_early_times_on_the_deeper_cluster():
     """0.198's mu_w at t~ = 1e-3 (0.026 t~_mud, mu~_w ~ 1e-5) on 128 cells: within 1e-7 of the early reference
-    with its early times apart (solver.EARLY_SPAN, measured 8e-9); on the solve's own map (EARLY_SPAN = 0, the
+    with its early times apart (Numerics.early_span, measured 8e-9); on the solve's own map (early_span = 0, the
     control) 1.2e-6 off, an error that N does not change.  The joined series runs on in time."""
-    import granstokes.continuum.solver as solver
+    from granstokes.continuum.solver import EARLY_SPAN
 
     from tests.continuum.reference import cached
 
     times = [1e-4, 1e-3, 1e-2, 0.1]
     ref = cached("speed-early-0.198", times=np.array(times[:2]))["mu_w"]
     errors = []
-    for span in (solver.EARLY_SPAN, 0.0):
-        monkeypatch.setattr(solver, "EARLY_SPAN", span)
-        sol = solve_speed(FR, 0.198, times, Numerics(n_cells=128))
+    for span in (EARLY_SPAN, 0.0):
+        sol = solve_speed(FR, 0.198, times, Numerics(n_cells=128, early_span=span))
         errors.append(np.abs(sol.mu_w[:2] - ref) / ref)
         assert (sol.early_mesh is not None) == (span > 0)
     assert np.all(errors[0] < 1e-7) and errors[1][1] > 1e-6, errors
