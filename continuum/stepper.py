@@ -3,9 +3,9 @@ zero on algebraic rows), adaptive steps from an embedded error estimate.
 
 Every implicit stage solves  M X - h a_ii F(X) = M x_n + h sum_j a_ij F_j  (algebraic rows:
 F(X) = 0) by simplified Newton: one factorisation of M - h a_ii J per step (all SDIRK stages share
-a_ii).  J is banded (a ``Jacobian``), except that row 0 may be dense (the imposed-speed integral
-condition); the system is solved by bordering with LAPACK gbtrf/gbtrs.  All tableaux are stiffly accurate
-(x_{n+1} is the last stage), so algebraic rows hold at every step (index-1 DAEs).
+a_ii), through the problem's kernels (continuum.kernels.DirkKernels): its own, or its ``rate`` and
+``jacobian`` factorised by ``NewtonMatrix`` (a band, bordered where row 0 is dense, by LAPACK).  All tableaux
+are stiffly accurate (x_{n+1} is the last stage), so algebraic rows hold at every step (index-1 DAEs).
 
 Methods (``TABLEAUX``), plus ``explicit_euler`` (first order, conditionally stable: the
 stability map's foil):
@@ -16,10 +16,9 @@ stability map's foil):
 * ``crank-nicolson``: the paper's scheme, order 2, A-stable but not L-stable (stiff modes excited
   by the impulsive start ring with amplification -> -1); no error estimate, fixed steps only.
 
-and ``bdf``: scipy's variable-order (1-5) BDF/NDF on the differential rows, the algebraic wall row
-eliminated by the problem's exact ``project`` (an ODE on a constraint manifold).  The DIRKs have stage
-order 1, so on the imposed-speed DAE their accuracy drops (measured: steps grow as rtol^-0.55 during the
-lift-off of mu_w); BDF has no stages and keeps its order: the imposed speed's default.
+The loop (``dirk_loop``) is written once and runs as Python or compiled by numba with the problem's kernels
+(``compiled``).  The DIRKs have stage order 1, so on the imposed-speed DAE their accuracy drops (measured: steps
+grow as rtol^-0.55 during the lift-off of mu_w); continuum.bdf keeps its order there: the imposed speed's default.
 """
 from __future__ import annotations
 
