@@ -124,6 +124,7 @@ def transients():
     return out
 
 
+@pytest.mark.slow
 def test_transient_tends_to_the_steady_solution(transients):
     """The FV transient settles (t = 1000 and 3000 agree to 1e-6) on the spectral steady state within its
     O(h^2) error: |u_80 - u_40|/3 bounds it, and Richardson's extrapolation is 10 x closer."""
@@ -140,6 +141,7 @@ def test_transient_tends_to_the_steady_solution(transients):
     assert abs(transients[80].g[-1][0] / transients["steady"].g[0] - 1) < 3 * est / st
 
 
+@pytest.mark.slow
 def test_speed_and_stress_meet_and_seed_does_not_matter(transients):
     sp = transients["speed"]
     assert abs(sp.mu_w[-1] - MU_W) < 1e-5                # same discrete steady state (time tolerance)

@@ -34,6 +34,7 @@ def test_reference_is_converged(cache, case):
         assert np.all(np.abs(coarse[q] - fine[q]) <= ref.CONVERGED * np.abs(fine[q])), q
 
 
+@pytest.mark.slow
 def test_cache_is_what_the_reference_computes(cache):
     """One case recomputed at the reference resolution reproduces the cached values."""
     case = "paper-0.5"

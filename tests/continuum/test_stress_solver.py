@@ -51,6 +51,7 @@ def test_time_convergence_matches_design_order(paper_friction, method, order):
     assert observed_orders(uw) == pytest.approx([order, order], abs=0.3)
 
 
+@pytest.mark.slow
 def test_loose_tolerance_does_not_break_down(paper_friction):
     """mu~_w = 0.1 on 64 cells at rtol 1e-4: without the repeat cap (Numerics.repeat_cap) nearly every accepted step
     is followed by a Newton failure at the size the error control grows it back to (measured 22 196 steps, 22 108
