@@ -46,10 +46,10 @@ DEFINITIONS = {
     "errors": ("-", f"the steady plate values' errors: the spread over the seeds (>= {MIN_SEEDS_SPREAD} seeds), else "
                     f"blocks of >= {BLOCK_TAUS:g} integrated autocorrelation times within each run (Sokal's window), "
                     "combined over the seeds; every *_err says how (*_how, *_method)"),
-    "mu_w": ("1", "friction of a window = <tau_w>/<p> (ratio of means; plate.csv samples average every step of "
-                  "their interval)"),
+    "mu_w": ("1", "friction of a window = <tau_w>/<p> (ratio of means; plate.csv rows average their interval, "
+                  "sampled every half contact time)"),
     "slip": ("1", f"1 - <u_x of the bed grains touching a plate grain>/<plate u_x> over the final {1 - SLIP_FROM:.0%} "
-                  "of the drive (grain-weighted over every step)"),
+                  "of the drive (grain-weighted over the samples)"),
     "tau_bulk": ("rho_p g d", "coarse-grained tau = -sigma_xy (contact + kinetic) averaged over the bulk in each frame "
                               "of the final 30 % of the drive, against the plate's <tau_w> over the same window"),
     "elastic_start": ("sqrt(d/g)", f"transit_time = depth/c_s of the shear wave through the deposited bed (run.json); "

@@ -2,7 +2,7 @@
 
 u_w(t) = plate x-velocity; tau_w(t) = -f_x (x force of the bed on the plate per area, sign flipped so
 that it is > 0 when it resists a plate moving in +x); mu_w(t) = tau_w/p, p = f_y (the normal load the
-bed carries, ~p_w); every sample of plate.csv is an average over every step of its output interval.
+bed carries, ~p_w); every row of plate.csv is an average over its output interval, sampled every half contact time.
 DEM units (d, rho_p, g).
 
 Errors.  A window's value is a function of the window means of one or more series (the friction is
@@ -125,7 +125,7 @@ def window_values(record: PlateRecord, t0: float) -> dict:
 
 def slip(record: PlateRecord) -> dict:
     """1 - <u_x of the bed grains touching a plate grain>/<plate u_x> over the second half of the
-    drive (grain-weighted over every step), with its block error."""
+    drive (grain-weighted over the samples), with its block error."""
     s = tail(record, record.t[0] + SLIP_FROM * (record.t[-1] - record.t[0]))
     return block_estimate({"sum": s["u_c"] * s["n_c"], "n": s["n_c"], "u": s["u_w"]},
                           lambda m: 1 - m["sum"] / m["n"] / m["u"])

@@ -7,7 +7,7 @@ the drive folder):
 
 * ``plate.csv``: step, t, x (unwrapped), y (at the output step), u_x, u_y, f_x, f_y (force of the bed
   on the plate per plate area), u_c, n_c (x velocity and number of the bed grains touching a plate
-  grain), all averaged over every step of the output interval (row 0: the prepared state),
+  grain), all averaged over the output interval, sampled every half contact time (row 0: the prepared state),
   mu_w = -f_x/f_y (empty while the plate is out of contact, f_y <= 0);
 * ``atoms.dump``: LAMMPS text dump (id type x y z vx vy vz radius), sorted by id;
 * ``contacts.dump``: LAMMPS local dump, one line per contact (r < r_1 + r_2, plate and base

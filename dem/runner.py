@@ -53,8 +53,8 @@ CONVENTIONS = {
     "grains": "diameters uniform by number in [1-w, 1+w] d; 2D disks have mass rho_p pi r^2 (per unit thickness)",
     "plate": "rigid body of spaced grains (run.json plate: layout, spacing, friction), no rotation, no gravity; "
              "loaded by p_w A (fix addforce); f_x, f_y = force of the bed on the plate per area averaged over "
-             "every step of the output interval, mu_w = -f_x/f_y; u_c, n_c: x velocity and number of the bed "
-             "grains touching a plate grain",
+             "the output interval (sampled every half contact time: run.json intervals_steps.sample), "
+             "mu_w = -f_x/f_y; u_c, n_c: x velocity and number of the bed grains touching a plate grain",
     "stress": "profiles: contact (virial) stress from compute stress/atom ... pair, kinetic part excluded; "
               "p = -trace/D, tau = -s_xy; values averaged over each profile interval",
     "restart": "granular pair styles do not restart bit-exactly: a resumed run continues statistically, "

@@ -306,7 +306,7 @@ fix load plate addforce {fx / n_plate:.10g} {-plan.config.p_w * area / n_plate:.
 
 
 def _plate_output(plan: Plan, fx: float) -> str:
-    area, every = plan.area, plan.intervals["plate"]
+    area, every, sample = plan.area, plan.intervals["plate"], plan.intervals["sample"]
     fmt = ",".join(f"$({v})" for v in ("step", "v_t:%.8g", "v_px:%.10g", "v_py:%.10g", *(
         f"v_out_{k}:%.8g" for k in ("ux", "uy", "fx", "fy", "uc", "nc"))))
     averaged = "\n".join(f"variable out_{k} equal (step>0)*f_plate_mean[{i + 1}]+(step==0)*v_{v}"
@@ -314,8 +314,8 @@ def _plate_output(plan: Plan, fx: float) -> str:
                                                       ("sc", "ucsum"), ("nc", "ncon"))))
     return f"""
 # --- plate time series: unwrapped x and y at the output step; velocity and force of the bed on the
-#     plate per area (sum of the plate grains' forces minus the applied load) averaged over every
-#     step of the output interval (fix ave/time); u_c, n_c: x velocity (sum over the interval / count)
+#     plate per area (sum of the plate grains' forces minus the applied load) averaged over the output
+#     interval, sampled every {sample} steps (fix ave/time); u_c, n_c: x velocity (sum over the samples / count)
 #     and mean number of the bed grains touching a plate grain (slip).  Row 0: the prepared state ---
 variable px equal f_plate[1][1]+f_plate[1][13]*lx
 variable py equal f_plate[1][2]
@@ -330,7 +330,7 @@ variable touch_vx atom v_touch*vx
 compute touch_sums bed reduce sum v_touch_vx v_touch
 variable ucsum equal c_touch_sums[1]
 variable ncon equal c_touch_sums[2]
-fix plate_mean all ave/time 1 {every} {every} v_pux v_puy v_pfx v_pfy v_ucsum v_ncon
+fix plate_mean all ave/time {sample} {every // sample} {every} v_pux v_puy v_pfx v_pfy v_ucsum v_ncon
 {averaged}
 variable out_uc equal v_out_sc/(v_out_nc+(v_out_nc==0))
 fix plate_out all print {every} "{fmt}" file {PLATE_CSV} screen no title "{",".join(PLATE_COLUMNS)}"

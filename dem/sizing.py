@@ -39,6 +39,8 @@ CONTENTION = 1.6
 #: mean over the beds of the shipped presets' seeds (1.0 to 12.5; each stage is capped by
 #: prepare.settle_max and relax_max)
 SETTLE_RELAX_EXPECTED = 7.25
+#: plate statistics (force, speed, slip) are sampled this many times per contact time t_c
+SAMPLES_PER_CONTACT = 2
 #: a run's or a calibration's fixed wall time in seconds: start-up, the LAMMPS library query, the merges
 OVERHEAD = 1.0
 #: durations up to this many seconds are printed in s, up to this many minutes in min, beyond in h
@@ -212,7 +214,10 @@ def plan(cfg: Config) -> Plan:
     n_grains = max(1, round(PACKING[dim] * total / mean_volume))
     reasons.append(f"{n_grains} grains fill base ({cfg.box.base_thickness:g} d) + bed at packing {PACKING[dim]}; "
                    f"width {cfg.box.width:g} d (minimum 8 d)" + (f", width_z {cfg.width_z:g} d" if cfg.width_z else ""))
-    plate_steps = max(1, round(cfg.output.plate / dt))
+    # the plate's force, speed and slip are sampled every half contact time: a contact's force is resolved,
+    # and the per-step evaluation of contact/atom over the bed is not paid for (tests/dem: unbiased)
+    sample = max(1, round(cfg.contact.t_c / SAMPLES_PER_CONTACT / dt))
+    plate_steps = max(1, round(cfg.output.plate / dt / sample)) * sample
     intervals = {k: max(1, round(getattr(cfg.output, k) / dt / plate_steps)) * plate_steps
                  for k in ("plate", "thermo", "atoms", "contacts", "profiles")}
     # contact snapshots coincide with atom snapshots (plane stresses need the positions)
@@ -220,6 +225,7 @@ def plan(cfg: Config) -> Plan:
     # restarts fall on profile-window boundaries so that a resumed run loses no averaging window
     intervals["restart"] = max(1, round(cfg.output.restart / dt / intervals["profiles"])) * intervals["profiles"]
     intervals["check"] = max(1, round(cfg.prepare.check_every / dt))
+    intervals["sample"] = sample
     return Plan(cfg, float(depth), n_grains, dt, intervals, tuple(drives), tuple(reasons))
 
 

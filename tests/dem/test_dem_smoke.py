@@ -1,4 +1,5 @@
 """The smoke scene run through LAMMPS: physics checks on its output, and kill + resume."""
+import dataclasses
 import json
 import os
 import signal
@@ -11,7 +12,8 @@ import pandas as pd
 import pytest
 from granstokes.compare.plate import PlateRecord
 from granstokes.compare.plate import slip as plate_slip
-from granstokes.dem import config, lammps_env, layout, outputs
+from granstokes.dem import config, lammps_env, layout, outputs, scene
+from granstokes.dem.sizing import plan
 
 from granstokes.cli import main as granstokes_main  # the `granstokes` console script
 
@@ -180,3 +182,31 @@ def test_seeds_run_side_by_side_under_a_launcher_template(tmp_path):
     assert all(st["status"] == "complete" for st in meta["stages"].values()) and len(meta["stages"]) == 4
     plates = [pd.read_csv(out / f"seed-{s}" / "speed" / "plate.csv") for s in (1, 2)]
     assert len(plates[0]) == len(plates[1]) and not np.allclose(plates[0]["f_x"], plates[1]["f_x"])
+
+
+def test_sampled_plate_averages_are_unbiased_against_every_step(smoke, tmp_path):
+    """The plate's interval means sampled every half contact time (dem.sizing SAMPLES_PER_CONTACT) against
+    every-step means of the same trajectory: per interval they track each other, and over the record their
+    difference is within its standard error (intervals ~ 5 contact times apart: independent)."""
+    out, _ = smoke
+    p = plan(config.preset("smoke")[0])
+    every, sample = p.intervals["plate"], p.intervals["sample"]
+    assert sample > 1 and every % sample == 0
+    drive = dataclasses.replace(p.drives[0], steps=60 * every, duration=60 * every * p.dt)
+    script = scene.drive_script(p, drive, str(out / "seed-1" / "prepare" / "prepared.restart"), fresh=True)
+    both = (f"fix every_step all ave/time 1 {every} {every} v_pfx v_pfy v_ncon file every_step.txt\n"
+            f"fix sampled all ave/time {sample} {every // sample} {every} v_pfx v_pfy v_ncon file sampled.txt\n")
+    head, run_line = script.rsplit("\nrun ", 1)
+    work = tmp_path / "drive" / "segment"  # the script writes its restarts to ../../restart, as in a run folder
+    work.mkdir(parents=True)
+    (tmp_path / scene.RESTART_DIR).mkdir()
+    (work / "in.lammps").write_text(f"{head}\n{both}run {run_line}")
+    subprocess.run([str(lammps_env.lmp_binary()), "-in", "in.lammps", "-log", "log.lammps", "-nocite"],
+                   cwd=work, env=lammps_env.child_env(), check=True, stdout=subprocess.DEVNULL)
+    read = lambda name: np.loadtxt(work / name, comments="#")[:, 1:]
+    full, sampled = read("every_step.txt"), read("sampled.txt")
+    assert full.shape == sampled.shape == (60, 3)
+    for k in range(3):
+        diff = sampled[:, k] - full[:, k]
+        assert abs(diff.mean()) <= 3 * diff.std(ddof=1) / np.sqrt(len(diff)), (k, diff.mean(), diff.std())
+        assert np.corrcoef(sampled[:, k], full[:, k])[0, 1] > 0.8, k
