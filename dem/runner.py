@@ -326,7 +326,7 @@ class Runner:
         st = StageResult("running", path=str(d.relative_to(self.out)))
         self.record(meta, key, st)
         c = self.plan.config.prepare
-        total = self.plan.free_fall_steps + round((c.settle_max + c.relax_max) / self.plan.dt)
+        total = self.plan.prepare_steps[1]
         info = self._stage(meta, key, st, lambda: self.lmp.run("prepare.in", d, self.plan, total, 0,
                                                                f"{key} prepare", self.position(seed)))
         relaxed = [ph for ph in info["phases"] if ph.startswith("relaxed")]

@@ -35,10 +35,12 @@ THROUGHPUT = {2: {"prepare": 10.5e6, "drive": 6.2e6, "shear": 10.0e6},
 #: wall time of each of two LAMMPS processes running at once over one running alone, on this machine as
 #: other sessions share it: 1.0-1.1 when they are idle, 2 when they keep a core busy (bench/RESULTS.md)
 CONTENTION = 1.6
-#: preparation's expected settling and relaxation after the free fall, in time units sqrt(d/g): the
-#: mean over the beds of the shipped presets' seeds (1.0 to 12.5; each stage is capped by
-#: prepare.settle_max and relax_max)
-SETTLE_RELAX_EXPECTED = 7.25
+#: preparation's expected settling and relaxation after a grain's fall from the top of the box, in time units
+#: sqrt(d/g): the mean over the beds of the shipped presets' seeds (7.8 to 16.4, bench/dem_prepare.py; each
+#: stage ends on its own convergence, capped by prepare.settle_max and relax_max)
+SETTLE_RELAX_EXPECTED = 12.8
+#: settling (which begins with the fall) is capped at this many free falls plus prepare.settle_max
+FALL_MARGIN = 1.5
 #: plate statistics (force, speed, slip) are sampled this many times per contact time t_c
 SAMPLES_PER_CONTACT = 2
 #: a run's or a calibration's fixed wall time in seconds: start-up, the LAMMPS library query, the merges
@@ -112,17 +114,22 @@ class Plan:
 
     @property
     def free_fall_steps(self) -> int:
-        """Steps of the first settling run: 1.5 times the free-fall time from the top of the box."""
-        return math.ceil(1.5 * math.sqrt(2 * self.box_top) / self.dt)
+        """Steps for a grain to fall from the top of the box to its floor."""
+        return math.ceil(math.sqrt(2 * self.box_top) / self.dt)
+
+    @property
+    def settle_steps_max(self) -> int:
+        """Settling's cap: FALL_MARGIN free falls, then ``prepare.settle_max``."""
+        return math.ceil(FALL_MARGIN * self.free_fall_steps + self.config.prepare.settle_max / self.dt)
 
     @property
     def prepare_steps(self) -> tuple[int, int]:
-        """A preparation's expected and largest number of steps: the free fall, then settling and relaxing
-        (SETTLE_RELAX_EXPECTED, each stage capped)."""
+        """A preparation's expected and largest number of steps: the fall, then settling and relaxing
+        (SETTLE_RELAX_EXPECTED), each stage ending on its own convergence or at its cap."""
         c = self.config.prepare
         fall = self.free_fall_steps
         expected = fall + round(min(SETTLE_RELAX_EXPECTED, c.settle_max + c.relax_max) / self.dt)
-        return expected, fall + round((c.settle_max + c.relax_max) / self.dt)
+        return expected, self.settle_steps_max + round(c.relax_max / self.dt)
 
     def stage_seconds(self, key: str) -> float:
         """Expected LAMMPS wall time of one stage (dem.layout.stage_key) run alone at one rank."""

@@ -1,9 +1,11 @@
 """The cost estimate printed before a run or a calibration (dem.sizing): the schedule, the units, what a
 resume has left, and the estimate against a measured smoke run."""
 import json
+import math
+import re
 
 import pytest
-from granstokes.dem import config, sizing
+from granstokes.dem import config, scene, sizing
 from granstokes.dem.calibrate import plan_calibration
 from granstokes.dem.sizing import CONTENTION, OVERHEAD, THROUGHPUT, duration_text, makespan, plan, slowdown
 
@@ -41,7 +43,13 @@ def test_preparation_counts_its_expected_steps_not_its_cap():
     c = p.config.prepare
     expected, most = p.prepare_steps
     assert expected == p.free_fall_steps + round(sizing.SETTLE_RELAX_EXPECTED / p.dt)
-    assert most == p.free_fall_steps + round((c.settle_max + c.relax_max) / p.dt)
+    assert p.settle_steps_max == math.ceil(sizing.FALL_MARGIN * p.free_fall_steps + c.settle_max / p.dt)
+    assert most == p.settle_steps_max + round(c.relax_max / p.dt)
+    # the script's settling loop (fall included) runs up to its cap in chunks of the check interval
+    loops = [int(n) for n in re.findall(r"variable i loop (\d+)", scene.prepare_script(p, 1))]
+    check = p.intervals["check"]
+    assert loops[0] == math.ceil(p.settle_steps_max / check) and "\nrun " + str(p.free_fall_steps) not in \
+        scene.prepare_script(p, 1)
     rate = THROUGHPUT[2]
     assert p.stage_seconds("seed-1") == pytest.approx(p.n_grains * expected / rate["prepare"])
     assert p.stage_seconds("seed-1/speed") == pytest.approx(p.n_grains * p.drives[0].steps / rate["drive"])
