@@ -43,7 +43,7 @@ def _run(code: str) -> str:
 
 def test_the_solvers_import_neither_scipy_linalg_nor_numba_before_a_solve():
     """The steppers' LAPACK routines come from scipy's wrapper module alone (continuum.lapack), and numba (with the
-    scipy.linalg its compiled functions load) is imported by the solve (continuum.stress_dirk, continuum.speed_bdf):
+    scipy.linalg its compiled functions load) is imported by the solve (continuum.compiled, when a loop compiles):
     importing the solvers, as `granstokes continuum` does before it solves, costs neither."""
     code = ("""import sys
 from granstokes.continuum.solver import solve_stress
