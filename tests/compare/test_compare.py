@@ -152,14 +152,18 @@ def test_depth_at_fraction_interpolates():
 def test_compare_report_on_a_smoke_run(smoke_run, tmp_path, capsys):
     """granstokes compare on a real (smoke) run: strict JSON, numbers that check the coarse-graining
     (mass to round-off, pressure slope phi rho g within 15 %); the fit on the smoke's one drive does not
-    determine mu(I) (mu_s runs to its bound 0): a failed fit, said, with nothing scored."""
+    determine mu(I) (a Jop parameter runs to a bound of its range): a failed fit, said, with nothing scored."""
     assert granstokes_main(["compare", str(smoke_run), "--out", str(tmp_path / "report")]) == 2
     assert "--calibration is required" in capsys.readouterr().err and not (tmp_path / "report").exists()
     assert granstokes_main(["compare", str(smoke_run), "--out", str(tmp_path / "report"), "--json",
                             "--fit-on-drives"]) == 0
     m = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"non-JSON constant {c}"))
     assert m["I0_convention"] == "dem" and not m["blind"]
-    assert m["calibration_failure"] and "mu_s" in m["calibration_failure"] and m["mu_s"] < 1e-3
+    # which Jop parameter runs away depends on the bed's trajectory (mu_s to 0 or mu_d to 3 on this drive)
+    failure = m["calibration_failure"]
+    name = failure.split(" = ")[0]
+    assert name in ("mu_s", "mu_d", "I0_dem") and failure.endswith("the data do not determine it"), failure
+    assert failure.startswith(f"{name} = {m[{'I0_dem': 'I0'}.get(name, name)]:.3g} ")  # the fit it reports
     assert m["scorecard"] == [] and m["tally"] == [] and m["verdict"].startswith("No verdict: the mu(I) calibration")
     assert abs(m["mass_error"]) < 1e-6
     (d,) = m["drives"].values()
