@@ -37,11 +37,11 @@ GAMMA = np.concatenate(([0.0], np.cumsum(1.0 / np.arange(1, MAX_ORDER + 1))))
 ALPHA = (1.0 - KAPPA) * GAMMA
 ERROR_CONST = KAPPA * GAMMA + 1.0 / np.arange(1, MAX_ORDER + 2)
 EPS = np.finfo(float).eps
-#: per-step rows kept between two returns to Python (the observer's), per kernel call
+#: per-step rows kept between two returns to Python (the observer's), per call of the loop
 RECORD_ROWS = 1024
 #: Newton's floor: the wall unknown's round-off is this many eps of the constraint's terms (``advance``)
 ROUND_OFF_UPDATES = 4.0
-#: the kernel's exits
+#: the loop's exits
 LANDED, RECORDS_FULL, STALLED, TOO_SMALL, FAILED = range(5)
 
 
@@ -255,15 +255,15 @@ def bdf_loop(kernels: BdfKernels, compiled: bool):
 
 
 def integrate(problem, t_out, *, compiled=True, rtol=1e-6, atol=1e-8, h0=1e-9, observer=None,
-              max_steps=MAX_STEPS, stall=(STALL_FRACTION, STALL_STEPS), handover=HANDOVER):
+              max_steps=MAX_STEPS, stall=(STALL_FRACTION, STALL_STEPS), handover=HANDOVER, repeat_cap=True):
     """Integrate ``problem`` (an algebraic row 0, unit mass elsewhere, and ``bdf_kernels``) by BDF from t = 0,
     landing on every output time of the sorted ``t_out``: (states at t_out, StepStats).
 
     Near a steady state at tight tolerances the round-off of the rate (|tau~|/h^2 eps) can stop Newton from
     converging and the steps shrink without end: once the step has stayed below ``stall`` = (fraction, steps) t for
     that many steps in a row, after the problem's ``lift_off_end`` (the DAE's stiff transient, where BDF is needed),
-    the rest goes to the DIRK ``handover`` (whose Newton accepts an update at round-off).  ``compiled``: the loop and
-    the kernels compiled by numba."""
+    the rest goes to the DIRK ``handover`` (whose Newton accepts an update at round-off; ``repeat_cap`` as in
+    continuum.stepper.integrate).  ``compiled``: the loop and the kernels compiled by numba."""
     if not np.all(problem.mass[1:] == 1.0) or problem.mass[0] != 0.0:
         raise ValueError("method 'bdf' needs an algebraic row 0 and unit mass elsewhere")
     t_out = np.asarray(t_out, dtype=float)
@@ -296,6 +296,9 @@ def integrate(problem, t_out, *, compiled=True, rtol=1e-6, atol=1e-8, h0=1e-9, o
         observer(0.0, x.copy())
     states = np.empty((len(t_out), n))
     k = 0
+    while k < len(t_out) and t_out[k] <= 0.0:  # output times at the start: the initial state
+        states[k] = x
+        k += 1
     while k < len(t_out):
         if k > 0 and t_out[k] == state[0]:  # a repeated output time: the solver is already there
             states[k] = states[k - 1]
@@ -314,9 +317,9 @@ def integrate(problem, t_out, *, compiled=True, rtol=1e-6, atol=1e-8, h0=1e-9, o
             t, x = rec_t[ints[8] - 1], rec_x[ints[8] - 1].copy()
             states[k:], rest = integrate_dirk(problem, t_out[k:], method=handover, compiled=compiled, rtol=rtol,
                                               atol=atol, h0=state[4], observer=observer,
-                                              max_steps=max_steps - int(ints[6]), resume=(t, x))
-            stats.steps += rest.steps
-            stats.newton_iterations += rest.newton_iterations
+                                              max_steps=max_steps - int(ints[6]), resume=(t, x),
+                                              repeat_cap=repeat_cap)
+            stats = stats.add(rest)
             break
         elif exit_ == TOO_SMALL:
             raise NewtonFailure(f"BDF failed at t = {state[0]:.3e}: Required step size is less than spacing between "

@@ -51,6 +51,7 @@ for _name, _tab in TABLEAUX.items():
 
 @register("bdf")
 def _bdf(problem, t_out, *, fixed_times=None, newton_tol=None, **options):
+    """continuum.bdf; its Newton tolerance is scipy's rule from rtol (``newton_tol`` is the DIRKs')."""
     from .bdf import integrate as integrate_bdf
 
     if fixed_times is not None:
@@ -59,7 +60,9 @@ def _bdf(problem, t_out, *, fixed_times=None, newton_tol=None, **options):
 
 
 @register("explicit-euler", adaptive=False)
-def _euler(problem, t_out, *, fixed_times=None, observer=None, **_):
+def _euler(problem, t_out, *, fixed_times=None, observer=None, compiled=None, rtol=None, atol=None, h0=None,
+           newton_tol=None, max_steps=None):
+    """continuum.stepper.explicit_euler on ``fixed_times`` (no error control: the tolerances do not apply)."""
     if fixed_times is None:
         raise ValueError("method 'explicit-euler' has no error estimate: give fixed_times")
     return stepper.explicit_euler(problem, t_out, fixed_times, observer)
@@ -69,8 +72,12 @@ def _solve_ivp(method):
     def run(problem, t_out, *, rtol=1e-6, atol=1e-8, observer=None, fixed_times=None, compiled=None, h0=None,
             newton_tol=None, max_steps=None):
         """scipy's solve_ivp(``method``) on the differential rows z, the algebraic rows from ``problem.project``
-        (which must not depend on z: an imposed stress), with the problem's banded Jacobian as a sparse matrix."""
+        (which must not depend on z: an imposed stress), with the problem's banded Jacobian as a sparse matrix; its
+        own first step and step count (``h0``, ``max_steps`` do not apply); ``steps`` reports the output times."""
         from scipy.integrate import solve_ivp
+
+        if observer is not None or fixed_times is not None:
+            raise ValueError(f"solve_ivp-{method} takes neither an observer nor fixed_times")
 
         t_out = np.asarray(t_out, dtype=float)
         differential = np.flatnonzero(problem.mass > 0)

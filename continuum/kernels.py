@@ -11,26 +11,36 @@ import hashlib
 import inspect
 import math
 from collections.abc import Callable
+from pathlib import Path
 from typing import NamedTuple
 
 #: every function marked ``jitable`` (continuum.compiled registers them with numba before it compiles a loop)
 JITABLE: list = []
+#: the source text of each module whose functions a loop compiles in, as it was when the module was imported (so that
+#: a file edited under a running process does not key that process's compiled code), and of continuum.compiled (its
+#: numba options)
+_TEXTS: dict[str, str] = {"compiled": (Path(__file__).with_name("compiled.py")).read_text()}
+
+
+def _text(module) -> str:
+    return _TEXTS.setdefault(module.__name__, inspect.getsource(module))
 
 
 def jitable(fn):
     """Mark ``fn`` as callable from a compiled loop; returns ``fn`` itself."""
     JITABLE.append(fn)
+    _text(inspect.getmodule(fn))
     return fn
 
 
 def source_key(*functions) -> str:
-    """A short hash of the source files that define ``functions`` and this module: a compiled loop holds it in its
-    closure, and numba's cache keys a closure by its cells, so the loop recompiles when any code it compiles in
-    changes (numba checks only the loop's own file)."""
-    h = hashlib.sha256()
-    for module in sorted({inspect.getmodule(fn).__name__: inspect.getmodule(fn)
-                          for fn in (*functions, source_key)}.items()):
-        h.update(inspect.getsource(module[1]).encode())
+    """A short hash of the source of the modules that define ``functions``, of this module and of the numba options:
+    a compiled loop holds it in its closure, and numba's cache keys a closure by its cells, so the loop recompiles
+    when any code it compiles in changes (numba checks only the loop's own file)."""
+    h = hashlib.sha256(_TEXTS["compiled"].encode())
+    modules = {inspect.getmodule(fn).__name__: inspect.getmodule(fn) for fn in (*functions, source_key)}
+    for name in sorted(modules):
+        h.update(_text(modules[name]).encode())
     return h.hexdigest()[:16]
 
 

@@ -108,8 +108,9 @@ SAFETY = 3.0
 class Numerics:
     """Resolution and tolerances of one solve.  ``stretch=None``: the map follows the first output
     time (``map_for``), else the exponential map of this stretch; ``order``: of the spatial discretisation
-    (continuum.mesh); ``method``, ``rtol``, ``atol`` = None: the drive's defaults (``for_drive``); ``compiled``: run
-    the problem's compiled kernel where it has one (continuum.integrators), else the Python integrators;
+    (continuum.mesh); ``method``, ``rtol``, ``atol`` = None: the drive's defaults (``for_drive``); ``compiled``: the
+    loop and the problem's kernels compiled by numba (continuum.integrators; False: the same loop as Python, far
+    slower, a reference);
     ``repeat_cap``: the DIRKs' step cap after a repeated Newton failure (continuum.stepper; False: the baseline);
     ``initial_step``: the first time step as a fraction of the first output time; ``early_span``: an imposed speed's
     output times before early_span t~_mud/max(1, u~_w) are solved on the deeper wall cluster (0: none, EARLY_SPAN);
@@ -364,7 +365,7 @@ def first_cells(imposed: str, accuracy: float) -> int:
 
 def _run_one(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
     recorder = obs.SeriesRecorder(problem) if record else None
-    options = {"stall": numerics.stall} if numerics.method == "bdf" else {"repeat_cap": numerics.repeat_cap}
+    options = {"repeat_cap": numerics.repeat_cap, **({"stall": numerics.stall} if numerics.method == "bdf" else {})}
     states, stats = integrate(problem, t, method=numerics.method, compiled=numerics.compiled, rtol=numerics.rtol,
                               atol=numerics.atol, h0=numerics.initial_step * t[0], fixed_times=fixed_times,
                               observer=recorder, **options)

@@ -541,6 +541,9 @@ def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol
                STEP_SHRINK, STEP_GROW, ERROR_FLOOR)
     work = (np.empty((s + 1, n)), *(np.empty(n) for _ in range(8)))
     fixed = np.asarray(fixed_times if fixed_times is not None else [], dtype=float)
+    if fixed.size and (fixed[0] <= t0 or np.any(np.diff(fixed) <= 0)
+                       or fixed[-1] < t_out[-1] * (1 - OUTPUT_RTOL)):
+        raise ValueError("fixed_times must increase from the start time and reach the last output time")
     state = np.array([t0, h0, 1.0, math.inf, math.inf, 0.0])
     counters = np.zeros(5, dtype=np.int64)
     record = (np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n)))
@@ -548,6 +551,9 @@ def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol
         observer(t0, x.copy())
     states = np.empty((len(t_out), n))
     k = 0
+    while k < len(t_out) and t_out[k] <= t0:  # output times at the start: the initial state
+        states[k] = x
+        k += 1
     rules = _rules(problem)
     lu, full_lu = factors(), factors()
     while k < len(t_out):
@@ -591,7 +597,7 @@ def explicit_euler(problem, t_out, fixed_times, observer=None):
             raise FloatingPointError(f"explicit Euler blew up at t = {t:.3e}")
         if observer is not None:
             observer(t, x)
-        while k < len(t_out) and np.isclose(t, t_out[k], rtol=1e-13, atol=0.0):
+        while k < len(t_out) and np.isclose(t, t_out[k], rtol=OUTPUT_RTOL, atol=0.0):
             states[k] = x
             k += 1
     stats.cpu_seconds = time.process_time() - start
