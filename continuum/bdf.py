@@ -23,7 +23,7 @@ import time
 import numpy as np
 
 from .kernels import BdfKernels, band_lu, band_solve, jitable, rms, source_key
-from .stepper import MAX_STEPS, NewtonFailure, StepperFailure, StepStats
+from .stepper import MAX_STEPS, RECORD_ROWS, NewtonFailure, StepperFailure, StepStats
 
 #: the stall that hands over to HANDOVER: steps below STALL_FRACTION t for STALL_STEPS in a row after the lift-off,
 #: counted afresh after each output time (the BDF cuts the step that lands on one and keeps that size for order + 1
@@ -37,8 +37,6 @@ GAMMA = np.concatenate(([0.0], np.cumsum(1.0 / np.arange(1, MAX_ORDER + 1))))
 ALPHA = (1.0 - KAPPA) * GAMMA
 ERROR_CONST = KAPPA * GAMMA + 1.0 / np.arange(1, MAX_ORDER + 2)
 EPS = np.finfo(float).eps
-#: per-step rows kept between two returns to Python (the observer's), per call of the loop
-RECORD_ROWS = 1024
 #: Newton's floor: the wall unknown's round-off is this many eps of the constraint's terms (``advance``)
 ROUND_OFF_UPDATES = 4.0
 #: the loop's exits
