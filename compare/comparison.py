@@ -12,7 +12,7 @@ compare.metrics and compare.report only render it.  DEM units throughout; I in t
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +21,7 @@ from granstokes.continuum.calibration import Calibration, mu_law
 from granstokes.continuum.crossing import crossing_depth
 from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.steady import DELTA_THRESHOLD
+from granstokes.dem.config import Grains
 from granstokes.dem.layout import RUN_JSON
 from tqdm import tqdm
 
@@ -239,10 +240,13 @@ def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.
 
 
 def check_grains(cal: Calibration, runs) -> None:
-    """Refuse a calibration of other grains than the runs' (one-line ValueError naming the difference)."""
+    """Refuse a calibration of other grains than the runs' (one-line ValueError naming the difference); an entry
+    either record lacks is the config's default (dem.config.Grains)."""
+    default = asdict(Grains())
+    calibrated = {**default, **cal.grains}
     for run in runs:
-        grains = json.loads((Path(run) / RUN_JSON).read_text())["config"]["grains"]
-        diff = {k: (cal.grains.get(k), v) for k, v in grains.items() if cal.grains.get(k) != v}
+        grains = {**default, **json.loads((Path(run) / RUN_JSON).read_text())["config"]["grains"]}
+        diff = {k: (calibrated.get(k), v) for k, v in grains.items() if calibrated.get(k) != v}
         require(not diff, f"--calibration {cal.source}", f"a calibration of the grains of {run}",
                 "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
 

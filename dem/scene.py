@@ -154,10 +154,7 @@ def _pair(plan: Plan) -> str:
 
 def _pair_coeffs(plan: Plan) -> str:
     """One contact law for every pair; bed-plate contacts with the plate's friction PLATE_FRICTION."""
-    c = plan.config.contact
-    return f"""pair_style granular
-pair_coeff * * {c.pair_coeff()}
-pair_coeff {BED} {PLATE} {c.pair_coeff(PLATE_FRICTION)}"""
+    return plan.config.contact.pair_lines(special=((BED, PLATE, PLATE_FRICTION),))
 
 
 def _settle(plan: Plan) -> str:
@@ -167,7 +164,7 @@ def _settle(plan: Plan) -> str:
 variable t equal step*{dt:.10g}
 compute ke_bed bed ke
 variable ke_grain equal c_ke_bed/count(bed)/{grain_mass(1.0, plan.dimension):.10g}
-fix floor all wall/gran granular {c.pair_coeff()} yplane 0.0 NULL
+fix floor all wall/gran {c.wall()} yplane 0.0 NULL
 fix gravity bed gravity 1.0 vector 0 -1 0
 {integrator("bed", plan.dimension)}
 {_enforce(plan.dimension)}

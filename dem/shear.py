@@ -110,8 +110,7 @@ set type 1 diameter v_diameter
 set group all {density} 1.0
 
 # --- contact law (dem.contact, same as the Stokes scene): {c.model}, mu_p = {c.mu_p:g}, e = {c.restitution:g} ---
-pair_style granular
-pair_coeff * * {c.pair_coeff()}
+{c.pair_lines()}
 neighbor {SKIN} bin
 neigh_modify delay 0 every 1 check yes
 timestep {point.dt:.10g}
