@@ -12,11 +12,12 @@ leave the lattice, then is timed.  The 800-disk chute is run again with the same
 
 Scenes: the drive of each shipped preset (smoke, quick: 2D; spheres: 3D) from a bed the harness
 prepares, run for ``--steps`` steps by the script the harness generates, with every output ("as run"),
-with none ("bare"), and as run but with the plate's statistics sampled every step (the scene before its
-sampling interval).  Every run is on one rank, alone, best of ``--repeats``; the ratio is the
-scene's atom-steps/s over the yardstick of its dimension measured in the same invocation (the machine's
-speed cancels).  LAMMPS's timing breakdown (% of the loop in Pair, Neigh, Comm, Modify, Output) is
-printed with each.  Writes bench/dem_yardstick.json and prints the table for bench/RESULTS.md.
+with none ("bare"), as run but with the plate's statistics sampled every step (the scene before its
+sampling interval), and as run in ``grains.pair_style = "classic"`` from a bed prepared in it.  Every run
+is on one rank, alone, best of ``--repeats``; the ratio is the scene's atom-steps/s over the yardstick of its
+dimension measured in the same invocation (the machine's speed cancels).  LAMMPS's timing breakdown (% of
+the loop in Pair, Neigh, Comm, Modify, Output) is printed with each.  Writes bench/dem_yardstick.json and
+prints the table for bench/RESULTS.md.
 """
 from __future__ import annotations
 
@@ -80,8 +81,9 @@ TILT = math.radians(26.0)
 SCENE_LAW = "hooke 200000.0 0.5 tangential linear_history 57142.857 0.5 0.5 damping coeff_restitution"
 BREAKDOWN = ("Pair", "Neigh", "Comm", "Modify", "Output")
 SCENES = {"smoke": 2, "quick": 2, "spheres": 3}
-#: each scene's drive as the harness runs it, with no output, and with the plate's statistics sampled every step
-VARIANTS = ("as run", "bare", "plate sampled every step")
+#: each scene's drive as the harness runs it, with no output, with the plate's statistics sampled every step, and
+#: as run in the classic pair style (grains.pair_style)
+VARIANTS = ("as run", "bare", "plate sampled every step", "as run, classic pair style")
 
 
 def chute_script(dim: int, atoms: int, steps: int) -> str:
@@ -129,24 +131,35 @@ def best_of(script: str, work: Path, repeats: int) -> dict:
     return max(runs, key=lambda r: r["rate"])
 
 
-def prepared(name: str, root: Path) -> Path:
-    """A bed of preset ``name`` (its first seed) prepared by the harness."""
-    cfg, text = config.preset(name)
-    runner = Runner(cfg, text, root / f"prepare-{name}", 1, None, False)
+def preset_text(name: str, pair_style: str) -> str:
+    """Preset ``name``'s TOML with ``grains.pair_style`` set."""
+    return config.preset_text(name).replace("[grains]\n", f'[grains]\npair_style = "{pair_style}"\n', 1)
+
+
+def prepared(text: str, out: Path) -> Path:
+    """A bed of the config ``text`` (its first seed) prepared by the harness in ``out``."""
+    cfg = config.parse(text)
+    runner = Runner(cfg, text, out, 1, None, False)
     runner.out.mkdir(parents=True)
     return runner.prepare(cfg.seeds[0], runner.new_metadata())
 
 
 def scene_runs(name: str, root: Path, steps: int, repeats: int) -> dict:
-    """The preset's first drive for ``steps`` steps from a prepared bed, with and without outputs."""
-    bed = prepared(name, root)
-    p = plan(config.preset(name)[0])
-    drive = dataclasses.replace(p.drives[0], duration=steps * p.dt, steps=steps)
-    every_step = dataclasses.replace(p, intervals={**p.intervals, "sample": 1})
-    variants = {"as run": (p, True), "bare": (p, False), "plate sampled every step": (every_step, True)}
-    return {kind: best_of(scene.drive_script(pv, drive, str(bed), fresh=True, outputs=outputs),
-                          root / f"{name}-{k}", repeats)
-            for k, (kind, (pv, outputs)) in enumerate(variants.items())}
+    """The preset's first drive for ``steps`` steps from a prepared bed: as run, bare, with the plate sampled every
+    step, and as run in the classic pair style (from a bed prepared in it)."""
+    runs = {}
+    for style in ("granular", "classic"):
+        text = preset_text(name, style)
+        bed = prepared(text, root / f"prepare-{name}-{style}")
+        p = plan(config.parse(text))
+        drive = dataclasses.replace(p.drives[0], duration=steps * p.dt, steps=steps)
+        every_step = dataclasses.replace(p, intervals={**p.intervals, "sample": 1})
+        variants = ({"as run": (p, True), "bare": (p, False), "plate sampled every step": (every_step, True)}
+                    if style == "granular" else {"as run, classic pair style": (p, True)})
+        runs.update({kind: best_of(scene.drive_script(pv, drive, str(bed), fresh=True, outputs=outputs),
+                                   root / f"{name}-{style}-{k}", repeats)
+                     for k, (kind, (pv, outputs)) in enumerate(variants.items())})
+    return runs
 
 
 def main() -> dict:
