@@ -47,9 +47,10 @@ from granstokes.lib.validate import require
 
 from . import lammps_env, layout
 from .config import Config, parse
+from .contact import mean_grain_volume
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .runner import Interrupted, RunError, _Lammps, _write_json
-from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, mean_grain_volume, shear_script
+from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, shear_script
 from .sizing import CONTENTION, OVERHEAD, PACKING, THROUGHPUT, count, duration_text, makespan
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)
@@ -147,7 +148,7 @@ class CalibrationPlan:
 def plan_calibration(cfg: Config) -> CalibrationPlan:
     cal, dim, dt = cfg.calibration, cfg.grains.dimension, cfg.time_step
     lz = cal.width if dim == 3 else 1.0
-    n = round(PACKING[dim] * cal.width**2 * lz / mean_grain_volume(cfg))
+    n = round(PACKING[dim] * cal.width**2 * lz / mean_grain_volume(cfg.grains.polydispersity, dim))
     points = []
     strain_max = cal.strain if cal.strain_max is None else cal.strain_max
     for I in cal.inertial_numbers:

@@ -39,6 +39,13 @@ def grain_volume(diameter: float, dimension: int) -> float:
     return grain_mass(diameter, dimension, 1.0)
 
 
+def mean_grain_volume(polydispersity: float, dimension: int) -> float:
+    """<V> over diameters uniform by number in [1-w, 1+w] (the mean grain mass at rho_p = 1)."""
+    w, dim = polydispersity, dimension
+    moment = ((1 + w) ** (dim + 1) - (1 - w) ** (dim + 1)) / ((dim + 1) * 2 * w) if w > 0 else 1.0  # <d^D>
+    return moment * grain_volume(1.0, dim)
+
+
 @dataclass(frozen=True)
 class Contact:
     """Stiffness, damping and time step of a scene; ``as_dict`` is written into run.json."""
@@ -103,9 +110,7 @@ class Contact:
     @property
     def gamma_n(self) -> float:
         """The classic style's normal damping rate giving the restitution for the mean pair."""
-        w, dim = self.polydispersity, self.dimension
-        moment = ((1 + w) ** (dim + 1) - (1 - w) ** (dim + 1)) / ((dim + 1) * 2 * w) if w > 0 else 1.0
-        m_eff = moment * grain_mass(1.0, dim) / 2
+        m_eff = mean_grain_volume(self.polydispersity, self.dimension) / 2  # rho_p = 1
         return 2 * self.zeta * math.sqrt(self.k_n / m_eff)
 
     def classic_coeff(self, mu_p: float | None = None) -> str:

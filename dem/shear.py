@@ -25,7 +25,7 @@ import math
 from dataclasses import dataclass
 
 from .config import Config
-from .contact import grain_volume
+from .contact import mean_grain_volume
 from .layout import SHEAR_PROFILE_TXT, SHEAR_SERIES_COLUMNS, SHEAR_SERIES_CSV
 from .scene import SKIN
 
@@ -64,14 +64,8 @@ def box_size(cfg: Config, n_grains: int) -> tuple[float, float, float]:
     """(L_x, L_y at PRE_PACKING, L_z or 1) for ``n_grains`` in a square (cubic) cell of width L_x."""
     g, cal = cfg.grains, cfg.calibration
     lz = cal.width if g.dimension == 3 else 1.0
-    return cal.width, n_grains * mean_grain_volume(cfg) / (PRE_PACKING[g.dimension] * cal.width * lz), lz
-
-
-def mean_grain_volume(cfg: Config) -> float:
-    """<V> over diameters uniform by number in [1-w, 1+w]."""
-    dim, w = cfg.grains.dimension, cfg.grains.polydispersity
-    moment = ((1 + w) ** (dim + 1) - (1 - w) ** (dim + 1)) / ((dim + 1) * 2 * w) if w > 0 else 1.0
-    return moment * grain_volume(1.0, dim)
+    volume = n_grains * mean_grain_volume(g.polydispersity, g.dimension)
+    return cal.width, volume / (PRE_PACKING[g.dimension] * cal.width * lz), lz
 
 
 def shear_script(cfg: Config, point: ShearPoint, n_grains: int, seed: int) -> str:

@@ -19,7 +19,7 @@ from granstokes.continuum.steady import steady_wall_speed
 from granstokes.lib.validate import require
 
 from .config import Config, Drive
-from .contact import grain_volume
+from .contact import grain_volume, mean_grain_volume
 from .layout import stage_key
 
 #: packing fractions used to turn a bed depth into a grain count (random close packing, loose side)
@@ -214,9 +214,7 @@ def plan(cfg: Config) -> Plan:
         depth = math.ceil(delta_max + cfg.box.margin)
         reasons.append(f"depth {depth:g} d = ceil(largest delta_s {delta_max:.3g} d + margin {cfg.box.margin:g} d)")
     dim = cfg.grains.dimension
-    w = cfg.grains.polydispersity
-    moment = ((1 + w) ** (dim + 1) - (1 - w) ** (dim + 1)) / ((dim + 1) * 2 * w) if w > 0 else 1.0
-    mean_volume = moment * grain_volume(1.0, dim)  # <d^D> over diameters uniform by number
+    mean_volume = mean_grain_volume(cfg.grains.polydispersity, dim)
     total = (depth + cfg.box.base_thickness) * cfg.box.width * (cfg.width_z or 1.0)
     n_grains = max(1, round(PACKING[dim] * total / mean_volume))
     reasons.append(f"{n_grains} grains fill base ({cfg.box.base_thickness:g} d) + bed at packing {PACKING[dim]}; "

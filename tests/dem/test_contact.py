@@ -7,7 +7,7 @@ import subprocess
 
 import pytest
 from granstokes.dem import config, lammps_env
-from granstokes.dem.contact import Contact
+from granstokes.dem.contact import Contact, grain_volume, mean_grain_volume
 
 SPEED = 0.5  # each disk's approach speed, sqrt(g d): overlaps stay ~1e-3 d at k_n = 2e5
 GAP = 0.1  # d between the surfaces at the start
@@ -59,7 +59,7 @@ def test_the_restitution_is_the_set_one_where_the_style_promises_it(tmp_path):
     spread over the masses (dem.contact: 0.43-0.58 at w = 0.2)."""
     granular, classic = _contact("granular"), _contact("classic")
     w, e = classic.polydispersity, classic.restitution
-    mean = math.sqrt(((1 + w) ** 3 - (1 - w) ** 3) / (3 * 2 * w))  # the disk of the mean mass (mass ~ d^2)
+    mean = math.sqrt(mean_grain_volume(w, 2) / grain_volume(1.0, 2))  # the disk of the mean mass
     pairs = ((1 - w, 1 - w), (1 + w, 1 + w), (1 - w, 1 + w))
     measured = [restitution(granular, d1, d2, tmp_path) for d1, d2 in pairs]
     assert all(abs(m - e) <= INTEGRATION * e for m in measured), measured
