@@ -241,8 +241,9 @@ def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.
 
 def check_grains(cal: Calibration, runs) -> None:
     """Refuse a calibration of other grains than the runs' (one-line ValueError naming the difference); an entry
-    either record lacks is the config's default (dem.config.Grains)."""
-    default = asdict(Grains())
+    either record lacks is the config's default (dem.config.Grains), except the pair style: a record that names
+    none ran ``pair_style granular``, the only style it could have run."""
+    default = {**asdict(Grains()), "pair_style": "granular"}
     calibrated = {**default, **cal.grains}
     for run in runs:
         grains = {**default, **json.loads((Path(run) / RUN_JSON).read_text())["config"]["grains"]}

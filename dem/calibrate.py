@@ -20,8 +20,9 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
   autocorrelation time (the MIN_BLOCKS cap can make them shorter when the window is too short).
 
 Output (dem.layout): DIR/calibration.json, DIR/points.csv, DIR/state.json, DIR/I-K/seed-S/.
-Points run concurrently (``jobs`` LAMMPS subprocesses, longest first); ``resume`` reruns the
-unfinished ones (a point restarts from its insertion: points are short).
+Points and seeds are tasks of the project's executor (granstokes.lib.executor: ``jobs`` LAMMPS processes at
+once, longest first, a failed cell retried once); ``resume`` reruns the unfinished ones (a cell restarts from
+its insertion: cells are short).
 """
 from __future__ import annotations
 
@@ -32,7 +33,6 @@ import shutil
 import signal
 import threading
 import time
-from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,6 +41,7 @@ import pandas as pd
 from granstokes.continuum import calibration as fitting
 
 from granstokes.lib import staging
+from granstokes.lib.executor import Executor, Outcome, Task
 from granstokes.lib.provenance import provenance
 from granstokes.lib.statistics import autocorrelation_time
 from granstokes.lib.validate import require
@@ -49,7 +50,7 @@ from . import lammps_env, layout
 from .config import Config, parse
 from .contact import mean_grain_volume
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
-from .runner import Interrupted, RunError, _Lammps, _write_json
+from .runner import Interrupted, RunError, _Lammps, stop_all_lammps
 from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, shear_script
 from .sizing import CONTENTION, OVERHEAD, PACKING, THROUGHPUT, count, duration_text, makespan
 
@@ -227,67 +228,45 @@ def _now() -> str:
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
 
 
-class _Calibrator:
-    def __init__(self, plan: CalibrationPlan, out: Path, state: dict, lmp: _Lammps):
-        self.plan, self.out, self.state, self.lmp = plan, out, state, lmp
-        self.lock = threading.Lock()
-        self.slots: list[int] = []  # progress-bar rows, one per concurrent job
+def run_cell(out: str, k: int, seed: int, np_: int, launcher: str | None, progress: bool, position: int) -> Outcome:
+    """The executor's task: the plane-shear cell of point ``k`` and ``seed`` of the calibration folder ``out`` (its
+    plan rebuilt from the stored config); a complete cell is re-analysed from its stored series (the fit uses the
+    current analysis).  Its entry in state.json is written under the folder's lock."""
+    out = Path(out)
+    plan = plan_calibration(parse((out / layout.CONFIG_TOML).read_text()))
+    state_path, key, d = out / layout.CALIBRATION_STATE, plan.key(k, seed), layout.point_dir(out, k, seed)
+    point = plan.points[k]
+    old = json.loads(state_path.read_text())["points"].get(key, {})
 
-    def save(self) -> None:
-        with self.lock:
-            _write_json(self.out / layout.CALIBRATION_STATE, self.state)
+    def store(entry):
+        staging.update_json(state_path, lambda doc: doc["points"].update({key: entry}))
 
-    def task(self, k: int, seed: int) -> None:
-        key = self.plan.key(k, seed)
-        d = layout.point_dir(self.out, k, seed)
-        old = self.state["points"].get(key, {})
-        if old.get("status") == "complete":  # re-analysed from its stored series: the fit uses the current analysis
-            row, blocks, checks = analyse(d, self.plan.config, self.plan.points[k], seed)
-            blocks.assign(point=k)[list(layout.BLOCK_COLUMNS)].to_csv(d / layout.BLOCKS_CSV, index=False)
-            with self.lock:
-                self.state["points"][key] = {**old, "row": row, "checks": checks}
-            return
-        if d.exists():
-            shutil.rmtree(d)
-        d.mkdir(parents=True)
-        point = self.plan.points[k]
-        (d / layout.SHEAR_IN).write_text(shear_script(self.plan.config, point, self.plan.n_grains, seed))
-        with self.lock:
-            slot = self.slots.pop(0)
-            self.state["points"][key] = {"status": "running", "I_target": point.I, "started": _now()}
-        self.save()
-        entry = {"status": "interrupted", "I_target": point.I, "message": "continue with --resume"}
-        try:
-            info = self.lmp.run(layout.SHEAR_IN, d, self.plan, self.plan.steps(k), 0,
-                                f"I={point.I:.3g} seed {seed}", position=slot)
-            row, blocks, checks = analyse(d, self.plan.config, point, seed)
-            blocks.assign(point=k)[list(layout.BLOCK_COLUMNS)].to_csv(d / layout.BLOCKS_CSV, index=False)
-            entry = {"status": "complete", "I_target": point.I, "row": row, "checks": checks,
-                     "wall_time": info["wall_time"], "steps": info["last_step"]}
-        except RunError as exc:
-            entry = {"status": "failed", "I_target": point.I, "message": str(exc)}
-            raise
-        finally:
-            with self.lock:
-                self.slots.insert(0, slot)
-                self.state["points"][key] = entry
-            self.save()
+    def analysed(entry):
+        row, blocks, checks = analyse(d, plan.config, point, seed)
+        blocks.assign(point=k)[list(layout.BLOCK_COLUMNS)].to_csv(d / layout.BLOCKS_CSV, index=False)
+        return {**entry, "row": row, "checks": checks}
 
-    def execute(self, jobs: int) -> None:
-        self.slots = list(range(jobs))
-        pool = ThreadPoolExecutor(max_workers=jobs)
-        futures = [pool.submit(self.task, k, s) for k, s in self.plan.tasks()]
-        try:
-            done, _ = wait(futures, return_when=FIRST_EXCEPTION)
-            for f in done:
-                f.result()
-        except BaseException:
-            for f in futures:
-                f.cancel()
-            self.lmp.stop_all()
-            raise
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+    if old.get("status") == "complete":
+        store(analysed(old))
+        return Outcome("complete")
+    if d.exists():
+        shutil.rmtree(d)
+    d.mkdir(parents=True)
+    (d / layout.SHEAR_IN).write_text(shear_script(plan.config, point, plan.n_grains, seed))
+    store({"status": "running", "I_target": point.I, "started": _now()})
+    entry = {"status": "interrupted", "I_target": point.I, "message": "continue with --resume"}
+    try:
+        info = _Lammps(np_, launcher, progress).run(layout.SHEAR_IN, d, plan, plan.steps(k), 0,
+                                                    f"I={point.I:.3g} seed {seed}", position=position)
+        entry = analysed({"status": "complete", "I_target": point.I, "wall_time": info["wall_time"],
+                          "steps": info["last_step"]})
+    except RunError as exc:
+        entry = {"status": "failed", "I_target": point.I, "message": str(exc)}
+    except (Interrupted, KeyboardInterrupt):
+        pass
+    finally:
+        store(entry)
+    return Outcome(entry["status"], entry.get("message", ""))
 
 
 def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Calibration:
@@ -312,7 +291,7 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
            "excluded": excluded, "protocol": plan.as_dict(),
            "cost": {"lammps_cpu_seconds": wall, "grain_steps": plan.n_grains * plan.as_dict()["total_steps"]},
            "law": cal.as_dict()["law"]}
-    _write_json(out / layout.CALIBRATION_JSON, doc)
+    staging.write_json(out / layout.CALIBRATION_JSON, doc)
     return cal
 
 
@@ -381,8 +360,14 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
         announce(plan.summary(out))
         announce(f"  {plan.cost_estimate(jobs, np, done)}")
     state["status"], state["message"] = "running", ""
-    runner = _Calibrator(plan, out, state, _Lammps(np, launcher, progress))
-    runner.save()
+
+    def save():
+        staging.update_json(state_path, lambda doc: doc.update({k: v for k, v in state.items() if k != "points"}
+                                                               | {"points": doc.get("points", {})}))
+
+    save()
+    tasks = [Task(plan.key(k, seed), run_cell, (str(out), k, seed, np, launcher, progress, i % jobs),
+                  cost=plan.task_seconds(k), ranks=np) for i, (k, seed) in enumerate(plan.tasks())]
     in_main = threading.current_thread() is threading.main_thread()
     previous = signal.getsignal(signal.SIGTERM)
     if in_main:
@@ -390,7 +375,12 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
     t0 = time.monotonic()
     cal = None
     try:
-        runner.execute(jobs)
+        outcomes = Executor(jobs * np).run(tasks, stop=stop_all_lammps)
+        state["points"] = json.loads(state_path.read_text())["points"]
+        stopped = [(key, o) for key, o in outcomes.items() if o.status != "complete"]
+        if stopped:
+            key, o = stopped[0]
+            raise (RunError if o.status == "failed" else Interrupted)(f"{key}: {o.message}")
         cal = _fit_and_write(plan, out, state)
         state["status"] = "complete"
         n_out = sum(not e["checks"]["passed"] for e in state["points"].values())
@@ -407,7 +397,7 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
             signal.signal(signal.SIGTERM, previous)
         state["finished"] = _now()
         state["wall_time_this_invocation"] = time.monotonic() - t0
-        runner.save()
+        save()
     return CalibrateResult(out, state["status"], state["message"], cal)
 
 

@@ -7,8 +7,8 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
     dt = "auto"           # or a number <= t_c/20 (the default, t_c from the contact law)
     # the bed's expected mu(I) parameters (continuum.scales.Material), used for sizing
     material = {mu_s = 0.28, mu_d = 0.58, I0 = 0.3, I_convention = "dem", phi = 0.8}
-    # dimension 2 (disks) or 3 (spheres); diameters uniform by number in [1-w, 1+w] d; pair_style "granular" (the
-    # default) or "classic" (Hooke only, faster; dem.contact)
+    # dimension 2 (disks) or 3 (spheres); diameters uniform by number in [1-w, 1+w] d; pair_style "classic" (the
+    # Hooke default, LAMMPS's gran/hooke/history) or "granular" (Hertz's only style; dem.contact)
     grains = {dimension = 2, polydispersity = 0.2, mu_p = 0.5, restitution = 0.5, contact = "hooke", kappa = 1e4}
     box = {width = 32.0, margin = 10.0}   # widths and depth in d; no depth -> max delta_s + margin
     load = {p_w = 20.0}
@@ -61,7 +61,7 @@ class Grains:
     contact: str = "hooke"
     kappa: float = 1e4
     kt_over_kn: float = 2 / 7
-    pair_style: str = "granular"
+    pair_style: str | None = None  # "classic" for Hooke, "granular" for Hertz (dem.contact)
 
     def __post_init__(self):
         require(self.dimension in (2, 3), "grains.dimension", "2 or 3", self.dimension)
@@ -75,6 +75,8 @@ class Grains:
                 f"a finite number >= {KAPPA_MIN:g} (rigid limit)", self.kappa)
         require(finite(self.kt_over_kn) and 0 < self.kt_over_kn <= 1, "grains.kt_over_kn", "in (0, 1]",
                 self.kt_over_kn)
+        if self.pair_style is None:
+            object.__setattr__(self, "pair_style", "classic" if self.contact == "hooke" else "granular")
         require(self.pair_style == "granular" or (self.pair_style == "classic" and self.contact == "hooke"),
                 "grains.pair_style", "'granular', or 'classic' with contact = 'hooke'", self.pair_style)
 

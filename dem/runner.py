@@ -1,8 +1,9 @@
 """Run a DEM scene: prepare one bed per seed, then every drive from it, as LAMMPS subprocesses.
 
 The run folder's layout is dem.layout's.
-Each seed's bed (preparation, then its drives) is an independent chain of LAMMPS processes; ``jobs``
-chains run side by side (threads, each waiting on its own subprocess), each process on ``np`` ranks
+Each seed's bed (preparation, then its drives) is an independent chain of LAMMPS processes, one task of the
+project's executor (granstokes.lib.executor: Dask, ``jobs`` rank slots, a failed bed retried once from its
+restarts, the other beds going on), each process on ``np`` ranks
 under the mpich wheel's ``mpirun -np N`` (or a ``launcher`` template such as ``srun -n {np}``), its
 screen output feeding a tqdm bar on a terminal, plain lines otherwise (``Lines``).  Defaults
 (DEFAULT_JOBS, DEFAULT_NP) are measured in bench/RESULTS.md.  A failed, killed or interrupted run leaves
@@ -23,7 +24,7 @@ import subprocess
 import sys
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
+import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from granstokes.continuum.scales import UNITS
 from tqdm import tqdm
 
 from granstokes.lib import staging
+from granstokes.lib.executor import Executor, Outcome, Task
 from granstokes.lib.provenance import provenance
 from granstokes.lib.validate import require
 
@@ -160,6 +162,15 @@ def _progress(total: int, initial: int, desc: str, position: int, enabled: bool)
                 leave=True, position=position)
 
 
+_LAUNCHERS: weakref.WeakSet = weakref.WeakSet()
+
+
+def stop_all_lammps() -> None:
+    """Terminate every LAMMPS process this Python process started (an interrupt of a run or a study)."""
+    for lmp in list(_LAUNCHERS):
+        lmp.stop_all()
+
+
 class _Lammps:
     """One LAMMPS subprocess: launch, stream the screen into a progress bar, diagnose failures."""
 
@@ -168,6 +179,7 @@ class _Lammps:
         self.live: set[subprocess.Popen] = set()
         self.stopping = False
         self._lock = threading.Lock()
+        _LAUNCHERS.add(self)
 
     def stop_all(self) -> None:
         """Terminate every running LAMMPS process (an interrupt of the whole run)."""
@@ -244,12 +256,6 @@ def _stop(proc: subprocess.Popen) -> None:
             proc.wait()
 
 
-def _write_json(path: Path, data: dict) -> None:
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=str))
-    os.replace(tmp, path)
-
-
 def _last_plate_step(segment: Path) -> int:
     path = segment / layout.PLATE_CSV
     if not path.exists():
@@ -281,7 +287,6 @@ class Runner:
         self.lmp = _Lammps(np_, launcher, progress)
         self.jobs = jobs
         self.meta_path = self.out / layout.RUN_JSON
-        self._lock = threading.Lock()  # run.json and its dict are shared by the seeds' threads
 
     # --- metadata --------------------------------------------------------------------------------
     def new_metadata(self) -> dict:
@@ -304,14 +309,14 @@ class Runner:
         }
 
     def save(self, meta: dict) -> None:
-        with self._lock:
-            _write_json(self.meta_path, meta)
+        """Write run.json's entries of ``meta`` except the stages, which their beds own (``record``)."""
+        staging.update_json(self.meta_path, lambda doc: doc.update({k: v for k, v in meta.items() if k != "stages"}
+                                                                    | {"stages": doc.get("stages", {})}))
 
     def record(self, meta: dict, key: str, st: StageResult) -> None:
-        """Store a stage's state in run.json (thread-safe)."""
-        with self._lock:
-            meta["stages"][key] = dataclasses.asdict(st)
-            _write_json(self.meta_path, meta)
+        """Store a stage's state in ``meta`` and in run.json (beds in other threads or processes keep theirs)."""
+        meta["stages"][key] = dataclasses.asdict(st)
+        staging.update_json(self.meta_path, lambda doc: doc.setdefault("stages", {}).update({key: meta["stages"][key]}))
 
     # --- stages ----------------------------------------------------------------------------------
     def prepare(self, seed: int, meta: dict) -> Path:
@@ -419,40 +424,50 @@ class Runner:
         for dp in self.plan.drives:
             self.drive(seed, dp, prepared, meta)
 
-    def _beds(self, meta: dict) -> None:
-        """Every seed's bed, ``jobs`` at a time; the first failure or an interrupt stops them all."""
-        if self.jobs == 1:
-            for seed in self.cfg.seeds:
-                self.bed(seed, meta)
-            return
-        with ThreadPoolExecutor(self.jobs) as pool:
-            futures = [pool.submit(self.bed, seed, meta) for seed in self.cfg.seeds]
-            try:
-                for f in futures:
-                    f.result()
-            except BaseException:
-                self.lmp.stop_all()
-                for f in futures:
-                    f.cancel()
-                raise
+    def bed_task(self, seed: int, done=()) -> Task:
+        """A seed's bed as an executor task (its arguments rebuild this runner from the folder: picklable), its
+        cost that of the stages not in ``done``."""
+        return Task(layout.stage_key(seed), run_bed, (str(self.out), seed, self.lmp.np, self.lmp.launcher,
+                                                      self.lmp.progress, self.jobs),
+                    cost=sum(self.plan.stage_seconds(k) for k in self.plan.stage_keys(seed) if k not in done),
+                    ranks=self.lmp.np)
 
-    def execute(self, meta: dict) -> RunResult:
+    def execute(self, meta: dict, executor: Executor | None = None) -> RunResult:
+        """Every unfinished bed through ``executor`` (default: a local one of ``jobs`` slots of ``np`` ranks),
+        then run.json's status: complete, or the first bed's failure or interrupt."""
         t0 = time.monotonic()
         status, message = "complete", ""
         try:
-            self._beds(meta)
-        except RunError as exc:
-            status, message = "failed", str(exc)
+            executor = executor or Executor(self.jobs * self.lmp.np)
+            done = [k for k, st in meta["stages"].items() if st.get("status") == "complete"]
+            outcomes = executor.run([self.bed_task(seed, done) for seed in self.cfg.seeds], stop=stop_all_lammps)
+            stopped = [o for o in outcomes.values() if o.status != "complete"]
+            if stopped:
+                status, message = stopped[0].status, stopped[0].message
         except (Interrupted, KeyboardInterrupt) as exc:
             status, message = "interrupted", str(exc) or "interrupted by SIGINT"
             meta["signal"] = getattr(exc, "signum", signal.SIGINT)
-        except Exception as exc:  # anything else (a merge of broken outputs...): never leave "running"
-            status, message = "failed", f"{type(exc).__name__}: {exc}"
         meta["status"], meta["message"] = status, message
         meta["timings"]["finished"] = _now()
         meta["timings"]["wall_time_this_invocation"] = time.monotonic() - t0
         self.save(meta)
+        meta["stages"] = json.loads(self.meta_path.read_text())["stages"]
         return RunResult(self.out, status, message, meta["stages"], meta)
+
+
+def run_bed(out: str, seed: int, np_: int, launcher: str | None, progress: bool, jobs: int) -> Outcome:
+    """The executor's task: seed ``seed``'s bed of the run folder ``out`` (its config and run.json as stored)."""
+    out = Path(out)
+    text = (out / layout.CONFIG_TOML).read_text()
+    runner = Runner(parse(text), text, out, np_, launcher, progress, jobs)
+    meta = json.loads(runner.meta_path.read_text())
+    try:
+        runner.bed(seed, meta)
+    except RunError as exc:
+        return Outcome("failed", str(exc))
+    except (Interrupted, KeyboardInterrupt) as exc:
+        return Outcome("interrupted", str(exc) or "interrupted")
+    return Outcome("complete")
 
 
 def _now() -> str:

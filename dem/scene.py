@@ -152,9 +152,13 @@ def _pair(plan: Plan) -> str:
 """)
 
 
+#: pairs of atom types with their own friction: bed-plate contacts have the plate's PLATE_FRICTION
+SPECIAL_PAIRS = ((BED, PLATE, PLATE_FRICTION),)
+
+
 def _pair_coeffs(plan: Plan) -> str:
     """One contact law for every pair; bed-plate contacts with the plate's friction PLATE_FRICTION."""
-    return plan.config.contact.pair_lines(special=((BED, PLATE, PLATE_FRICTION),))
+    return plan.config.contact.pair_lines(special=SPECIAL_PAIRS)
 
 
 def _settle(plan: Plan) -> str:
@@ -268,11 +272,11 @@ def prepare_script(plan: Plan, seed: int) -> str:
 def _read_state(plan: Plan, restart: str) -> str:
     return f"""
 # --- state: prepared bed or last drive restart; the processor grid must precede read_restart (the
-#     tall box is never split along y) and the contact law is re-declared so that pair granular
-#     recomputes its cutoffs (contact history comes back with the restart) ---
+#     tall box is never split along y); the contact law's coefficients are not in restart files
+#     (dem.contact.Contact.restart_lines: the contact history comes back with the restart) ---
 processors {_procs(plan.dimension)}
 read_restart {restart}
-{_pair_coeffs(plan)}
+{plan.config.contact.restart_lines(SPECIAL_PAIRS)}
 """
 
 

@@ -140,14 +140,35 @@ def staged(target, command: str, inputs=(), keep: bool = False):
 
 
 @contextmanager
-def _locked(folder: Path):
-    """Hold an exclusive lock on ``folder`` (the directory itself: no file is added) while in the block."""
+def locked(folder: Path):
+    """Hold an exclusive lock on ``folder`` (the directory itself: no file is added) while in the block; threads
+    and processes (on one machine, or a shared file system with flock) take turns."""
     fd = os.open(folder, os.O_RDONLY)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
         yield
     finally:
         os.close(fd)
+
+
+def write_json(path, doc: dict) -> None:
+    """Write ``doc`` to ``path`` atomically (a hidden temporary file beside it, then a rename)."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    with os.fdopen(fd, "w") as f:
+        json.dump(doc, f, indent=2, default=str)
+    os.replace(tmp, path)
+
+
+def update_json(path, change) -> dict:
+    """Read the JSON record ``path`` (``{}`` if absent), apply ``change(doc)`` in place and write it back atomically,
+    under the lock of its folder: concurrent writers of different entries lose none.  Returns the new record."""
+    path = Path(path)
+    with locked(path.parent):
+        doc = json.loads(path.read_text()) if path.exists() else {}
+        change(doc)
+        write_json(path, doc)
+    return doc
 
 
 def _blocked(target: Path, rel: str, owned: set[str]) -> bool:
@@ -165,7 +186,7 @@ def _blocked(target: Path, rel: str, owned: set[str]) -> bool:
 
 
 def _commit(work: Path, target: Path, command: str, inputs, keep: bool) -> None:
-    with _locked(target):
+    with locked(target):
         owned = _owned(target, command)
         new = _files(work)
         foreign = [rel for rel in new if _blocked(target, rel, owned)]

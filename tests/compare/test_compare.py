@@ -79,7 +79,7 @@ def test_a_calibration_of_other_grains_is_refused(tmp_path):
     assert "\n" not in str(err.value)
     (run / "run.json").write_text(json.dumps({"config": {"grains": doc["grains"]}}))
     check_grains(loaded, [run])
-    # an entry the calibration's record lacks is the default: another contact implementation is other grains
+    # a record without a pair style ran pair granular: another contact implementation is other grains
     (run / "run.json").write_text(json.dumps({"config": {"grains": {**doc["grains"], "pair_style": "granular"}}}))
     check_grains(loaded, [run])
     (run / "run.json").write_text(json.dumps({"config": {"grains": {**doc["grains"], "pair_style": "classic"}}}))

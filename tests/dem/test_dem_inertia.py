@@ -17,7 +17,7 @@ SETTLE, MEASURE, EVERY = 20000, 40000, 1000  # steps: sticking transient, then t
 
 
 def _rolling_script(dim: int) -> str:
-    c = Contact("hooke", dim, 10.0, 1e4, 0.5, 0.5, 2 / 7, 0.0)
+    c = Contact("hooke", dim, 10.0, 1e4, 0.5, 0.5, 2 / 7, 0.0, "granular")
     z = "-0.5 0.5" if dim == 2 else "-5 5"
     density = "density/disc" if dim == 2 else "density"
     return f"""

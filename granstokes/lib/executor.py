@@ -1,0 +1,113 @@
+"""Run independent tasks on Dask (``distributed``): an in-process ``LocalCluster`` or any running scheduler.
+
+A task is a plain function and its arguments (picklable: remote workers rebuild what they need from the
+folders), with an expected cost in seconds and the MPI ranks it takes.  Tasks start longest first (Dask
+priority); a task of k ranks holds k of its worker's ``RANKS`` resource, so a local cluster of ``jobs`` slots
+runs two 1-rank tasks side by side or one 2-rank task alone.  A task returns an ``Outcome``; a failed outcome
+or an exception is retried ``retries`` times, an interrupted one never.  ``KeyboardInterrupt`` (SIGINT, or a
+SIGTERM handler that raises) cancels the queue and calls ``stop`` to end what runs in this process; workers of
+a remote cluster finish their current task (Dask cannot stop a running task).
+"""
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from tqdm import tqdm
+
+RANKS = "ranks"  # the worker resource a task's MPI ranks hold
+DEFAULT_RETRIES = 1
+
+
+@dataclass(frozen=True)
+class Task:
+    """``fn(*args)`` returning an Outcome; ``key`` names it in the study's records."""
+
+    key: str
+    fn: Callable
+    args: tuple = ()
+    cost: float = 1.0  # expected seconds: the order (longest first) and the progress bar's ETA
+    ranks: int = 1
+
+
+@dataclass(frozen=True)
+class Outcome:
+    status: str  # complete | failed | interrupted
+    message: str = ""
+    info: dict = field(default_factory=dict)
+    attempts: int = 1
+
+
+def _call(fn, args) -> Outcome:
+    """A task on its worker: an exception is a failed outcome with its reason (the traceback stays there)."""
+    try:
+        return fn(*args)
+    except Exception as exc:  # recorded, never lost
+        return Outcome("failed", f"{type(exc).__name__}: {exc}")
+
+
+class Executor:
+    """``jobs`` rank slots on a local in-process cluster, or the cluster at ``scheduler`` (an address)."""
+
+    def __init__(self, jobs: int = 2, scheduler: str | None = None, retries: int = DEFAULT_RETRIES):
+        self.jobs, self.scheduler, self.retries = jobs, scheduler, retries
+
+    def _client(self):
+        from distributed import Client, LocalCluster
+
+        if self.scheduler:
+            return None, Client(self.scheduler)
+        # threads: a task waits on its LAMMPS subprocess, so one process suffices and holds no copies
+        cluster = LocalCluster(n_workers=1, threads_per_worker=self.jobs, processes=False,
+                               resources={RANKS: self.jobs}, dashboard_address=None,
+                               scheduler_kwargs={"dashboard_address": ":0"})  # any free port: no clash
+        return cluster, Client(cluster)
+
+    def run(self, tasks, on_done: Callable[[Task, Outcome], None] | None = None, stop: Callable[[], None] | None = None,
+            progress: bool = False, desc: str = "runs") -> dict[str, Outcome]:
+        """Run ``tasks``; ``on_done(task, outcome)`` in this thread as each finishes (for the records); returns
+        each task's last outcome by key."""
+        from distributed import as_completed
+
+        tasks = sorted(tasks, key=lambda t: -t.cost)
+        by_key = {t.key: t for t in tasks}
+        ranks_max = max((t.ranks for t in tasks), default=1)
+        if self.scheduler is None and ranks_max > self.jobs:
+            raise ValueError(f"--jobs: at least the ranks of the largest task ({ranks_max}), got {self.jobs}")
+        outcomes: dict[str, Outcome] = {}
+        if not tasks:
+            return outcomes
+        cluster, client = self._client()
+        bar = tqdm(total=round(sum(t.cost for t in tasks)), desc=desc, unit="s est.", disable=not progress,
+                   file=sys.stderr, dynamic_ncols=True)
+        attempts = dict.fromkeys(by_key, 1)
+
+        def submit(task: Task):
+            return client.submit(_call, task.fn, task.args, key=f"{task.key}-{attempts[task.key]}", pure=False,
+                                 priority=task.cost, resources={RANKS: task.ranks})
+
+        try:
+            pending = as_completed([submit(t) for t in tasks])
+            for future in pending:
+                key = future.key.rsplit("-", 1)[0]
+                task, outcome = by_key[key], future.result()
+                outcome = Outcome(outcome.status, outcome.message, outcome.info, attempts[key])
+                if outcome.status == "failed" and attempts[key] <= self.retries:
+                    attempts[key] += 1
+                    pending.add(submit(task))
+                    continue
+                outcomes[key] = outcome
+                bar.update(round(task.cost))
+                if on_done is not None:
+                    on_done(task, outcome)
+        except BaseException:
+            if stop is not None:
+                stop()
+            raise
+        finally:
+            bar.close()
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        return outcomes

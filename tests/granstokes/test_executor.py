@@ -1,0 +1,87 @@
+"""The executor (granstokes.lib.executor): order, retry, failure records, interrupts, rank slots, a scheduler."""
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from granstokes.lib.executor import Executor, Outcome, Task
+
+_LOCK = threading.Lock()
+
+
+def _log(path: str, key: str, status: str = "complete", sleep: float = 0.0) -> Outcome:
+    """Append ``key`` to the file ``path`` (start order), sleep, return ``status``."""
+    with _LOCK, open(path, "a") as f:
+        f.write(key + "\n")
+    time.sleep(sleep)
+    return Outcome(status, key)
+
+
+def _flaky(path: str, key: str) -> Outcome:
+    """Fails on its first call (the marker file absent), completes on the second."""
+    marker = Path(path)
+    if not marker.exists():
+        marker.write_text("tried")
+        return Outcome("failed", "first attempt")
+    return Outcome("complete")
+
+
+def _raises(path: str) -> Outcome:
+    Path(path).open("a").write("x\n")
+    raise RuntimeError("a bug, not a LAMMPS failure")
+
+
+def test_one_slot_runs_the_longest_first(tmp_path):
+    log = str(tmp_path / "order")
+    tasks = [Task(f"t{c}", _log, (log, f"t{c}"), cost=c) for c in (1, 5, 3, 4, 2)]
+    outcomes = Executor(jobs=1).run(tasks)
+    assert Path(log).read_text().split() == ["t5", "t4", "t3", "t2", "t1"]
+    assert all(o.status == "complete" and o.attempts == 1 for o in outcomes.values())
+
+
+def test_a_failed_task_is_retried_once_then_recorded(tmp_path):
+    done = []
+    tasks = [Task("flaky", _flaky, (str(tmp_path / "marker"), "flaky")),
+             Task("bad", _log, (str(tmp_path / "bad"), "bad", "failed")),
+             Task("bug", _raises, (str(tmp_path / "bug"),))]
+    outcomes = Executor(jobs=2).run(tasks, on_done=lambda t, o: done.append((t.key, o.status)))
+    assert outcomes["flaky"].status == "complete" and outcomes["flaky"].attempts == 2
+    assert outcomes["bad"].status == "failed" and outcomes["bad"].attempts == 2
+    assert len((tmp_path / "bad").read_text().split()) == 2  # tried twice, no more
+    assert outcomes["bug"].status == "failed" and "RuntimeError: a bug" in outcomes["bug"].message
+    assert sorted(done) == [("bad", "failed"), ("bug", "failed"), ("flaky", "complete")]
+
+
+def test_an_interrupted_task_is_not_retried(tmp_path):
+    outcomes = Executor(jobs=1).run([Task("i", _log, (str(tmp_path / "i"), "i", "interrupted"))])
+    assert outcomes["i"].status == "interrupted" and outcomes["i"].attempts == 1
+    assert (tmp_path / "i").read_text().split() == ["i"]
+
+
+def test_a_two_rank_task_holds_both_slots(tmp_path):
+    """Two slots: two 1-rank tasks overlap, a 2-rank task runs alone (wall time ~ the sum)."""
+    log = str(tmp_path / "r")
+    start = time.perf_counter()
+    Executor(jobs=2).run([Task("a", _log, (log, "a", "complete", 0.4)), Task("b", _log, (log, "b", "complete", 0.4))])
+    overlapped = time.perf_counter() - start
+    start = time.perf_counter()
+    Executor(jobs=2).run([Task("a", _log, (log, "a", "complete", 0.4), ranks=2),
+                          Task("b", _log, (log, "b", "complete", 0.4), ranks=2)])
+    alone = time.perf_counter() - start
+    assert alone - overlapped > 0.3  # 0.8 s of sleeps in turn against 0.4 s side by side
+    with pytest.raises(ValueError, match="--jobs"):
+        Executor(jobs=1).run([Task("c", _log, (log, "c"), ranks=2)])
+
+
+def test_the_same_tasks_through_a_scheduler(tmp_path):
+    """--scheduler: a LocalCluster of 2 worker processes that the test starts; tasks and retries as locally."""
+    from distributed import LocalCluster
+
+    log = str(tmp_path / "s")
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, resources={"ranks": 1},
+                      dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"}) as cluster:
+        outcomes = Executor(scheduler=cluster.scheduler_address).run(
+            [Task("a", _log, (log, "a")), Task("f", _flaky, (str(tmp_path / "m"), "f"))])
+    assert outcomes["a"].status == "complete" and outcomes["f"].attempts == 2
+    assert Path(log).read_text().split() == ["a"]
