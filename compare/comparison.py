@@ -12,7 +12,7 @@ compare.metrics and compare.report only render it.  DEM units throughout; I in t
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +21,7 @@ from granstokes.continuum.calibration import Calibration, mu_law
 from granstokes.continuum.crossing import crossing_depth
 from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.steady import DELTA_THRESHOLD
-from granstokes.dem.config import Grains
+from granstokes.dem.calibrate import grains_difference
 from granstokes.dem.layout import RUN_JSON
 from tqdm import tqdm
 
@@ -240,14 +240,13 @@ def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.
 
 
 def check_grains(cal: Calibration, runs) -> None:
-    """Refuse a calibration of other grains than the runs' (one-line ValueError naming the difference); an entry
-    either record lacks is the config's default (dem.config.Grains), except the pair style: a record that names
-    none ran ``pair_style granular``, the only style it could have run."""
-    default = {**asdict(Grains()), "pair_style": "granular"}
-    calibrated = {**default, **cal.grains}
+    """Refuse a calibration of other grains than the runs' (one-line ValueError naming the difference;
+    dem.calibrate.grains_difference: one material, one stiffness k_n at any pressure)."""
+    p_cal = float(cal.info.get("protocol", {}).get("p", np.nan))
     for run in runs:
-        grains = {**default, **json.loads((Path(run) / RUN_JSON).read_text())["config"]["grains"]}
-        diff = {k: (calibrated.get(k), v) for k, v in grains.items() if calibrated.get(k) != v}
+        config = json.loads((Path(run) / RUN_JSON).read_text())["config"]
+        diff = grains_difference(cal.grains, p_cal if np.isfinite(p_cal) else config.get("p_w", np.nan),
+                                 config["grains"], config.get("p_w", np.nan))
         require(not diff, f"--calibration {cal.source}", f"a calibration of the grains of {run}",
                 "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
 

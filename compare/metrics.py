@@ -55,6 +55,9 @@ DEFINITIONS = {
     "elastic_start": ("sqrt(d/g)", f"transit_time = depth/c_s of the shear wave through the deposited bed (run.json); "
                                    f"transients (the early exponents alpha) are compared from "
                                    f"{TRANSITS_BEFORE_COMPARISON:g} transits on"),
+    "duration": ("sqrt(d/g)", "the DEM record's length (its last whole frame)"),
+    "delta_s": ("d", "the paper's steady layer depth beta_w p_w/(phi rho_p g) with the calibrated material"),
+    "t_s": ("sqrt(d/g)", "the paper's time scale delta_s^2/nu_g with the calibrated material"),
     "pressure_slope": ("rho_p g", "dp/d(depth) over the bulk, from the whole run's mean profile"),
     "creep_at_delta_s": ("1", "u/u_w of the DEM's steady profile at the calibrated delta_s"),
     "phi_bulk": ("1", f"mean solid fraction of the steady windows, {WALL_EXCLUSION:g} d away from plate and base "
@@ -77,6 +80,8 @@ def drive_metrics(dc: DriveComparison) -> dict:
     out = {
         "kind": spec.kind, "imposed": spec.load.value, "imposed_unit": "tau_w [rho_p g d]" if spec.kind == "stress"
         else "u_w [sqrt(g d)]", "p_w": spec.p_w, "depth": spec.depth, "seeds": len(spec.folders),
+        "duration": g.t_end, "delta_s": dc.scales.delta_s if dc.scales is not None else None,
+        "t_s": dc.scales.t_s if dc.scales is not None else None,
         "grains_x_steps": spec.cost, "t_steady": g.steady["t_steady"], "t_window": g.t_window,
         "pressure_slope": slope.slope, "pressure_slope_err": slope.stderr,
         "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_err": g.steady["u_w"]["stderr"],

@@ -26,6 +26,7 @@ its insertion: cells are short).
 """
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import json
 import math
@@ -44,11 +45,12 @@ from granstokes.lib import staging
 from granstokes.lib.executor import Executor, Outcome, Task
 from granstokes.lib.provenance import provenance
 from granstokes.lib.statistics import autocorrelation_time
+from granstokes.lib.toml_text import with_entries
 from granstokes.lib.validate import require
 
 from . import lammps_env, layout
-from .config import Config, parse
-from .contact import mean_grain_volume
+from .config import Config, Grains, parse
+from .contact import Contact, mean_grain_volume
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .runner import Interrupted, RunError, _Lammps, stop_all_lammps
 from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, shear_script
@@ -225,7 +227,7 @@ def analyse(folder: Path, cfg: Config, point: ShearPoint, seed: int) -> tuple[di
 
 # --- running -----------------------------------------------------------------------------------------
 def _now() -> str:
-    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
 def run_cell(out: str, k: int, seed: int, np_: int, launcher: str | None, progress: bool, position: int) -> Outcome:
@@ -295,6 +297,49 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
     return cal
 
 
+def grains_difference(calibrated: dict, p_calibrated: float, run: dict, p_run: float) -> dict:
+    """{key: (calibrated, run)} where two grains records differ; an entry a record lacks is the config's default
+    (Grains), except the pair style (a record that names none ran ``pair_style granular``, the only style it
+    could have run).  The rigidity kappa = k_n/(p d) may differ with the pressure: one material has one
+    stiffness k_n in rho_p g d units, so k_n is compared instead (kappa itself when a pressure is unknown)."""
+    default = {**dataclasses.asdict(Grains()), "pair_style": "granular"}
+    a, b = {**default, **calibrated}, {**default, **run}
+    pressures = all(math.isfinite(p) for p in (p_calibrated, p_run))
+    diff = {k: (a.get(k), v) for k, v in b.items() if (k != "kappa" or not pressures) and a.get(k) != v}
+    if pressures:
+        k_a, k_b = (Contact(g["contact"], g["dimension"], p, g["kappa"], g["restitution"], g["mu_p"], g["kt_over_kn"],
+                            g["polydispersity"], g["pair_style"]).k_n for g, p in ((a, p_calibrated), (b, p_run)))
+        if not math.isclose(k_a, k_b, rel_tol=1e-9):
+            diff["k_n"] = (k_a, k_b)
+    return diff
+
+
+def material_table(path: str | Path) -> tuple[dict, dict, float]:
+    """The config's [material] table from a calibration.json (mu_s, mu_d, I0 in the DEM convention, phi =
+    phi_max), its grains record and its pressure; ValueError naming ``--calibration`` if unreadable."""
+    path = Path(path)
+    require(path.is_file(), "--calibration", "a calibration.json written by granstokes dem calibrate", str(path))
+    try:
+        doc = json.loads(path.read_text())
+        table = {"mu_s": float(doc["mu_s"]), "mu_d": float(doc["mu_d"]), "I0": float(doc["I0"]),
+                 "I_convention": doc["I_convention"], "phi": float(doc["phi"]["phi_max"])}
+        return table, doc["grains"], float(doc["p"])
+    except (json.JSONDecodeError, KeyError, TypeError) as exc:
+        raise ValueError(f"--calibration {path} must be a calibration.json of granstokes dem calibrate, got "
+                         f"{type(exc).__name__}: {exc}") from None
+
+
+def calibrated_text(text: str, path: str | Path) -> str:
+    """The config ``text`` sized from the calibration at ``path``: its [material] table replaced by the calibrated
+    one; refused (ValueError naming --calibration) if the calibration is of other grains."""
+    table, grains, p = material_table(path)
+    cfg = parse(text)
+    diff = grains_difference(grains, p, dataclasses.asdict(cfg.grains), cfg.p_w)
+    require(not diff, f"--calibration {path}", "a calibration of the config's grains",
+            "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
+    return with_entries(text, [("material", table)], header=f"material: the calibration {Path(path).resolve()}")
+
+
 @dataclass(frozen=True)
 class CalibrateResult:
     out: Path
@@ -338,11 +383,11 @@ def completed_points(out: str | Path, plan: CalibrationPlan) -> tuple[list[str],
 
 def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS, np: int = DEFAULT_NP,
               resume: bool = False, launcher: str | None = None, progress: bool = True,
-              announce=None) -> CalibrateResult:
+              announce=None, executor: Executor | None = None) -> CalibrateResult:
     """Run (or with ``resume`` continue: unfinished points rerun, finished ones re-analysed, then the
-    fit) the calibration of ``cfg`` into ``out``; everything is validated before the folder is touched
-    (``check_calibration``: ValueError / LammpsNotFound, nothing written); ``announce(line)`` then
-    receives a summary and the cost estimate."""
+    fit) the calibration of ``cfg`` into ``out`` on ``executor`` (default: a local one of ``jobs`` x ``np``
+    slots); everything is validated before the folder is touched (``check_calibration``: ValueError /
+    LammpsNotFound, nothing written); ``announce(line)`` then receives a summary and the cost estimate."""
     plan = check_calibration(cfg, out, jobs, np, resume, launcher)
     out = Path(out)
     state_path = out / layout.CALIBRATION_STATE
@@ -375,7 +420,7 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
     t0 = time.monotonic()
     cal = None
     try:
-        outcomes = Executor(jobs * np).run(tasks, stop=stop_all_lammps)
+        outcomes = (executor or Executor(jobs * np)).run(tasks, stop=stop_all_lammps)
         state["points"] = json.loads(state_path.read_text())["points"]
         stopped = [(key, o) for key, o in outcomes.items() if o.status != "complete"]
         if stopped:

@@ -14,6 +14,7 @@ import signal
 import sys
 from pathlib import Path
 
+from granstokes.lib.toml_text import parse_assignment, with_entries
 from granstokes.lib.validate import require
 
 from . import config as config_mod
@@ -24,15 +25,23 @@ QUIET_HELP = (f"no progress report (otherwise a bar per LAMMPS process on a term
 
 
 def _config(args, command: str):
-    """The config and its text: CONFIG.toml, --preset, or (with --resume and neither) the one stored in --out."""
+    """The config and its text: CONFIG.toml or --preset with the --set entries (and, for a run, the material of
+    --calibration), or (with --resume and neither) the one stored in --out."""
     from .layout import CONFIG_TOML  # pandas: imported when a command runs, not when the parser is built
 
     given = [x for x in (args.config, args.preset) if x is not None]
     require(len(given) <= 1, "CONFIG.toml / --preset", "given once (a config file or a preset, not both)", given)
-    if args.config is not None:
-        return config_mod.load(args.config)
-    if args.preset is not None:
-        return config_mod.preset(args.preset)
+    if given:
+        text = (config_mod.load(args.config)[1] if args.config is not None else config_mod.preset_text(args.preset))
+        text = with_entries(text, [parse_assignment(a) for a in args.set or ()],
+                            header=f"{args.config or args.preset} with --set " + " ".join(args.set or ()))
+        if getattr(args, "calibration", None):
+            from .calibrate import calibrated_text
+
+            text = calibrated_text(text, args.calibration)
+        return config_mod.parse(text), text
+    require(not args.set and not getattr(args, "calibration", None), "--set / --calibration",
+            "given with CONFIG.toml or --preset (a resume continues the stored config)", "a resume without either")
     require(args.resume, "CONFIG.toml / --preset", "given (or --resume, to continue the folder in --out)", "neither")
     stored = Path(args.out) / CONFIG_TOML
     require(stored.is_file(), "--resume", f"given with a folder holding the {CONFIG_TOML} of an earlier "
@@ -110,6 +119,9 @@ def _common(p, what: str, config_help: str) -> None:
                                       "mpich wheel's mpirun)")
     p.add_argument("--dry-run", action="store_true",
                    help="validate, print the plan and its cost estimate, run and write nothing")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override one entry of the config (dotted key, TOML value; repeatable), e.g. load.p_w=10 "
+                        "or drive.0.mu_w_tilde=0.3; granstokes preset dem NAME prints a preset to start from")
 
 
 def register(subparsers) -> None:
@@ -126,6 +138,9 @@ def register(subparsers) -> None:
     r.add_argument("--jobs", type=int, default=DEFAULT_JOBS,
                    help=f"seeds' beds run side by side as separate LAMMPS processes (default {DEFAULT_JOBS})")
     r.add_argument("--quiet", action="store_true", help=QUIET_HELP)
+    r.add_argument("--calibration", metavar="CALIBRATION.json",
+                   help="size the scene from this calibration of the config's grains (its mu_s, mu_d, I0 and "
+                        "phi_max replace the config's [material] table; refused for other grains)")
     r.set_defaults(func=_cmd_run)
     c = sub.add_parser("calibrate", help="mu(I) of a config's grains by plane shear at controlled pressure",
                        description="Calibrate mu(I) and phi(I) by homogeneous (Lees-Edwards) plane shear of the "

@@ -10,9 +10,9 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
     # dimension 2 (disks) or 3 (spheres); diameters uniform by number in [1-w, 1+w] d; pair_style "classic" (the
     # Hooke default, LAMMPS's gran/hooke/history) or "granular" (Hertz's only style; dem.contact)
     grains = {dimension = 2, polydispersity = 0.2, mu_p = 0.5, restitution = 0.5, contact = "hooke", kappa = 1e4}
-    box = {width = 32.0, margin = 10.0}   # widths and depth in d; no depth -> max delta_s + margin
+    box = {width = 32.0}   # widths and depth in d; no depth -> max delta_s + margin (default 5 creep lengths)
     load = {p_w = 20.0}
-    # kind "stress" (mu_w or mu_w_tilde) or "speed" (u_w, or mu_w_tilde: the matching steady speed)
+    # kind "stress" (mu_w, mu_w_tilde or tau_w) or "speed" (u_w, or mu_w_tilde: the matching steady speed)
     drive = [{name = "stress", kind = "stress", mu_w_tilde = 0.5, duration_ts = 10.0},
              {name = "speed", kind = "speed", u_w = 5.0, duration = 20.0}]
     output = {plate = 0.02, thermo = 0.1, atoms = 1.0, contacts = 5.0, profiles = 0.5, restart = 2.0}
@@ -27,11 +27,11 @@ from __future__ import annotations
 
 import dataclasses
 import re
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import tomllib
 from granstokes.continuum.scales import Material
 
 from granstokes.lib.validate import finite, require
@@ -83,12 +83,13 @@ class Grains:
 
 @dataclass(frozen=True)
 class Box:
-    """Periodic widths (x; z in 3D) and bed depth in d; ``depth=None`` sizes it from delta_s + margin."""
+    """Periodic widths (x; z in 3D) and bed depth in d; ``depth=None`` sizes it from delta_s + margin
+    (``margin=None``: dem.sizing's creep margin)."""
 
     width: float = 20.0
     width_z: float | None = None
     depth: float | None = None
-    margin: float = 10.0
+    margin: float | None = None
     base_thickness: float = 1.5
 
     def __post_init__(self):
@@ -97,7 +98,8 @@ class Box:
             _positive("box.width_z", self.width_z, MIN_WIDTH_Z, strict=False)
         if self.depth is not None:
             _positive("box.depth", self.depth, MIN_DEPTH, strict=False)
-        _positive("box.margin", self.margin, strict=False)
+        if self.margin is not None:
+            _positive("box.margin", self.margin, strict=False)
         require(finite(self.base_thickness) and 0.5 <= self.base_thickness <= 5, "box.base_thickness",
                 "in [0.5, 5] (d)", self.base_thickness)
 
@@ -110,6 +112,7 @@ class Drive:
     kind: str
     mu_w_tilde: float | None = None
     mu_w: float | None = None
+    tau_w: float | None = None
     u_w: float | None = None
     duration: float | None = None
     duration_ts: float = 10.0
@@ -120,8 +123,8 @@ class Drive:
                 "drive.name", "a non-empty name of letters, digits, '_', '-', '.'", self.name)
         p = f"drive[{self.name}]"
         require(self.kind in ("stress", "speed"), f"{p}.kind", "'stress' or 'speed'", self.kind)
-        given = [k for k in ("mu_w_tilde", "mu_w", "u_w") if getattr(self, k) is not None]
-        valid = {"stress": ("mu_w_tilde", "mu_w"), "speed": ("u_w", "mu_w_tilde")}[self.kind]
+        given = [k for k in ("mu_w_tilde", "mu_w", "tau_w", "u_w") if getattr(self, k) is not None]
+        valid = {"stress": ("mu_w_tilde", "mu_w", "tau_w"), "speed": ("u_w", "mu_w_tilde")}[self.kind]
         require(len(given) == 1 and given[0] in valid, f"{p} load",
                 f"exactly one of {' / '.join(valid)} for a {self.kind} drive", given)
         if self.mu_w_tilde is not None:
@@ -131,6 +134,8 @@ class Drive:
             _positive(f"{p}.u_w", self.u_w)
         if self.mu_w is not None:
             _positive(f"{p}.mu_w", self.mu_w)
+        if self.tau_w is not None:
+            _positive(f"{p}.tau_w", self.tau_w)
         if self.duration is not None:
             _positive(f"{p}.duration", self.duration)
         _positive(f"{p}.duration_ts", self.duration_ts)

@@ -25,6 +25,7 @@ import sys
 import threading
 import time
 import weakref
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -424,35 +425,39 @@ class Runner:
         for dp in self.plan.drives:
             self.drive(seed, dp, prepared, meta)
 
-    def bed_task(self, seed: int, done=()) -> Task:
-        """A seed's bed as an executor task (its arguments rebuild this runner from the folder: picklable), its
-        cost that of the stages not in ``done``."""
-        return Task(layout.stage_key(seed), run_bed, (str(self.out), seed, self.lmp.np, self.lmp.launcher,
-                                                      self.lmp.progress, self.jobs),
-                    cost=sum(self.plan.stage_seconds(k) for k in self.plan.stage_keys(seed) if k not in done),
-                    ranks=self.lmp.np)
+    def bed_tasks(self, meta: dict, prefix: str = "") -> list[Task]:
+        """The unfinished seeds' beds as executor tasks (keys ``prefix`` + "seed-S"; arguments that rebuild this
+        runner from the folder: picklable), each costing its unfinished stages."""
+        done = {k for k, st in meta["stages"].items() if st.get("status") == "complete"}
+        tasks = []
+        for seed in self.cfg.seeds:
+            left = [k for k in self.plan.stage_keys(seed) if k not in done]
+            if left:
+                tasks.append(Task(prefix + layout.stage_key(seed), run_bed,
+                                  (str(self.out), seed, self.lmp.np, self.lmp.launcher, self.lmp.progress, self.jobs),
+                                  cost=sum(self.plan.stage_seconds(k) for k in left), ranks=self.lmp.np))
+        return tasks
 
     def execute(self, meta: dict, executor: Executor | None = None) -> RunResult:
         """Every unfinished bed through ``executor`` (default: a local one of ``jobs`` slots of ``np`` ranks),
-        then run.json's status: complete, or the first bed's failure or interrupt."""
+        then ``finish``."""
         t0 = time.monotonic()
-        status, message = "complete", ""
         try:
-            executor = executor or Executor(self.jobs * self.lmp.np)
-            done = [k for k, st in meta["stages"].items() if st.get("status") == "complete"]
-            outcomes = executor.run([self.bed_task(seed, done) for seed in self.cfg.seeds], stop=stop_all_lammps)
-            stopped = [o for o in outcomes.values() if o.status != "complete"]
-            if stopped:
-                status, message = stopped[0].status, stopped[0].message
+            outcomes = (executor or Executor(self.jobs * self.lmp.np)).run(self.bed_tasks(meta), stop=stop_all_lammps)
         except (Interrupted, KeyboardInterrupt) as exc:
-            status, message = "interrupted", str(exc) or "interrupted by SIGINT"
             meta["signal"] = getattr(exc, "signum", signal.SIGINT)
-        meta["status"], meta["message"] = status, message
+            outcomes = {"": Outcome("interrupted", str(exc) or "interrupted by SIGINT")}
+        return self.finish(meta, outcomes.values(), t0)
+
+    def finish(self, meta: dict, outcomes, t0: float) -> RunResult:
+        """run.json's status from the beds' outcomes (complete, or the first failure or interrupt) and timings."""
+        stopped = [o for o in outcomes if o.status != "complete"]
+        meta["status"], meta["message"] = (stopped[0].status, stopped[0].message) if stopped else ("complete", "")
         meta["timings"]["finished"] = _now()
         meta["timings"]["wall_time_this_invocation"] = time.monotonic() - t0
         self.save(meta)
         meta["stages"] = json.loads(self.meta_path.read_text())["stages"]
-        return RunResult(self.out, status, message, meta["stages"], meta)
+        return RunResult(self.out, meta["status"], meta["message"], meta["stages"], meta)
 
 
 def run_bed(out: str, seed: int, np_: int, launcher: str | None, progress: bool, jobs: int) -> Outcome:
@@ -471,7 +476,7 @@ def run_bed(out: str, seed: int, np_: int, launcher: str | None, progress: bool,
 
 
 def _now() -> str:
-    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
 def check_request(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
@@ -512,6 +517,24 @@ def completed_stages(out: str | Path, plan_: Plan) -> tuple[list[str], list[str]
     return done, left
 
 
+def begin(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
+          launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> tuple[Runner, dict]:
+    """Check the request (``check_request``), then create the run folder (or reopen it with ``resume``): the
+    runner and run.json's record, ready for ``Runner.execute`` or a study's executor."""
+    runner = check_request(cfg, text, out, np, resume, launcher, progress, jobs)
+    out = Path(out)
+    if resume:
+        meta = json.loads((out / layout.RUN_JSON).read_text())
+        meta["status"], meta["message"] = "running", ""
+        meta.setdefault("resumes", []).append(_now())
+    else:
+        meta = runner.new_metadata()  # queries the LAMMPS library: fails before anything is written
+        staging.start(out, COMMAND)
+        (out / layout.CONFIG_TOML).write_text(text)
+    runner.save(meta)
+    return runner, meta
+
+
 def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
         launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> RunResult:
     """Run (or with ``resume`` continue) the scene ``cfg`` (TOML ``text``) in folder ``out``, the seeds'
@@ -521,24 +544,20 @@ def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: b
     wheel, a folder that already holds another run, or a resume whose config differs raise
     ValueError / LammpsNotFound and write nothing.
     """
-    runner = check_request(cfg, text, out, np, resume, launcher, progress, jobs)
-    out = Path(out)
-    meta_path = out / layout.RUN_JSON
-    if resume:
-        meta = json.loads(meta_path.read_text())
-        meta["status"], meta["message"] = "running", ""
-        meta.setdefault("resumes", []).append(_now())
-    else:
-        meta = runner.new_metadata()  # queries the LAMMPS library: fails before anything is written
-        staging.start(out, COMMAND)
-        (out / layout.CONFIG_TOML).write_text(text)
-    runner.save(meta)
-    previous = signal.getsignal(signal.SIGTERM)
+    runner, meta = begin(cfg, text, out, np, resume, launcher, progress, jobs)
+    with sigterm_interrupts():
+        return runner.execute(meta)
+
+
+@contextmanager
+def sigterm_interrupts():
+    """SIGTERM raises Interrupted in the main thread while in the block (as SIGINT raises KeyboardInterrupt)."""
     in_main = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGTERM)
     if in_main:
         signal.signal(signal.SIGTERM, _raise_interrupted)
     try:
-        return runner.execute(meta)
+        yield
     finally:
         if in_main:
             signal.signal(signal.SIGTERM, previous)

@@ -1,9 +1,12 @@
 """Scene sizing from the continuum prediction (continuum.scales): depth, grain count, durations, steps.
 
-* bed depth (base top to plate) >= max over drives of delta_s + margin (default 10 d, about three
-  creep decay lengths of 2.5-3 d measured below the flowing layer), unless the config gives it;
+* bed depth (base top to plate) >= max over drives of delta_s + margin (default CREEP_LENGTHS creep decay
+  lengths CREEP_LENGTH below the flowing layer: the creep has fallen to e^-5 of its value at delta_s), unless
+  the config gives it; the sizing is as good as the config's material (``dem run --calibration`` puts a
+  calibration's there);
 * duration of a drive = duration_ts * t_s (default 10 t_s, t_s = delta_s^2/nu_g), unless given;
-* a speed drive with mu_w_tilde runs at the matching steady speed u_w = U u~_w^inf(mu_w).
+* a speed drive with mu_w_tilde runs at the matching steady speed u_w = U u~_w^inf(mu_w) (the paper's
+  u~_w); a stress drive with tau_w has mu_w = tau_w/p_w.
 Every choice is written into run.json with its reason.
 """
 from __future__ import annotations
@@ -50,13 +53,18 @@ SECONDS_SHOWN, MINUTES_SHOWN = 90, 90
 
 
 def drive_scales(cfg: Config, drive: Drive) -> Scales:
-    """The paper's scales of a drive (mu_w from mu_w/mu_w_tilde, or from the imposed speed)."""
+    """The paper's scales of a drive (mu_w from mu_w, mu_w_tilde or tau_w, or from the imposed speed)."""
     m, fr = cfg.material, cfg.material.friction
     if drive.u_w is not None:
         return Scales.for_speed(m, cfg.p_w, drive.u_w)
-    mu_w = fr.mu_w_from_tilde(drive.mu_w_tilde) if drive.mu_w_tilde is not None else drive.mu_w
+    mu_w = (fr.mu_w_from_tilde(drive.mu_w_tilde) if drive.mu_w_tilde is not None
+            else drive.tau_w / cfg.p_w if drive.tau_w is not None else drive.mu_w)
     return Scales(m, cfg.p_w, mu_w)
 
+
+#: e-folding length of the creep below the flowing layer in d (2.2-3 d measured in the 2D and 3D drives,
+#: metrics.json creep_length) and the number of them the default margin below the largest delta_s holds
+CREEP_LENGTH, CREEP_LENGTHS = 2.5, 5
 
 #: grain placement: insertion column filled to this fraction of the largest grain's volume
 INSERT_FRACTION = {2: 0.30, 3: 0.20}
@@ -211,8 +219,10 @@ def plan(cfg: Config) -> Plan:
         depth = cfg.box.depth
         reasons.append(f"depth {depth:g} d (given; largest delta_s = {delta_max:.3g} d)")
     else:
-        depth = math.ceil(delta_max + cfg.box.margin)
-        reasons.append(f"depth {depth:g} d = ceil(largest delta_s {delta_max:.3g} d + margin {cfg.box.margin:g} d)")
+        margin, why = ((cfg.box.margin, "given") if cfg.box.margin is not None else
+                       (CREEP_LENGTHS * CREEP_LENGTH, f"{CREEP_LENGTHS} creep lengths of {CREEP_LENGTH:g} d"))
+        depth = math.ceil(delta_max + margin)
+        reasons.append(f"depth {depth:g} d = ceil(largest delta_s {delta_max:.3g} d + margin {margin:g} d, {why})")
     dim = cfg.grains.dimension
     mean_volume = mean_grain_volume(cfg.grains.polydispersity, dim)
     total = (depth + cfg.box.base_thickness) * cfg.box.width * (cfg.width_z or 1.0)

@@ -49,6 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
     from granstokes.continuum.paper.cli import register as paper_register
     from granstokes.continuum.predict_cli import register as predict_register
     from granstokes.dem.cli import register as dem_register
+    from granstokes.study.cli import register as study_register
 
     parser = OneLineParser(prog="granstokes", description="Stokes' first problem in a dense granular bed: mu(I) and "
                            "nonlocal continuum models against LAMMPS DEM. Each command has its own --help.")
@@ -59,6 +60,7 @@ def build_parser() -> argparse.ArgumentParser:
     paper_register(sub)
     dem_register(sub)
     compare_register(sub)
+    study_register(sub)
     d = sub.add_parser("demo", help="the quick continuum-vs-DEM comparison: paper figures, quick DEM presets, report")
     d.add_argument("--out", type=Path, default=Path("demo-out"), help="output folder (default %(default)s)")
     d.set_defaults(func=run_demo)

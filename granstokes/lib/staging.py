@@ -95,7 +95,7 @@ def claim(path, option: str, command: str, inputs=()) -> Path:
 
 def _manifest(command: str, files, inputs, progressive: bool) -> dict:
     return {"command": command, "progressive": progressive,
-            "written": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "written": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             "inputs": [str(p) for p in inputs], "files": sorted(files),
             "note": f"written by granstokes {command}; a later run of it may replace the files listed here, "
                     "and nothing else in this folder"}

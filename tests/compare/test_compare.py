@@ -85,6 +85,12 @@ def test_a_calibration_of_other_grains_is_refused(tmp_path):
     (run / "run.json").write_text(json.dumps({"config": {"grains": {**doc["grains"], "pair_style": "classic"}}}))
     with pytest.raises(ValueError, match=r"pair_style calibrated 'granular' vs run 'classic'"):
         check_grains(loaded, [run])
+    # one material at two pressures: the same k_n = kappa p (Hooke) is the same grains, another k_n is not
+    from granstokes.dem.calibrate import grains_difference
+    grains = {**doc["grains"], "pair_style": "classic"}
+    assert grains_difference({**grains, "kappa": 1e4}, 20.0, {**grains, "kappa": 2e4}, 10.0) == {}
+    assert grains_difference({**grains, "kappa": 1e4}, 20.0, {**grains, "kappa": 1e4}, 10.0) == \
+        {"k_n": (pytest.approx(2e5), pytest.approx(1e5))}
 
 
 def test_too_few_points_are_refused():

@@ -64,7 +64,7 @@ def test_the_estimate_follows_the_schedule_and_what_is_left():
     left = bed - p.stage_seconds("seed-2")
     assert p.cost_seconds(jobs=2, done=done) == pytest.approx(OVERHEAD + left * CONTENTION + (bed - left))
     line = p.cost_estimate(jobs=2, done=done)
-    assert line.startswith("cost: 820 grains x 3 bed(s)") and "of what is left" in line
+    assert line.startswith(f"cost: {p.n_grains} grains x 3 bed(s)") and "of what is left" in line
     everything = {k for s in p.config.seeds for k in p.stage_keys(s)}
     assert p.cost_estimate(jobs=2, done=everything) == "cost: none, every stage is complete"
 

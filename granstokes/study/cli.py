@@ -1,0 +1,90 @@
+"""``granstokes study``: run a study (a grid of pressures x drives x seeds of one material, sized from an
+independent calibration) on Dask, and ``granstokes preset``: print a DEM or study preset to edit.
+
+    granstokes study (STUDY.toml | --preset NAME) --out DIR [--jobs N | --scheduler ADDRESS] [--dry-run] [--resume]
+    granstokes preset (dem | study) [NAME]
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from granstokes.lib.validate import require
+
+from . import config
+
+
+def _cmd_study(args) -> int:
+    from granstokes.dem import config as dem_config
+    from granstokes.dem.calibrate import material_table, plan_calibration
+
+    from .plan import calibration_text, plan_study
+    from .runner import STUDY_TOML, check_folder, run_study
+
+    require(isinstance(args.jobs, int) and args.jobs >= 1, "--jobs", "an integer >= 1 (LAMMPS processes at once)",
+            args.jobs)
+    require(args.scheduler is None or args.jobs == 2, "--jobs / --scheduler", "one of them (a scheduler's workers "
+            "set the concurrency)", [args.jobs, args.scheduler])
+    if args.resume and args.config is None and args.preset is None:
+        stored = Path(args.out) / STUDY_TOML
+        require(stored.is_file(), "--resume", f"given with a study folder (holding {STUDY_TOML})", args.out)
+        study, text = config.parse(stored.read_text(), Path(args.out)), stored.read_text()
+    else:
+        study, text = config.load(args.config, args.preset, args.set or ())
+    check_folder(study, Path(args.out), args.resume)
+    if study.calibration_file is not None:
+        material, source = material_table(study.calibration_file)[0], study.calibration_file
+    else:  # the calibration runs first: the dry run sizes from the DEM preset's nominal material
+        material = dem_config.preset(study.dem)[0].material
+        material = {k: getattr(material, k) for k in dem_config.MATERIAL_KEYS}
+        source = f"(not yet run: sized here from the {study.dem} preset's nominal material)"
+        for p_w in study.calibration_pressures:
+            cp = plan_calibration(dem_config.parse(calibration_text(study, p_w)))
+            print(f"study: calibration at p = {p_w:g}: {cp.cost_estimate(args.jobs)}", file=sys.stderr)
+    sp = plan_study(study, material, source)
+    print(f"study '{study.name}': {len(study.pressures)} pressure(s) x {len(study.drives)} drive(s) x "
+          f"{len(study.seeds)} seed(s), sized from {source} -> {args.out}", file=sys.stderr)
+    for line in sp.lines(args.jobs):
+        print(line, file=sys.stderr)
+    if args.dry_run:
+        return 0
+    record = run_study(study, text, args.out, jobs=args.jobs, scheduler=args.scheduler, resume=args.resume,
+                       progress=not args.quiet)
+    print(f"study: {record['status']}" + (f": {record['message']}" if record["message"] else "")
+          + f" (see {Path(args.out) / 'study.json'})", file=sys.stderr)
+    return {"complete": 0, "interrupted": 130}.get(record["status"], 1)
+
+
+def _cmd_preset(args) -> int:
+    from granstokes.dem import config as dem_config
+
+    names = dem_config.PRESETS if args.kind == "dem" else config.PRESETS
+    if args.name is None:
+        print("\n".join(names))
+        return 0
+    print(dem_config.preset_text(args.name) if args.kind == "dem" else config.preset_text(args.name), end="")
+    return 0
+
+
+def register(subparsers) -> None:
+    s = subparsers.add_parser("study", help="a grid of DEM drives over pressures, sized from a calibration, on Dask",
+                              description="Run a study: the calibration (a file, or plane shear at the lowest and "
+                                          "highest pressure), every pressure's run (all drives, all seeds), and the "
+                                          "comparison of every drive with every model. Start from a preset: "
+                                          "granstokes preset study NAME.")
+    s.add_argument("config", nargs="?", help="STUDY.toml (schema: granstokes/study/config.py)")
+    s.add_argument("--preset", choices=config.PRESETS, help="a shipped study (granstokes/study/presets/)")
+    s.add_argument("--out", required=True, help="study folder (new or empty, or with --resume an unfinished one)")
+    s.add_argument("--jobs", type=int, default=2, help="LAMMPS processes at once on this machine (default 2)")
+    s.add_argument("--scheduler", help="address of a running Dask scheduler (e.g. tcp://host:8786) whose workers "
+                                       "run the LAMMPS processes; the folder must be on a file system they share")
+    s.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override one entry of the study (dotted key, TOML value; repeatable), e.g. seeds=[1,2,3]")
+    s.add_argument("--resume", action="store_true", help="continue the unfinished study in --out")
+    s.add_argument("--dry-run", action="store_true", help="print the plan and its cost, run and write nothing")
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.set_defaults(func=_cmd_study)
+    p = subparsers.add_parser("preset", help="print a DEM or study preset (a config to edit), or list them")
+    p.add_argument("kind", choices=("dem", "study"))
+    p.add_argument("name", nargs="?", help="the preset (none: list them)")
+    p.set_defaults(func=_cmd_preset)

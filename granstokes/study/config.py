@@ -1,0 +1,162 @@
+"""A study's TOML schema, its validation (before anything runs) and the shipped presets.
+
+A study is valid with these keys (DEM units; example)::
+
+    name = "smoke"
+    dem = "smoke"              # the DEM preset whose grains, box width, outputs and preparation every run takes
+    seeds = [1, 2]             # beds per pressure (independent samples)
+    pressures = [10.0, 20.0]   # p_w [rho_p g d]; one material: the grains' k_n is the DEM preset's at the highest
+    # the independent mu(I) calibration: a calibration.json of these grains, or run = true: the DEM preset's
+    # [calibration] table (with the entries given here) at the lowest and the highest pressure, the first stage
+    calibration = {run = true, I = [0.005, 0.02, 0.08, 0.2, 0.4, 0.6]}
+    # drives run at every pressure from the same beds: stress by mu_w_tilde, mu_w or tau_w; speed by u_w or
+    # mu_w_tilde (the paper's u~_w: the steady speed of that stress)
+    drive = [{kind = "stress", mu_w_tilde = 0.5}, {kind = "speed", mu_w_tilde = 0.5}]
+
+Optional: ``duration_ts`` (drive length in calibrated t_s, default 10), ``min_duration``, ``width`` (the box's
+x width in d; default the DEM preset's).  Unknown keys are errors.
+"""
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from granstokes.dem import config as dem_config
+from granstokes.lib.toml_text import parse_assignment, with_entries
+from granstokes.lib.validate import finite, require
+
+PRESET_DIR = Path(__file__).parent / "presets"
+PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
+DRIVE_KEYS = ("kind", "mu_w_tilde", "mu_w", "tau_w", "u_w")
+SHORT = {"mu_w_tilde": "mutilde", "mu_w": "mu", "tau_w": "tau", "u_w": "u"}  # drive names: stress-mutilde0.5
+TOP = {"name", "dem", "seeds", "pressures", "calibration", "drive", "duration_ts", "min_duration", "width"}
+
+
+@dataclass(frozen=True)
+class StudyDrive:
+    """One drive of the grid, run at every pressure: its DEM [[drive]] table without name and duration."""
+
+    kind: str
+    load_key: str
+    value: float
+
+    @property
+    def name(self) -> str:
+        return f"{self.kind}-{SHORT[self.load_key]}{self.value:g}"
+
+    def table(self, duration_ts: float, min_duration: float) -> dict:
+        return {"name": self.name, "kind": self.kind, self.load_key: self.value, "duration_ts": duration_ts,
+                "min_duration": min_duration}
+
+
+@dataclass(frozen=True)
+class Study:
+    name: str
+    dem: str
+    seeds: tuple[int, ...]
+    pressures: tuple[float, ...]
+    drives: tuple[StudyDrive, ...]
+    calibration_file: str | None
+    calibration_table: tuple = ()  # (key, value) entries of the DEM [calibration] table when the study runs it
+    duration_ts: float = 10.0
+    min_duration: float = 0.0
+    width: float | None = None
+
+    @property
+    def calibration_pressures(self) -> tuple[float, ...]:
+        """Where the study's own calibration runs: the lowest and the highest pressure."""
+        return tuple(sorted({min(self.pressures), max(self.pressures)}))
+
+    @property
+    def reference_pressure(self) -> float:
+        """The pressure whose calibration predicts every drive (the other tests mu(I)'s dependence on p)."""
+        return max(self.pressures)
+
+
+def _drive(table, k: int) -> StudyDrive:
+    where = f"drive[{k}]"
+    require(isinstance(table, dict) and set(table) <= set(DRIVE_KEYS), f"{where} keys", f"among {list(DRIVE_KEYS)}",
+            table)
+    loads = [key for key in DRIVE_KEYS[1:] if key in table]
+    require(len(loads) == 1, f"{where} load", "exactly one of mu_w_tilde, mu_w, tau_w (stress) or u_w, mu_w_tilde "
+            "(speed)", loads)
+    value = table[loads[0]]
+    require(finite(value) and value > 0, f"{where}.{loads[0]}", "a finite number > 0", value)
+    drive = StudyDrive(table.get("kind"), loads[0], float(value))
+    dem_config.Drive(drive.name, drive.kind, **{drive.load_key: drive.value})  # the DEM's own checks
+    return drive
+
+
+def from_dict(doc: dict, base: Path | None = None) -> Study:
+    """Validated Study from a parsed TOML document (``base``: the folder a relative calibration file is in)."""
+    unknown = sorted(set(doc) - TOP)
+    require(not unknown, "study keys", f"among {sorted(TOP)}", unknown)
+    require(doc.get("dem") in dem_config.PRESETS, "dem", f"one of the DEM presets {list(dem_config.PRESETS)}",
+            doc.get("dem"))
+    seeds = doc.get("seeds", [1])
+    require(isinstance(seeds, list) and len(seeds) >= 1 and all(isinstance(s, int) and 0 < s < 2**31 for s in seeds)
+            and len(set(seeds)) == len(seeds), "seeds", "a list of distinct integers in [1, 2^31)", seeds)
+    pressures = doc.get("pressures")
+    require(isinstance(pressures, list) and len(pressures) >= 1 and all(finite(p) and p > 0 for p in pressures)
+            and len(set(pressures)) == len(pressures), "pressures", "a list of distinct p_w > 0 [rho_p g d]",
+            pressures)
+    cal = doc.get("calibration")
+    require(isinstance(cal, dict) and (set(cal) == {"file"} or cal.get("run") is True), "calibration",
+            "{file = 'calibration.json'} or {run = true, ...entries of the DEM [calibration] table}", cal)
+    table = tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in cal.items() if k != "run")
+    if cal.get("run"):
+        known = {f.name for f in dataclasses.fields(dem_config.Calibration)}
+        require(set(dict(table)) <= known, "calibration keys", f"run and among {sorted(known)}", sorted(dict(table)))
+    file = cal.get("file")
+    if file is not None:
+        path = Path(file) if Path(file).is_absolute() or base is None else base / file
+        require(path.is_file(), "calibration.file", "a calibration.json of granstokes dem calibrate", str(path))
+        file = str(path.resolve())
+    drives = doc.get("drive")
+    require(isinstance(drives, list) and drives, "drive", "an array of at least one [[drive]] table", drives)
+    built = tuple(_drive(t, k) for k, t in enumerate(drives))
+    require(len({d.name for d in built}) == len(built), "drive", "distinct drives", [d.name for d in built])
+    duration_ts, min_duration = doc.get("duration_ts", 10.0), doc.get("min_duration", 0.0)
+    require(finite(duration_ts) and duration_ts > 0, "duration_ts", "a finite number > 0", duration_ts)
+    require(finite(min_duration) and min_duration >= 0, "min_duration", "a finite number >= 0", min_duration)
+    width = doc.get("width")
+    require(width is None or (finite(width) and width >= dem_config.MIN_WIDTH), "width",
+            f"a number >= {dem_config.MIN_WIDTH:g} d", width)
+    name = doc.get("name", "study")
+    require(isinstance(name, str) and name.replace("-", "").replace("_", "").isalnum(), "name",
+            "letters, digits, '-' and '_'", name)
+    return Study(name, doc["dem"], tuple(seeds), tuple(float(p) for p in pressures), built, file,
+                 table if file is None else (), float(duration_ts), float(min_duration), None if width is None else float(width))
+
+
+def parse(text: str, base: Path | None = None) -> Study:
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"study is not valid TOML: {exc}") from None
+    return from_dict(doc, base)
+
+
+def preset_text(name: str) -> str:
+    require(name in PRESETS, "--preset", f"one of {list(PRESETS)}", name)
+    return (PRESET_DIR / f"{name}.toml").read_text()
+
+
+def load(config: str | None, preset: str | None, sets=()) -> tuple[Study, str]:
+    """The study and its text from STUDY.toml or --preset, with --set entries applied."""
+    require((config is None) != (preset is None), "STUDY.toml / --preset", "exactly one of them", [config, preset])
+    text = Path(config).read_text() if config is not None else preset_text(preset)
+    text = with_entries(text, [parse_assignment(a) for a in sets],
+                        header=f"{config or preset} with --set " + " ".join(sets))
+    return parse(text, Path(config).resolve().parent if config is not None else Path.cwd()), text
+
+
+def rigidity(kappa: float, contact: str, p_max: float, p_w: float) -> float:
+    """kappa at p_w of grains whose kappa is ``kappa`` at p_max (one stiffness k_n: Hooke k_n = kappa p,
+    Hertz k_n = 2 kappa^1.5 p)."""
+    ratio = p_max / p_w
+    return kappa * (ratio if contact == "hooke" else ratio ** (2 / 3))
+
+

@@ -1,0 +1,92 @@
+"""A study's runs as DEM configs: one run folder per pressure (every drive, every seed), sized from the
+calibration (dem.sizing with the calibrated material), and the calibration stage's configs."""
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from granstokes.dem import config as dem_config
+from granstokes.dem.sizing import Plan, duration_text, makespan, plan
+from granstokes.lib.toml_text import with_entries
+
+from .config import Study, rigidity
+
+RUNS = "runs"
+#: atom and contact snapshots per t_s of the fastest drive (the preset's interval when it is denser): the
+#: layer's growth over the first t_s is resolved by this many frames
+FRAMES_PER_TS = 20
+
+
+def pressure_label(p_w: float) -> str:
+    return f"p{p_w:g}"
+
+
+def _grains(study: Study, p_w: float) -> list[tuple[str, object]]:
+    """The entries that make the DEM preset's grains one material at p_w: k_n of the highest pressure's kappa."""
+    doc = tomllib.loads(dem_config.preset_text(study.dem))
+    grains = doc.get("grains", {})
+    defaults = dem_config.Grains()
+    kappa = grains.get("kappa", defaults.kappa)
+    return [("load.p_w", p_w), ("grains.kappa", rigidity(kappa, grains.get("contact", defaults.contact),
+                                                           max(study.pressures), p_w))]
+
+
+def calibration_text(study: Study, p_w: float) -> str:
+    """The DEM preset with its grains at p_w: ``granstokes dem calibrate`` runs its [calibration] table there."""
+    table = [(f"calibration.{k}", list(v) if isinstance(v, tuple) else v) for k, v in study.calibration_table]
+    if any(k in dict(study.calibration_table) for k in ("I", "I_min", "I_max", "points")):
+        table += [(f"calibration.{k}", None) for k in ("I", "I_min", "I_max", "points")
+                  if k not in dict(study.calibration_table)]  # the study's inertial numbers replace the preset's
+    return with_entries(dem_config.preset_text(study.dem), [*_grains(study, p_w), *table],
+                        header=f"study {study.name}: the calibration of the {study.dem} grains at p_w = {p_w:g}")
+
+
+def run_text(study: Study, p_w: float, material: dict, source: str) -> str:
+    """The DEM config of the run at p_w: the preset's grains (one material), the study's seeds and drives, the
+    depth and durations sized from ``material`` (the calibration at ``source``)."""
+    entries = [("name", f"{study.name}-{pressure_label(p_w)}"), ("seeds", list(study.seeds)), *_grains(study, p_w),
+               ("material", material), ("box.depth", None), ("box.margin", None),
+               ("drive", [d.table(study.duration_ts, study.min_duration) for d in study.drives])]
+    if study.width is not None:
+        entries.append(("box.width", study.width))
+    header = f"study {study.name} at p_w = {p_w:g}, sized from the calibration {source}"
+    text = with_entries(dem_config.preset_text(study.dem), entries, header=header)
+    cfg = dem_config.parse(text)
+    frame = min(min(d.scales.t_s for d in plan(cfg).drives) / FRAMES_PER_TS, cfg.output.atoms)
+    return with_entries(text, [("output.atoms", frame), ("output.contacts", frame)], header=header)
+
+
+@dataclass(frozen=True)
+class StudyPlan:
+    study: Study
+    runs: dict[float, tuple[str, Plan]]  # p_w -> (config text, its plan)
+
+    def folder(self, out: Path, p_w: float) -> Path:
+        return out / RUNS / pressure_label(p_w)
+
+    def cost_seconds(self, jobs: int) -> float:
+        beds = [sum(p.stage_seconds(k) for k in p.stage_keys(seed)) for _, p in self.runs.values()
+                for seed in p.config.seeds]
+        return makespan(sorted(beds, reverse=True), jobs)
+
+    def lines(self, jobs: int) -> list[str]:
+        """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole."""
+        out = []
+        for p_w, (_, p) in self.runs.items():
+            for d in p.drives:
+                out.append(f"  p_w = {p_w:g}, {d.drive.name}: delta_s = {d.scales.delta_s:.3g} d, t_s = "
+                           f"{d.scales.t_s:.3g}, depth {p.depth:g} d, duration {d.duration:.4g} "
+                           f"({d.steps:.3g} steps), {p.n_grains} grains x {len(p.config.seeds)} bed(s)")
+            out.append(f"  p_w = {p_w:g}: {p.cost_estimate(1)}")
+        out.append(f"  the study's beds: about {duration_text(self.cost_seconds(jobs))} with {jobs} job(s)")
+        return out
+
+
+def plan_study(study: Study, material: dict, source: str) -> StudyPlan:
+    """Every run's config and plan (ValueError naming the drive if a load is outside the calibrated law)."""
+    runs = {}
+    for p_w in study.pressures:
+        text = run_text(study, p_w, material, source)
+        runs[p_w] = (text, plan(dem_config.parse(text)))
+    return StudyPlan(study, runs)

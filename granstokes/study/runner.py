@@ -1,0 +1,198 @@
+"""Run a study: its calibration (a file, or plane shear at the lowest and highest pressure), then every bed of
+every pressure's run on one executor (granstokes.lib.executor: Dask, local or a scheduler), then the
+comparison of all drives against every model from the calibration.
+
+Folder: DIR/study.toml (the study as given), DIR/study.json (status, grid, every run with its status and path,
+the calibration, provenance), DIR/calibration-pP/ (dem calibrate), DIR/runs/pP/ (dem run folders),
+DIR/metrics.json, DIR/index.html and the report's figures and tables.  ``resume`` continues whatever is
+unfinished; a finished calibration, bed or drive is never redone.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import sys
+import time
+from pathlib import Path
+
+from granstokes.dem import config as dem_config
+from granstokes.dem import layout
+from granstokes.dem.calibrate import calibrate, material_table
+from granstokes.dem.runner import Interrupted, begin, sigterm_interrupts, stop_all_lammps
+from granstokes.lib import staging
+from granstokes.lib.executor import Executor
+from granstokes.lib.provenance import provenance
+from granstokes.lib.validate import require
+
+from .config import Study, parse
+from .plan import StudyPlan, calibration_text, plan_study, pressure_label
+
+COMMAND = "study"
+STUDY_TOML, STUDY_JSON = "study.toml", "study.json"
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+
+
+def check_folder(study: Study, out: Path, resume: bool) -> None:
+    """The folder: new or empty, or with ``resume`` a study of the same grid (ValueError naming the option)."""
+    require(not out.exists() or out.is_dir(), "--out", "a folder (this path is an existing file)", str(out))
+    if resume:
+        stored = out / STUDY_TOML
+        require(stored.is_file(), "--resume", f"given with a study folder (holding {STUDY_TOML})", str(out))
+        require(parse(stored.read_text(), out) == study, "--resume", f"the study stored in {stored}",
+                "a different study")
+    else:
+        require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
+                str(out))
+
+
+class StudyRunner:
+    """The study folder's state; ``run`` does whatever is unfinished."""
+
+    def __init__(self, study: Study, text: str, out: Path, jobs: int, scheduler: str | None, progress: bool,
+                 announce=None):
+        self.study, self.text, self.out = study, text, out.resolve()
+        self.jobs, self.scheduler, self.progress = jobs, scheduler, progress
+        self.announce = announce or (lambda line: print(line, file=sys.stderr))
+        self.path = self.out / STUDY_JSON
+
+    def executor(self) -> Executor:
+        return Executor(self.jobs, self.scheduler)
+
+    def record(self, change) -> dict:
+        return staging.update_json(self.path, change)
+
+    # --- stage 1: the calibration ----------------------------------------------------------------------
+    def calibration(self) -> Path:
+        """The calibration.json that predicts every drive: the file given, or the study's at the reference
+        pressure (each calibration pressure run or resumed; their mu(I) compared in study.json)."""
+        s = self.study
+        if s.calibration_file is not None:
+            self.record(lambda d: d.update(calibration={"source": s.calibration_file, "ran": False}))
+            return Path(s.calibration_file)
+        results = {}
+        for p_w in s.calibration_pressures:
+            folder = self.out / f"calibration-{pressure_label(p_w)}"
+            state = folder / layout.CALIBRATION_STATE
+            status = json.loads(state.read_text()).get("status") if state.exists() else None
+            if status != "complete":
+                text = calibration_text(s, p_w)
+                self.announce(f"study: calibrating the {s.dem} grains at p = {p_w:g} -> {folder}")
+                result = calibrate(dem_config.parse(text), text, folder, jobs=self.jobs, resume=status is not None,
+                                   progress=False, executor=self.executor())
+                if result.status != "complete":
+                    raise StudyStopped(result.status, f"calibration at p = {p_w:g}: {result.message}")
+            results[p_w] = str(folder / layout.CALIBRATION_JSON)
+        reference = results[s.reference_pressure]
+        self.record(lambda d: d.update(calibration={"source": reference, "ran": True, "files": results,
+                                                    "pressure_dependence": pressure_dependence(results)}))
+        return Path(reference)
+
+    # --- stage 2: the runs -----------------------------------------------------------------------------
+    def runs(self, sp: StudyPlan) -> dict:
+        """Every unfinished bed of every pressure on one executor; each run folder's status at the end."""
+        runners, tasks = {}, []
+        for p_w, (text, _) in sp.runs.items():
+            folder = sp.folder(self.out, p_w)
+            resume = (folder / layout.RUN_JSON).exists()
+            runner, meta = begin(dem_config.parse(text), text, folder, resume=resume, progress=False, jobs=self.jobs)
+            runners[p_w] = (runner, meta)
+            tasks += runner.bed_tasks(meta, prefix=f"{pressure_label(p_w)}/")
+
+        def done(task, outcome):
+            label, bed = task.key.split("/", 1)
+            self.record(lambda d: d["runs"][label]["beds"].update({bed: outcome.status}))
+
+        t0 = time.monotonic()
+        outcomes = self.executor().run(tasks, on_done=done, stop=stop_all_lammps, progress=self.progress,
+                                       desc=f"study {self.study.name}: beds")
+        results = {}
+        for p_w, (runner, meta) in runners.items():
+            label = pressure_label(p_w)
+            mine = [o for k, o in outcomes.items() if k.startswith(f"{label}/")]
+            results[label] = runner.finish(meta, mine, t0)
+            self.record(lambda d, r=results[label], label=label: d["runs"][label].update(
+                status=r.status, message=r.message))
+        return results
+
+    # --- stage 3: the comparison -----------------------------------------------------------------------
+    def compare(self, sp: StudyPlan, calibration: Path) -> dict:
+        from granstokes.compare.comparison import build
+        from granstokes.compare.report import write_report
+
+        comparison = build([sp.folder(self.out, p) for p in self.study.pressures], calibration=calibration,
+                           progress=self.progress)
+        with staging.staged(self.out, COMMAND, keep=True) as work:
+            metrics = write_report(comparison, work)
+        return metrics
+
+    def run(self) -> dict:
+        """The three stages in order; study.json's status: complete, failed or interrupted (with why)."""
+        status, message = "complete", ""
+        try:
+            with sigterm_interrupts():
+                calibration = self.calibration()
+                material, _, _ = material_table(calibration)
+                sp = plan_study(self.study, material, str(calibration))
+                self.record(lambda d: d["runs"].update({
+                    pressure_label(p): {**d["runs"].get(pressure_label(p), {"beds": {}}), "p_w": p,
+                                        "path": str(sp.folder(self.out, p).relative_to(self.out)),
+                                        "status": d["runs"].get(pressure_label(p), {}).get("status", "pending")}
+                    for p in self.study.pressures}))
+                for line in sp.lines(self.jobs):
+                    self.announce(line)
+                results = self.runs(sp)
+                stopped = [(k, r) for k, r in results.items() if r.status != "complete"]
+                if stopped:
+                    raise StudyStopped(stopped[0][1].status, f"run {stopped[0][0]}: {stopped[0][1].message}")
+                self.announce("study: comparing every drive with every model")
+                metrics = self.compare(sp, calibration)
+                message = metrics.get("verdict", "")
+        except StudyStopped as exc:
+            status, message = exc.status, str(exc)
+        except (Interrupted, KeyboardInterrupt) as exc:
+            status, message = "interrupted", f"{exc or 'interrupted by SIGINT'}; continue with --resume"
+        return self.record(lambda d: d.update(status=status, message=message, finished=_now()))
+
+
+class StudyStopped(RuntimeError):
+    def __init__(self, status: str, message: str):
+        super().__init__(message)
+        self.status = status
+
+
+def pressure_dependence(files: dict) -> dict:
+    """mu_s, mu_d, I0 at the lowest and the highest calibrated pressure and their difference in units of the
+    combined error (half-widths of the 95 % intervals / 1.96): |z| > 2 says mu(I) depends on p beyond I."""
+    if len(files) < 2:
+        return {"note": "one calibration pressure: not tested"}
+    lo, hi = (json.loads(Path(files[p]).read_text()) for p in sorted(files))
+    out = {}
+    for key in ("mu_s", "mu_d", "I0"):
+        err = [(c[key][1] - c[key][0]) / 2 / 1.96 for c in (lo["ci95"], hi["ci95"])]
+        z = (hi[key] - lo[key]) / (err[0] ** 2 + err[1] ** 2) ** 0.5
+        out[key] = {"low_p": lo[key], "high_p": hi[key], "z": z}
+    out["depends_on_p"] = any(abs(v["z"]) > 2 for v in out.values())
+    return out
+
+
+def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None = None, resume: bool = False,
+              progress: bool = True, announce=None) -> dict:
+    """Run (or with ``resume`` continue) ``study`` in ``out``; returns study.json's record."""
+    out = Path(out)
+    check_folder(study, out, resume)
+    runner = StudyRunner(study, text, out, jobs, scheduler, progress, announce)
+    if not resume:
+        staging.start(out, COMMAND)
+        (out / STUDY_TOML).write_text(text)
+        runner.record(lambda d: d.update(
+            name=study.name, status="running", message="", started=_now(), runs={},
+            grid={"dem": study.dem, "pressures": list(study.pressures), "seeds": list(study.seeds),
+                  "drives": [d.name for d in study.drives], "duration_ts": study.duration_ts},
+            units="DEM units: d = rho_p = g = 1; p_w in rho_p g d, times in sqrt(d/g)",
+            provenance={**provenance(), "jobs": jobs, "scheduler": scheduler or "local"}))
+    else:
+        runner.record(lambda d: d.update(status="running", message="", resumes=[*d.get("resumes", []), _now()]))
+    return runner.run()
