@@ -11,14 +11,16 @@ from granstokes.lib.provenance import provenance
 from .analysis import TRANSITS_BEFORE_COMPARISON
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
-from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_CHANGE, STEADY_WINDOW
+from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_WINDOW, TREND_SIGMA
 from .scorecard import BLOCKS, OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length, tally
 
 #: name -> (unit, definition)
 DEFINITIONS = {
-    "steady": ("-", f"the record is steady from the time its running mean over {STEADY_WINDOW:.0%} of the record "
-                    f"stays within max(3 stderr, {STEADY_CHANGE:.0%} of the total change) of the final-quarter mean "
-                    "and the final quarter's trend moves it by less than that band"),
+    "steady": ("-", f"the final quarter has no trend (slope through block means, blocks longer than the "
+                    f"correlation time, within {TREND_SIGMA:g} of its error), and the record is steady from the "
+                    f"earliest start (in steps of {STEADY_WINDOW:.0%} of the record) after which it has no trend "
+                    f"and the mean of the first quarter of the rest is within {TREND_SIGMA:g} errors of the final "
+                    "value; the prepared state at t = 0 is in no window"),
     "u_w_inf": (OBSERVABLES["u_w_inf"][0], "steady plate speed: mean over the final quarter of the record"),
     "mu_w_inf": (OBSERVABLES["mu_w_inf"][0], "steady plate friction: final-quarter mean of tau_w/p"),
     "delta_u": ("d", "depth below the plate's contact plane where the steady-window coarse-grained u falls to 5 % "
@@ -36,9 +38,12 @@ DEFINITIONS = {
                     "'note' says why. Only scored rows with blind = true count for a model"),
     "tally": ("-", "per model, over the scored blind rows every model has (same drive and observable): rows, "
                    "consistent rows, share, median |sigma|; the verdict ranks models by share, then median |sigma|"),
-    "model_at_end": ("unit of the row", "the model's free response averaged over the DEM record's final quarter "
-                                        "(as the DEM's steady value): near 'predicted' when the model is steady by "
-                                        "then"),
+    "predicted": ("unit of the row", "the model's value compared with the DEM's: for the steady plate value "
+                                     "(u_w_inf under a stress, mu_w_inf under a speed) the model's response averaged "
+                                     "over the DEM's window (the record's final quarter: like with like), else its "
+                                     "steady value"),
+    "asymptote": ("unit of the row", "the model's steady plate value (t -> infinity), beside 'predicted' on the "
+                                     "plate rows: equal when the model is steady within the record"),
     "band": ("unit of the row", "95 % band of the prediction from the calibration's uncertainty (compare.scorecard)"),
     "dem_err": ("unit of the row", f"standard error of the DEM value: spread over seeds (>= 2 seeds), else over "
                                    f"{BLOCKS} blocks of the steady window, or the estimator's resolution; dem_how "
@@ -128,7 +133,7 @@ def _clean(v):
 
 
 SCORECARD_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted",
-                  "band", "numerical_err", "sigma", "verdict", "scored", "note", "blind", "model_at_end")
+                  "band", "numerical_err", "sigma", "verdict", "scored", "note", "blind", "asymptote")
 
 
 def metrics(c: Comparison) -> dict:

@@ -23,9 +23,11 @@ from scipy import stats
 
 from granstokes.lib.statistics import autocorrelation_time
 
-#: steady-state criterion (stated in every report): the running mean over 5 % of the record stays
-#: within max(3 standard errors of the final-quarter mean, 5 % of the total change) of that mean
-STEADY_WINDOW, STEADY_CHANGE = 0.05, 0.05
+#: steady-state criterion (stated in every report): the final quarter has no trend (its slope, fitted to the
+#: means of blocks longer than the correlation time, within TREND_SIGMA of its error), and the record is
+#: steady from the earliest start (in steps of STEADY_WINDOW of the record) after which it has no trend; the
+#: prepared state (t = 0) is in no window
+STEADY_WINDOW, TREND_SIGMA = 0.05, 3.0
 #: the steady window starts at t_steady, but no later than this fraction of the record (and there
 #: when no steady state was detected): the profiles always average the final 30 % at least
 STEADY_WINDOW_LATEST = 0.7
@@ -131,25 +133,46 @@ def slip(record: PlateRecord) -> dict:
                           lambda m: 1 - m["sum"] / m["n"] / m["u"])
 
 
+def trend(t: np.ndarray, y: np.ndarray) -> dict:
+    """Slope of y(t) and its standard error from a straight line through the means of the blocks of
+    ``block_estimate`` (longer than the correlation time: independent), and their ratio ``z``."""
+    est = block_estimate({"y": y})
+    blocks = est["blocks"]
+    if blocks < 3:
+        return {"slope": np.nan, "stderr": np.nan, "z": np.nan, "blocks": blocks}
+    tb = np.array([b.mean() for b in np.array_split(t, blocks)])
+    yb = np.array([b.mean() for b in np.array_split(y, blocks)])
+    fit = stats.linregress(tb, yb)
+    return {"slope": float(fit.slope), "stderr": float(fit.stderr), "blocks": blocks,
+            "z": float(fit.slope / fit.stderr) if fit.stderr > 0 else np.inf * np.sign(fit.slope)}
+
+
 def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
-    """Final value (mean over the last quarter), its standard error (``block_estimate``) and the
-    time from which the running mean stays in the band (STEADY_WINDOW, STEADY_CHANGE); t_steady is
-    nan when the record has not settled: the last quarter's linear trend still moves it by more
-    than the band (``drift``: that slope)."""
-    ok = np.isfinite(y)
+    """Final value (mean over the last quarter), its standard error (``block_estimate``), the final quarter's
+    ``trend``, and t_steady: the earliest start, in steps of STEADY_WINDOW of the record, from which the rest
+    of the record has no trend (|z| <= TREND_SIGMA) and the mean of its first quarter agrees with the final value
+    within TREND_SIGMA combined errors; nan when the final quarter itself drifts.  The record's
+    first sample, the prepared state at t = 0, is left out."""
+    ok = np.isfinite(y) & (t > t[0])
     t, y = t[ok], y[ok]
-    last = y[t >= t[0] + STEADY_LAST * (t[-1] - t[0])]
-    value, stderr = float(last.mean()), block_estimate({"y": last})["stderr"]
-    n = max(1, int(STEADY_WINDOW * len(y)))
-    running = pd.Series(y).rolling(n, center=True, min_periods=1).mean().to_numpy()
-    band = max(3 * stderr, STEADY_CHANGE * abs(value - y[0]))
-    outside = np.nonzero(np.abs(running - value) > band)[0]
-    t_steady = float(t[outside[-1] + 1]) if len(outside) and outside[-1] + 1 < len(t) else float(t[0])
     last_t = t >= t[0] + STEADY_LAST * (t[-1] - t[0])
-    slope = stats.linregress(t[last_t], y[last_t]).slope
-    drift = abs(slope) * (t[-1] - t[last_t][0]) > band  # still moving by more than the band: not steady
-    return {"value": value, "stderr": stderr, "t_steady": np.nan if drift else t_steady, "band": band,
-            "drift": float(slope)}
+    last = y[last_t]
+    value, stderr = float(last.mean()), block_estimate({"y": last})["stderr"]
+    tr = trend(t[last_t], last)
+    def settled(s: float) -> bool:
+        """From s on: no trend, and the first quarter of the rest agrees with the final value."""
+        rest = t >= s
+        head = rest & (t < s + (1 - STEADY_LAST) * (t[-1] - s))
+        err = stderr * np.sqrt(len(last) / max(1, head.sum()) + 1)  # a head mean against the final value
+        return (abs(y[head].mean() - value) <= TREND_SIGMA * err
+                and abs(trend(t[rest], y[rest])["z"]) <= TREND_SIGMA)
+
+    t_steady = np.nan
+    if abs(tr["z"]) <= TREND_SIGMA:  # a drifting (or too short to test) final quarter is not steady
+        starts = t[0] + np.arange(0.0, STEADY_LAST, STEADY_WINDOW) * (t[-1] - t[0])
+        t_steady = next((float(s) for s in starts if settled(s)), float(t[last_t][0]))
+    return {"value": value, "stderr": stderr, "t_steady": t_steady, "drift": tr["slope"], "drift_err": tr["stderr"],
+            "drift_z": tr["z"]}
 
 
 def power_law(t: np.ndarray, y: np.ndarray, t_min: float, t_max: float) -> dict:

@@ -588,15 +588,15 @@ def conclusions(c: Comparison) -> list[str]:
             text += (" The fit ran into its search range: that profile does not determine A, and the NGF rows test "
                      "little.")
         out.append(text)
-    steady_rows = rows[np.isfinite(rows.model_at_end.astype(float))]
-    late = steady_rows[~((steady_rows.model_at_end / steady_rows.predicted - 1).abs() <= MODEL_UNSTEADY)]
+    steady_rows = rows[np.isfinite(rows.asymptote.astype(float))]
+    late = steady_rows[~((steady_rows.predicted / steady_rows.asymptote - 1).abs() <= MODEL_UNSTEADY)]
     if len(late):
         out.append("Over the DEM's final quarter some models are still more than "
                    f"{MODEL_UNSTEADY:.0%} from their steady state: " + ", ".join(
-                       f"{html.escape(r.model)} on {name(r.drive)} at {r.model_at_end:.3g} "
-                       f"({(r.model_at_end / r.predicted - 1) * 100:+.0f} % of its steady {r.predicted:.3g})"
-                       for r in late.itertuples()) + ": the record is shorter than those models' time scale, so "
-                   "their steady rows there are not scored.")
+                       f"{html.escape(r.model)} on {name(r.drive)} at {r.predicted:.3g} "
+                       f"({(r.predicted / r.asymptote - 1) * 100:+.0f} % of its steady {r.asymptote:.3g})"
+                       for r in late.itertuples()) + ": the record is shorter than those models' time scale; their "
+                   "plate rows compare the same window (like with like), their layer rows are not scored.")
     creep = rows[(rows.observable == "creep_length") & (rows.model == "local")]
     if len(creep):
         out.append(f"Below the layer the DEM creeps with an e-folding length of "

@@ -347,9 +347,14 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                     if half >= 2 and len(s) > half and abs(hi - lo) > 0:
                         lo2, hi2 = np.percentile(s[:half], [2.5, 97.5])
                         edges.append(max(abs(lo2 - lo), abs(hi2 - hi)) / abs(hi - lo))
+                asymptote = value
+                windowed = obs == f"{a.response}_inf"  # like with like: the model over the DEM's steady window
+                if windowed:
+                    value, lo, hi = end_value, lo + end_value - asymptote, hi + end_value - asymptote
                 band_sd = (hi - lo) / (2 * Z95)
                 combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
-                note = (_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"])
+                note = ((_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
+                         else _not_scored("", model, base, end_value, asymptote))
                         or _unmeasurable(measured, lo, hi, combined))
                 sigma = (measured.value - value) / combined if combined > 0 else np.nan
                 rows.append({"drive": a.label, "observable": obs, "unit": OBSERVABLES[obs][0],
@@ -360,7 +365,7 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                              "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees",
                              "scored": not note, "note": note,
                              "blind": independent and fitted_on.get(model.key) != a.label,
-                             "model_at_end": end_value if obs == f"{a.response}_inf" else np.nan})
+                             "asymptote": asymptote if windowed else np.nan})
     return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands
 
 

@@ -128,7 +128,8 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     require(isinstance(name, str) and name.replace("-", "").replace("_", "").isalnum(), "name",
             "letters, digits, '-' and '_'", name)
     return Study(name, doc["dem"], tuple(seeds), tuple(float(p) for p in pressures), built, file,
-                 table if file is None else (), float(duration_ts), float(min_duration), None if width is None else float(width))
+                 table if file is None else (), float(duration_ts), float(min_duration),
+                 None if width is None else float(width))
 
 
 def parse(text: str, base: Path | None = None) -> Study:

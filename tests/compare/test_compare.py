@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 from granstokes.compare.calibrate import fit, load
 from granstokes.compare.comparison import check_grains
-from granstokes.compare.plate import block_estimate, friction, pooled, power_law, steady_state
+from granstokes.compare.plate import block_estimate, friction, pooled, power_law, steady_state, trend
 from granstokes.continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
 from granstokes.continuum.crossing import depth_at_fraction
 
@@ -104,12 +104,32 @@ def test_steady_state_and_power_law_on_known_series():
     y = 3 * (1 - np.exp(-t / 4)) + rng.normal(0, 0.05, t.size)
     st = steady_state(t, y)
     assert st["value"] == pytest.approx(3, abs=0.02)
-    # the running mean enters the band max(3 stderr, 5 % of 3) = 0.15 near t = 4 ln(3/0.15) = 12
-    assert st["t_steady"] == pytest.approx(4 * np.log(3 / st["band"]), abs=1.5)
+    # steady once the remaining change 3 exp(-t/4), averaged over the next quarter of the rest, is within 3 errors
+    # (~0.01): near t = 4 ln(3/0.01) - a few, and no trend is left after it
+    after = t >= st["t_steady"]
+    assert 12 < st["t_steady"] < 25 and abs(trend(t[after], y[after])["z"]) <= 3
     growing = steady_state(t, t)
     assert np.isnan(growing["t_steady"])
     fit_ = power_law(t, 0.7 * np.sqrt(t), 0.1, 10)
     assert fit_["alpha"] == pytest.approx(0.5, abs=1e-9)
+
+
+def test_the_trend_test_flags_a_drift_and_ignores_the_prepared_state():
+    """The referee's cases: a final quarter drifting by 0.045 per time unit under noise that hides it from a
+    band is not steady; the prepared state at t = 0 (a spike: mu_w = 5.26 before the plate moves) neither
+    widens the band nor delays t_steady; stationary noise passes at the stated rate."""
+    rng = np.random.default_rng(7)
+    t = np.linspace(0, 10, 501)
+    noise = rng.normal(0, 0.05, t.size)
+    drifting = steady_state(t, 2.0 + 0.045 * t + noise)
+    assert np.isnan(drifting["t_steady"]) and drifting["drift"] == pytest.approx(0.045, abs=0.02)
+    assert abs(drifting["drift_z"]) > 3
+    spiked = 0.5 + noise
+    spiked[0] = 5.26
+    st = steady_state(t, spiked)
+    assert abs(st["value"] - 0.5) < 4 * st["stderr"] and st["t_steady"] < 1.0
+    passes = [np.isfinite(steady_state(t, 0.5 + rng.normal(0, 0.05, t.size))["t_steady"]) for _ in range(40)]
+    assert sum(passes) >= 37  # |z| <= 3 of a t-like statistic: a false alarm in a few percent at most
 
 
 def test_friction_is_a_ratio_of_means_and_the_mean_of_ratios_is_biased():
