@@ -144,7 +144,7 @@ def trend(t: np.ndarray, y: np.ndarray) -> dict:
     yb = np.array([b.mean() for b in np.array_split(y, blocks)])
     fit = stats.linregress(tb, yb)
     return {"slope": float(fit.slope), "stderr": float(fit.stderr), "blocks": blocks,
-            "z": float(fit.slope / fit.stderr) if fit.stderr > 0 else np.inf * np.sign(fit.slope)}
+            "z": float(fit.slope / fit.stderr) if fit.stderr > 0 else 0.0 if fit.slope == 0 else np.inf}
 
 
 def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
