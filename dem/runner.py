@@ -461,13 +461,17 @@ class Runner:
 
 
 def run_bed(out: str, seed: int, np_: int, launcher: str | None, progress: bool, jobs: int) -> Outcome:
-    """The executor's task: seed ``seed``'s bed of the run folder ``out`` (its config and run.json as stored)."""
+    """The executor's task: seed ``seed``'s bed of the run folder ``out`` (its config and run.json as stored),
+    holding the lock of the bed's folder (a bed left running by a stopped study on a remote worker finishes, or
+    dies at its next screen output once its worker is gone, before a resume runs it again)."""
     out = Path(out)
     text = (out / layout.CONFIG_TOML).read_text()
     runner = Runner(parse(text), text, out, np_, launcher, progress, jobs)
-    meta = json.loads(runner.meta_path.read_text())
+    bed = layout.seed_dir(out, seed)
+    bed.mkdir(exist_ok=True)
     try:
-        runner.bed(seed, meta)
+        with staging.locked(bed):  # one process per bed: a resume waits for a bed still running elsewhere
+            runner.bed(seed, json.loads(runner.meta_path.read_text()))
     except RunError as exc:
         return Outcome("failed", str(exc))
     except (Interrupted, KeyboardInterrupt) as exc:

@@ -52,7 +52,9 @@ def _cmd_study(args) -> int:
                        progress=not args.quiet)
     print(f"study: {record['status']}" + (f": {record['message']}" if record["message"] else "")
           + f" (see {Path(args.out) / 'study.json'})", file=sys.stderr)
-    return {"complete": 0, "interrupted": 130}.get(record["status"], 1)
+    if record["status"] == "interrupted":
+        return 128 + int(record.get("signal") or 2)  # 130 SIGINT, 143 SIGTERM
+    return 0 if record["status"] == "complete" else 1
 
 
 def _cmd_preset(args) -> int:

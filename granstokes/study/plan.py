@@ -13,8 +13,8 @@ from granstokes.lib.toml_text import with_entries
 from .config import Study, rigidity
 
 RUNS = "runs"
-#: atom and contact snapshots per t_s of the fastest drive (the preset's interval when it is denser): the
-#: layer's growth over the first t_s is resolved by this many frames
+#: atom and contact snapshots per t_s of the fastest drive at a pressure: the layer's growth over the first t_s
+#: is resolved by this many frames, and a drive of 10 t_s has 10 times as many (coarse-graining's cost)
 FRAMES_PER_TS = 20
 
 
@@ -53,7 +53,7 @@ def run_text(study: Study, p_w: float, material: dict, source: str) -> str:
     header = f"study {study.name} at p_w = {p_w:g}, sized from the calibration {source}"
     text = with_entries(dem_config.preset_text(study.dem), entries, header=header)
     cfg = dem_config.parse(text)
-    frame = min(min(d.scales.t_s for d in plan(cfg).drives) / FRAMES_PER_TS, cfg.output.atoms)
+    frame = min(d.scales.t_s for d in plan(cfg).drives) / FRAMES_PER_TS
     return with_entries(text, [("output.atoms", frame), ("output.contacts", frame)], header=header)
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import signal
 import sys
 import time
 from pathlib import Path
@@ -130,7 +131,7 @@ class StudyRunner:
 
     def run(self) -> dict:
         """The three stages in order; study.json's status: complete, failed or interrupted (with why)."""
-        status, message = "complete", ""
+        status, message, signum = "complete", "", None
         try:
             with sigterm_interrupts():
                 calibration = self.calibration()
@@ -153,8 +154,9 @@ class StudyRunner:
         except StudyStopped as exc:
             status, message = exc.status, str(exc)
         except (Interrupted, KeyboardInterrupt) as exc:
-            status, message = "interrupted", f"{exc or 'interrupted by SIGINT'}; continue with --resume"
-        return self.record(lambda d: d.update(status=status, message=message, finished=_now()))
+            signum = int(getattr(exc, "signum", signal.SIGINT))
+            status, message = "interrupted", f"interrupted by {signal.Signals(signum).name}; continue with --resume"
+        return self.record(lambda d: d.update(status=status, message=message, finished=_now(), signal=signum))
 
 
 class StudyStopped(RuntimeError):

@@ -1,0 +1,136 @@
+"""granstokes study: the config and its checks, --set, sizing from the calibration (one material), and (slow)
+the smoke study through a Dask scheduler, killed mid-way and resumed."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from granstokes.cli import main as granstokes_main
+from granstokes.dem import config as dem_config
+from granstokes.dem.calibrate import material_table
+from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS, plan
+from granstokes.study import config
+from granstokes.study.plan import FRAMES_PER_TS, calibration_text, plan_study
+
+ROOT = Path(__file__).resolve().parents[2]
+CALIBRATION = ROOT / "results" / "quick-calibration" / "calibration.json"
+
+
+def _study(**changes) -> str:
+    doc = {"name": "t", "dem": "quick", "seeds": [1, 2], "pressures": [10.0, 20.0],
+           "calibration": {"file": str(CALIBRATION)},
+           "drive": [{"kind": "stress", "mu_w_tilde": 0.5}, {"kind": "speed", "mu_w_tilde": 0.5},
+                     {"kind": "stress", "tau_w": 6.0}]}
+    doc.update(changes)
+    import tomli_w
+    return tomli_w.dumps(doc)
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"pressures": []}, "pressures must be"),
+    ({"pressures": [10.0, 10.0]}, "pressures must be"),
+    ({"dem": "nope"}, "dem must be one of the DEM presets"),
+    ({"calibration": {"file": "/nonexistent/calibration.json"}}, "calibration.file must be"),
+    ({"calibration": {"run": True, "wobble": 1}}, "calibration keys must be"),
+    ({"drive": [{"kind": "stress", "u_w": 1.0}]}, r"drive\[stress-u1\] load must be"),
+    ({"drive": [{"kind": "stress", "mu_w_tilde": 0.5, "mu_w": 0.4}]}, r"drive\[0\] load must be"),
+    ({"colour": "red"}, "study keys must be"),
+])
+def test_bad_studies_are_refused_naming_the_parameter(change, message):
+    with pytest.raises(ValueError, match=message) as err:
+        config.parse(_study(**change))
+    assert "\n" not in str(err.value)
+
+
+def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
+    """Every run is sized from the calibrated material: depth >= delta_s + 5 creep lengths, duration >= 10
+    calibrated t_s, frames every t_s/FRAMES_PER_TS of the fastest drive; the grains' k_n is one at every pressure
+    (kappa scales as 1/p), the calibration stage's too; tau_w gives mu_w = tau_w/p_w."""
+    study = config.parse(_study())
+    material, _, _ = material_table(CALIBRATION)
+    sp = plan_study(study, material, "test")
+    k_n = set()
+    for p_w, (text, p) in sp.runs.items():
+        cfg = p.config
+        assert cfg.p_w == p_w and cfg.seeds == (1, 2) and cfg.material.mu_s == pytest.approx(material["mu_s"])
+        assert cfg.material.phi == pytest.approx(material["phi"]) and cfg.material.I0 == pytest.approx(material["I0"])
+        k_n.add(round(cfg.contact.k_n, 6))
+        deepest = max(d.scales.delta_s for d in p.drives)
+        assert p.depth >= deepest + CREEP_LENGTHS * CREEP_LENGTH
+        for d in p.drives:
+            assert d.duration == pytest.approx(10 * d.scales.t_s, rel=1e-9)
+        assert cfg.output.atoms == pytest.approx(min(d.scales.t_s for d in p.drives) / FRAMES_PER_TS)
+        tau = next(d for d in p.drives if d.drive.tau_w is not None)
+        assert tau.scales.mu_w == pytest.approx(6.0 / p_w)
+        assert dem_config.parse(text) == cfg
+    assert len(k_n) == 1
+    cal = dem_config.parse(calibration_text(study, 10.0))
+    assert round(cal.contact.k_n, 6) in k_n and cal.p_w == 10.0
+    # the same sizing through dem run --calibration: the preset's nominal material replaced
+    out = tmp_path / "dry"
+    assert granstokes_main(["dem", "run", "--preset", "quick", "--calibration", str(CALIBRATION), "--out", str(out),
+                            "--dry-run"]) == 0
+    assert not out.exists()
+
+
+def test_set_overrides_and_presets_print(capsys):
+    study, text = config.load(None, "smoke", ["seeds=[3, 4, 5]", "pressures=[4.0]", "drive.0.mu_w_tilde=0.3"])
+    assert study.seeds == (3, 4, 5) and study.pressures == (4.0,) and study.drives[0].value == 0.3
+    assert tomllib.loads(text)["seeds"] == [3, 4, 5] and text.startswith("# smoke with --set")
+    with pytest.raises(ValueError, match="--set"):
+        config.load(None, "smoke", ["seeds"])
+    assert granstokes_main(["preset", "study", "smoke"]) == 0
+    printed = capsys.readouterr().out
+    assert config.parse(printed) == config.load(None, "smoke")[0]
+    assert granstokes_main(["preset", "dem"]) == 0
+    assert set(capsys.readouterr().out.split()) == set(dem_config.PRESETS)
+
+
+#: the smoke study cut to what the test needs: one pressure, one drive, one seed, a 4-point calibration
+SMALL = ["pressures=[10.0]", "seeds=[1]", 'drive=[{kind = "speed", mu_w_tilde = 0.5}]', "min_duration=0.0",
+         "calibration.I=[0.01, 0.03, 0.08, 0.2, 0.4, 0.6]"]
+
+
+@pytest.mark.slow
+def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
+    """The study runs its beds on a LocalCluster of 2 worker processes the test starts (--scheduler); SIGTERM
+    once the calibration is complete stops it (status interrupted, exit 143); --resume finishes it without
+    redoing the calibration; metrics.json has the drives table, study.json every run with its status."""
+    from distributed import LocalCluster
+
+    out = tmp_path / "study"
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, resources={"ranks": 1},
+                      dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"}) as cluster:
+        args = [sys.executable, "-m", "granstokes.cli", "study", "--preset", "smoke", "--out", str(out), "--quiet",
+                "--scheduler", cluster.scheduler_address, *[x for s in SMALL for x in ("--set", s)]]
+        proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        state = out / "calibration-p10" / "state.json"
+        deadline = time.monotonic() + 240
+        while time.monotonic() < deadline and proc.poll() is None:
+            if state.exists() and json.loads(state.read_text() or "{}").get("status") == "complete":
+                break
+            time.sleep(0.2)
+        os.kill(proc.pid, signal.SIGTERM)
+        _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    record = json.loads((out / "study.json").read_text())
+    assert record["status"] == "interrupted" and "--resume" in record["message"]
+    calibrated = json.loads(state.read_text())
+    assert granstokes_main(["study", "--resume", "--out", str(out), "--quiet"]) == 0
+    assert json.loads(state.read_text())["points"] == calibrated["points"]  # not redone
+    record = json.loads((out / "study.json").read_text())
+    assert record["status"] == "complete" and record["runs"]["p10"]["status"] == "complete"
+    assert record["runs"]["p10"]["beds"] == {"seed-1": "complete"} and len(record["resumes"]) == 1
+    metrics = json.loads((out / "metrics.json").read_text())
+    (drive,) = metrics["drives"].values()
+    for key in ("p_w", "kind", "imposed", "seeds", "depth", "duration", "delta_s", "t_s", "base_confined"):
+        assert key in drive
+    assert drive["p_w"] == 10.0 and drive["kind"] == "speed" and drive["seeds"] == 1
+    assert drive["t_s"] > 0 and drive["duration"] >= 9.5 * drive["t_s"]
+    assert (out / "index.html").exists() and (out / "runs" / "p10" / "run.json").exists()
