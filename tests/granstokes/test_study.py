@@ -134,3 +134,23 @@ def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
     assert drive["p_w"] == 10.0 and drive["kind"] == "speed" and drive["seeds"] == 1
     assert drive["t_s"] > 0 and drive["duration"] >= 9.5 * drive["t_s"]
     assert (out / "index.html").exists() and (out / "runs" / "p10" / "run.json").exists()
+
+
+def test_the_readme_cluster_script_builds_its_slurm_job():
+    """README's dask-jobqueue script, up to the submission: the installed SLURMCluster accepts its arguments and
+    writes a job whose workers offer the ``ranks`` resource the study's beds hold."""
+    import re
+
+    from dask_jobqueue import SLURMCluster  # noqa: F401 (the script's import)
+
+    block = next(b for b in re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+                 if "SLURMCluster" in b)
+    setup = block.split("cluster.scale")[0]
+    scope = {}
+    exec(setup, scope)
+    cluster = scope["cluster"]
+    try:
+        script = cluster.job_script()
+    finally:
+        cluster.close()
+    assert "--resources ranks=1" in script and "#SBATCH" in script and "--nworkers 8" in script
