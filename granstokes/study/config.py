@@ -14,7 +14,8 @@ A study is valid with these keys (DEM units; example)::
     drive = [{kind = "stress", mu_w_tilde = 0.5}, {kind = "speed", mu_w_tilde = 0.5}]
 
 Optional: ``duration_ts`` (drive length in calibrated t_s, default 10), ``min_duration``, ``width`` (the box's
-x width in d; default the DEM preset's).  Unknown keys are errors.
+x width in d; default the DEM preset's), ``width_check`` (default true: the first drive again at the highest
+pressure in a box twice as wide).  Unknown keys are errors.
 """
 from __future__ import annotations
 
@@ -31,7 +32,8 @@ PRESET_DIR = Path(__file__).parent / "presets"
 PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
 DRIVE_KEYS = ("kind", "mu_w_tilde", "mu_w", "tau_w", "u_w")
 SHORT = {"mu_w_tilde": "mutilde", "mu_w": "mu", "tau_w": "tau", "u_w": "u"}  # drive names: stress-mutilde0.5
-TOP = {"name", "dem", "seeds", "pressures", "calibration", "drive", "duration_ts", "min_duration", "width"}
+TOP = {"name", "dem", "seeds", "pressures", "calibration", "drive", "duration_ts", "min_duration", "width",
+       "width_check"}
 
 
 @dataclass(frozen=True)
@@ -63,6 +65,7 @@ class Study:
     duration_ts: float = 10.0
     min_duration: float = 0.0
     width: float | None = None
+    width_check: bool = True
 
     @property
     def calibration_pressures(self) -> tuple[float, ...]:
@@ -124,12 +127,14 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     width = doc.get("width")
     require(width is None or (finite(width) and width >= dem_config.MIN_WIDTH), "width",
             f"a number >= {dem_config.MIN_WIDTH:g} d", width)
+    width_check = doc.get("width_check", True)
+    require(isinstance(width_check, bool), "width_check", "true or false", width_check)
     name = doc.get("name", "study")
     require(isinstance(name, str) and name.replace("-", "").replace("_", "").isalnum(), "name",
             "letters, digits, '-' and '_'", name)
     return Study(name, doc["dem"], tuple(seeds), tuple(float(p) for p in pressures), built, file,
                  table if file is None else (), float(duration_ts), float(min_duration),
-                 None if width is None else float(width))
+                 None if width is None else float(width), width_check)
 
 
 def parse(text: str, base: Path | None = None) -> Study:

@@ -13,6 +13,7 @@ from granstokes.lib.toml_text import with_entries
 from .config import Study, rigidity
 
 RUNS = "runs"
+WIDE = "-wide"  # the width check's run: label and name suffix
 #: atom and contact snapshots per t_s of the fastest drive at a pressure: the layer's growth over the first t_s
 #: is resolved by this many frames, and a drive of 10 t_s has 10 times as many (coarse-graining's cost)
 FRAMES_PER_TS = 20
@@ -42,14 +43,16 @@ def calibration_text(study: Study, p_w: float) -> str:
                         header=f"study {study.name}: the calibration of the {study.dem} grains at p_w = {p_w:g}")
 
 
-def run_text(study: Study, p_w: float, material: dict, source: str) -> str:
+def run_text(study: Study, p_w: float, material: dict, source: str, wide: bool = False) -> str:
     """The DEM config of the run at p_w: the preset's grains (one material), the study's seeds and drives, the
-    depth and durations sized from ``material`` (the calibration at ``source``)."""
-    entries = [("name", f"{study.name}-{pressure_label(p_w)}"), ("seeds", list(study.seeds)), *_grains(study, p_w),
-               ("material", material), ("box.depth", None), ("box.margin", None),
-               ("drive", [d.table(study.duration_ts, study.min_duration) for d in study.drives])]
-    if study.width is not None:
-        entries.append(("box.width", study.width))
+    depth and durations sized from ``material`` (the calibration at ``source``); ``wide``: the width check, the
+    first drive alone in a box twice as wide."""
+    drives = study.drives[:1] if wide else study.drives
+    width = study.width or dem_config.preset(study.dem)[0].box.width
+    entries = [("name", f"{study.name}-{pressure_label(p_w)}{WIDE if wide else ''}"), ("seeds", list(study.seeds)),
+               *_grains(study, p_w), ("material", material), ("box.depth", None), ("box.margin", None),
+               ("box.width", width * (2 if wide else 1)),
+               ("drive", [d.table(study.duration_ts, study.min_duration) for d in drives])]
     header = f"study {study.name} at p_w = {p_w:g}, sized from the calibration {source}"
     text = with_entries(dem_config.preset_text(study.dem), entries, header=header)
     cfg = dem_config.parse(text)
@@ -58,35 +61,50 @@ def run_text(study: Study, p_w: float, material: dict, source: str) -> str:
 
 
 @dataclass(frozen=True)
+class StudyRun:
+    p_w: float
+    text: str
+    plan: Plan
+
+
+@dataclass(frozen=True)
 class StudyPlan:
     study: Study
-    runs: dict[float, tuple[str, Plan]]  # p_w -> (config text, its plan)
+    runs: dict[str, StudyRun]  # label (pP, pP-wide) -> the run
 
-    def folder(self, out: Path, p_w: float) -> Path:
-        return out / RUNS / pressure_label(p_w)
+    @staticmethod
+    def folder(out: Path, label: str) -> Path:
+        return out / RUNS / label
 
     def cost_seconds(self, jobs: int) -> float:
-        beds = [sum(p.stage_seconds(k) for k in p.stage_keys(seed)) for _, p in self.runs.values()
-                for seed in p.config.seeds]
+        beds = [sum(r.plan.stage_seconds(k) for k in r.plan.stage_keys(seed)) for r in self.runs.values()
+                for seed in r.plan.config.seeds]
         return makespan(sorted(beds, reverse=True), jobs)
 
     def lines(self, jobs: int) -> list[str]:
         """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole."""
         out = []
-        for p_w, (_, p) in self.runs.items():
+        for label, r in self.runs.items():
+            p = r.plan
             for d in p.drives:
-                out.append(f"  p_w = {p_w:g}, {d.drive.name}: delta_s = {d.scales.delta_s:.3g} d, t_s = "
-                           f"{d.scales.t_s:.3g}, depth {p.depth:g} d, duration {d.duration:.4g} "
-                           f"({d.steps:.3g} steps), {p.n_grains} grains x {len(p.config.seeds)} bed(s)")
-            out.append(f"  p_w = {p_w:g}: {p.cost_estimate(1)}")
+                out.append(f"  {label}, {d.drive.name}: delta_s = {d.scales.delta_s:.3g} d, t_s = "
+                           f"{d.scales.t_s:.3g}, depth {p.depth:g} d, width {p.config.box.width:g} d, duration "
+                           f"{d.duration:.4g} ({d.steps:.3g} steps), {p.n_grains} grains x "
+                           f"{len(p.config.seeds)} bed(s)")
+            out.append(f"  {label}: {p.cost_estimate(1)}")
         out.append(f"  the study's beds: about {duration_text(self.cost_seconds(jobs))} with {jobs} job(s)")
         return out
 
 
 def plan_study(study: Study, material: dict, source: str) -> StudyPlan:
-    """Every run's config and plan (ValueError naming the drive if a load is outside the calibrated law)."""
+    """Every run's config and plan (ValueError naming the drive if a load is outside the calibrated law), and
+    with ``study.width_check`` the first drive at the reference pressure in a box twice as wide."""
     runs = {}
     for p_w in study.pressures:
         text = run_text(study, p_w, material, source)
-        runs[p_w] = (text, plan(dem_config.parse(text)))
+        runs[pressure_label(p_w)] = StudyRun(p_w, text, plan(dem_config.parse(text)))
+    if study.width_check:
+        p_w = study.reference_pressure
+        text = run_text(study, p_w, material, source, wide=True)
+        runs[pressure_label(p_w) + WIDE] = StudyRun(p_w, text, plan(dem_config.parse(text)))
     return StudyPlan(study, runs)

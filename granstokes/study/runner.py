@@ -95,12 +95,13 @@ class StudyRunner:
     def runs(self, sp: StudyPlan) -> dict:
         """Every unfinished bed of every pressure on one executor; each run folder's status at the end."""
         runners, tasks = {}, []
-        for p_w, (text, _) in sp.runs.items():
-            folder = sp.folder(self.out, p_w)
+        for label, r in sp.runs.items():
+            folder = sp.folder(self.out, label)
             resume = (folder / layout.RUN_JSON).exists()
-            runner, meta = begin(dem_config.parse(text), text, folder, resume=resume, progress=False, jobs=self.jobs)
-            runners[p_w] = (runner, meta)
-            tasks += runner.bed_tasks(meta, prefix=f"{pressure_label(p_w)}/")
+            runner, meta = begin(dem_config.parse(r.text), r.text, folder, resume=resume, progress=False,
+                                 jobs=self.jobs)
+            runners[label] = (runner, meta)
+            tasks += runner.bed_tasks(meta, prefix=f"{label}/")
 
         def done(task, outcome):
             label, bed = task.key.split("/", 1)
@@ -110,8 +111,7 @@ class StudyRunner:
         outcomes = self.executor().run(tasks, on_done=done, stop=stop_all_lammps, progress=self.progress,
                                        desc=f"study {self.study.name}: beds")
         results = {}
-        for p_w, (runner, meta) in runners.items():
-            label = pressure_label(p_w)
+        for label, (runner, meta) in runners.items():
             mine = [o for k, o in outcomes.items() if k.startswith(f"{label}/")]
             results[label] = runner.finish(meta, mine, t0)
             self.record(lambda d, r=results[label], label=label: d["runs"][label].update(
@@ -123,7 +123,7 @@ class StudyRunner:
         from granstokes.compare.comparison import build
         from granstokes.compare.report import write_report
 
-        comparison = build([sp.folder(self.out, p) for p in self.study.pressures], calibration=calibration,
+        comparison = build([sp.folder(self.out, label) for label in sp.runs], calibration=calibration,
                            progress=self.progress)
         with staging.staged(self.out, COMMAND, keep=True) as work:
             metrics = write_report(comparison, work)
@@ -138,10 +138,11 @@ class StudyRunner:
                 material, _, _ = material_table(calibration)
                 sp = plan_study(self.study, material, str(calibration))
                 self.record(lambda d: d["runs"].update({
-                    pressure_label(p): {**d["runs"].get(pressure_label(p), {"beds": {}}), "p_w": p,
-                                        "path": str(sp.folder(self.out, p).relative_to(self.out)),
-                                        "status": d["runs"].get(pressure_label(p), {}).get("status", "pending")}
-                    for p in self.study.pressures}))
+                    label: {**d["runs"].get(label, {"beds": {}}), "p_w": r.p_w,
+                            "path": str(sp.folder(self.out, label).relative_to(self.out)),
+                            "drives": [dp.drive.name for dp in r.plan.drives],
+                            "status": d["runs"].get(label, {}).get("status", "pending")}
+                    for label, r in sp.runs.items()}))
                 for line in sp.lines(self.jobs):
                     self.announce(line)
                 results = self.runs(sp)

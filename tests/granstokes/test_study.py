@@ -10,11 +10,11 @@ import tomllib
 from pathlib import Path
 
 import pytest
-
-from granstokes.cli import main as granstokes_main
 from granstokes.dem import config as dem_config
 from granstokes.dem.calibrate import material_table
-from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS, plan
+from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS
+
+from granstokes.cli import main as granstokes_main
 from granstokes.study import config
 from granstokes.study.plan import FRAMES_PER_TS, calibration_text, plan_study
 
@@ -56,7 +56,9 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
     material, _, _ = material_table(CALIBRATION)
     sp = plan_study(study, material, "test")
     k_n = set()
-    for p_w, (text, p) in sp.runs.items():
+    assert list(sp.runs) == ["p10", "p20", "p20-wide"]
+    for label, run in sp.runs.items():
+        p_w, text, p = run.p_w, run.text, run.plan
         cfg = p.config
         assert cfg.p_w == p_w and cfg.seeds == (1, 2) and cfg.material.mu_s == pytest.approx(material["mu_s"])
         assert cfg.material.phi == pytest.approx(material["phi"]) and cfg.material.I0 == pytest.approx(material["I0"])
@@ -66,6 +68,10 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
         for d in p.drives:
             assert d.duration == pytest.approx(10 * d.scales.t_s, rel=1e-9)
         assert cfg.output.atoms == pytest.approx(min(d.scales.t_s for d in p.drives) / FRAMES_PER_TS)
+        if label.endswith("-wide"):  # the width check: the first drive alone, twice as wide
+            assert [d.drive.name for d in p.drives] == ["stress-mutilde0.5"]
+            assert cfg.box.width == 2 * sp.runs["p20"].plan.config.box.width and p_w == 20.0
+            continue
         tau = next(d for d in p.drives if d.drive.tau_w is not None)
         assert tau.scales.mu_w == pytest.approx(6.0 / p_w)
         assert dem_config.parse(text) == cfg
@@ -127,8 +133,10 @@ def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
     record = json.loads((out / "study.json").read_text())
     assert record["status"] == "complete" and record["runs"]["p10"]["status"] == "complete"
     assert record["runs"]["p10"]["beds"] == {"seed-1": "complete"} and len(record["resumes"]) == 1
+    assert record["runs"]["p10-wide"]["status"] == "complete"
     metrics = json.loads((out / "metrics.json").read_text())
-    (drive,) = metrics["drives"].values()
+    assert len(metrics["drives"]) == 2  # the drive and its width check
+    drive = next(d for label, d in metrics["drives"].items() if "wide" not in label)
     for key in ("p_w", "kind", "imposed", "seeds", "depth", "duration", "delta_s", "t_s", "base_confined"):
         assert key in drive
     assert drive["p_w"] == 10.0 and drive["kind"] == "speed" and drive["seeds"] == 1
