@@ -26,7 +26,7 @@ from granstokes.lib.provenance import provenance
 from granstokes.lib.validate import require
 
 from .config import Study, parse
-from .plan import StudyPlan, calibration_text, plan_study, pressure_label
+from .plan import WIDE, StudyPlan, calibration_text, plan_study, pressure_label
 
 COMMAND = "study"
 STUDY_TOML, STUDY_JSON = "study.toml", "study.json"
@@ -127,6 +127,7 @@ class StudyRunner:
                            progress=self.progress)
         with staging.staged(self.out, COMMAND, keep=True) as work:
             metrics = write_report(comparison, work)
+        self.record(lambda d: d.update(width_check=width_check(metrics["drives"])))
         return metrics
 
     def run(self) -> dict:
@@ -164,6 +165,26 @@ class StudyStopped(RuntimeError):
     def __init__(self, status: str, message: str):
         super().__init__(message)
         self.status = status
+
+
+def width_check(drives: dict) -> list[dict]:
+    """Each width-check drive (run label ending in WIDE) against the same drive in the normal box: the free
+    response's steady value in both and their difference in units of the combined error (|z| > 2: the box's
+    width changes the answer)."""
+    out = []
+    for label, wide in drives.items():
+        run, _, name = label.rpartition("/")
+        if not run.endswith(WIDE):
+            continue
+        normal = drives.get(f"{run[:-len(WIDE)]}/{name}")
+        if normal is None:
+            continue
+        key = "u_w_inf" if wide["kind"] == "stress" else "mu_w_inf"
+        a, b = normal[key], wide[key]
+        err = (a["dem_err"] ** 2 + b["dem_err"] ** 2) ** 0.5
+        out.append({"drive": name, "observable": key, "normal": a["dem"], "normal_err": a["dem_err"],
+                    "wide": b["dem"], "wide_err": b["dem_err"], "z": (b["dem"] - a["dem"]) / err if err > 0 else None})
+    return out
 
 
 def pressure_dependence(files: dict) -> dict:

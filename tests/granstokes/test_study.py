@@ -162,3 +162,13 @@ def test_the_readme_cluster_script_builds_its_slurm_job():
     finally:
         cluster.close()
     assert "--resources ranks=1" in script and "#SBATCH" in script and "--nworkers 8" in script
+
+
+def test_the_width_check_pairs_each_wide_drive_with_its_normal_box():
+    from granstokes.study.runner import width_check
+
+    drives = {"/s/runs/p20/stress-mutilde0.5": {"kind": "stress", "u_w_inf": {"dem": 1.0, "dem_err": 0.1}},
+              "/s/runs/p20-wide/stress-mutilde0.5": {"kind": "stress", "u_w_inf": {"dem": 1.3, "dem_err": 0.1}},
+              "/s/runs/p200/stress-mutilde0.5": {"kind": "stress", "u_w_inf": {"dem": 9.0, "dem_err": 0.1}}}
+    (row,) = width_check(drives)
+    assert row["normal"] == 1.0 and row["wide"] == 1.3 and row["z"] == pytest.approx(0.3 / 0.02 ** 0.5)
