@@ -1,5 +1,6 @@
 """The comparison report on a real smoke run: the scorecard's contract, the pages a reader opens
 (every link and image there, alt text, no raw dict or nan in a cell), and runs named alike."""
+import html
 import json
 import math
 import re
@@ -17,7 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.text import Text
 
 from granstokes.cli import main
-from granstokes.demo import write_index
+from granstokes.demo import STUDY_DIR, write_index
 
 pytestmark = pytest.mark.slow
 SCORECARD_KEYS = {"drive", "observable", "unit", "dem", "dem_err", "model", "predicted", "band", "sigma", "verdict"}
@@ -137,11 +138,13 @@ def test_scorecard_contract(report):
 
 
 def test_every_page_the_demo_writes_is_whole(report):
-    comparison, _, out = report
+    _, m, out = report
     write_continuum_report(out / "continuum")
-    index = write_index(comparison, out, ("smoke",), {"test": 0.0})
+    shutil.copytree(out / "compare", out / STUDY_DIR)  # the demo's study report is a comparison report
+    index = write_index(out, out / STUDY_DIR, {"test": 0.0})
     front = check_page(index)
-    assert {"compare/index.html", "continuum/index.html"} <= set(front.links)
+    assert {f"{STUDY_DIR}/index.html", "continuum/index.html"} <= set(front.links)
+    assert html.escape(m["verdict"]) in index.read_text() and len(front.images) == 1
     compare_page = check_page(out / "compare" / "index.html")
     text = (out / "compare" / "index.html").read_text()
     assert text.index("Scorecard") < text.index("Conclusions") < text.index("Figures")
