@@ -17,12 +17,17 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
   no drift (first and second halves of the blocks agree within DRIFT_Z standard errors in mu and phi),
   <P_yy> = p within PRESSURE_Z standard errors, velocity profile linear (largest deviation from the
   linear fit below HOMOGENEITY_TOL of the velocity difference across the cell), blocks longer than the
-  autocorrelation time (the MIN_BLOCKS cap can make them shorter when the window is too short).
+  autocorrelation time (the MIN_BLOCKS cap can make them shorter when the window is too short), and dense
+  flow (``kinetic_fraction``: the kinetic part of P_yy at most KINETIC_MAX of P_yy); calibration.json lists
+  the excluded cells (``excluded``) and, with their kinetic fraction, those that are not dense (``not_dense``);
+* finite size (``finite_size`` of the table): at each of those points one more cell of twice the width,
+  with the first seed and a start FINITE_SIZE_START times longer, compared with the same seed's cell of the
+  fit (``finite_size_record``); never fitted.
 
-Output (dem.layout): DIR/calibration.json, DIR/points.csv, DIR/state.json, DIR/I-K/seed-S/.
-Points and seeds are tasks of the project's executor (granstokes.lib.executor: ``jobs`` LAMMPS processes at
-once, longest first, a failed cell retried once); ``resume`` reruns the unfinished ones (a cell restarts from
-its insertion: cells are short).
+Output (dem.layout): DIR/calibration.json, DIR/points.csv, DIR/state.json, DIR/I-K/seed-S/,
+DIR/finite-size/I-K/seed-S/.  Every cell (the doubled ones too) is a task of the project's executor
+(granstokes.lib.executor: ``jobs`` LAMMPS processes at once, longest first, a failed cell retried once);
+``resume`` reruns the unfinished ones (a cell restarts from its insertion: cells are short).
 """
 from __future__ import annotations
 
@@ -68,6 +73,13 @@ HOMOGENEITY_TOL = 0.1
 #: under the pressure control) still reaches ``strain``
 STRAIN_MARGIN = 0.03
 STRAIN_REFERENCE_I = 0.05
+#: dense flow: the kinetic (streaming) part of P_yy is at most this fraction of P_yy (kinetic_fraction)
+KINETIC_MAX = 0.1
+DENSE_CRITERION = f"kinetic part of P_yy <= {KINETIC_MAX:g} P_yy"
+#: a finite-size cell discards this many times ``strain_start``: its start transient lasts longer (quick's grains at
+#: I = 0.46: the dilation from the compressed packing overshoots to phi = 0.39-0.45 and phi settles after a strain of
+#: 4-6 in the doubled cell, ~1 in the normal one; at I = 0.1 neither overshoots)
+FINITE_SIZE_START = 5.0
 
 
 @dataclass(frozen=True)
@@ -78,24 +90,45 @@ class CalibrationPlan:
     dt: float
     n_grains: int
     points: tuple[ShearPoint, ...]
+    finite_size: tuple[int, ...] = ()  # the points with a doubled cell (calibration.finite_size)
 
     @property
     def seeds(self) -> tuple[int, ...]:
         return self.config.calibration.seeds
 
+    @property
+    def doubled_config(self) -> Config:
+        """The config of the finite-size cells: the calibration's width doubled."""
+        cal = self.config.calibration
+        return dataclasses.replace(self.config, calibration=dataclasses.replace(cal, width=2 * cal.width))
+
+    @property
+    def n_doubled(self) -> int:
+        return _grains(self.doubled_config)
+
     def tasks(self) -> list[tuple[int, int]]:
-        """(point index, seed), longest first (smallest I), so that concurrent jobs finish together."""
+        """The fit's cells (point index, seed), longest first (smallest I), so that concurrent jobs finish together."""
         order = sorted(range(len(self.points)), key=lambda k: -self.steps(k))
         return [(k, s) for k in order for s in self.seeds]
 
-    def steps(self, k: int) -> int:
+    def cells(self) -> list[tuple[int, int, bool]]:
+        """Every cell (point index, seed, doubled): the fit's and the finite-size check's, longest first."""
+        cells = [(k, s, False) for k, s in self.tasks()] + [(k, self.seeds[0], True) for k in self.finite_size]
+        return sorted(cells, key=lambda c: -self.task_seconds(c[0], c[2]))
+
+    def point(self, k: int, doubled: bool = False) -> ShearPoint:
+        """Point ``k``, or its doubled cell's (the longer start, FINITE_SIZE_START)."""
         p = self.points[k]
+        return dataclasses.replace(p, start_steps=round(FINITE_SIZE_START * p.start_steps)) if doubled else p
+
+    def steps(self, k: int, doubled: bool = False) -> int:
+        p = self.point(k, doubled)
         return round(SQUEEZE_TIME / self.dt) + p.start_steps + p.measure_steps
 
     @staticmethod
-    def key(k: int, seed: int) -> str:
-        """state.json's key of point ``k`` and ``seed``."""
-        return f"I-{k}/seed-{seed}"
+    def key(k: int, seed: int, doubled: bool = False) -> str:
+        """state.json's key of point ``k`` and ``seed`` (or of its doubled cell)."""
+        return f"{layout.FINITE_SIZE}/I-{k}/seed-{seed}" if doubled else f"I-{k}/seed-{seed}"
 
     @property
     def compress_steps(self) -> int:
@@ -103,23 +136,30 @@ class CalibrationPlan:
         phi = self.config.material.phi / PRE_PACKING[self.config.grains.dimension]
         return round(min(COMPRESS_MAX, math.log(max(1.0, phi)) / COMPRESS_RATE) / self.dt)
 
-    def task_seconds(self, k: int) -> float:
-        """Expected LAMMPS wall time of one point and seed run alone at one rank (sizing.THROUGHPUT)."""
-        steps = self.steps(k) + self.compress_steps
-        return self.n_grains * steps / THROUGHPUT[self.config.grains.dimension]["shear"]
+    def task_seconds(self, k: int, doubled: bool = False) -> float:
+        """Expected LAMMPS wall time of one cell of point ``k`` run alone at one rank (sizing.THROUGHPUT)."""
+        steps = self.steps(k, doubled) + self.compress_steps
+        n = self.n_doubled if doubled else self.n_grains
+        return n * steps / THROUGHPUT[self.config.grains.dimension]["shear"]
+
+    def grain_steps(self) -> int:
+        """Grain-steps of every cell's shear (compression aside)."""
+        return sum((self.n_doubled if dbl else self.n_grains) * self.steps(k, dbl) for k, _, dbl in self.cells())
 
     def cost_seconds(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=()) -> float:
-        """Expected wall time of the calibration (or of the points left: ``done`` holds the complete keys)."""
-        work = [self.task_seconds(k) for k, seed in self.tasks() if self.key(k, seed) not in done]
+        """Expected wall time of the calibration (or of the cells left: ``done`` holds the complete keys)."""
+        work = [self.task_seconds(k, dbl) for k, seed, dbl in self.cells() if self.key(k, seed, dbl) not in done]
         return OVERHEAD + makespan(work, jobs, np_)
 
     def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=()) -> str:
         """One line: the calibration's size and its expected wall time on this machine."""
         rate = THROUGHPUT[self.config.grains.dimension]["shear"]
-        if all(self.key(k, seed) in done for k, seed in self.tasks()):
+        if all(self.key(*cell) in done for cell in self.cells()):
             return "cost: none, every point is complete"
         left = " of what is left" if done else ""
-        return (f"cost: {len(self.tasks())} cells of {self.n_grains} grains, each compressing ~"
+        doubled = (f" and {len(self.finite_size)} finite-size cell(s) of {self.n_doubled}" if self.finite_size
+                   else "")
+        return (f"cost: {len(self.tasks())} cells of {self.n_grains} grains{doubled}, each compressing ~"
                 f"{count(self.compress_steps)} steps first; about {duration_text(self.cost_seconds(jobs, np_, done))}"
                 f"{left} with {jobs} job(s) x {np_} rank(s) (one cell alone at one rank: {rate / 1e6:.2g} M "
                 f"grain-steps/s; two at once {CONTENTION:g}x slower each; bench/RESULTS.md)")
@@ -127,8 +167,9 @@ class CalibrationPlan:
     def summary(self, out) -> str:
         """One line: what the calibration measures, and where."""
         c = self.config.calibration
+        doubled = f" (+ {len(self.finite_size)} cell(s) twice as wide)" if self.finite_size else ""
         return (f"dem calibrate: '{self.config.name}' grains, {len(self.points)} inertial numbers in [{c.I_min:g}, "
-                f"{c.I_max:g}] x {len(c.seeds)} seed(s), {self.n_grains} grains at p = {self.config.p_w:g}, "
+                f"{c.I_max:g}] x {len(c.seeds)} seed(s){doubled}, {self.n_grains} grains at p = {self.config.p_w:g}, "
                 f"{self.as_dict()['total_steps']:.3g} steps -> {out}")
 
     def as_dict(self) -> dict:
@@ -139,19 +180,27 @@ class CalibrationPlan:
                 "strain_max": cal.strain_max,
                 "points": [{"I": p.I, "rate": p.rate, "start_steps": p.start_steps, "measure_steps": p.measure_steps,
                             "sample_steps": p.sample} for p in self.points],
-                "total_steps": sum(self.steps(k) for k in range(len(self.points))) * len(cal.seeds),
+                "total_steps": sum(self.steps(k, dbl) for k, _, dbl in self.cells()),
+                "finite_size": {"I": [self.points[k].I for k in self.finite_size], "points": list(self.finite_size),
+                                "seed": self.seeds[0], "width": 2 * cal.width, "n_grains": self.n_doubled,
+                                "start_steps": [self.point(k, True).start_steps for k in self.finite_size]},
                 "block": f"{BLOCK_TAU:g} integrated autocorrelation times (the longer of mu's and phi's), at least "
                          f"{MIN_BLOCKS} blocks",
                 "checks": f"strain >= {cal.strain:g}; drift of mu and phi between halves < {DRIFT_Z:g} s.e.; "
                           f"|<P_yy> - p| < {PRESSURE_Z:g} s.e.; velocity profile within {HOMOGENEITY_TOL:g} of linear; "
-                          "blocks longer than the autocorrelation time",
+                          f"blocks longer than the autocorrelation time; dense: {DENSE_CRITERION}",
                 "I_convention": "dem: I = gamma_dot d/sqrt(p/rho_p), gamma_dot = |du/dy|"}
 
 
-def plan_calibration(cfg: Config) -> CalibrationPlan:
-    cal, dim, dt = cfg.calibration, cfg.grains.dimension, cfg.time_step
+def _grains(cfg: Config) -> int:
+    """Grains of a calibration cell of the config's width (square in 2D, cubic in 3D) at sizing.PACKING."""
+    cal, dim = cfg.calibration, cfg.grains.dimension
     lz = cal.width if dim == 3 else 1.0
-    n = round(PACKING[dim] * cal.width**2 * lz / mean_grain_volume(cfg.grains.polydispersity, dim))
+    return round(PACKING[dim] * cal.width**2 * lz / mean_grain_volume(cfg.grains.polydispersity, dim))
+
+
+def plan_calibration(cfg: Config) -> CalibrationPlan:
+    cal, dt = cfg.calibration, cfg.time_step
     points = []
     strain_max = cal.strain if cal.strain_max is None else cal.strain_max
     for I in cal.inertial_numbers:
@@ -163,7 +212,8 @@ def plan_calibration(cfg: Config) -> CalibrationPlan:
         measure = math.ceil(strain * (1 + STRAIN_MARGIN) * per_strain / profile) * profile
         start = math.ceil(cal.strain_start * per_strain)
         points.append(ShearPoint(float(I), rate, dt, start, measure, sample, profile))
-    return CalibrationPlan(cfg, dt, n, tuple(points))
+    doubled = tuple(min(range(len(points)), key=lambda k: abs(math.log(points[k].I / I))) for I in cal.finite_size)
+    return CalibrationPlan(cfg, dt, _grains(cfg), tuple(points), doubled)
 
 
 # --- analysis of one point and seed ------------------------------------------------------------------
@@ -175,7 +225,21 @@ def _samples(folder: Path) -> pd.DataFrame:
     ly = 0.5 * (s.ly.to_numpy()[1:] + s.ly.to_numpy()[:-1])
     out = s.iloc[1:].reset_index(drop=True)
     return pd.DataFrame({"strain": np.cumsum(dxy / ly), "rate": dxy / ly / np.diff(s.t.to_numpy()),
-                         "tau": -out.p_xy, "p": out.p_yy, "phi": out.phi})
+                         "tau": -out.p_xy, "p": out.p_yy, "p_kin": out.p_yy_kin, "phi": out.phi})
+
+
+def kinetic_fraction(samples: pd.DataFrame) -> float:
+    """<kinetic part of P_yy>/<P_yy> over the measured window: the dense-flow indicator (dense if at most
+    KINETIC_MAX).
+
+    mu(I) is the law of dense flow, where the stress is carried by enduring contacts (the contact virial) and
+    the grains' agitation carries little; as I grows the cell turns into a sheared granular gas whose stress is
+    the streaming part n T of kinetic theory plus brief collisions, which a local mu(I) does not describe.  The
+    kinetic part of the measured P_yy is exact in the cell (``compute pressure ... ke`` on the velocities
+    relative to the streaming profile: the same split as p itself) and needs neither a fitted quantity (phi
+    against phi_max) nor a contact criterion (a coordination number).  KINETIC_MAX = 0.1: at least 90 % of the
+    normal stress passes through contacts."""
+    return float(samples.p_kin.mean() / samples.p.mean())
 
 
 def _profile_deviation(folder: Path, rate: float, ly: float) -> float:
@@ -217,9 +281,11 @@ def analyse(folder: Path, cfg: Config, point: ShearPoint, seed: int) -> tuple[di
               "p_mean": p, "p_err": p_err, "pressure_ok": abs(p - cfg.p_w) < PRESSURE_Z * p_err,
               "profile_deviation": deviation, "homogeneous_ok": deviation < HOMOGENEITY_TOL,
               "tau_int_strain": tau_int * cfg.calibration.sample, "blocks": nb,
-              "block_strain": length * cfg.calibration.sample}
+              "block_strain": length * cfg.calibration.sample, "kinetic_fraction": kinetic_fraction(s)}
     checks["blocks_ok"] = checks["block_strain"] >= checks["tau_int_strain"]
-    checks["passed"] = all(checks[k] for k in ("strain_ok", "drift_ok", "pressure_ok", "homogeneous_ok", "blocks_ok"))
+    checks["dense_ok"] = checks["kinetic_fraction"] <= KINETIC_MAX
+    checks["passed"] = all(checks[k] for k in ("strain_ok", "drift_ok", "pressure_ok", "homogeneous_ok", "blocks_ok",
+                                               "dense_ok"))
     row = {"I": I, "I_err": I_err, "mu": mu, "mu_err": mu_err, "phi": phi, "phi_err": phi_err, "p": p,
            "strain": strain, "seed": seed}
     return row, blocks.assign(seed=seed), checks
@@ -234,17 +300,28 @@ def run_cell(out: str, k: int, seed: int, np_: int, launcher: str | None, progre
     """The executor's task: the plane-shear cell of point ``k`` and ``seed`` of the calibration folder ``out`` (its
     plan rebuilt from the stored config); a complete cell is re-analysed from its stored series (the fit uses the
     current analysis).  Its entry in state.json is written under the folder's lock."""
-    out = Path(out)
+    return _run_cell(Path(out), k, seed, False, np_, launcher, progress, position)
+
+
+def run_finite_size_cell(out: str, k: int, seed: int, np_: int, launcher: str | None, progress: bool,
+                         position: int) -> Outcome:
+    """The executor's task: as ``run_cell``, the cell twice as wide of the finite-size check."""
+    return _run_cell(Path(out), k, seed, True, np_, launcher, progress, position)
+
+
+def _run_cell(out: Path, k: int, seed: int, doubled: bool, np_: int, launcher: str | None, progress: bool,
+              position: int) -> Outcome:
     plan = plan_calibration(parse((out / layout.CONFIG_TOML).read_text()))
-    state_path, key, d = out / layout.CALIBRATION_STATE, plan.key(k, seed), layout.point_dir(out, k, seed)
-    point = plan.points[k]
+    cfg, n = (plan.doubled_config, plan.n_doubled) if doubled else (plan.config, plan.n_grains)
+    state_path, key = out / layout.CALIBRATION_STATE, plan.key(k, seed, doubled)
+    d, point = layout.point_dir(out / layout.FINITE_SIZE if doubled else out, k, seed), plan.point(k, doubled)
     old = json.loads(state_path.read_text())["points"].get(key, {})
 
     def store(entry):
         staging.update_json(state_path, lambda doc: doc["points"].update({key: entry}))
 
     def analysed(entry):
-        row, blocks, checks = analyse(d, plan.config, point, seed)
+        row, blocks, checks = analyse(d, cfg, point, seed)
         blocks.assign(point=k)[list(layout.BLOCK_COLUMNS)].to_csv(d / layout.BLOCKS_CSV, index=False)
         return {**entry, "row": row, "checks": checks}
 
@@ -254,12 +331,13 @@ def run_cell(out: str, k: int, seed: int, np_: int, launcher: str | None, progre
     if d.exists():
         shutil.rmtree(d)
     d.mkdir(parents=True)
-    (d / layout.SHEAR_IN).write_text(shear_script(plan.config, point, plan.n_grains, seed))
+    (d / layout.SHEAR_IN).write_text(shear_script(cfg, point, n, seed))
     store({"status": "running", "I_target": point.I, "started": _now()})
     entry = {"status": "interrupted", "I_target": point.I, "message": "continue with --resume"}
     try:
-        info = _Lammps(np_, launcher, progress).run(layout.SHEAR_IN, d, plan, plan.steps(k), 0,
-                                                    f"I={point.I:.3g} seed {seed}", position=position)
+        desc = f"I={point.I:.3g} seed {seed}" + (" (2x wide)" if doubled else "")
+        info = _Lammps(np_, launcher, progress).run(layout.SHEAR_IN, d, plan, plan.steps(k, doubled), 0, desc,
+                                                    position=position)
         entry = analysed({"status": "complete", "I_target": point.I, "wall_time": info["wall_time"],
                           "steps": info["last_step"]})
     except RunError as exc:
@@ -269,6 +347,40 @@ def run_cell(out: str, k: int, seed: int, np_: int, launcher: str | None, progre
     finally:
         store(entry)
     return Outcome(entry["status"], entry.get("message", ""))
+
+
+def not_dense(plan: CalibrationPlan, state: dict) -> list[dict]:
+    """calibration.json's ``not_dense``: every cell of the fit that is not dense flow, with its indicator and
+    the threshold (``kinetic_fraction``)."""
+    out = []
+    for k, seed in sorted(plan.tasks()):
+        key = plan.key(k, seed)
+        entry = state["points"][key]
+        if not entry["checks"]["dense_ok"]:
+            fraction = entry["checks"]["kinetic_fraction"]
+            out.append({"key": key, "I_target": plan.points[k].I, "I": entry["row"]["I"], "kinetic_fraction": fraction,
+                        "threshold": KINETIC_MAX,
+                        "reason": f"kinetic part of P_yy {fraction:.3g} P_yy > {KINETIC_MAX:g} P_yy: not dense flow"})
+    return out
+
+
+def finite_size_record(plan: CalibrationPlan, state: dict) -> dict:
+    """calibration.json's ``finite_size``: at each point of the check, mu and phi (with their block errors) of the
+    first seed's cell and of its doubled cell, and their differences in units of the combined error, z =
+    (doubled - normal)/hypot(err_normal, err_doubled)."""
+    seed, points = plan.seeds[0], []
+    for k in plan.finite_size:
+        record = {}
+        for name, doubled in (("normal", False), ("doubled", True)):
+            key = plan.key(k, seed, doubled)
+            entry = state["points"][key]
+            record[name] = {"key": key, "passed": entry["checks"]["passed"],
+                            **{q: entry["row"][q] for q in ("I", "I_err", "mu", "mu_err", "phi", "phi_err")}}
+        a, b = record["normal"], record["doubled"]
+        points.append({"I_target": plan.points[k].I, **record,
+                       **{f"z_{q}": (b[q] - a[q]) / math.hypot(a[f"{q}_err"], b[f"{q}_err"]) for q in ("mu", "phi")}})
+    return {"seed": seed, "width": [plan.config.calibration.width, plan.doubled_config.calibration.width],
+            "n_grains": [plan.n_grains, plan.n_doubled], "points": points}
 
 
 def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Calibration:
@@ -290,8 +402,8 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
                           "analysed_and_fitted_by": provenance()["git"]},
            "p": plan.config.p_w, "rms_mu": cal.rms_mu,
            "points": cal.points.assign(n_seeds=passed.groupby("point").size().to_numpy()).to_dict("list"),
-           "excluded": excluded, "protocol": plan.as_dict(),
-           "cost": {"lammps_cpu_seconds": wall, "grain_steps": plan.n_grains * plan.as_dict()["total_steps"]},
+           "excluded": excluded, "not_dense": not_dense(plan, state), "finite_size": finite_size_record(plan, state),
+           "protocol": plan.as_dict(), "cost": {"lammps_cpu_seconds": wall, "grain_steps": plan.grain_steps()},
            "law": cal.as_dict()["law"]}
     staging.write_json(out / layout.CALIBRATION_JSON, doc)
     return cal
@@ -372,11 +484,12 @@ def check_calibration(cfg: Config, out: str | Path, jobs: int = DEFAULT_JOBS, np
 
 
 def completed_points(out: str | Path, plan: CalibrationPlan) -> tuple[list[str], list[str]]:
-    """The keys of a calibration folder's complete points (each seed) and of those left, in run order."""
+    """The keys of a calibration folder's complete cells (each point and seed, and the finite-size cells) and of
+    those left, in run order."""
     points = json.loads((Path(out) / layout.CALIBRATION_STATE).read_text()).get("points", {})
     done, left = [], []
-    for k, seed in plan.tasks():
-        key = plan.key(k, seed)
+    for cell in plan.cells():
+        key = plan.key(*cell)
         (done if points.get(key, {}).get("status") == "complete" else left).append(key)
     return done, left
 
@@ -411,8 +524,9 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
                                                                | {"points": doc.get("points", {})}))
 
     save()
-    tasks = [Task(plan.key(k, seed), run_cell, (str(out), k, seed, np, launcher, progress, i % jobs),
-                  cost=plan.task_seconds(k), ranks=np) for i, (k, seed) in enumerate(plan.tasks())]
+    tasks = [Task(plan.key(k, seed, doubled), run_finite_size_cell if doubled else run_cell,
+                  (str(out), k, seed, np, launcher, progress, i % jobs), cost=plan.task_seconds(k, doubled), ranks=np)
+             for i, (k, seed, doubled) in enumerate(plan.cells())]
     in_main = threading.current_thread() is threading.main_thread()
     previous = signal.getsignal(signal.SIGTERM)
     if in_main:
@@ -428,9 +542,11 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
             raise (RunError if o.status == "failed" else Interrupted)(f"{key}: {o.message}")
         cal = _fit_and_write(plan, out, state)
         state["status"] = "complete"
-        n_out = sum(not e["checks"]["passed"] for e in state["points"].values())
+        checks = [state["points"][plan.key(k, seed)]["checks"] for k, seed in plan.tasks()]
+        n_out, n_gas = sum(not c["passed"] for c in checks), sum(not c["dense_ok"] for c in checks)
         state["message"] = (f"mu_s = {cal.mu_s:.4g}, mu_d = {cal.mu_d:.4g}, I0 = {cal.I0_dem:.4g}"
-                            + (f"; {n_out} point(s) failed a check and were left out" if n_out else ""))
+                            + (f"; {n_out} point(s) failed a check and were left out" if n_out else "")
+                            + (f" ({n_gas} not dense)" if n_gas else ""))
     except RunError as exc:
         state["status"], state["message"] = "failed", str(exc)
     except (KeyboardInterrupt, Interrupted):

@@ -26,6 +26,7 @@ follows from them) are required, every other key is optional; unknown keys are e
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 import tomllib
 from dataclasses import dataclass, field
@@ -42,6 +43,7 @@ MIN_WIDTH = 8.0  # d: narrower periodic boxes order the packing and correlate th
 MIN_WIDTH_Z = 4.0
 MIN_DEPTH = 4.0
 MIN_CALIBRATION_STRAIN = 5.0  # each calibration point is measured over at least this strain
+FINITE_SIZE_RTOL = 1e-4  # a calibration.finite_size entry names the point within this relative difference of its I
 KAPPA_MIN = 1e4  # rigid limit: overlap under p_w d at most 1e-4 d
 
 
@@ -180,7 +182,9 @@ class Calibration:
     that the rigidity is the Stokes scene's kappa: ``points`` inertial numbers log-spaced in [I_min,
     I_max] (DEM convention), or the increasing list ``I`` (then I_min, I_max and points follow from it),
     each seed an independent cell of width ``width`` d (square in 2D, cubic in 3D), sheared
-    ``strain_start`` (discarded) then ``strain`` (measured), sampled every ``sample``."""
+    ``strain_start`` (discarded) then ``strain`` (measured), sampled every ``sample``.  ``finite_size``: some
+    of the points' inertial numbers, at each of which one more cell of twice the width (first seed) checks
+    the cell size (dem.calibrate; not fitted)."""
 
     I_min: float = 1e-2
     I_max: float = 0.3
@@ -193,6 +197,7 @@ class Calibration:
     sample: float = 0.02
     profile: float = 0.25
     I: tuple[float, ...] | None = None
+    finite_size: tuple[float, ...] = ()
 
     def __post_init__(self):
         if self.I is not None:
@@ -218,6 +223,14 @@ class Calibration:
         _positive("calibration.sample", self.sample)
         require(finite(self.profile) and self.sample <= self.profile <= self.strain, "calibration.profile",
                 f"in [sample = {self.sample:g}, strain = {self.strain:g}]", self.profile)
+        require(isinstance(self.finite_size, list | tuple), "calibration.finite_size", "a list of inertial numbers",
+                self.finite_size)
+        object.__setattr__(self, "finite_size", tuple(self.finite_size))
+        points = self.inertial_numbers
+        require(all(finite(v) and any(math.isclose(v, I, rel_tol=FINITE_SIZE_RTOL) for I in points)
+                    for v in self.finite_size) and len(set(self.finite_size)) == len(self.finite_size),
+                "calibration.finite_size", "distinct inertial numbers among the points' "
+                f"({', '.join(f'{I:.6g}' for I in points)})", list(self.finite_size))
 
     @property
     def inertial_numbers(self) -> tuple[float, ...]:

@@ -17,6 +17,7 @@ Calibration folder (``granstokes dem calibrate``)::
     DIR/state.json                      status of every point and seed, messages, timings
     DIR/I-K/seed-S/                     in.lammps, log.lammps, series.csv (``SHEAR_SERIES_COLUMNS``), profile.txt
                                         (u_x in bins across L_y), blocks.csv (``BLOCK_COLUMNS``: block means)
+    DIR/finite-size/I-K/seed-S/         the same files of a cell twice as wide (``FINITE_SIZE``: the finite-size check)
 
 Atom types: ``BED`` grains (the coarse-grained material), ``BASE`` (frozen rough base), ``PLATE``
 (one rigid body).  Dump columns: ``ATOM_COLUMNS`` (atoms.dump, sorted by id) and ``CONTACT_COLUMNS``
@@ -42,6 +43,7 @@ PLATE_CSV, PROFILES_CSV, ATOMS, CONTACTS, LOG = "plate.csv", "profiles.csv", "at
 SEGMENTS, RESTART_DIR = "segments", "restart"
 CALIBRATION_JSON, POINTS_CSV, CALIBRATION_STATE = "calibration.json", "points.csv", "state.json"
 SHEAR_SERIES_CSV, SHEAR_PROFILE_TXT, SHEAR_IN, BLOCKS_CSV = "series.csv", "profile.txt", "in.lammps", "blocks.csv"
+FINITE_SIZE = "finite-size"
 
 # --- columns -------------------------------------------------------------------------------------
 PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y", "u_c", "n_c")
@@ -49,9 +51,9 @@ ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "radius")
 CONTACT_COLUMNS = ("id1", "id2", "dist", "dx", "dy", "dz", "fn", "ft_x", "ft_y", "ft_z")
 GRAIN_COLUMNS = ("id", "type", "radius", "mass")
 #: calibration: points.csv's columns (its contract with compare), and a point's time series (stresses compressive
-#: positive)
+#: positive; p_yy_kin the kinetic part of p_yy)
 POINT_COLUMNS = ("I", "I_err", "mu", "mu_err", "phi", "phi_err", "p", "strain", "seed")
-SHEAR_SERIES_COLUMNS = ("step", "t", "lx", "ly", "xy", "p_xx", "p_yy", "p_xy", "phi", "T")
+SHEAR_SERIES_COLUMNS = ("step", "t", "lx", "ly", "xy", "p_xx", "p_yy", "p_xy", "p_yy_kin", "phi", "T")
 BLOCK_COLUMNS = ("block", "tau", "p", "phi", "rate", "seed", "point")
 
 #: profile bin height in d (LAMMPS in-run chunk averages, profiles.csv)
