@@ -59,7 +59,8 @@ from .contact import Contact, mean_grain_volume
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .runner import Interrupted, RunError, _Lammps, stop_all_lammps
 from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, shear_script
-from .sizing import CONTENTION, OVERHEAD, PACKING, THROUGHPUT, count, duration_text, makespan
+from .sizing import OVERHEAD, PACKING, count, duration_text, makespan
+from .throughput import Throughput, measured
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)
 COMMAND = "dem calibrate"
@@ -136,33 +137,38 @@ class CalibrationPlan:
         phi = self.config.material.phi / PRE_PACKING[self.config.grains.dimension]
         return round(min(COMPRESS_MAX, math.log(max(1.0, phi)) / COMPRESS_RATE) / self.dt)
 
-    def task_seconds(self, k: int, doubled: bool = False) -> float:
-        """Expected LAMMPS wall time of one cell of point ``k`` run alone at one rank (sizing.THROUGHPUT)."""
+    def task_seconds(self, k: int, doubled: bool = False, speed: Throughput | None = None) -> float:
+        """Expected LAMMPS wall time of one cell of point ``k`` run alone at one rank at ``speed`` (default: this
+        machine's, dem.throughput.measured)."""
         steps = self.steps(k, doubled) + self.compress_steps
         n = self.n_doubled if doubled else self.n_grains
-        return n * steps / THROUGHPUT[self.config.grains.dimension]["shear"]
+        return n * steps / (speed or measured()).rate(self.config.grains.dimension, "shear")
 
     def grain_steps(self) -> int:
         """Grain-steps of every cell's shear (compression aside)."""
         return sum((self.n_doubled if dbl else self.n_grains) * self.steps(k, dbl) for k, _, dbl in self.cells())
 
-    def cost_seconds(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=()) -> float:
+    def cost_seconds(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
+                     speed: Throughput | None = None) -> float:
         """Expected wall time of the calibration (or of the cells left: ``done`` holds the complete keys)."""
-        work = [self.task_seconds(k, dbl) for k, seed, dbl in self.cells() if self.key(k, seed, dbl) not in done]
-        return OVERHEAD + makespan(work, jobs, np_)
+        speed = speed or measured()
+        work = [self.task_seconds(k, dbl, speed) for k, seed, dbl in self.cells()
+                if self.key(k, seed, dbl) not in done]
+        return OVERHEAD + makespan(work, jobs, np_, contention=speed.contention)
 
-    def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=()) -> str:
+    def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
+                      speed: Throughput | None = None) -> str:
         """One line: the calibration's size and its expected wall time on this machine."""
-        rate = THROUGHPUT[self.config.grains.dimension]["shear"]
+        speed = speed or measured()
         if all(self.key(*cell) in done for cell in self.cells()):
             return "cost: none, every point is complete"
         left = " of what is left" if done else ""
         doubled = (f" and {len(self.finite_size)} finite-size cell(s) of {self.n_doubled}" if self.finite_size
                    else "")
         return (f"cost: {len(self.tasks())} cells of {self.n_grains} grains{doubled}, each compressing ~"
-                f"{count(self.compress_steps)} steps first; about {duration_text(self.cost_seconds(jobs, np_, done))}"
-                f"{left} with {jobs} job(s) x {np_} rank(s) (one cell alone at one rank: {rate / 1e6:.2g} M "
-                f"grain-steps/s; two at once {CONTENTION:g}x slower each; bench/RESULTS.md)")
+                f"{count(self.compress_steps)} steps first; about "
+                f"{duration_text(self.cost_seconds(jobs, np_, done, speed))}{left} with {jobs} job(s) x {np_} rank(s) "
+                f"(one process alone at one rank: {speed.describe(self.config.grains.dimension)})")
 
     def summary(self, out) -> str:
         """One line: what the calibration measures, and where."""

@@ -17,6 +17,7 @@ from granstokes.dem.calibrate import (
     plan_calibration,
 )
 from granstokes.dem.sizing import OVERHEAD
+from granstokes.dem.throughput import measured
 
 from granstokes.cli import main as granstokes_main
 
@@ -81,7 +82,7 @@ def test_finite_size_cells_are_planned_costed_and_resumed_but_not_fitted(tmp_pat
     assert plan.point(3, True).measure_steps == plan.points[3].measure_steps
     work = [plan.task_seconds(k, dbl) for k, _, dbl in plan.cells()]
     assert work == sorted(work, reverse=True) and plan.task_seconds(3, True) > 4 * plan.task_seconds(3)
-    assert plan.cost_seconds(jobs=1) == pytest.approx(OVERHEAD + sum(work))
+    assert plan.cost_seconds(jobs=1, speed=measured()) == pytest.approx(OVERHEAD + sum(work))
     assert "and 1 finite-size cell(s) of" in plan.cost_estimate()
     assert plan.as_dict()["finite_size"]["I"] == [pytest.approx(0.3)]
     key = plan.key(3, 1, True)
