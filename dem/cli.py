@@ -54,6 +54,23 @@ def _resume_line(done: list[str], left: list[str], what: str) -> str:
             f"left: {', '.join(left) or 'none'}")
 
 
+def _speed():
+    """This machine's LAMMPS throughput for the cost estimates: cached, or probed now (a few seconds, said)."""
+    from .throughput import measured
+
+    return measured(announce=lambda line: print(f"  {line}", file=sys.stderr))
+
+
+def _cmd_probe(args) -> int:
+    from .throughput import cache_path, measured
+
+    speed = measured(renew=True)
+    for dim in (2, 3):
+        print(f"{dim}D: {speed.describe(dim)}")
+    print(f"cached in {cache_path()}")
+    return 0
+
+
 def _oversubscribed(np_: int, jobs: int) -> None:
     cores = os.cpu_count() or 1
     if np_ * jobs > cores:
@@ -74,6 +91,7 @@ def _cmd_run(args) -> int:
     if args.resume:
         done, left = completed_stages(runner.out, runner.plan)
         print(f"  {_resume_line(done, left, 'stages')}", file=sys.stderr)
+    _speed()
     print(f"  {runner.plan.cost_estimate(runner.jobs, args.np, done)}", file=sys.stderr)
     _oversubscribed(args.np, runner.jobs)
     if args.dry_run:
@@ -97,6 +115,7 @@ def _cmd_calibrate(args) -> int:
     if args.resume:
         done, left = completed_points(args.out, plan)
         print(f"  {_resume_line(done, left, 'points')}", file=sys.stderr)
+    _speed()
     print(f"  {plan.cost_estimate(args.jobs, args.np, done)}", file=sys.stderr)
     _oversubscribed(args.np, args.jobs)
     if args.dry_run:
@@ -130,7 +149,7 @@ def register(subparsers) -> None:
                                 description="LAMMPS DEM scenes (plate over a granular bed) and the plane-shear "
                                             "calibration of their grains' mu(I).")
     dem.set_defaults(func=lambda args: dem.print_help() or 0)
-    sub = dem.add_subparsers(dest="dem_command", metavar="{run,calibrate}")
+    sub = dem.add_subparsers(dest="dem_command", metavar="{run,calibrate,probe}")
     r = sub.add_parser("run", help="run a scene from a TOML config or a preset",
                        description="Run a DEM scene: prepare the bed(s), then each drive; outputs in --out.")
     _common(r, "run", "a scene")
@@ -152,3 +171,7 @@ def register(subparsers) -> None:
                    help=f"MPI ranks per point (default {DEFAULT_NP})")
     c.add_argument("--quiet", action="store_true", help=QUIET_HELP)
     c.set_defaults(func=_cmd_calibrate)
+    p = sub.add_parser("probe", help="measure LAMMPS's speed on this machine for the cost estimates (a few seconds)",
+                       description="Time LAMMPS's chute benchmark alone and two at once, and cache the rates the "
+                                   "cost estimates use (dem/throughput.py); run it again when the machine changes.")
+    p.set_defaults(func=_cmd_probe)

@@ -24,20 +24,12 @@ from granstokes.lib.validate import require
 from .config import Config, Drive
 from .contact import grain_volume, mean_grain_volume
 from .layout import stage_key
+from .throughput import Throughput, measured
 
 #: packing fractions used to turn a bed depth into a grain count (random close packing, loose side)
 PACKING = {2: 0.80, 3: 0.60}
 #: LAMMPS counts the steps of a run in a 32-bit integer ("Invalid run command N value" above it)
 MAX_STEPS = 2**31 - 1
-#: LAMMPS throughput on this 2-core machine of one process alone at one rank, in bed grains x steps per
-#: second, per dimension and phase: the preparation (free fall, settling, relaxation), the drives (with
-#: their outputs) and the calibration's shear cells (with their compression); fitted to the wall times
-#: that run.json and state.json record for the shipped presets (bench/RESULTS.md, "Cost estimates")
-THROUGHPUT = {2: {"prepare": 10.5e6, "drive": 6.2e6, "shear": 10.0e6},
-              3: {"prepare": 6.2e6, "drive": 3.65e6, "shear": 7.0e6}}
-#: wall time of each of two LAMMPS processes running at once over one running alone, on this machine as
-#: other sessions share it: 1.0-1.1 when they are idle, 2 when they keep a core busy (bench/RESULTS.md)
-CONTENTION = 1.6
 #: preparation's expected settling and relaxation after a grain's fall from the top of the box, in time units
 #: sqrt(d/g): the mean over the beds of the shipped presets' seeds (7.8 to 16.4, bench/dem_prepare.py; each
 #: stage ends on its own convergence, capped by prepare.settle_max and relax_max)
@@ -139,38 +131,39 @@ class Plan:
         expected = fall + round(min(SETTLE_RELAX_EXPECTED, c.settle_max + c.relax_max) / self.dt)
         return expected, self.settle_steps_max + round(c.relax_max / self.dt)
 
-    def stage_seconds(self, key: str) -> float:
-        """Expected LAMMPS wall time of one stage (dem.layout.stage_key) run alone at one rank."""
-        rate = THROUGHPUT[self.dimension]
+    def stage_seconds(self, key: str, speed: Throughput | None = None) -> float:
+        """Expected LAMMPS wall time of one stage (dem.layout.stage_key) run alone at one rank, at ``speed``
+        (default: this machine's, dem.throughput.measured)."""
+        speed = speed or measured()
         drive = key.partition("/")[2]
         if not drive:
-            return self.n_grains * self.prepare_steps[0] / rate["prepare"]
+            return self.n_grains * self.prepare_steps[0] / speed.rate(self.dimension, "prepare")
         steps = next(d.steps for d in self.drives if d.drive.name == drive)
-        return self.n_grains * steps / rate["drive"]
+        return self.n_grains * steps / speed.rate(self.dimension, "drive")
 
     def stage_keys(self, seed: int) -> list[str]:
         """run.json's keys of a seed's stages in the order they run: the preparation, then each drive."""
         return [stage_key(seed)] + [stage_key(seed, d.drive.name) for d in self.drives]
 
-    def cost_seconds(self, jobs: int = 1, np_: int = 1, done=()) -> float:
+    def cost_seconds(self, jobs: int = 1, np_: int = 1, done=(), speed: Throughput | None = None) -> float:
         """Expected wall time of the run (or of what is left: ``done`` holds the complete stages' keys):
         each seed's bed is one unit of work, ``jobs`` of them at a time."""
-        beds = [sum(self.stage_seconds(k) for k in self.stage_keys(seed) if k not in done)
+        speed = speed or measured()
+        beds = [sum(self.stage_seconds(k, speed) for k in self.stage_keys(seed) if k not in done)
                 for seed in self.config.seeds]
-        return OVERHEAD + makespan([b for b in beds if b > 0], jobs, np_)
+        return OVERHEAD + makespan([b for b in beds if b > 0], jobs, np_, contention=speed.contention)
 
-    def cost_estimate(self, jobs: int = 1, np_: int = 1, done=()) -> str:
+    def cost_estimate(self, jobs: int = 1, np_: int = 1, done=(), speed: Throughput | None = None) -> str:
         """One line: the run's size and its expected wall time on this machine (``cost_seconds``)."""
-        rate = THROUGHPUT[self.dimension]
+        speed = speed or measured()
         expected, most = self.prepare_steps
         if all(k in done for seed in self.config.seeds for k in self.stage_keys(seed)):
             return "cost: none, every stage is complete"
         left = " of what is left" if done else ""
         return (f"cost: {self.n_grains} grains x {len(self.config.seeds)} bed(s), each preparing ~{count(expected)} "
                 f"steps (at most {count(most)}) and driving {count(sum(d.steps for d in self.drives))}; about "
-                f"{duration_text(self.cost_seconds(jobs, np_, done))}{left} with {jobs} job(s) x {np_} rank(s) "
-                f"(one process alone at one rank: {rate['prepare'] / 1e6:.2g} M grain-steps/s preparing, "
-                f"{rate['drive'] / 1e6:.2g} M driving; two at once {CONTENTION:g}x slower each; bench/RESULTS.md)")
+                f"{duration_text(self.cost_seconds(jobs, np_, done, speed))}{left} with {jobs} job(s) x {np_} rank(s) "
+                f"(one process alone at one rank: {speed.describe(self.dimension)})")
 
     def as_dict(self) -> dict:
         return {"depth": self.depth, "n_grains_target": self.n_grains, "width": self.config.box.width,
@@ -244,23 +237,24 @@ def plan(cfg: Config) -> Plan:
     return Plan(cfg, float(depth), n_grains, dt, intervals, tuple(drives), tuple(reasons))
 
 
-def slowdown(processes: int, np_: int = 1, cores: int | None = None) -> float:
+def slowdown(processes: int, np_: int = 1, cores: int | None = None, contention: float = 1.0) -> float:
     """Wall time of each of ``processes`` concurrent LAMMPS processes of ``np_`` ranks over that of one
-    process alone at one rank (ranks are not credited with a speed-up: THROUGHPUT is measured at one)."""
+    process alone at one rank (ranks are not credited with a speed-up: the rates are measured at one), each of
+    two or more sharing the cores ``contention`` times slower (dem.throughput)."""
     ranks = processes * np_
     cores = cores or os.cpu_count() or 1
-    shared = CONTENTION if min(ranks, cores) > 1 else 1.0
+    shared = contention if min(ranks, cores) > 1 else 1.0
     return shared * max(1.0, ranks / cores)
 
 
-def makespan(work, jobs: int, np_: int = 1, cores: int | None = None) -> float:
+def makespan(work, jobs: int, np_: int = 1, cores: int | None = None, contention: float = 1.0) -> float:
     """Wall time of units of work (each its seconds alone) taken in order by ``jobs`` workers, every
     running unit slowed by ``slowdown`` of how many run at once."""
     pending, running, elapsed = list(work), [], 0.0
     while pending or running:
         while pending and len(running) < jobs:
             running.append(pending.pop(0))
-        factor = slowdown(len(running), np_, cores)
+        factor = slowdown(len(running), np_, cores, contention)
         first = min(running)
         elapsed += first * factor
         running = [w - first for w in running if w > first]

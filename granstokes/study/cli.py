@@ -32,6 +32,9 @@ def _cmd_study(args) -> int:
     else:
         study, text = config.load(args.config, args.preset, args.set or ())
     check_folder(study, Path(args.out), args.resume)
+    from granstokes.dem.throughput import measured
+
+    measured(announce=lambda line: print(f"study: {line}", file=sys.stderr))
     if study.calibration_file is not None:
         material, source = material_table(study.calibration_file)[0], study.calibration_file
     else:  # the calibration runs first: the dry run sizes from the DEM preset's nominal material

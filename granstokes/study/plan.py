@@ -8,6 +8,7 @@ from pathlib import Path
 
 from granstokes.dem import config as dem_config
 from granstokes.dem.sizing import Plan, duration_text, makespan, plan
+from granstokes.dem.throughput import measured
 from granstokes.lib.toml_text import with_entries
 
 from .config import Study, rigidity
@@ -77,9 +78,11 @@ class StudyPlan:
         return out / RUNS / label
 
     def cost_seconds(self, jobs: int) -> float:
-        beds = [sum(r.plan.stage_seconds(k) for k in r.plan.stage_keys(seed)) for r in self.runs.values()
+        """Every bed, longest first over ``jobs`` slots, at this machine's speed (dem.throughput)."""
+        speed = measured()
+        beds = [sum(r.plan.stage_seconds(k, speed) for k in r.plan.stage_keys(seed)) for r in self.runs.values()
                 for seed in r.plan.config.seeds]
-        return makespan(sorted(beds, reverse=True), jobs)
+        return makespan(sorted(beds, reverse=True), jobs, contention=speed.contention)
 
     def lines(self, jobs: int) -> list[str]:
         """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole."""
