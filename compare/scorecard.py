@@ -215,10 +215,11 @@ def _material(base: Material, row) -> Material:
 
 
 def _linearised(model: SceneModel, material: Material, drive: Drive, times, a: DriveAnalysis,
-                replicates: pd.DataFrame) -> tuple[float, pd.DataFrame]:
+                replicates: pd.DataFrame, central_series: pd.DataFrame) -> tuple[float, pd.DataFrame]:
     """Linearised propagation J C J^T, C the replicates' covariance of the material's parameters and the
-    model's own, J by one-sided differences (a transient solve each): the standard deviation of t90 and
-    the 95 % band of the free response on the DEM's output times (t, lo, hi)."""
+    model's own, J by one-sided differences from the prediction's ``central_series`` (a transient solve per
+    parameter): the standard deviation of t90 and the 95 % band of the free response on the DEM's output times
+    (t, lo, hi)."""
     t = a.series.t.to_numpy()
     names = [*PARAMETERS, *([model.parameter] if model.parameter else [])]
     base = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
@@ -228,7 +229,7 @@ def _linearised(model: SceneModel, material: Material, drive: Drive, times, a: D
         series, _ = model.at(params).transient(_material(material, params), drive, times)
         return np.interp(t, series.t, series[a.response])
 
-    central = response(base)
+    central = np.interp(t, central_series.t, central_series[a.response])
     jac_series, jac_t90 = [], []
     for name in names:
         h = FD_STEP * abs(base[name])
@@ -329,7 +330,8 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                     continue
             times = pred.series.t.to_numpy()
             end_value = _final_quarter(pred.series, a)
-            t90_sd, bands[(a.label, model.key)] = _linearised(model, material, a.spec.drive, times, a, replicates)
+            t90_sd, bands[(a.label, model.key)] = _linearised(model, material, a.spec.drive, times, a, replicates,
+                                                              pred.series)
             for obs, measured in dem.items():
                 value = central.get(obs)
                 if value is None or not np.isfinite(value) or not np.isfinite(measured.value):
