@@ -2,11 +2,12 @@
 
     .venv/bin/python bench/dem_phase_rates.py [--out DIR]
 
-Runs, one process at a time on one rank: the throughput probe (dem.throughput.probe), one bed of each shipped
-scene preset (smoke, quick: 2D; spheres: 3D; ``--set seeds=[1]``) with ``granstokes dem run --jobs 1``, the
-calibration cells of the smoke grains (2D) and of a short 3D protocol with ``dem calibrate --jobs 1``, then the
-probe again.  A phase's rate is grains x steps / wall time of its stages (run.json, state.json: LAMMPS's own
-start-up included, as in a real run); its ratio is that over the mean of the two probes of its dimension.
+Runs, one process at a time on one rank: one bed of each shipped scene preset (smoke, quick: 2D; spheres: 3D;
+``--set seeds=[1]``) with ``granstokes dem run --jobs 1``, and the calibration cells of the smoke grains (2D) and
+of a short 3D protocol with ``dem calibrate --jobs 1``, each between two throughput probes of its dimension
+(dem.throughput.probe, alone).  A phase's rate is grains x steps / wall time of its stages (run.json,
+state.json: LAMMPS's own start-up included, as in a real run); its ratio is that over the mean of the probes
+around it, so that a machine whose load drifts during the bench still gives the ratio of one moment.
 Writes bench/dem_phase_rates.json and prints the rows for bench/RESULTS.md.
 """
 from __future__ import annotations
@@ -64,47 +65,51 @@ def shear_rate(name: str, sets: list, out: Path) -> dict:
     return {"grains": cp.n_grains, "shear": cp.n_grains * steps / sum(c["wall_time"] for c in cells)}
 
 
+def bracketed(dim: int, measure) -> dict:
+    """``measure()`` between two probes of dimension ``dim``: its rates and the probes' mean (``chute``)."""
+    before = throughput.probe((dim,), together=False).probe[str(dim)]
+    rates = measure()
+    after = throughput.probe((dim,), together=False).probe[str(dim)]
+    return {"dimension": dim, **rates, "chute": (before + after) / 2, "probes": [before, after]}
+
+
 def main() -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="scratch folder (default: a temporary one)")
     args = ap.parse_args()
     root = args.out or Path(tempfile.mkdtemp(prefix="dem-phase-rates-"))
     t0 = time.monotonic()
-    probes = [throughput.probe()]
-    phases = {name: {"dimension": dim, **scene_rates(name, root / name)} for name, dim in SCENES.items()}
-    shears = {name: {"dimension": dim, **shear_rate(name, sets, root / f"cal-{name}")}
+    phases = {name: bracketed(dim, lambda n=name: scene_rates(n, root / n)) for name, dim in SCENES.items()}
+    shears = {name: bracketed(dim, lambda n=name, s=sets: shear_rate(n, s, root / f"cal-{n}"))
               for name, (dim, sets) in CALIBRATIONS.items()}
-    probes.append(throughput.probe())
-    chute = {dim: statistics.mean(p.probe[str(dim)] for p in probes) for dim in (2, 3)}
     ratios = {}
     for dim in (2, 3):
         rows = [r for r in phases.values() if r["dimension"] == dim]
-        ratios[dim] = {ph: statistics.mean(r[ph] for r in rows) / chute[dim] for ph in ("prepare", "drive")}
-        shear = [r["shear"] for r in shears.values() if r["dimension"] == dim]
-        ratios[dim]["shear"] = statistics.mean(shear) / chute[dim]
-    res = {"machine": {"cpus": os.cpu_count(), "load_average": os.getloadavg()}, "probes": [p.probe for p in probes],
-           "chute": chute, "scenes": phases, "calibrations": shears, "ratios": ratios,
-           "seconds": time.monotonic() - t0}
+        ratios[dim] = {ph: statistics.mean(r[ph] / r["chute"] for r in rows) for ph in ("prepare", "drive")}
+        ratios[dim]["shear"] = statistics.mean(r["shear"] / r["chute"] for r in shears.values()
+                                               if r["dimension"] == dim)
+    res = {"machine": {"cpus": os.cpu_count(), "load_average": os.getloadavg()}, "scenes": phases,
+           "calibrations": shears, "ratios": ratios, "seconds": time.monotonic() - t0}
     (HERE / "dem_phase_rates.json").write_text(json.dumps(res, indent=2))
     print(markdown(res))
     return res
 
 
 def markdown(res: dict) -> str:
-    lines = ["| phase (scene) | dimension | grain-steps/s | ratio to the probe chute |", "|---|---|---|---|"]
+    lines = ["| phase (scene) | dimension | grain-steps/s | ratio to the probe chute (probes before, after) |",
+             "|---|---|---|---|"]
     for name, r in res["scenes"].items():
         for ph in ("prepare", "drive"):
-            lines.append(f"| {ph} ({name}) | {r['dimension']}D | {r[ph] / 1e6:.2f} M | "
-                         f"{r[ph] / res['chute'][r['dimension']]:.2f} |")
+            lines.append(f"| {ph} ({name}) | {r['dimension']}D | {r[ph] / 1e6:.2f} M | {r[ph] / r['chute']:.2f} "
+                         f"(probes {r['probes'][0] / 1e6:.1f}, {r['probes'][1] / 1e6:.1f} M) |")
     for name, r in res["calibrations"].items():
         lines.append(f"| shear cells ({name}) | {r['dimension']}D | {r['shear'] / 1e6:.2f} M | "
-                     f"{r['shear'] / res['chute'][r['dimension']]:.2f} |")
+                     f"{r['shear'] / r['chute']:.2f} (probes {r['probes'][0] / 1e6:.1f}, "
+                     f"{r['probes'][1] / 1e6:.1f} M) |")
     lines.append("")
     lines.append("PHASE_RATIO = " + json.dumps({d: {k: round(v, 2) for k, v in r.items()}
                                                 for d, r in res["ratios"].items()}))
-    lines.append(f"probe chutes (mean of {len(res['probes'])}): 2D {res['chute'][2] / 1e6:.2f} M, 3D "
-                 f"{res['chute'][3] / 1e6:.2f} M atom-steps/s; load {res['machine']['load_average'][0]:.1f}; "
-                 f"{res['seconds'] / 60:.0f} min")
+    lines.append(f"load {res['machine']['load_average'][0]:.1f} at the end; {res['seconds'] / 60:.0f} min")
     return "\n".join(lines)
 
 

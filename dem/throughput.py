@@ -25,8 +25,8 @@ from . import lammps_env
 
 #: grain-steps per second of a phase over the probe chute of its dimension on the same machine, measured by
 #: bench/dem_phase_rates.py (bench/RESULTS.md, "Cost estimates")
-PHASE_RATIO = {2: {"prepare": 0.66, "drive": 0.62, "shear": 0.64},
-               3: {"prepare": 0.52, "drive": 0.50, "shear": 0.60}}
+PHASE_RATIO = {2: {"prepare": 1.21, "drive": 0.79, "shear": 1.05},
+               3: {"prepare": 0.59, "drive": 0.39, "shear": 0.63}}
 PROBE_ATOMS, PROBE_STEPS, WARMUP = {2: 800, 3: 4000}, {2: 20000, 3: 3000}, 1000
 #: the chute benchmark's law (gran/hooke/history, k_n = 2e5, gamma_n = 50, friction 0.5), time step 1e-4,
 #: gravity tilted 26 degrees from the vertical, a frozen bottom layer, equal unit-mass grains on a lattice
@@ -123,15 +123,15 @@ class Throughput:
                 f"machine {self.measured})")
 
 
-def probe() -> Throughput:
-    """Time the chutes alone and two at once (a few seconds)."""
+def probe(dimensions=(2, 3), together: bool = True) -> Throughput:
+    """Time the chutes of ``dimensions`` alone and (``together``) two 2D ones at once (a few seconds)."""
     with tempfile.TemporaryDirectory(prefix="granstokes-probe-") as tmp:
-        alone = {dim: _run_chutes(dim, 1, Path(tmp))[0]["rate"] for dim in (2, 3)}
-        together = [r["rate"] for r in _run_chutes(2, 2, Path(tmp))]
-    contention = max(1.0, alone[2] / (sum(together) / len(together)))
+        alone = {dim: _run_chutes(dim, 1, Path(tmp))[0]["rate"] for dim in dimensions}
+        pair = [r["rate"] for r in _run_chutes(2, 2, Path(tmp))] if together else [alone.get(2, 1.0)] * 2
+    contention = max(1.0, alone.get(2, 1.0) / (sum(pair) / len(pair)))
     rates = {str(dim): {phase: ratio * alone[dim] for phase, ratio in PHASE_RATIO[dim].items()}
-             for dim in (2, 3)}
-    return Throughput(rates, contention, {str(k): v for k, v in alone.items()} | {"two_at_once_2d": together},
+             for dim in dimensions}
+    return Throughput(rates, contention, {str(k): v for k, v in alone.items()} | {"two_at_once_2d": pair},
                       _host(), time.strftime("%Y-%m-%d %H:%M"))
 
 
