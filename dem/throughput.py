@@ -5,8 +5,9 @@ fixed fraction PHASE_RATIO of LAMMPS's granular chute benchmark of its dimension
 (``bench/dem_phase_rates.py`` measures the fractions, both in one invocation).  The probe times the chute of each
 dimension here (PROBE_ATOMS grains, PROBE_STEPS steps after WARMUP) alone, then two copies at once: the rates
 are PHASE_RATIO x the probe, and ``contention`` is how much slower each of two processes runs than one alone.
-The probe takes a few seconds; its result is cached per host, core count and LAMMPS version in
-$XDG_CACHE_HOME/granstokes/throughput.json (``~/.cache`` by default); ``granstokes dem probe`` renews it.
+The probe takes a few seconds; its result is cached per host, core count and LAMMPS version for MAX_AGE seconds
+(a shared machine's load changes) in $XDG_CACHE_HOME/granstokes/throughput.json (``~/.cache`` by default);
+``granstokes dem probe`` renews it.
 """
 from __future__ import annotations
 
@@ -65,6 +66,7 @@ run {steps}
 DENSITY = {3: 6 / math.pi, 2: 4 / math.pi}
 TILT = math.radians(26.0)
 LATTICE_WIDTH = 40  # lattice sites across the chute (a 2D chute of many disks gets 200)
+MAX_AGE = 3600.0  # seconds a cached probe stands for this machine
 
 
 def chute_script(dim: int, atoms: int, steps: int, warmup: int = WARMUP) -> str:
@@ -112,6 +114,7 @@ class Throughput:
     probe: dict
     host: str
     measured: str
+    epoch: float = 0.0  # time.time() of the probe
 
     def rate(self, dim: int, phase: str) -> float:
         return self.rates[str(dim)][phase]
@@ -132,7 +135,7 @@ def probe(dimensions=(2, 3), together: bool = True) -> Throughput:
     rates = {str(dim): {phase: ratio * alone[dim] for phase, ratio in PHASE_RATIO[dim].items()}
              for dim in dimensions}
     return Throughput(rates, contention, {str(k): v for k, v in alone.items()} | {"two_at_once_2d": pair},
-                      _host(), time.strftime("%Y-%m-%d %H:%M"))
+                      _host(), time.strftime("%Y-%m-%d %H:%M"), time.time())
 
 
 def _host() -> str:
@@ -147,22 +150,21 @@ _KNOWN: dict[Path, Throughput] = {}  # this process's reads of the cache
 
 
 def measured(renew: bool = False, announce=None) -> Throughput:
-    """This machine's throughput: the cached probe of this host, core count and LAMMPS version, else a new probe
-    (``announce(line)`` is told first)."""
+    """This machine's throughput: the cached probe of this host, core count and LAMMPS version if younger than
+    MAX_AGE, else a new probe (``announce(line)`` is told first)."""
     path = cache_path()
-    if not renew and path in _KNOWN:
+    if not renew and path in _KNOWN and time.time() - _KNOWN[path].epoch < MAX_AGE:
         return _KNOWN[path]
     if not renew and path.is_file():
         try:
             cached = Throughput(**json.loads(path.read_text()))
-            if cached.host == _host():
+            if cached.host == _host() and time.time() - cached.epoch < MAX_AGE:
                 _KNOWN[path] = cached
                 return cached
         except (ValueError, TypeError):
             pass
     if announce is not None:
-        announce("probing LAMMPS's speed on this machine (a few seconds, once: cached in "
-                 f"{path})")
+        announce(f"probing LAMMPS's speed on this machine (a few seconds; cached for {MAX_AGE / 3600:g} h in {path})")
     result = probe()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}")

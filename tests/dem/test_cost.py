@@ -126,3 +126,20 @@ def test_the_estimate_from_the_probe_holds_a_smoke_run(tmp_path):
     wall = sum(st["wall_time"] for st in result.stages.values())
     estimate = sum(p.stage_seconds(k, speed) for k in p.stage_keys(1))
     assert result.ok and abs(estimate / wall - 1) <= ESTIMATE_TOLERANCE, (estimate, wall, before.probe, after.probe)
+
+
+def test_a_fresh_cached_probe_of_this_host_is_reused(tmp_path, monkeypatch):
+    """The cache stands for this host while younger than MAX_AGE (no LAMMPS run); its rates are what sizing uses."""
+    import dataclasses
+    import time
+
+    from granstokes.dem import throughput
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    path = throughput.cache_path()
+    path.parent.mkdir(parents=True)
+    cached = dataclasses.replace(SPEED, host=throughput._host(), epoch=time.time())
+    path.write_text(json.dumps(dataclasses.asdict(cached)))
+    assert throughput.measured() == cached
+    p = plan(config.preset("smoke")[0])
+    assert p.stage_seconds("seed-1") == p.stage_seconds("seed-1", SPEED)
