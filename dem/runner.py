@@ -236,6 +236,7 @@ class _Lammps:
             raise
         finally:
             bar.close()
+            proc.stdout.close()
             with self._lock:
                 self.live.discard(proc)
         if self.stopping:

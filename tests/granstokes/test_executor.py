@@ -28,7 +28,8 @@ def _flaky(path: str, key: str) -> Outcome:
 
 
 def _raises(path: str) -> Outcome:
-    Path(path).open("a").write("x\n")
+    with open(path, "a") as f:
+        f.write("x\n")
     raise RuntimeError("a bug, not a LAMMPS failure")
 
 
@@ -74,6 +75,7 @@ def test_a_two_rank_task_holds_both_slots(tmp_path):
         Executor(jobs=1).run([Task("c", _log, (log, "c"), ranks=2)])
 
 
+@pytest.mark.slow
 def test_the_same_tasks_through_a_scheduler(tmp_path):
     """--scheduler: a LocalCluster of 2 worker processes that the test starts; tasks and retries as locally."""
     from distributed import LocalCluster
