@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import os
 import re
 import subprocess
@@ -34,7 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from granstokes.dem import config, lammps_env, scene
+from granstokes.dem import config, lammps_env, scene, throughput
 from granstokes.dem.runner import Runner, _Lammps
 from granstokes.dem.sizing import plan
 
@@ -44,41 +43,6 @@ WARMUP = 2000
 LARGE, SMALL = 32000, 800
 #: the yardstick of each dimension (the 2D chute of a scene's size: the 32k-disk one runs slower per atom)
 REFERENCE = {3: "3D chute, 32k spheres", 2: "2D chute, 800 disks"}
-CHUTE = """units lj
-atom_style sphere
-dimension {dim}
-boundary p {boundary}
-newton off
-comm_modify vel yes
-lattice {lattice} 1.0
-region box block 0 {nx} 0 {ny} {z}
-create_box 2 box
-create_atoms 1 box
-set type 1 diameter 1.0
-set type 1 density {density}
-region low {low}
-group bottom region low
-set group bottom type 2
-group active subtract all bottom
-pair_style gran/hooke/history 200000.0 NULL 50.0 NULL 0.5 0
-pair_coeff * *
-neighbor 0.1 bin
-neigh_modify every 1 delay 0
-neigh_modify exclude group bottom bottom
-timestep 0.0001
-fix grav all gravity 1.0 {gravity}
-fix freeze bottom freeze
-fix nve active nve/sphere{disc}
-{enforce}
-thermo 1000
-thermo_modify norm no lost ignore
-run {warmup}
-run {steps}
-"""
-#: unit-mass grains: sphere density 6/pi, disk (per unit thickness) 4/pi
-DENSITY = {3: 6 / math.pi, 2: 4 / math.pi}
-#: the chute's tilt, 26 degrees from the vertical, as a 2D gravity vector
-TILT = math.radians(26.0)
 #: the chute's law in pair_style granular: restitution 0.5, k_t = 2/7 k_n (dem.contact.Contact.pair_coeff)
 GRANULAR_LAW = "hooke 200000.0 0.5 tangential linear_history 57142.857 0.5 0.5 damping coeff_restitution"
 BREAKDOWN = ("Pair", "Neigh", "Comm", "Modify", "Output")
@@ -88,17 +52,9 @@ SCENES = {"smoke": 2, "quick": 2, "spheres": 3}
 VARIANTS = ("as run", "bare", "plate sampled every step", "as run in pair_style granular")
 
 
-def chute_script(dim: int, atoms: int, steps: int) -> str:
-    """The chute yardstick with about ``atoms`` grains: 40 lattice sites across, a frozen bottom layer."""
-    nx = 40 if dim == 3 or atoms <= SMALL else 200
-    if dim == 3:
-        shape = dict(boundary="p fm", lattice="sc", nx=nx, ny=20, z=f"0 {atoms // (nx * 20)}",
-                     low="block INF INF INF INF INF 0.5", gravity="chute 26.0", disc="", enforce="")
-    else:
-        shape = dict(boundary="fm p", lattice="sq", nx=nx, ny=atoms // nx, z="-0.5 0.5",
-                     low="block INF INF INF 0.5 INF INF", disc=" disc", enforce="fix plane all enforce2d",
-                     gravity=f"vector {math.sin(TILT):.10f} {-math.cos(TILT):.10f} 0")
-    return CHUTE.format(dim=dim, density=DENSITY[dim], warmup=WARMUP, steps=steps, **shape)
+def chute(dim: int, atoms: int, steps: int) -> str:
+    """The chute benchmark (dem.throughput.chute_script, the cost probe's) after WARMUP steps off the lattice."""
+    return throughput.chute_script(dim, atoms, steps, warmup=WARMUP)
 
 
 def with_granular_law(script: str) -> str:
@@ -109,15 +65,13 @@ def with_granular_law(script: str) -> str:
 
 
 def timed(log: str) -> dict:
-    """The last run's atoms, steps, loop time, atom-steps/s, % CPU use and the % breakdown from a LAMMPS log."""
-    loop = re.findall(r"Loop time of (\S+) on (\d+) procs for (\d+) steps with (\d+) atoms", log)[-1]
-    seconds, ranks, steps, atoms = float(loop[0]), int(loop[1]), int(loop[2]), int(loop[3])
+    """The last run's atoms, steps, loop time, atom-steps/s (dem.throughput.timed), % CPU use and the % breakdown
+    from a LAMMPS log."""
     tail = log[log.rfind("Loop time of"):]
     cpu = re.search(r"([\d.]+)% CPU use", tail)
     share = {k: float(m.group(1)) for k in BREAKDOWN
              if (m := re.search(rf"^{k}\s*\|.*\|\s*(\S+)\s*$", tail, re.MULTILINE))}
-    return {"atoms": atoms, "steps": steps, "ranks": ranks, "loop": seconds,
-            "rate": atoms * steps / seconds / ranks, "cpu": float(cpu.group(1)) if cpu else None, "breakdown": share}
+    return {**throughput.timed(log), "cpu": float(cpu.group(1)) if cpu else None, "breakdown": share}
 
 
 def best_of(script: str, work: Path, repeats: int) -> dict:
@@ -173,8 +127,8 @@ def main() -> dict:
     args = ap.parse_args()
     root = args.out or Path(tempfile.mkdtemp(prefix="dem-yardstick-"))
     t0 = time.monotonic()
-    small = chute_script(2, SMALL, 40000)
-    yard = {REFERENCE[3]: (3, chute_script(3, LARGE, 1000)), "2D chute, 32k disks": (2, chute_script(2, LARGE, 1000)),
+    small = chute(2, SMALL, 40000)
+    yard = {REFERENCE[3]: (3, chute(3, LARGE, 1000)), "2D chute, 32k disks": (2, chute(2, LARGE, 1000)),
             REFERENCE[2]: (2, small), "2D chute, 800 disks, pair_style granular": (2, with_granular_law(small))}
     sticks = {label: {"dimension": dim, **best_of(text, root / f"chute-{k}", args.repeats)}
               for k, (label, (dim, text)) in enumerate(yard.items())}
