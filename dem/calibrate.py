@@ -37,7 +37,6 @@ import json
 import math
 import shutil
 import signal
-import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -57,7 +56,7 @@ from . import lammps_env, layout
 from .config import Config, Grains, parse
 from .contact import Contact, mean_grain_volume
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
-from .runner import Interrupted, RunError, _Lammps, stop_all_lammps
+from .runner import Interrupted, RunError, _Lammps, allow_lammps, sigterm_interrupts, stop_all_lammps
 from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, shear_script
 from .sizing import OVERHEAD, PACKING, count, duration_text, makespan
 from .throughput import Throughput, measured
@@ -464,6 +463,7 @@ class CalibrateResult:
     status: str
     message: str
     calibration: fitting.Calibration | None
+    signal: int | None = None  # the signal that interrupted it
 
 
 def check_calibration(cfg: Config, out: str | Path, jobs: int = DEFAULT_JOBS, np: int = DEFAULT_NP,
@@ -533,16 +533,15 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
     tasks = [Task(plan.key(k, seed, doubled), run_finite_size_cell if doubled else run_cell,
                   (str(out), k, seed, np, launcher, progress, i % jobs), cost=plan.task_seconds(k, doubled), ranks=np)
              for i, (k, seed, doubled) in enumerate(plan.cells())]
-    in_main = threading.current_thread() is threading.main_thread()
-    previous = signal.getsignal(signal.SIGTERM)
-    if in_main:
-        signal.signal(signal.SIGTERM, _raise_interrupted)
     t0 = time.monotonic()
-    cal = None
+    cal, signum = None, None
+    allow_lammps()
     try:
-        outcomes = (executor or Executor(jobs * np)).run(tasks, stop=stop_all_lammps)
+        with sigterm_interrupts():
+            outcomes = (executor or Executor(jobs * np)).run(tasks, stop=stop_all_lammps)
         state["points"] = json.loads(state_path.read_text())["points"]
-        stopped = [(key, o) for key, o in outcomes.items() if o.status != "complete"]
+        fit_cells = {plan.key(k, seed) for k, seed in plan.tasks()}  # a finite-size cell's failure is its record's
+        stopped = [(key, o) for key, o in outcomes.items() if o.status != "complete" and key in fit_cells]
         if stopped:
             key, o = stopped[0]
             raise (RunError if o.status == "failed" else Interrupted)(f"{key}: {o.message}")
@@ -555,18 +554,14 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
                             + (f" ({n_gas} not dense)" if n_gas else ""))
     except RunError as exc:
         state["status"], state["message"] = "failed", str(exc)
-    except (KeyboardInterrupt, Interrupted):
-        state["status"], state["message"] = "interrupted", "interrupted by SIGINT/SIGTERM; continue with --resume"
+    except (KeyboardInterrupt, Interrupted) as exc:
+        signum = int(getattr(exc, "signum", signal.SIGINT))
+        state["status"] = "interrupted"
+        state["message"] = f"interrupted by {signal.Signals(signum).name}; continue with --resume"
     except ValueError as exc:  # too few steady points for the fit
         state["status"], state["message"] = "failed", f"fit: {exc}"
     finally:
-        if in_main:
-            signal.signal(signal.SIGTERM, previous)
         state["finished"] = _now()
         state["wall_time_this_invocation"] = time.monotonic() - t0
         save()
-    return CalibrateResult(out, state["status"], state["message"], cal)
-
-
-def _raise_interrupted(signum, frame):
-    raise Interrupted(f"received signal {signum}")
+    return CalibrateResult(out, state["status"], state["message"], cal, signum)

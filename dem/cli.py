@@ -124,7 +124,9 @@ def _cmd_calibrate(args) -> int:
                        progress=not args.quiet)
     print(f"dem calibrate: {result.status}" + (f": {result.message}" if result.message else "")
           + f" (see {result.out})", file=sys.stderr)
-    return {"complete": 0, "interrupted": 130}.get(result.status, 1)
+    if result.status == "interrupted":
+        return 128 + int(result.signal or signal.SIGINT)  # 130 SIGINT, 143 SIGTERM
+    return 0 if result.status == "complete" else 1
 
 
 def _common(p, what: str, config_help: str) -> None:

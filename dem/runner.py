@@ -166,10 +166,20 @@ def _progress(total: int, initial: int, desc: str, position: int, enabled: bool)
 _LAUNCHERS: weakref.WeakSet = weakref.WeakSet()
 
 
+_HALTED = threading.Event()
+
+
 def stop_all_lammps() -> None:
-    """Terminate every LAMMPS process this Python process started (an interrupt of a run or a study)."""
+    """Terminate every LAMMPS process this Python process started, and start none until ``allow_lammps`` (an
+    interrupt of a run, a calibration or a study: a task about to launch LAMMPS raises Interrupted instead)."""
+    _HALTED.set()
     for lmp in list(_LAUNCHERS):
         lmp.stop_all()
+
+
+def allow_lammps() -> None:
+    """LAMMPS processes may start (a run, a calibration or a study begins)."""
+    _HALTED.clear()
 
 
 class _Lammps:
@@ -203,7 +213,7 @@ class _Lammps:
         bar = _progress(total, start, desc, position, self.progress)
         t0, step, error, nonfinite, phases, in_thermo = time.monotonic(), start, None, False, [], False
         with self._lock:
-            if self.stopping:
+            if self.stopping or _HALTED.is_set():
                 raise Interrupted("the run is being interrupted")
             proc = subprocess.Popen(self.command(script), cwd=cwd, env=lammps_env.child_env(),
                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
@@ -550,6 +560,7 @@ def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: b
     ValueError / LammpsNotFound and write nothing.
     """
     runner, meta = begin(cfg, text, out, np, resume, launcher, progress, jobs)
+    allow_lammps()
     with sigterm_interrupts():
         return runner.execute(meta)
 

@@ -4,13 +4,15 @@ A task is a plain function and its arguments (picklable: remote workers rebuild 
 folders), with an expected cost in seconds and the MPI ranks it takes.  Tasks start longest first (Dask
 priority); a task of k ranks holds k of its worker's ``RANKS`` resource, so a local cluster of ``jobs`` slots
 runs two 1-rank tasks side by side or one 2-rank task alone.  A task returns an ``Outcome``; a failed outcome
-or an exception is retried ``retries`` times, an interrupted one never.  ``KeyboardInterrupt`` (SIGINT, or a
-SIGTERM handler that raises) cancels the queue and calls ``stop`` to end what runs in this process; workers of
-a remote cluster finish their current task (Dask cannot stop a running task).
+or an exception (a lost worker too) is retried ``retries`` times, an interrupted one never.  ``KeyboardInterrupt``
+(SIGINT, or a SIGTERM handler that raises) cancels the queue, then calls ``stop`` to end what runs in this process
+(``stop`` must also keep a task that is starting from launching anything); workers of a remote cluster finish
+their current task (Dask cannot stop a running task).
 """
 from __future__ import annotations
 
 import sys
+import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -83,25 +85,34 @@ class Executor:
                    file=sys.stderr, dynamic_ncols=True)
         attempts = dict.fromkeys(by_key, 1)
 
+        run_id = uuid.uuid4().hex[:8]  # Dask keys are shared by every client of a scheduler
+        futures: dict = {}  # future -> its task
+
         def submit(task: Task):
-            return client.submit(_call, task.fn, task.args, key=f"{task.key}-{attempts[task.key]}", pure=False,
-                                 priority=task.cost, resources={RANKS: task.ranks})
+            future = client.submit(_call, task.fn, task.args, key=f"{task.key}-{run_id}-{attempts[task.key]}",
+                                   pure=False, priority=task.cost, resources={RANKS: task.ranks})
+            futures[future] = task
+            return future
 
         try:
             pending = as_completed([submit(t) for t in tasks])
             for future in pending:
-                key = future.key.rsplit("-", 1)[0]
-                task, outcome = by_key[key], future.result()
-                outcome = Outcome(outcome.status, outcome.message, outcome.info, attempts[key])
-                if outcome.status == "failed" and attempts[key] <= self.retries:
-                    attempts[key] += 1
+                task = futures.pop(future)
+                try:
+                    outcome = future.result()
+                except Exception as exc:  # a lost worker (KilledWorker, a closed connection): the task failed
+                    outcome = Outcome("failed", f"{type(exc).__name__}: {exc}")
+                outcome = Outcome(outcome.status, outcome.message, outcome.info, attempts[task.key])
+                if outcome.status == "failed" and attempts[task.key] <= self.retries:
+                    attempts[task.key] += 1
                     pending.add(submit(task))
                     continue
-                outcomes[key] = outcome
+                outcomes[task.key] = outcome
                 bar.update(round(task.cost))
                 if on_done is not None:
                     on_done(task, outcome)
         except BaseException:
+            client.cancel(list(futures))  # nothing queued starts; then what runs here is stopped
             if stop is not None:
                 stop()
             raise

@@ -7,8 +7,10 @@ independent calibration) on Dask, and ``granstokes preset``: print a DEM or stud
 from __future__ import annotations
 
 import sys
+from dataclasses import asdict
 from pathlib import Path
 
+from granstokes.dem.lammps_env import DEFAULT_JOBS
 from granstokes.lib.validate import require
 
 from . import config
@@ -16,16 +18,19 @@ from . import config
 
 def _cmd_study(args) -> int:
     from granstokes.dem import config as dem_config
-    from granstokes.dem.calibrate import material_table, plan_calibration
+    from granstokes.dem.calibrate import grains_difference, material_table, plan_calibration
 
     from .plan import calibration_text, plan_study
     from .runner import STUDY_TOML, check_folder, run_study
 
+    require(args.scheduler is None or args.jobs is None, "--jobs / --scheduler", "one of them (a scheduler's "
+            "workers set the concurrency)", [args.jobs, args.scheduler])
+    args.jobs = DEFAULT_JOBS if args.jobs is None else args.jobs
     require(isinstance(args.jobs, int) and args.jobs >= 1, "--jobs", "an integer >= 1 (LAMMPS processes at once)",
             args.jobs)
-    require(args.scheduler is None or args.jobs == 2, "--jobs / --scheduler", "one of them (a scheduler's workers "
-            "set the concurrency)", [args.jobs, args.scheduler])
     if args.resume and args.config is None and args.preset is None:
+        require(not args.set, "--set", "given with STUDY.toml or --preset (a resume continues the stored study)",
+                args.set)
         stored = Path(args.out) / STUDY_TOML
         require(stored.is_file(), "--resume", f"given with a study folder (holding {STUDY_TOML})", args.out)
         study, text = config.parse(stored.read_text(), Path(args.out)), stored.read_text()
@@ -45,6 +50,12 @@ def _cmd_study(args) -> int:
             cp = plan_calibration(dem_config.parse(calibration_text(study, p_w)))
             print(f"study: calibration at p = {p_w:g}: {cp.cost_estimate(args.jobs)}", file=sys.stderr)
     sp = plan_study(study, material, source)
+    if study.calibration_file is not None:  # a calibration of other grains is refused before any work
+        _, grains, p_cal = material_table(study.calibration_file)
+        for label, r in sp.runs.items():
+            diff = grains_difference(grains, p_cal, asdict(r.plan.config.grains), r.p_w)
+            require(not diff, "calibration.file", f"a calibration of the grains of run {label}", "different grains: "
+                    + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
     print(f"study '{study.name}': {len(study.pressures)} pressure(s) x {len(study.drives)} drive(s) x "
           f"{len(study.seeds)} seed(s), sized from {source} -> {args.out}", file=sys.stderr)
     for line in sp.lines(args.jobs):
@@ -80,7 +91,7 @@ def register(subparsers) -> None:
     s.add_argument("config", nargs="?", help="STUDY.toml (schema: granstokes/study/config.py)")
     s.add_argument("--preset", choices=config.PRESETS, help="a shipped study (granstokes/study/presets/)")
     s.add_argument("--out", required=True, help="study folder (new or empty, or with --resume an unfinished one)")
-    s.add_argument("--jobs", type=int, default=2, help="LAMMPS processes at once on this machine (default 2)")
+    s.add_argument("--jobs", type=int, help=f"LAMMPS processes at once on this machine (default {DEFAULT_JOBS})")
     s.add_argument("--scheduler", help="address of a running Dask scheduler (e.g. tcp://host:8786) whose workers "
                                        "run the LAMMPS processes; the folder must be on a file system they share")
     s.add_argument("--set", action="append", metavar="KEY=VALUE",

@@ -99,7 +99,8 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     require(doc.get("dem") in dem_config.PRESETS, "dem", f"one of the DEM presets {list(dem_config.PRESETS)}",
             doc.get("dem"))
     seeds = doc.get("seeds", [1])
-    require(isinstance(seeds, list) and len(seeds) >= 1 and all(isinstance(s, int) and 0 < s < 2**31 for s in seeds)
+    require(isinstance(seeds, list) and len(seeds) >= 1
+            and all(isinstance(s, int) and not isinstance(s, bool) and 0 < s < 2**31 for s in seeds)
             and len(set(seeds)) == len(seeds), "seeds", "a list of distinct integers in [1, 2^31)", seeds)
     pressures = doc.get("pressures")
     require(isinstance(pressures, list) and len(pressures) >= 1 and all(finite(p) and p > 0 for p in pressures)

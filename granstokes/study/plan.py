@@ -44,21 +44,25 @@ def calibration_text(study: Study, p_w: float) -> str:
                         header=f"study {study.name}: the calibration of the {study.dem} grains at p_w = {p_w:g}")
 
 
-def run_text(study: Study, p_w: float, material: dict, source: str, wide: bool = False) -> str:
+def run_text(study: Study, p_w: float, material: dict, source: str, wide_of: Plan | None = None) -> str:
     """The DEM config of the run at p_w: the preset's grains (one material), the study's seeds and drives, the
-    depth and durations sized from ``material`` (the calibration at ``source``); ``wide``: the width check, the
-    first drive alone in a box twice as wide."""
-    drives = study.drives[:1] if wide else study.drives
+    depth and durations sized from ``material`` (the calibration at ``source``), snapshots every t_s/FRAMES_PER_TS
+    of its fastest drive (the plate's and the profiles' intervals no longer).  ``wide_of``: the width check of
+    that run, its first drive alone in a box twice as wide and as deep."""
+    drives = study.drives[:1] if wide_of else study.drives
     width = study.width or dem_config.preset(study.dem)[0].box.width
-    entries = [("name", f"{study.name}-{pressure_label(p_w)}{WIDE if wide else ''}"), ("seeds", list(study.seeds)),
-               *_grains(study, p_w), ("material", material), ("box.depth", None), ("box.margin", None),
-               ("box.width", width * (2 if wide else 1)),
+    entries = [("name", f"{study.name}-{pressure_label(p_w)}{WIDE if wide_of else ''}"), ("seeds", list(study.seeds)),
+               *_grains(study, p_w), ("material", material), ("box.margin", None),
+               ("box.depth", wide_of.depth if wide_of else None), ("box.width", width * (2 if wide_of else 1)),
                ("drive", [d.table(study.duration_ts, study.min_duration) for d in drives])]
     header = f"study {study.name} at p_w = {p_w:g}, sized from the calibration {source}"
     text = with_entries(dem_config.preset_text(study.dem), entries, header=header)
     cfg = dem_config.parse(text)
     frame = min(d.scales.t_s for d in plan(cfg).drives) / FRAMES_PER_TS
-    return with_entries(text, [("output.atoms", frame), ("output.contacts", frame)], header=header)
+    out = cfg.output
+    return with_entries(text, [("output.atoms", frame), ("output.contacts", frame), ("output.plate",
+                                                                                      min(out.plate, frame)),
+                               ("output.profiles", min(out.profiles, frame))], header=header)
 
 
 @dataclass(frozen=True)
@@ -108,6 +112,6 @@ def plan_study(study: Study, material: dict, source: str) -> StudyPlan:
         runs[pressure_label(p_w)] = StudyRun(p_w, text, plan(dem_config.parse(text)))
     if study.width_check:
         p_w = study.reference_pressure
-        text = run_text(study, p_w, material, source, wide=True)
+        text = run_text(study, p_w, material, source, wide_of=runs[pressure_label(p_w)].plan)
         runs[pressure_label(p_w) + WIDE] = StudyRun(p_w, text, plan(dem_config.parse(text)))
     return StudyPlan(study, runs)

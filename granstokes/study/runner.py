@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import math
 import signal
 import sys
 import time
@@ -19,10 +20,11 @@ from pathlib import Path
 from granstokes.dem import config as dem_config
 from granstokes.dem import layout
 from granstokes.dem.calibrate import calibrate, material_table
-from granstokes.dem.runner import Interrupted, begin, sigterm_interrupts, stop_all_lammps
+from granstokes.dem.runner import Interrupted, allow_lammps, begin, sigterm_interrupts, stop_all_lammps
 from granstokes.lib import staging
-from granstokes.lib.executor import Executor
+from granstokes.lib.executor import Executor, Outcome
 from granstokes.lib.provenance import provenance
+from granstokes.lib.toml_text import with_entries
 from granstokes.lib.validate import require
 
 from .config import Study, parse
@@ -84,7 +86,7 @@ class StudyRunner:
                 result = calibrate(dem_config.parse(text), text, folder, jobs=self.jobs, resume=status is not None,
                                    progress=False, executor=self.executor())
                 if result.status != "complete":
-                    raise StudyStopped(result.status, f"calibration at p = {p_w:g}: {result.message}")
+                    raise StudyStopped(result.status, f"calibration at p = {p_w:g}: {result.message}", result.signal)
             results[p_w] = str(folder / layout.CALIBRATION_JSON)
         reference = results[s.reference_pressure]
         self.record(lambda d: d.update(calibration={"source": reference, "ran": True, "files": results,
@@ -108,26 +110,38 @@ class StudyRunner:
             self.record(lambda d: d["runs"][label]["beds"].update({bed: outcome.status}))
 
         t0 = time.monotonic()
-        outcomes = self.executor().run(tasks, on_done=done, stop=stop_all_lammps, progress=self.progress,
-                                       desc=f"study {self.study.name}: beds")
-        results = {}
-        for label, (runner, meta) in runners.items():
-            mine = [o for k, o in outcomes.items() if k.startswith(f"{label}/")]
-            results[label] = runner.finish(meta, mine, t0)
-            self.record(lambda d, r=results[label], label=label: d["runs"][label].update(
-                status=r.status, message=r.message))
-        return results
+        try:
+            outcomes = self.executor().run(tasks, on_done=done, stop=stop_all_lammps, progress=self.progress,
+                                           desc=f"study {self.study.name}: beds")
+        except (Interrupted, KeyboardInterrupt) as exc:
+            stopped = Outcome("interrupted", str(exc) or "interrupted by SIGINT")
+            for label, (runner, meta) in runners.items():
+                meta["signal"] = int(getattr(exc, "signum", signal.SIGINT))
+                self._finish(label, runner, meta, [stopped], t0)
+            raise
+        return {label: self._finish(label, runner, meta, [o for k, o in outcomes.items() if k.startswith(f"{label}/")],
+                                    t0)
+                for label, (runner, meta) in runners.items()}
+
+    def _finish(self, label: str, runner, meta: dict, outcomes, t0: float):
+        """A run folder's status (dem.runner.Runner.finish) and its entry in study.json."""
+        result = runner.finish(meta, outcomes, t0)
+        self.record(lambda d: d["runs"][label].update(status=result.status, message=result.message))
+        return result
 
     # --- stage 3: the comparison -----------------------------------------------------------------------
     def compare(self, sp: StudyPlan, calibration: Path) -> dict:
         from granstokes.compare.comparison import build
         from granstokes.compare.report import write_report
 
-        comparison = build([sp.folder(self.out, label) for label in sp.runs], calibration=calibration,
+        scored = [label for label in sp.runs if not label.endswith(WIDE)]
+        comparison = build([sp.folder(self.out, label) for label in scored], calibration=calibration,
                            progress=self.progress)
         with staging.staged(self.out, COMMAND, keep=True) as work:
             metrics = write_report(comparison, work)
-        self.record(lambda d: d.update(width_check=width_check(metrics["drives"])))
+        checks = [width_check(sp.folder(self.out, label), sp.folder(self.out, label[:-len(WIDE)]), comparison)
+                  for label in sp.runs if label.endswith(WIDE)]
+        self.record(lambda d: d.update(width_check=[row for rows in checks for row in rows]))
         return metrics
 
     def run(self) -> dict:
@@ -154,37 +168,43 @@ class StudyRunner:
                 metrics = self.compare(sp, calibration)
                 message = metrics.get("verdict", "")
         except StudyStopped as exc:
-            status, message = exc.status, str(exc)
+            status, message, signum = exc.status, str(exc), exc.signal
         except (Interrupted, KeyboardInterrupt) as exc:
             signum = int(getattr(exc, "signum", signal.SIGINT))
             status, message = "interrupted", f"interrupted by {signal.Signals(signum).name}; continue with --resume"
+        except Exception as exc:  # a drive the calibrated law cannot sustain, a lost scheduler, a bug: recorded
+            status, message = "failed", f"{type(exc).__name__}: {exc}"
         return self.record(lambda d: d.update(status=status, message=message, finished=_now(), signal=signum))
 
 
 class StudyStopped(RuntimeError):
-    def __init__(self, status: str, message: str):
+    """A stage ended without completing: its status (failed, interrupted), why, and the signal if any."""
+
+    def __init__(self, status: str, message: str, signal: int | None = None):
         super().__init__(message)
-        self.status = status
+        self.status, self.signal = status, signal
 
 
-def width_check(drives: dict) -> list[dict]:
-    """Each width-check drive (run label ending in WIDE) against the same drive in the normal box: the free
-    response's steady value in both and their difference in units of the combined error (|z| > 2: the box's
-    width changes the answer)."""
-    out = []
-    for label, wide in drives.items():
-        run, _, name = label.rpartition("/")
-        if not run.endswith(WIDE):
+def width_check(wide: Path, normal: Path, comparison) -> list[dict]:
+    """The drives of the run folder ``wide`` (twice as wide) against the same drives of ``normal`` in
+    ``comparison``: the free response's steady value in both and their difference in units of the combined error
+    (|z| > 2: the box's width changes the answer).  The wide drives are analysed, never scored."""
+    from granstokes.compare.analysis import analyse_drive, drive_specs
+
+    normal_by_name = {dc.dem.spec.name: dc.dem for dc in comparison.drives
+                      if Path(dc.dem.spec.run).resolve() == Path(normal).resolve()}
+    rows = []
+    for spec in drive_specs(wide):
+        a, b = normal_by_name.get(spec.name), analyse_drive(spec)
+        if a is None:
             continue
-        normal = drives.get(f"{run[:-len(WIDE)]}/{name}")
-        if normal is None:
-            continue
-        key = "u_w_inf" if wide["kind"] == "stress" else "mu_w_inf"
-        a, b = normal[key], wide[key]
-        err = (a["dem_err"] ** 2 + b["dem_err"] ** 2) ** 0.5
-        out.append({"drive": name, "observable": key, "normal": a["dem"], "normal_err": a["dem_err"],
-                    "wide": b["dem"], "wide_err": b["dem_err"], "z": (b["dem"] - a["dem"]) / err if err > 0 else None})
-    return out
+        key = b.response
+        va, ea, vb, eb = (a.steady[key]["value"], a.steady[key]["stderr"], b.steady[key]["value"],
+                          b.steady[key]["stderr"])
+        err = math.hypot(ea, eb)
+        rows.append({"drive": spec.name, "observable": f"{key}_inf", "normal": va, "normal_err": ea, "wide": vb,
+                     "wide_err": eb, "z": (vb - va) / err if err > 0 else None})
+    return rows
 
 
 def pressure_dependence(files: dict) -> dict:
@@ -210,6 +230,8 @@ def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None
     runner = StudyRunner(study, text, out, jobs, scheduler, progress, announce)
     if not resume:
         staging.start(out, COMMAND)
+        if study.calibration_file is not None:  # resolved: a resume reads it from the study folder
+            text = with_entries(text, [("calibration.file", study.calibration_file)])
         (out / STUDY_TOML).write_text(text)
         runner.record(lambda d: d.update(
             name=study.name, status="running", message="", started=_now(), runs={},
@@ -219,4 +241,5 @@ def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None
             provenance={**provenance(), "jobs": jobs, "scheduler": scheduler or "local"}))
     else:
         runner.record(lambda d: d.update(status="running", message="", resumes=[*d.get("resumes", []), _now()]))
+    allow_lammps()
     return runner.run()

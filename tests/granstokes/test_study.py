@@ -41,6 +41,7 @@ def _study(**changes) -> str:
     ({"drive": [{"kind": "stress", "u_w": 1.0}]}, r"drive\[stress-u1\] load must be"),
     ({"drive": [{"kind": "stress", "mu_w_tilde": 0.5, "mu_w": 0.4}]}, r"drive\[0\] load must be"),
     ({"colour": "red"}, "study keys must be"),
+    ({"seeds": [True]}, "seeds must be"),
 ])
 def test_bad_studies_are_refused_naming_the_parameter(change, message):
     with pytest.raises(ValueError, match=message) as err:
@@ -67,10 +68,13 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
         assert p.depth >= deepest + CREEP_LENGTHS * CREEP_LENGTH
         for d in p.drives:
             assert d.duration == pytest.approx(10 * d.scales.t_s, rel=1e-9)
-        assert cfg.output.atoms == pytest.approx(min(d.scales.t_s for d in p.drives) / FRAMES_PER_TS)
+        frame = min(d.scales.t_s for d in p.drives) / FRAMES_PER_TS  # the snapshots as LAMMPS writes them
+        assert abs(p.intervals["atoms"] * p.dt - frame) <= p.intervals["plate"] * p.dt
+        assert p.intervals["plate"] <= p.intervals["atoms"] and p.intervals["profiles"] <= p.intervals["atoms"]
         if label.endswith("-wide"):  # the width check: the first drive alone, twice as wide
             assert [d.drive.name for d in p.drives] == ["stress-mutilde0.5"]
             assert cfg.box.width == 2 * sp.runs["p20"].plan.config.box.width and p_w == 20.0
+            assert p.depth == sp.runs["p20"].plan.depth  # as deep as the run it checks
             continue
         tau = next(d for d in p.drives if d.drive.tau_w is not None)
         assert tau.scales.mu_w == pytest.approx(6.0 / p_w)
@@ -134,9 +138,10 @@ def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
     assert record["status"] == "complete" and record["runs"]["p10"]["status"] == "complete"
     assert record["runs"]["p10"]["beds"] == {"seed-1": "complete"} and len(record["resumes"]) == 1
     assert record["runs"]["p10-wide"]["status"] == "complete"
+    (check,) = record["width_check"]  # the wide drive is analysed against the normal one, never scored
+    assert check["drive"] == "speed-mutilde0.5" and check["observable"] == "mu_w_inf" and check["wide_err"] > 0
     metrics = json.loads((out / "metrics.json").read_text())
-    assert len(metrics["drives"]) == 2  # the drive and its width check
-    drive = next(d for label, d in metrics["drives"].items() if "wide" not in label)
+    (drive,) = metrics["drives"].values()
     for key in ("p_w", "kind", "imposed", "seeds", "depth", "duration", "delta_s", "t_s", "base_confined"):
         assert key in drive
     assert drive["p_w"] == 10.0 and drive["kind"] == "speed" and drive["seeds"] == 1
@@ -162,13 +167,3 @@ def test_the_readme_cluster_script_builds_its_slurm_job():
     finally:
         cluster.close()
     assert "--resources ranks=1" in script and "#SBATCH" in script and "--nworkers 8" in script
-
-
-def test_the_width_check_pairs_each_wide_drive_with_its_normal_box():
-    from granstokes.study.runner import width_check
-
-    drives = {"/s/runs/p20/stress-mutilde0.5": {"kind": "stress", "u_w_inf": {"dem": 1.0, "dem_err": 0.1}},
-              "/s/runs/p20-wide/stress-mutilde0.5": {"kind": "stress", "u_w_inf": {"dem": 1.3, "dem_err": 0.1}},
-              "/s/runs/p200/stress-mutilde0.5": {"kind": "stress", "u_w_inf": {"dem": 9.0, "dem_err": 0.1}}}
-    (row,) = width_check(drives)
-    assert row["normal"] == 1.0 and row["wide"] == 1.3 and row["z"] == pytest.approx(0.3 / 0.02 ** 0.5)
