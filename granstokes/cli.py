@@ -21,8 +21,13 @@ class OneLineParser(argparse.ArgumentParser):
 
 def run_demo(args) -> int:
     from .demo import run_demo as demo
+    from .study.runner import StudyStopped
 
-    index = demo(args.out)
+    try:
+        index = demo(args.out)
+    except StudyStopped as stopped:
+        print(f"granstokes: {stopped}", file=sys.stderr)
+        return 128 + stopped.signal if stopped.status == "interrupted" and stopped.signal else 1
     print(f"report: {index.resolve()}")
     return 0
 

@@ -1,7 +1,7 @@
 """``granstokes demo`` (``make demo``): the continuum report (the paper's figures regenerated) and the smoke study
 (``granstokes study --preset smoke``: its grains calibrated by plane shear at two pressures, the drives sized from
 that calibration, predicted blind by every model and scored), with one front page linking both reports.  A demo
-that stopped resumes where it stopped."""
+that stopped resumes where it stopped; one that completed is rendered again without rerunning anything."""
 from __future__ import annotations
 
 import html
@@ -15,7 +15,8 @@ from granstokes.continuum.paper.report import write_continuum_report
 from .lib.page import page
 from .lib.staging import claim, staged, start
 from .study import config as study_config
-from .study.runner import STUDY_JSON, STUDY_TOML, run_study
+from .study.runner import COMMAND as STUDY_COMMAND
+from .study.runner import STUDY_JSON, STUDY_TOML, StudyStopped, run_study
 
 COMMAND = "demo"
 STUDY = "smoke"
@@ -33,8 +34,8 @@ def _stage(name: str, clock: dict, action):
 
 def run_demo(out_dir, study: str = STUDY) -> Path:
     out = start(claim(out_dir, "--out", COMMAND), COMMAND)
-    for part in ("continuum", STUDY_DIR):
-        claim(out / part, "--out", COMMAND)
+    claim(out / "continuum", "--out", COMMAND)
+    claim(out / STUDY_DIR, "--out", STUDY_COMMAND)  # the study's own folder: run, resumed, or complete
     clock = {}
 
     def continuum_report():
@@ -51,8 +52,8 @@ def run_demo(out_dir, study: str = STUDY) -> Path:
         record = _stage(f"the {study} study (calibration, DEM drives, blind comparison)", clock,
                         lambda: run_study(st, text, folder, resume=resume))
         if record["status"] != "complete":
-            raise RuntimeError(f"the {study} study did not complete: {record['status']} {record['message']} "
-                               f"(see {stored}); rerun make demo to resume it")
+            raise StudyStopped(record["status"], f"the {study} study did not complete: {record['message']} (see "
+                               f"{stored}); rerun make demo to resume it", record.get("signal"))
     with staged(out, COMMAND, keep=True) as work:
         write_index(work, folder, clock)
     return out / "index.html"

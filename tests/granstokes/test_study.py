@@ -167,3 +167,31 @@ def test_the_readme_cluster_script_builds_its_slurm_job():
     finally:
         cluster.close()
     assert "--resources ranks=1" in script and "#SBATCH" in script and "--nworkers 8" in script
+
+
+def test_the_demo_runs_its_study_once_then_renders_again(tmp_path, monkeypatch):
+    """make demo twice: the study runs once (its folder is the study's own, not refused), the front page is
+    written both times; a study that stops leaves a one-line error and exit 1."""
+    from granstokes import demo
+    from granstokes.lib.staging import start
+
+    calls = []
+
+    def fake_study(study, text, folder, resume=False, **_):
+        calls.append(resume)
+        start(folder, "study")
+        status = "failed" if len(calls) == 3 else "complete"
+        (folder / "metrics.json").write_text(json.dumps({"verdict": "v", "units": "u"}))
+        (folder / "study.toml").write_text(text)
+        (folder / "study.json").write_text(json.dumps({"status": status, "message": "m"}))
+        return {"status": status, "message": "m"}
+
+    monkeypatch.setattr(demo, "run_study", fake_study)
+    monkeypatch.setattr(demo, "write_continuum_report", lambda work: (work / "index.html").write_text("c"))
+    out = tmp_path / "demo"
+    assert demo.run_demo(out).exists() and demo.run_demo(out).exists()
+    assert calls == [False]
+    other = tmp_path / "other"
+    demo.run_demo(other)
+    (other / "study" / "study.json").write_text(json.dumps({"status": "running"}))
+    assert granstokes_main(["demo", "--out", str(other)]) == 1 and calls == [False, False, True]
