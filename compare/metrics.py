@@ -17,7 +17,8 @@ from .scorecard import BLOCKS, OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, 
 #: name -> (unit, definition)
 DEFINITIONS = {
     "steady": ("-", f"the final quarter has no trend (slope through block means, blocks longer than the "
-                    f"correlation time, within {TREND_SIGMA:g} of its error), and the record is steady from the "
+                    "correlation time, within the t quantile (blocks - 2 degrees of freedom) of a "
+                    f"{TREND_SIGMA:g} sigma normal deviation), and the record is steady from the "
                     f"earliest start (in steps of {STEADY_WINDOW:.0%} of the record) after which it has no trend "
                     f"and the mean of the first quarter of the rest is within {TREND_SIGMA:g} errors of the final "
                     "value; the prepared state at t = 0 is in no window"),

@@ -24,9 +24,10 @@ from scipy import stats
 from granstokes.lib.statistics import autocorrelation_time
 
 #: steady-state criterion (stated in every report): the final quarter has no trend (its slope, fitted to the
-#: means of blocks longer than the correlation time, within TREND_SIGMA of its error), and the record is
-#: steady from the earliest start (in steps of STEADY_WINDOW of the record) after which it has no trend; the
-#: prepared state (t = 0) is in no window
+#: means of blocks longer than the correlation time, within the Student-t quantile of the blocks' degrees of
+#: freedom that a normal variable exceeds at TREND_SIGMA: a steady record is flagged 0.27 % of the time), and
+#: the record is steady from the earliest start (in steps of STEADY_WINDOW of the record) after which it has no
+#: trend; the prepared state (t = 0) is in no window
 STEADY_WINDOW, TREND_SIGMA = 0.05, 3.0
 #: the steady window starts at t_steady, but no later than this fraction of the record (and there
 #: when no steady state was detected): the profiles always average the final 30 % at least
@@ -135,7 +136,8 @@ def slip(record: PlateRecord) -> dict:
 
 def trend(t: np.ndarray, y: np.ndarray) -> dict:
     """Slope of y(t) and its standard error from a straight line through the means of the blocks of
-    ``block_estimate`` (longer than the correlation time: independent), and their ratio ``z``."""
+    ``block_estimate`` (longer than the correlation time: independent), their ratio ``z`` and the ``limit`` |z| may
+    reach for a record without trend (a t quantile with blocks - 2 degrees of freedom)."""
     est = block_estimate({"y": y})
     blocks = est["blocks"]
     if blocks < 3:
@@ -143,14 +145,21 @@ def trend(t: np.ndarray, y: np.ndarray) -> dict:
     tb = np.array([b.mean() for b in np.array_split(t, blocks)])
     yb = np.array([b.mean() for b in np.array_split(y, blocks)])
     fit = stats.linregress(tb, yb)
+    tail = 2 * stats.norm.sf(TREND_SIGMA)  # two-sided: the same false-alarm rate at any number of blocks
     return {"slope": float(fit.slope), "stderr": float(fit.stderr), "blocks": blocks,
-            "z": float(fit.slope / fit.stderr) if fit.stderr > 0 else 0.0 if fit.slope == 0 else np.inf}
+            "z": float(fit.slope / fit.stderr) if fit.stderr > 0 else 0.0 if fit.slope == 0 else np.inf,
+            "limit": float(stats.t.isf(tail / 2, blocks - 2))}
+
+
+def no_trend(tr: dict) -> bool:
+    """Whether a ``trend`` is within its limit (False when it could not be formed)."""
+    return bool(abs(tr["z"]) <= tr.get("limit", np.nan))
 
 
 def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
     """Final value (mean over the last quarter), its standard error (``block_estimate``), the final quarter's
     ``trend``, and t_steady: the earliest start, in steps of STEADY_WINDOW of the record, from which the rest
-    of the record has no trend (|z| <= TREND_SIGMA) and the mean of its first quarter agrees with the final value
+    of the record has no trend (``no_trend``) and the mean of its first quarter agrees with the final value
     within TREND_SIGMA combined errors; nan when the final quarter itself drifts.  The record's
     first sample, the prepared state at t = 0, is left out."""
     ok = np.isfinite(y) & (t > t[0])
@@ -164,11 +173,10 @@ def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
         rest = t >= s
         head = rest & (t < s + (1 - STEADY_LAST) * (t[-1] - s))
         err = stderr * np.sqrt(len(last) / max(1, head.sum()) + 1)  # a head mean against the final value
-        return (abs(y[head].mean() - value) <= TREND_SIGMA * err
-                and abs(trend(t[rest], y[rest])["z"]) <= TREND_SIGMA)
+        return abs(y[head].mean() - value) <= TREND_SIGMA * err and no_trend(trend(t[rest], y[rest]))
 
     t_steady = np.nan
-    if abs(tr["z"]) <= TREND_SIGMA:  # a drifting (or too short to test) final quarter is not steady
+    if no_trend(tr):  # a drifting (or too short to test) final quarter is not steady
         starts = t[0] + np.arange(0.0, STEADY_LAST, STEADY_WINDOW) * (t[-1] - t[0])
         t_steady = next((float(s) for s in starts if settled(s)), float(t[last_t][0]))
     return {"value": value, "stderr": stderr, "t_steady": t_steady, "drift": tr["slope"], "drift_err": tr["stderr"],

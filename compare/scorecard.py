@@ -3,7 +3,8 @@ prediction with a 95 % band propagated from the calibration's uncertainty.
 
 Observables (DEM units; estimators applied alike to the DEM and to every model):
 
-* ``u_w_inf`` (imposed stress) or ``mu_w_inf`` (imposed speed): the steady value of the free response;
+* ``u_w_inf`` (imposed stress) or ``mu_w_inf`` (imposed speed): the steady value of the free response, the
+  model's averaged over the DEM's window (the record's final quarter: like with like; its ``asymptote`` beside);
 * ``delta_u``: steady layer thickness, the depth where the steady-window u falls to 5 % of u_w;
 * ``t90``: time for the running mean of the free response to cover 90 % of its change (the model's
   series is interpolated onto the DEM's output times first, so that both are smoothed alike);
@@ -14,19 +15,20 @@ Errors.  DEM: spread over seeds (standard error of the mean) when a drive has >=
 seed, for the profile observables the spread over BLOCKS consecutive blocks of the steady window, for
 t90 the running mean's half-width (a resolution, not a statistical error); for the steady response
 the block or seed error of compare.plate.steady_state.  Model: the band is the 2.5-97.5 % range over
-the calibration's replicates (joint samples of mu_s, mu_d, I0, phi) for the steady observables; for
-t90 (a transient solve per sample is too costly) the linearised propagation J C J^T of the
-replicates' covariance C, J by one-sided differences, band +-1.96 sd; the numerical error of t90 is its change
-when every other output time is dropped (interpolation), of the steady values the solver's estimate.  sigma =
+the calibration's replicates (joint samples of mu_s, mu_d, I0, phi) for the steady profile observables; for
+t90 and the windowed plate value (a transient solve per sample is too costly) the linearised propagation
+J C J^T of the replicates' covariance C, J by one-sided differences, band +-1.96 sd (the plate value's: the
+band's mean over the window); the numerical error of t90 is its change when every other output time is dropped
+(interpolation), none for the others (the solvers' errors are far below the bands).  sigma =
 (dem - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical^2), band_sd = band width / (2 x 1.96); verdict
 "consistent" when |sigma| <= 2.
 
 Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where
 the drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose
 bed is a half-space; where a model is not yet steady over the DEM's final quarter (the record is shorter
-than the model's time scale), that model's steady rows.  A row is ``blind`` only when mu(I) comes from an
-independent calibration and the model's own parameter was not fitted on that drive; only scored blind
-rows count for a model (``tally``), and models are ranked over the rows they share.
+than the model's time scale), that model's steady profile rows (delta_u, creep_length).  A row is ``blind``
+only when mu(I) comes from an independent calibration and the model's own parameter was not fitted on that
+drive; only scored blind rows count for a model (``tally``), and models are ranked over the rows they share.
 """
 from __future__ import annotations
 
@@ -265,6 +267,14 @@ def _final_quarter(series: pd.DataFrame, a: DriveAnalysis) -> float:
     return float(np.mean(np.interp(t[last], series.t, series[a.response])))
 
 
+def _final_quarter_band(band: pd.DataFrame, a: DriveAnalysis) -> tuple[float, float]:
+    """The linearised 95 % band of the free response (t, lo, hi on the DEM's output times) averaged over the
+    record's final quarter, as ``_final_quarter`` averages the response."""
+    t = band.t.to_numpy()
+    last = t >= t[0] + STEADY_LAST * (t[-1] - t[0])
+    return float(band.lo[last].mean()), float(band.hi[last].mean())
+
+
 def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
     """Interpolation error of a model's t90: the change when every other output time is dropped."""
     t = a.series.t.to_numpy()
@@ -352,7 +362,9 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                 asymptote = value
                 windowed = obs == f"{a.response}_inf"  # like with like: the model over the DEM's steady window
                 if windowed:
-                    value, lo, hi = end_value, lo + end_value - asymptote, hi + end_value - asymptote
+                    value = end_value
+                    lo, hi = _final_quarter_band(bands[(a.label, model.key)], a)
+                    lo, hi = min(lo, value), max(hi, value)
                 band_sd = (hi - lo) / (2 * Z95)
                 combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
                 note = ((_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
