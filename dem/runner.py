@@ -396,12 +396,11 @@ class Runner:
             self.record(meta, key, st)
             raise
         st.info.update(self._merge(d, segments, starts))
-        self.record(meta, key, st)
         st.status, st.message = "complete", f"{dp.steps} steps ({dp.duration:.4g} time units)"
+        self.record(meta, key, st)  # complete before the clean-up: a kill during it redoes nothing
         for _, p in _restarts(d)[:-1]:
             p.unlink()
         shutil.rmtree(segdir)
-        self.record(meta, key, st)
 
     def _stage(self, meta: dict, key: str, st: StageResult, action):
         t0 = time.monotonic()

@@ -87,3 +87,19 @@ def test_the_same_tasks_through_a_scheduler(tmp_path):
             [Task("a", _log, (log, "a")), Task("f", _flaky, (str(tmp_path / "m"), "f"))])
     assert outcomes["a"].status == "complete" and outcomes["f"].attempts == 2
     assert Path(log).read_text().split() == ["a"]
+
+
+def test_an_interrupt_cancels_the_queue_and_calls_stop(tmp_path):
+    """KeyboardInterrupt while tasks wait (raised here by the record of the first): the queued tasks never start,
+    ``stop`` is called once, the interrupt goes on to the caller."""
+    log, stops = str(tmp_path / "log"), []
+
+    def interrupt(task, outcome):
+        raise KeyboardInterrupt
+
+    tasks = [Task(f"t{k}", _log, (log, f"t{k}", "complete", 0.3), cost=10 - k) for k in range(4)]
+    with pytest.raises(KeyboardInterrupt):
+        Executor(jobs=1).run(tasks, on_done=interrupt, stop=lambda: stops.append(1))
+    time.sleep(0.5)  # a task started after the interrupt would have logged by now
+    started = Path(log).read_text().split()
+    assert stops == [1] and started[0] == "t0" and len(started) <= 2 and "t3" not in started
