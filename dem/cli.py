@@ -139,7 +139,8 @@ def _common(p, what: str, config_help: str) -> None:
     p.add_argument("--launcher", help="launcher template with {np}, e.g. 'srun -n {np}' (default: the "
                                       "mpich wheel's mpirun)")
     p.add_argument("--dry-run", action="store_true",
-                   help="validate, print the plan and its cost estimate, run and write nothing")
+                   help="validate, print the plan and its cost estimate, run and write nothing (a probe of this "
+                        "machine's speed may be cached, outside the project)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override one entry of the config (dotted key, TOML value; repeatable), e.g. load.p_w=10 "
                         "or drive.0.mu_w_tilde=0.3; granstokes preset dem NAME prints a preset to start from")

@@ -89,6 +89,10 @@ def timed(log: str) -> dict:
     return {"atoms": atoms, "steps": steps, "ranks": ranks, "loop": seconds, "rate": atoms * steps / seconds / ranks}
 
 
+class ProbeFailed(RuntimeError):
+    """LAMMPS could not run the probe's chute (the message says where its log is)."""
+
+
 def _run_chutes(dim: int, copies: int, work: Path) -> list[dict]:
     """``copies`` probe chutes of dimension ``dim`` at once, each on one rank; their timings."""
     procs = []
@@ -100,7 +104,8 @@ def _run_chutes(dim: int, copies: int, work: Path) -> list[dict]:
                                            "-screen", "none", "-nocite"], cwd=d, env=lammps_env.child_env())))
     for d, p in procs:
         if p.wait() != 0:
-            raise RuntimeError(f"the throughput probe's LAMMPS run failed (see {d / 'log.lammps'})")
+            raise ProbeFailed(f"the throughput probe's LAMMPS run failed with exit code {p.returncode} "
+                              f"({d / 'log.lammps'} says why)")
     return [timed((d / "log.lammps").read_text()) for d, _ in procs]
 
 

@@ -94,10 +94,14 @@ def main(argv=None) -> int:
     except RuntimeError as err:
         from granstokes.continuum.stepper import StepperFailure
         from granstokes.dem.lammps_env import LammpsNotFound
+        from granstokes.dem.throughput import ProbeFailed
 
         if isinstance(err, LammpsNotFound):
             print(f"granstokes: error: {err}", file=sys.stderr)
             return 2
+        if isinstance(err, ProbeFailed):
+            print(f"granstokes: error: {err}", file=sys.stderr)
+            return 1
         if not isinstance(err, StepperFailure):
             raise
         print(f"granstokes: error: the time integration failed ({err}); try a looser --accuracy or other "
