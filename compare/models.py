@@ -117,12 +117,14 @@ def _paper_transient(material: Material, drive: Drive, times) -> tuple[pd.DataFr
 # --- nonlocal granular fluidity --------------------------------------------------------------------
 
 #: Chebyshev intervals per piece of the comparison's NGF steady states: below 1e-10 u_w at A >= 0.1 already
-#: (tests/continuum/test_ngf.py), and the replicates' root-finding for imposed speeds costs O(n^3) per try
-NGF_STEADY_N = 32
+#: (tests/continuum/test_ngf.py), and the replicates' root-finding for imposed speeds costs O(n^3) per try;
+#: mu_w of an imposed speed to NGF_STEADY_RTOL (the DEM's errors are percent-level), no error estimate
+NGF_STEADY_N, NGF_STEADY_RTOL = 32, 1e-9
 
 
 def _ngf_steady(fluidity: ngf.NonlocalFluidity, material: Material, drive: Drive) -> Steady:
-    st = ngf.solve_steady(drive.scene(material), fluidity, n=NGF_STEADY_N, **drive.load.imposed)
+    st = ngf.solve_steady(drive.scene(material), fluidity, n=NGF_STEADY_N, rtol=NGF_STEADY_RTOL,
+                          error_estimate=False, **drive.load.imposed)
     return Steady(st.y, st.u, st.u_w, st.mu_w, st.delta_s, st.g)
 
 

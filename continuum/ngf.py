@@ -248,8 +248,10 @@ def _check_mu_w(scene: BedScene, fluidity: NonlocalFluidity, mu_w: float) -> flo
     return float(mu_w)
 
 
-def solve_steady(scene: BedScene, fluidity: NonlocalFluidity, *, mu_w=None, u_w=None, n: int = 64) -> SteadyNGF:
-    """Steady NGF state under an imposed wall friction mu_w = tau_w/p_w or an imposed speed u_w."""
+def solve_steady(scene: BedScene, fluidity: NonlocalFluidity, *, mu_w=None, u_w=None, n: int = 64,
+                 rtol: float = 1e-14, error_estimate: bool = True) -> SteadyNGF:
+    """Steady NGF state under an imposed wall friction mu_w = tau_w/p_w or an imposed speed u_w (mu_w to
+    ``rtol``); ``error_estimate``: the free value's error from a solve at half the intervals (else nan)."""
     require((mu_w is None) != (u_w is None), "mu_w/u_w", "exactly one of them", (mu_w, u_w))
     require(isinstance(n, (int, np.integer)) and n >= 8, "n", "an integer >= 8", n)
     m = scene.material
@@ -257,7 +259,7 @@ def solve_steady(scene: BedScene, fluidity: NonlocalFluidity, *, mu_w=None, u_w=
     if mu_w is not None:
         tau_w = _check_mu_w(scene, fluidity, mu_w) * scene.p_w
         y, u, g, mu, gl = steady_profile(scene, fluidity, tau_w, n)
-        u_c = steady_profile(scene, fluidity, tau_w, coarse)[1][0]
+        u_c = steady_profile(scene, fluidity, tau_w, coarse)[1][0] if error_estimate else np.nan
         imposed, u_w_err, mu_w_err = "stress", abs(u[0] - u_c), 0.0
     else:
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
@@ -266,12 +268,12 @@ def solve_steady(scene: BedScene, fluidity: NonlocalFluidity, *, mu_w=None, u_w=
         def root(npts):
             f = lambda mw: steady_profile(scene, fluidity, mw * scene.p_w, npts)[1][0] - u_w
             require(f(hi) > 0, "u_w", f"a speed reachable with mu_w < mu(I_max) = {hi:.6g}", u_w)
-            return brentq(f, lo, hi, xtol=1e-15, rtol=1e-14)
+            return brentq(f, lo, hi, xtol=rtol * lo, rtol=rtol)
 
         mw = root(n)
         tau_w = mw * scene.p_w
         y, u, g, mu, gl = steady_profile(scene, fluidity, tau_w, n)
-        imposed, u_w_err, mu_w_err = "speed", 0.0, abs(mw - root(coarse))
+        imposed, u_w_err, mu_w_err = "speed", 0.0, abs(mw - root(coarse)) if error_estimate else np.nan
     return SteadyNGF(scene, fluidity, imposed, y, u, g, mu, gl, float(tau_w), float(u[0]), float(u_w_err),
                      float(mu_w_err), float(yield_depth(scene, tau_w)), n)
 
