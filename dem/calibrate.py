@@ -334,17 +334,20 @@ def _run_cell(out: Path, k: int, seed: int, doubled: bool, np_: int, launcher: s
         store(analysed(old))
         return Outcome("complete")
     if d.exists():
+        with staging.locked(d):  # a cell left running by a stopped calibration elsewhere ends first
+            pass
         shutil.rmtree(d)
     d.mkdir(parents=True)
     (d / layout.SHEAR_IN).write_text(shear_script(cfg, point, n, seed))
     store({"status": "running", "I_target": point.I, "started": _now()})
     entry = {"status": "interrupted", "I_target": point.I, "message": "continue with --resume"}
     try:
-        desc = f"I={point.I:.3g} seed {seed}" + (" (2x wide)" if doubled else "")
-        info = _Lammps(np_, launcher, progress).run(layout.SHEAR_IN, d, plan, plan.steps(k, doubled), 0, desc,
-                                                    position=position)
-        entry = analysed({"status": "complete", "I_target": point.I, "wall_time": info["wall_time"],
-                          "steps": info["last_step"]})
+        with staging.locked(d):
+            desc = f"I={point.I:.3g} seed {seed}" + (" (2x wide)" if doubled else "")
+            info = _Lammps(np_, launcher, progress).run(layout.SHEAR_IN, d, plan, plan.steps(k, doubled), 0, desc,
+                                                        position=position)
+            entry = analysed({"status": "complete", "I_target": point.I, "wall_time": info["wall_time"],
+                              "steps": info["last_step"]})
     except RunError as exc:
         entry = {"status": "failed", "I_target": point.I, "message": str(exc)}
     except (Interrupted, KeyboardInterrupt):
