@@ -49,6 +49,22 @@ def _call(fn, args) -> Outcome:
         return Outcome("failed", f"{type(exc).__name__}: {exc}")
 
 
+def check_scheduler(address: str) -> None:
+    """A running scheduler at ``address`` whose workers offer the RANKS resource (ValueError naming --scheduler)."""
+    from distributed import Client
+
+    try:
+        with Client(address, timeout=10) as client:
+            workers = client.scheduler_info()["workers"].values()
+    except OSError as exc:
+        raise ValueError(f"--scheduler must be the address of a running Dask scheduler, got {address!r} ({exc})") \
+            from None
+    offering = [w for w in workers if RANKS in w.get("resources", {})]
+    if not offering:
+        raise ValueError(f"--scheduler must have workers offering the '{RANKS}' resource (dask worker --resources "
+                         f"{RANKS}=N), got {len(list(workers))} worker(s) without it at {address}")
+
+
 class Executor:
     """``jobs`` rank slots on a local in-process cluster, or the cluster at ``scheduler`` (an address)."""
 
@@ -63,7 +79,7 @@ class Executor:
         # threads: a task waits on its LAMMPS subprocess, so one process suffices and holds no copies
         cluster = LocalCluster(n_workers=1, threads_per_worker=self.jobs, processes=False,
                                resources={RANKS: self.jobs}, dashboard_address=None,
-                               scheduler_kwargs={"dashboard_address": ":0"})  # any free port: no clash
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})  # a free local port
         return cluster, Client(cluster)
 
     def run(self, tasks, on_done: Callable[[Task, Outcome], None] | None = None, stop: Callable[[], None] | None = None,

@@ -37,6 +37,10 @@ def _cmd_study(args) -> int:
     else:
         study, text = config.load(args.config, args.preset, args.set or ())
     check_folder(study, Path(args.out), args.resume)
+    if args.scheduler is not None:
+        from granstokes.lib.executor import check_scheduler
+
+        check_scheduler(args.scheduler)
     from granstokes.dem.throughput import measured
 
     measured(announce=lambda line: print(f"study: {line}", file=sys.stderr))

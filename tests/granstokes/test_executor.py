@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from granstokes.lib.executor import Executor, Outcome, Task
+from granstokes.lib.executor import Executor, Outcome, Task, check_scheduler
 
 _LOCK = threading.Lock()
 
@@ -82,7 +82,8 @@ def test_the_same_tasks_through_a_scheduler(tmp_path):
 
     log = str(tmp_path / "s")
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, resources={"ranks": 1},
-                      dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"}) as cluster:
+                      dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
+        check_scheduler(cluster.scheduler_address)
         outcomes = Executor(scheduler=cluster.scheduler_address).run(
             [Task("a", _log, (log, "a")), Task("f", _flaky, (str(tmp_path / "m"), "f"))])
     assert outcomes["a"].status == "complete" and outcomes["f"].attempts == 2
@@ -103,3 +104,15 @@ def test_an_interrupt_cancels_the_queue_and_calls_stop(tmp_path):
     time.sleep(0.5)  # a task started after the interrupt would have logged by now
     started = Path(log).read_text().split()
     assert stops == [1] and started[0] == "t0" and len(started) <= 2 and "t3" not in started
+
+
+@pytest.mark.slow
+def test_a_scheduler_without_rank_slots_is_refused():
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
+        with pytest.raises(ValueError, match="--scheduler must have workers offering the 'ranks' resource"):
+            check_scheduler(cluster.scheduler_address)
+    with pytest.raises(ValueError, match="--scheduler must be the address of a running Dask scheduler"):
+        check_scheduler("tcp://127.0.0.1:9")

@@ -116,7 +116,7 @@ def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
 
     out = tmp_path / "study"
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, resources={"ranks": 1},
-                      dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"}) as cluster:
+                      dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
         args = [sys.executable, "-m", "granstokes.cli", "study", "--preset", "smoke", "--out", str(out), "--quiet",
                 "--scheduler", cluster.scheduler_address, *[x for s in SMALL for x in ("--set", s)]]
         proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
