@@ -43,6 +43,10 @@ T_LABEL, DEPTH_LABEL = "t [sqrt(d/g)]", "depth below the plate [d]"
 RESPONSE_LABEL = {"u_w": "u_w [sqrt(g d)]", "mu_w": "mu_w = <tau_w>/<p>"}
 
 
+
+#: significant digits of the report's CSV tables (the DEM's errors are percent-level)
+CSV_FLOAT = "%.6g"
+
 def slug(label: str) -> str:
     """A file-name stem of a label: letters and digits, every other run of characters one underscore."""
     return re.sub(r"[^0-9A-Za-z]+", "_", label).strip("_")
@@ -650,27 +654,28 @@ def write_report(c: Comparison, out_dir) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     m = metrics(c)
     (out / "metrics.json").write_text(json.dumps(m, indent=2))
-    c.pairs.to_csv(out / "calibration_pairs.csv", index=False)
-    c.scorecard.rows.to_csv(out / "scorecard.csv", index=False)
+    c.pairs.to_csv(out / "calibration_pairs.csv", index=False, float_format=CSV_FLOAT)
+    c.scorecard.rows.to_csv(out / "scorecard.csv", index=False, float_format=CSV_FLOAT)
     names = display_labels(c)
     figs = [("scorecard", sigma_figure(c, out), "")] if len(c.scorecard.rows) else []
     figs += [("calibration", calibration_figure(c, out), ""), ("cost_noise", cost_figure(c, out), "")]
     for dc in c.drives:
         g, name = dc.dem, names[dc.label]
         stem = slug(name)
-        g.series.to_csv(out / f"series_{stem}.csv", index=False)
-        g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False)
-        g.delta.assign(delta_mu=dc.delta_mu).to_csv(out / f"delta_{stem}.csv", index=False)
+        g.series.to_csv(out / f"series_{stem}.csv", index=False, float_format=CSV_FLOAT)
+        g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False, float_format=CSV_FLOAT)
+        g.delta.assign(delta_mu=dc.delta_mu).to_csv(out / f"delta_{stem}.csv", index=False, float_format=CSV_FLOAT)
         for p in dc.predictions:
-            p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{p.model}.csv", index=False)
+            p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{p.model}.csv", index=False,
+                                                  float_format=CSV_FLOAT)
         if dc.predictions:
             figs += [("drive", drive_figure(dc, c.scorecard.bands, out, name), name),
                      ("profiles", profiles_figure(dc, c.material, out, name), name),
                      ("transient", transient_figure(dc, c.material, out, name), name),
                      ("fluidity", fluidity_figure(dc, c.material, out, name), name)]
     ch = c.checks
-    ch.width.to_csv(out / "width_check.csv", index=False)
-    ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False)
+    ch.width.to_csv(out / "width_check.csv", index=False, float_format=CSV_FLOAT)
+    ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False, float_format=CSV_FLOAT)
     drive_rows = [[html.escape(names.get(label, label)), d["kind"], fmt(d["imposed"]), html.escape(d["imposed_unit"]),
                    fmt_cell(d["seeds"]), fmt(d["u_w_inf"]["dem"], d["u_w_inf"]["dem_err"]),
                    fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]), fmt(d["t_steady"]), fmt_cell(d["frames"]),
