@@ -95,13 +95,14 @@ class StudyRunner:
 
     # --- stage 2: the runs -----------------------------------------------------------------------------
     def runs(self, sp: StudyPlan) -> dict:
-        """Every unfinished bed of every pressure on one executor; each run folder's status at the end."""
+        """Every unfinished bed of every pressure on one executor (a run folder already begun goes on with the
+        config stored in it); each run folder's status at the end."""
         runners, tasks = {}, []
         for label, r in sp.runs.items():
             folder = sp.folder(self.out, label)
             resume = (folder / layout.RUN_JSON).exists()
-            runner, meta = begin(dem_config.parse(r.text), r.text, folder, resume=resume, progress=False,
-                                 jobs=self.jobs)
+            text = (folder / layout.CONFIG_TOML).read_text() if resume else r.text  # a run goes on as it was planned
+            runner, meta = begin(dem_config.parse(text), text, folder, resume=resume, progress=False, jobs=self.jobs)
             runners[label] = (runner, meta)
             tasks += runner.bed_tasks(meta, prefix=f"{label}/")
 
