@@ -54,6 +54,8 @@ def _cmd_study(args) -> int:
             cp = plan_calibration(dem_config.parse(calibration_text(study, p_w)))
             print(f"study: calibration at p = {p_w:g}: {cp.cost_estimate(args.jobs)}", file=sys.stderr)
     sp = plan_study(study, material, source)
+    if args.resume:
+        sp = sp.as_begun(Path(args.out))
     if study.calibration_file is not None:  # a calibration of other grains is refused before any work
         _, grains, p_cal = material_table(study.calibration_file)
         for label, r in sp.runs.items():
@@ -62,7 +64,7 @@ def _cmd_study(args) -> int:
                     + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
     print(f"study '{study.name}': {len(study.pressures)} pressure(s) x {len(study.drives)} drive(s) x "
           f"{len(study.seeds)} seed(s), sized from {source} -> {args.out}", file=sys.stderr)
-    for line in sp.lines(args.jobs):
+    for line in sp.lines(args.jobs, Path(args.out) if args.resume else None):
         print(line, file=sys.stderr)
     if args.dry_run:
         return 0

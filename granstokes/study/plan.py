@@ -2,11 +2,13 @@
 calibration (dem.sizing with the calibrated material), and the calibration stage's configs."""
 from __future__ import annotations
 
+import json
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from granstokes.dem import config as dem_config
+from granstokes.dem.layout import CONFIG_TOML, RUN_JSON
 from granstokes.dem.sizing import Plan, duration_text, makespan, plan
 from granstokes.dem.throughput import measured
 from granstokes.lib.toml_text import with_entries
@@ -81,26 +83,52 @@ class StudyPlan:
     def folder(out: Path, label: str) -> Path:
         return out / RUNS / label
 
-    def cost_seconds(self, jobs: int) -> float:
-        """Every bed, longest first over ``jobs`` slots, at this machine's speed (dem.throughput)."""
-        speed = measured()
-        beds = [sum(r.plan.stage_seconds(k, speed) for k in r.plan.stage_keys(seed)) for r in self.runs.values()
-                for seed in r.plan.config.seeds]
-        return makespan(sorted(beds, reverse=True), jobs, contention=speed.contention)
+    def as_begun(self, out: Path) -> StudyPlan:
+        """This plan with each run already begun in the study folder ``out`` as its stored config has it (a resume
+        goes on as the run was planned)."""
+        runs = {}
+        for label, r in self.runs.items():
+            stored = self.folder(out, label) / CONFIG_TOML
+            text = stored.read_text() if (self.folder(out, label) / RUN_JSON).is_file() else r.text
+            runs[label] = r if text == r.text else StudyRun(r.p_w, text, plan(dem_config.parse(text)))
+        return StudyPlan(self.study, runs)
 
-    def lines(self, jobs: int) -> list[str]:
-        """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole."""
-        out = []
+    def done(self, out: Path | None) -> set[str]:
+        """The complete stages of the runs already begun in the study folder ``out``, as "label/stage key"."""
+        if out is None:
+            return set()
+        keys = set()
+        for label in self.runs:
+            meta = self.folder(out, label) / RUN_JSON
+            if meta.is_file():
+                stages = json.loads(meta.read_text()).get("stages", {})
+                keys |= {f"{label}/{k}" for k, st in stages.items() if st.get("status") == "complete"}
+        return keys
+
+    def cost_seconds(self, jobs: int, out: Path | None = None) -> float:
+        """Every bed (what is left of it in the study folder ``out``), longest first over ``jobs`` slots, at this
+        machine's speed (dem.throughput)."""
+        speed, done = measured(), self.done(out)
+        beds = [sum(r.plan.stage_seconds(k, speed) for k in r.plan.stage_keys(seed) if f"{label}/{k}" not in done)
+                for label, r in self.runs.items() for seed in r.plan.config.seeds]
+        return makespan(sorted([b for b in beds if b > 0], reverse=True), jobs, contention=speed.contention)
+
+    def lines(self, jobs: int, out: Path | None = None) -> list[str]:
+        """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole (what is left of it in
+        the study folder ``out``)."""
+        lines = []
         for label, r in self.runs.items():
             p = r.plan
             for d in p.drives:
-                out.append(f"  {label}, {d.drive.name}: delta_s = {d.scales.delta_s:.3g} d, t_s = "
-                           f"{d.scales.t_s:.3g}, depth {p.depth:g} d, width {p.config.box.width:g} d, duration "
-                           f"{d.duration:.4g} ({d.steps:.3g} steps), {p.n_grains} grains x "
-                           f"{len(p.config.seeds)} bed(s)")
-            out.append(f"  {label}: {p.cost_estimate(1)}")
-        out.append(f"  the study's beds: about {duration_text(self.cost_seconds(jobs))} with {jobs} job(s)")
-        return out
+                lines.append(f"  {label}, {d.drive.name}: delta_s = {d.scales.delta_s:.3g} d, t_s = "
+                             f"{d.scales.t_s:.3g}, depth {p.depth:g} d, width {p.config.box.width:g} d, duration "
+                             f"{d.duration:.4g} ({d.steps:.3g} steps), {p.n_grains} grains x "
+                             f"{len(p.config.seeds)} bed(s)")
+            lines.append(f"  {label}: {p.cost_estimate(1)}")
+        left = " (what is left)" if self.done(out) else ""
+        lines.append(f"  the study's beds{left}: about {duration_text(self.cost_seconds(jobs, out))} with {jobs} "
+                     "job(s)")
+        return lines
 
 
 def plan_study(study: Study, material: dict, source: str) -> StudyPlan:

@@ -95,14 +95,13 @@ class StudyRunner:
 
     # --- stage 2: the runs -----------------------------------------------------------------------------
     def runs(self, sp: StudyPlan) -> dict:
-        """Every unfinished bed of every pressure on one executor (a run folder already begun goes on with the
-        config stored in it); each run folder's status at the end."""
+        """Every unfinished bed of every pressure on one executor (``sp`` as begun: a run folder already begun goes
+        on with the config stored in it); each run folder's status at the end."""
         runners, tasks = {}, []
         for label, r in sp.runs.items():
             folder = sp.folder(self.out, label)
             resume = (folder / layout.RUN_JSON).exists()
-            text = (folder / layout.CONFIG_TOML).read_text() if resume else r.text  # a run goes on as it was planned
-            runner, meta = begin(dem_config.parse(text), text, folder, resume=resume, progress=False, jobs=self.jobs)
+            runner, meta = begin(r.plan.config, r.text, folder, resume=resume, progress=False, jobs=self.jobs)
             runners[label] = (runner, meta)
             tasks += runner.bed_tasks(meta, prefix=f"{label}/")
 
@@ -152,14 +151,14 @@ class StudyRunner:
             with sigterm_interrupts():
                 calibration = self.calibration()
                 material, _, _ = material_table(calibration)
-                sp = plan_study(self.study, material, str(calibration))
+                sp = plan_study(self.study, material, str(calibration)).as_begun(self.out)
                 self.record(lambda d: d["runs"].update({
                     label: {**d["runs"].get(label, {"beds": {}}), "p_w": r.p_w,
                             "path": str(sp.folder(self.out, label).relative_to(self.out)),
                             "drives": [dp.drive.name for dp in r.plan.drives],
                             "status": d["runs"].get(label, {}).get("status", "pending")}
                     for label, r in sp.runs.items()}))
-                for line in sp.lines(self.jobs):
+                for line in sp.lines(self.jobs, self.out):
                     self.announce(line)
                 results = self.runs(sp)
                 stopped = [(k, r) for k, r in results.items() if r.status != "complete"]
