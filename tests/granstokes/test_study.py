@@ -196,3 +196,23 @@ def test_the_demo_runs_its_study_once_then_renders_again(tmp_path, monkeypatch):
     demo.run_demo(other)
     (other / "study" / "study.json").write_text(json.dumps({"status": "running"}))
     assert granstokes_main(["demo", "--out", str(other)]) == 1 and calls == [False, False, True]
+
+
+def test_a_resume_plans_a_begun_run_as_its_stored_config(tmp_path):
+    """A run folder begun under an older sizing goes on as stored; runs not begun are planned anew; the cost
+    counts only the stages left."""
+    study = config.parse(_study(width_check=False))
+    material, _, _ = material_table(CALIBRATION)
+    sp = plan_study(study, material, "test")
+    folder = sp.folder(tmp_path, "p10")
+    folder.mkdir(parents=True)
+    stored = sp.runs["p10"].text.replace("duration_ts = 10.0", "duration_ts = 3.0")
+    (folder / "config.toml").write_text(stored)
+    stages = {k: {"status": "complete"} for k in sp.runs["p10"].plan.stage_keys(1)}
+    (folder / "run.json").write_text(json.dumps({"stages": stages}))
+    begun = sp.as_begun(tmp_path)
+    assert begun.runs["p10"].text == stored and begun.runs["p20"] is sp.runs["p20"]
+    first = begun.runs["p10"].plan.drives[0]
+    assert first.duration == pytest.approx(3 * first.scales.t_s)
+    assert begun.done(tmp_path) == {f"p10/{k}" for k in stages}
+    assert begun.cost_seconds(1, tmp_path) < begun.cost_seconds(1)
