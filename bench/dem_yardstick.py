@@ -8,15 +8,15 @@ style of the Hooke scenes' default ``grains.pair_style = "classic"``; k_n = 2e5,
 time step 1e-4, skin 0.1, gravity tilted 26 degrees, a frozen bottom layer, equal grains of diameter 1 on a
 simple lattice -- 32,000 spheres (3D), and its 2D analogue with 32,000 and 800 disks (the 800-disk chute, a
 scene's size, is the 2D yardstick).  Each runs WARMUP steps to leave the lattice, then is timed.  The 800-disk
-chute is run again with the same law written in ``pair_style granular`` (GRANULAR_LAW, the scenes' former
-default): the cost of the pair style itself.
+chute is run again with the same law written in ``pair_style granular`` (GRANULAR_LAW, the style Hertz grains
+use): the cost of the pair style itself.
 
 Scenes: the drive of each shipped preset (smoke, quick: 2D; spheres: 3D) from a bed the harness
 prepares, run for ``--steps`` steps by the script the harness generates, in the default classic pair style:
 with every output ("as run"), with none ("bare"), and as run but with the plate's statistics sampled every
-step (the scene before its sampling interval); then as run in ``grains.pair_style = "granular"`` (the former
-default) from a bed prepared in it.  Every run is on one rank, one at a time, best of ``--repeats``; the ratio is the
-scene's atom-steps/s over the yardstick of its dimension measured in the same invocation (the machine's speed
+step (the gain of the sampling interval); then as run in ``grains.pair_style = "granular"`` (the gain of the
+classic style) from a bed prepared in it.  Every run is on one rank, one at a time, best of ``--repeats``; the
+ratio is the scene's atom-steps/s over the yardstick of its dimension measured in the same invocation (the machine's speed
 cancels, as long as the load it shares the cores with stays even).  LAMMPS's timing breakdown (% of the loop in
 Pair, Neigh, Comm, Modify, Output) and its CPU use (below 100 % when the run waited for a core: the other load) are
 printed with each.  Writes bench/dem_yardstick.json and prints the table for bench/RESULTS.md.
@@ -48,7 +48,7 @@ GRANULAR_LAW = "hooke 200000.0 0.5 tangential linear_history 57142.857 0.5 0.5 d
 BREAKDOWN = ("Pair", "Neigh", "Comm", "Modify", "Output")
 SCENES = {"smoke": 2, "quick": 2, "spheres": 3}
 #: each scene's drive as the harness runs it (the default grains.pair_style, classic), with no output, with the
-#: plate's statistics sampled every step, and as run in pair_style granular (the former default)
+#: plate's statistics sampled every step, and as run in pair_style granular (the other contact implementation)
 VARIANTS = ("as run", "bare", "plate sampled every step", "as run in pair_style granular")
 
 
@@ -58,7 +58,7 @@ def chute(dim: int, atoms: int, steps: int) -> str:
 
 
 def with_granular_law(script: str) -> str:
-    """The chute with its contact law in ``pair_style granular`` (the scenes' former default): Hooke with the
+    """The chute with its contact law in ``pair_style granular`` (Hertz's style): Hooke with the
     same stiffness, linear tangential history with the same friction, damping by restitution (GRANULAR_LAW)."""
     return script.replace("pair_style gran/hooke/history 200000.0 NULL 50.0 NULL 0.5 0\npair_coeff * *",
                           f"pair_style granular\npair_coeff * * {GRANULAR_LAW}")
