@@ -11,15 +11,15 @@ scene's size, is the 2D yardstick).  Each runs WARMUP steps to leave the lattice
 chute is run again with the same law written in ``pair_style granular`` (GRANULAR_LAW, the style Hertz grains
 use): the cost of the pair style itself.
 
-Scenes: the drive of each shipped preset (smoke, quick: 2D; spheres: 3D) from a bed the harness
-prepares, run for ``--steps`` steps by the script the harness generates, in the default classic pair style:
-with every output ("as run"), with none ("bare"), and as run but with the plate's statistics sampled every
-step (the gain of the sampling interval); then as run in ``grains.pair_style = "granular"`` (the gain of the
-classic style) from a bed prepared in it.  Every run is on one rank, one at a time, best of ``--repeats``; the
-ratio is the scene's atom-steps/s over the yardstick of its dimension measured in the same invocation (the
-machine's speed cancels, as long as the load it shares the cores with stays even).  LAMMPS's timing breakdown (% of the loop in
-Pair, Neigh, Comm, Modify, Output) and its CPU use (below 100 % when the run waited for a core: the other load) are
-printed with each.  Writes bench/dem_yardstick.json and prints the table for bench/RESULTS.md.
+Scenes: the drive of each shipped preset (smoke, quick: 2D; spheres: 3D) from a bed the harness prepares, run for
+``--steps`` steps by the script the harness generates, in the default classic pair style: with every output ("as
+run"), with none ("bare"), and as run but with the plate's statistics sampled every step (the gain of the sampling
+interval); then as run in ``grains.pair_style = "granular"`` (the gain of the classic style) from a bed prepared in
+it. Every run is on one rank, one at a time, best of ``--repeats``; the ratio is the scene's atom-steps/s over the
+yardstick of its dimension measured in the same invocation (the machine's speed cancels, as long as the load it
+shares the cores with stays even). LAMMPS's timing breakdown (% of the loop in Pair, Neigh, Comm, Modify, Output)
+and its CPU use (below 100 % when the run waited for a core: the other load) are printed with each. Writes
+bench/dem_yardstick.json and prints the table for bench/RESULTS.md.
 """
 from __future__ import annotations
 
