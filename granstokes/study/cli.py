@@ -67,6 +67,15 @@ def _cmd_study(args) -> int:
     for line in sp.lines(args.jobs, Path(args.out) if args.resume else None):
         print(line, file=sys.stderr)
     if args.dry_run:
+        from granstokes.compare import noise
+
+        print("the DEM's standard errors this size buys (compare/noise.csv, fitted by bench/dem_cost_noise.py):",
+              file=sys.stderr)
+        table = noise.laws()
+        for label, r in sp.runs.items():
+            for d in r.plan.drives:
+                print(noise.error_line(f"{label}, {d.drive.name}", noise.drive_size(r.plan, d, r.p_w), table),
+                      file=sys.stderr)
         return 0
     record = run_study(study, text, args.out, jobs=args.jobs, scheduler=args.scheduler, resume=args.resume,
                        progress=not args.quiet)

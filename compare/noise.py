@@ -1,0 +1,122 @@
+"""The cost of an error bar: the DEM's standard error of each scored observable against a drive's size,
+
+    err = C_D  X^r  (seeds x area)^(-1/2)  duration^(-a)  p_w^(-b)
+
+with ``area`` the plate's area (2D: its length) in d^(D-1), ``duration`` the drive's in sqrt(d/g), and X the
+drive's expected scale of the observable (``SCALES``: what the calibrated local law gives before the run).
+Independent beds and independent lateral strips of one bed average alike: the exponent of seeds x area is
+the central limit's.  One law per scored observable and drive kind; its coefficients (``noise.csv``) are
+fitted by bench/dem_cost_noise.py on the committed studies (C_2 on the 2D disks, C_3 on the 3D spheres with
+the 2D exponents).  ``drive_errors`` predicts a planned drive's errors (``granstokes study --dry-run``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+NOISE_CSV = Path(__file__).with_name("noise.csv")
+#: the observable each drive kind scores (compare.scorecard), in the order printed
+SCORED = {"stress": ("u_w_inf", "delta_u", "creep_length", "t90"),
+          "speed": ("mu_w_inf", "delta_u", "creep_length", "t90")}
+#: the expected scale X of each observable: the local law's steady wall speed and friction, the layer
+#: thickness delta_s, the time scale t_s; "one" for an observable whose error does not follow a scale
+SCALES = {"u_w_inf": "u_w", "mu_w_inf": "mu_w", "delta_u": "one", "creep_length": "one", "t90": "t_s"}
+#: the plate's steady responses, whose scale is their expected value
+RESPONSES = ("u_w_inf", "mu_w_inf")
+UNITS = {"u_w_inf": "sqrt(g d)", "mu_w_inf": "", "delta_u": "d", "creep_length": "d", "t90": "sqrt(d/g)"}
+#: the exponent of seeds x area
+AVERAGING = 0.5
+
+
+@dataclass(frozen=True)
+class DriveSize:
+    """What a drive's error depends on: its kind, the scene's dimension, beds, plate area (d^(D-1)), duration,
+    pressure and the expected scales (``SCALES`` name -> value)."""
+
+    kind: str
+    dimension: int
+    seeds: int
+    area: float
+    duration: float
+    p_w: float
+    scales: dict
+
+    def x(self, observable: str) -> float:
+        name = SCALES[observable]
+        return 1.0 if name == "one" else float(self.scales[name])
+
+
+@dataclass(frozen=True)
+class NoiseLaw:
+    observable: str
+    kind: str
+    c2: float
+    c3: float
+    r: float
+    a: float
+    b: float
+
+    def error(self, size: DriveSize) -> float:
+        c = self.c2 if size.dimension == 2 else self.c3
+        return float(c * size.x(self.observable) ** self.r * (size.seeds * size.area) ** -AVERAGING
+                     * size.duration ** -self.a * size.p_w ** -self.b)
+
+
+def fit(err, x, seeds, area, duration, p_w, r: float | None = None, a: float | None = None,
+        b: float | None = None) -> dict:
+    """Least squares of ln err on ln X, ln duration and ln p_w (seeds x area at the fixed AVERAGING exponent): c, r,
+    a, b; an exponent given is held (one the rows do not vary independently, or that the physics sets)."""
+    y = np.log(np.asarray(err, float)) + AVERAGING * np.log(np.asarray(seeds, float) * np.asarray(area, float))
+    held = {"r": r, "a": a, "b": b}
+    terms = {"r": np.log(np.asarray(x, float)), "a": -np.log(np.asarray(duration, float)),
+             "b": -np.log(np.asarray(p_w, float))}
+    free = [k for k in terms if held[k] is None]
+    for k in terms:
+        if held[k] is not None:
+            y = y - held[k] * terms[k]
+    design = np.column_stack([np.ones_like(y), *(terms[k] for k in free)])
+    coef = np.linalg.lstsq(design, y, rcond=None)[0]
+    return {"c": float(np.exp(coef[0])), **{k: float(held[k]) for k in terms if held[k] is not None},
+            **dict(zip(free, map(float, coef[1:])))}
+
+
+def laws(path: Path = NOISE_CSV) -> dict[tuple[str, str], NoiseLaw]:
+    """The fitted laws by (observable, kind)."""
+    table = pd.read_csv(path)
+    return {(row.observable, row.kind): NoiseLaw(row.observable, row.kind, row.c2, row.c3, row.r, row.a, row.b)
+            for row in table.itertuples()}
+
+
+def drive_size(plan, drive_plan, p_w: float) -> DriveSize:
+    """A planned drive (dem.sizing.Plan and one of its DrivePlans) as a DriveSize, its scales those of the
+    plan's material."""
+    from granstokes.continuum.steady import steady_wall_speed
+
+    s = drive_plan.scales
+    u_w = (drive_plan.load.u_w if drive_plan.load.kind == "speed"
+           else s.U * steady_wall_speed(plan.config.material.friction, s.mu_w))
+    return DriveSize(drive_plan.load.kind, plan.dimension, len(plan.config.seeds), plan.area, drive_plan.duration,
+                     p_w, {"u_w": u_w, "mu_w": s.mu_w, "delta_s": s.delta_s, "t_s": s.t_s})
+
+
+def drive_errors(size: DriveSize, table: dict | None = None) -> dict[str, float]:
+    """The predicted standard error of each observable the drive scores."""
+    table = laws() if table is None else table
+    return {obs: table[(obs, size.kind)].error(size) for obs in SCORED[size.kind]}
+
+
+def error_line(label: str, size: DriveSize, table: dict | None = None) -> str:
+    """One drive's predicted errors, as ``granstokes study --dry-run`` prints them (relative to the expected value
+    for the plate's response)."""
+    parts = []
+    for obs, err in drive_errors(size, table).items():
+        unit = f" {UNITS[obs]}" if UNITS[obs] else ""
+        x = size.x(obs)
+        rel = f" ({err / x:.1%} of {x:.3g})" if obs in RESPONSES else ""
+        parts.append(f"{obs} +- {err:.3g}{unit}{rel}")
+    area = f"{size.area:g} d" + ("" if size.dimension == 2 else f"^{size.dimension - 1}")
+    return (f"  {label}: expected errors at {size.seeds} bed(s) x {area}, duration {size.duration:.4g}: "
+            + ", ".join(parts))
