@@ -4,6 +4,7 @@ fitted to compare.noise's law and checked by predicting each pressure's errors f
 
     .venv/bin/python bench/dem_cost_noise.py              # writes compare/noise.csv, bench/dem_cost_noise.{csv,png}
     .venv/bin/python bench/dem_cost_noise.py --plot-only  # redraws the PNG from the committed CSVs
+    .venv/bin/python bench/dem_cost_noise.py --forward DIR   # + runs FORWARD (4 min on 2 cores): ..._forward.csv
 
 Measured errors:
 * full window: each drive's dem_err in the scorecard (the spread over its beds, std/sqrt(n));
@@ -15,6 +16,10 @@ Measured errors:
   u_w_inf and mu_w_inf from series_*.csv, delta_u from delta_*.csv; creep_length has no time record (its
   duration exponent comes from the drives' durations), t90 is a transient's time (no duration exponent);
 * width: the study's width check (one drive in a bed twice as wide).
+
+The forward check (``--forward``): the committed study's scene at p_w = 10 (its calibration, new beds: seeds 5-12)
+with one stress and one speed drive, and its width check, run now; each bed's plate record gives the errors of
+subsets of beds and of shorter windows directly, and the laws' predictions for 8 beds are compared with them.
 """
 from __future__ import annotations
 
@@ -28,9 +33,13 @@ import pandas as pd
 from granstokes.compare import noise
 from granstokes.compare.plate import STEADY_LAST, block_estimate
 from granstokes.dem import config as dem_config
+from granstokes.dem.calibrate import material_table
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter
+
+from granstokes.study import config as study_config
+from granstokes.study.plan import plan_study
 
 ROOT = Path(__file__).resolve().parents[1]
 HERE = ROOT / "bench"
@@ -46,6 +55,10 @@ WITHIN = 1.5
 #: lengths of the steady profile: one law for both drive kinds, their error in d independent of the pressure
 #: (the layer's edge is placed to within the grains' structure at any pressure)
 LENGTHS = ("delta_u", "creep_length")
+#: the forward check: the disks study cut to one pressure, two drives and eight new beds, with its calibration
+FORWARD = ["seeds=[5, 6, 7, 8, 9, 10, 11, 12]", "pressures=[10.0]",
+           'drive=[{kind = "stress", mu_w_tilde = 0.45}, {kind = "speed", mu_w_tilde = 0.45}]']
+CALIBRATION_2D = STUDY_2D / "calibration-p20" / "calibration.json"
 PRESSURE_COLOURS = {5.0: "C0", 10.0: "C1", 20.0: "C2"}
 
 
@@ -81,17 +94,25 @@ def shorter_windows(folder: Path, full: pd.DataFrame) -> pd.DataFrame:
         rec = pd.read_csv(folder / f"{prefix}_{r.drive}.csv").dropna(subset=[column])
         t0 = STEADY_LAST * r.duration
         y = rec[column].to_numpy()[rec.t.to_numpy() >= t0]
-        block_full = block_estimate({"y": y})["stderr"]
-        offset2 = max(r.err**2 - block_full**2, 0.0)
-        for f in FRACTIONS:
-            parts = np.array_split(y, round(1 / f))
-            block = float(np.sqrt(np.mean([block_estimate({"y": p})["stderr"] ** 2 for p in parts])))
-            # the fluctuating part scaled to make the full window's error the measured one
-            err = np.sqrt(offset2 + (r.err**2 - offset2) * (block / block_full) ** 2)
+        for f, err, block_full, offset in decomposed(y, r.err):
             rows.append({**r._asdict(), "fraction": f, "duration": r.duration * f, "grain_steps": r.grain_steps * f,
-                         "err": float(err), "how": "offset + blocks",
-                         "block_full": block_full, "offset": np.sqrt(offset2)})
+                         "err": err, "how": "offset + blocks", "block_full": block_full, "offset": offset})
     return pd.DataFrame(rows).drop(columns="Index")
+
+
+def decomposed(y: np.ndarray, err: float) -> list[tuple[float, float, float, float]]:
+    """(f, err_f, block error of the full window, offset) for each of FRACTIONS, from the seed-mean record ``y``
+    over the steady window and the drive's error ``err`` over it (module docstring)."""
+    block_full = block_estimate({"y": y})["stderr"]
+    offset2 = max(err**2 - block_full**2, 0.0)
+    out = []
+    for f in FRACTIONS:
+        parts = np.array_split(y, round(1 / f))
+        block = float(np.sqrt(np.mean([block_estimate({"y": p})["stderr"] ** 2 for p in parts])))
+        # the fluctuating part scaled to make the full window's error the measured one
+        out.append((f, float(np.sqrt(offset2 + (err**2 - offset2) * (block / block_full) ** 2)), block_full,
+                    float(np.sqrt(offset2))))
+    return out
 
 
 def duration_exponent(short: pd.DataFrame) -> float:
@@ -179,11 +200,13 @@ OBS_LABELS = {"u_w_inf": "u_w_inf (stress drives)", "mu_w_inf": "mu_w_inf (speed
               "creep_length": "creep length", "t90": "t90"}
 KIND_MARKERS = {"stress": "o", "speed": "s"}
 PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
+#: minor ticks labelled at 2 and 5 times a power of ten only
+SPARSE = FuncFormatter(lambda v, _: f"{v:g}" if f"{v:.0e}"[0] in "25" else "")
 
 
-def plot(measured: pd.DataFrame, path: Path) -> Path:
+def plot(measured: pd.DataFrame, forward: pd.DataFrame | None, path: Path) -> Path:
     """One panel per observable: relative error against grain-steps (filled: a drive's full window; open and
-    joined: its shorter windows; crosses: the fitted law; grey: 3D), and the held-out check."""
+    joined: its shorter windows; crosses: the fitted law; grey: 3D), and the held-out and forward checks."""
     fig = Figure(figsize=(12, 7.8), layout="constrained")
     axes = fig.subplots(2, 3).ravel()
     for ax, (obs, label) in zip(axes, OBS_LABELS.items()):
@@ -202,17 +225,21 @@ def plot(measured: pd.DataFrame, path: Path) -> Path:
         ax.set(xscale="log", yscale="log", title=label, xlabel="grain-steps (beds x grains x steps)",
                ylabel="standard error / |value| [%]")
         ax.yaxis.set_major_formatter(PLAIN)
-        ax.yaxis.set_minor_formatter(PLAIN)
+        ax.yaxis.set_minor_formatter(SPARSE)
     ax = axes[-1]
     for obs, marker in zip(OBS_LABELS, "o^sDv"):
         g = measured[(measured.observable == obs) & measured.heldout.notna()]
         ax.scatter(g.err, g.heldout, marker=marker, c=[PRESSURE_COLOURS[p] for p in g.p_w], s=22, label=obs)
+    if forward is not None:
+        f = forward[(forward.beds == forward.beds.max()) & (forward.fraction == 1.0)]
+        ax.scatter(f.measured, f.predicted, marker="*", c="k", s=70, label="forward: 8 new beds, p_w = 10")
     lim = np.array([measured.err[measured.heldout.notna()].min() / 2, measured.err.max() * 2])
     ax.plot(lim, lim, "k-", lw=0.8)
     for k in (WITHIN, 1 / WITHIN):
         ax.plot(lim, k * lim, "k:", lw=0.8)
-    ax.set(xscale="log", yscale="log", xlabel="measured error (spread over 4 beds)",
-           ylabel="predicted with its pressure held out", title=f"held-out check (dotted: x{WITHIN:g}, 1/{WITHIN:g})")
+    ax.set(xscale="log", yscale="log", xlabel="measured error (spread over the beds)",
+           ylabel="predicted (pressure held out / before the run)",
+           title=f"predicted against measured (dotted: x{WITHIN:g})")
     ax.legend(fontsize=7, loc="upper left", frameon=False)
     handles = [Line2D([], [], color=c, marker="o", ls="none", label=f"2D, p_w = {p:g}")
                for p, c in PRESSURE_COLOURS.items()]
@@ -229,18 +256,103 @@ def plot(measured: pd.DataFrame, path: Path) -> Path:
     return path
 
 
+def forward_plan():
+    """The FORWARD study's plan (its p10 run and width check), sized from the committed calibration."""
+    study, _ = study_config.load(None, "disks", FORWARD)
+    material, _, _ = material_table(CALIBRATION_2D)
+    return plan_study(study, material, str(CALIBRATION_2D))
+
+
+def run_forward(out: Path, jobs: int = 2):
+    """Run (or resume) the FORWARD study's runs, one folder per run label under ``out``; its plan."""
+    from granstokes.dem.layout import RUN_JSON
+    from granstokes.dem.runner import run
+
+    sp = forward_plan()
+    for label, r in sp.runs.items():
+        folder = out / label
+        meta = folder / RUN_JSON
+        stages = json.loads(meta.read_text()).get("stages", {}) if meta.exists() else {}
+        if not stages or any(st.get("status") != "complete" for st in stages.values()):
+            result = run(dem_config.parse(r.text), r.text, folder, resume=meta.exists(), progress=False, jobs=jobs)
+            if result.status != "complete":
+                raise RuntimeError(f"{label}: {result.status} {result.message}")
+    return sp
+
+
+#: bed counts of the forward check's error against beds (random partitions of its beds into groups of k)
+GROUPS, PARTITIONS = (1, 2, 4), 200
+
+
+def forward_rows(sp, out: Path) -> pd.DataFrame:
+    """Each forward drive's plate response and t90: the error measured from its beds (spread of the per-bed values)
+    against the laws' prediction at its size, over shorter windows (with the decomposition's estimate from the
+    seed-mean record, as on the committed study) and for groups of fewer beds."""
+    from dataclasses import replace
+
+    from granstokes.compare.analysis import _ensemble_series, drive_specs
+    from granstokes.compare.plate import PlateRecord, window_values
+    from granstokes.compare.scorecard import t90
+
+    table, rng, rows = noise.laws(), np.random.default_rng(1), []
+    for label, r in sp.runs.items():
+        plans = {d.drive.name: d for d in r.plan.drives}
+        for spec in drive_specs(out / label):
+            d = plans[spec.name]
+            size = noise.drive_size(r.plan, d, r.p_w)
+            plates = [PlateRecord.read(f.path) for f in spec.folders]
+            resp = "u_w" if d.load.kind == "stress" else "mu_w"
+            obs, n = f"{resp}_inf", len(plates)
+            law = table[(obs, d.load.kind)]
+            t = plates[0].t
+            t0 = t[0] + STEADY_LAST * (t[-1] - t[0])
+            base = {"run": label, "drive": spec.name, "kind": d.load.kind, "area": size.area}
+            values = {}
+            for f in FRACTIONS:
+                start = t[-1] - f * (t[-1] - t0)
+                values[f] = np.array([window_values(p, start)[resp]["value"] for p in plates])
+            err = float(values[1.0].std(ddof=1) / np.sqrt(n))
+            series = _ensemble_series(tuple(plates))
+            seed_mean = series[resp].to_numpy()[series.t.to_numpy() >= t0]
+            for f, estimate, block_full, _ in decomposed(seed_mean, err):
+                rows.append({**base, "observable": obs, "beds": n, "fraction": f, "value": values[f].mean(),
+                             "measured": float(values[f].std(ddof=1) / np.sqrt(n)), "decomposed": estimate,
+                             "block_full": block_full,
+                             "predicted": law.error(replace(size, duration=size.duration * f))})
+            # one bed's own error estimate (blocks of its record) beside the spread of single beds
+            one_bed = float(np.sqrt(np.mean([window_values(p, t0)[resp]["stderr"] ** 2 for p in plates])))
+            for k in GROUPS:
+                var = np.mean([np.var(rng.permutation(values[1.0]).reshape(-1, k).mean(axis=1), ddof=1)
+                               for _ in range(PARTITIONS)])
+                rows.append({**base, "observable": obs, "beds": k, "fraction": 1.0, "value": values[1.0].mean(),
+                             "measured": float(np.sqrt(var)), "predicted": law.error(replace(size, seeds=k)),
+                             "block_one_bed": one_bed if k == 1 else np.nan})
+            times = np.array([t90(p.t, getattr(p, resp)) for p in plates])
+            rows.append({**base, "observable": "t90", "beds": n, "fraction": 1.0, "value": times.mean(),
+                         "measured": float(times.std(ddof=1) / np.sqrt(n)),
+                         "predicted": table[("t90", d.load.kind)].error(size)})
+    return pd.DataFrame(rows)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--plot-only", action="store_true", help="redraw the PNG from bench/dem_cost_noise.csv")
+    parser.add_argument("--forward", type=Path, metavar="DIR", help="run (or resume) the forward check in DIR")
     args = parser.parse_args()
+    forward_csv = HERE / "dem_cost_noise_forward.csv"
     if args.plot_only:
-        measured = pd.read_csv(HERE / "dem_cost_noise.csv")
-        plot(measured, HERE / "dem_cost_noise.png")
+        forward = pd.read_csv(forward_csv) if forward_csv.exists() else None
+        plot(pd.read_csv(HERE / "dem_cost_noise.csv"), forward, HERE / "dem_cost_noise.png")
         return
     measured, table, held, checks = measure()
     measured.to_csv(HERE / "dem_cost_noise.csv", index=False, float_format="%.6g")
     table.to_csv(noise.NOISE_CSV, index=False, float_format="%.6g")
-    plot(measured, HERE / "dem_cost_noise.png")
+    if args.forward:
+        forward = forward_rows(run_forward(args.forward), args.forward)
+        forward.to_csv(forward_csv, index=False, float_format="%.6g")
+    else:
+        forward = pd.read_csv(forward_csv) if forward_csv.exists() else None
+    plot(measured, forward, HERE / "dem_cost_noise.png")
     print("| observable | drives | C_2 | C_3 | r (scale) | a (measured, from) | b |")
     print("|---|---|---|---|---|---|---|")
     for r in table.itertuples():
@@ -258,6 +370,35 @@ def main():
     print(f"width: error ratio twice as wide {checks['width_ratio']:.3f} (law {checks['width_ratio_law']:.3f})")
     print(f"seed spread / block error of the seed-mean record, median: u_w {checks['seed_over_block_u_w']:.2f}, "
           f"mu_w {checks['seed_over_block_mu_w']:.2f}")
+    if forward is not None:
+        print_forward(forward)
+
+
+def print_forward(fwd: pd.DataFrame):
+    """The forward check's tables for bench/RESULTS.md."""
+    print("\nforward check (new beds, predicted from compare/noise.csv before the run):")
+    print("| run | drive | observable | beds | window | value | measured | decomposed | predicted | pred./meas. |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for r in fwd.itertuples():
+        dec = "" if pd.isna(getattr(r, "decomposed", np.nan)) else f"{r.decomposed:.3g}"
+        print(f"| {r.run} | {r.drive} | {r.observable} | {r.beds} | {r.fraction:g} | {r.value:.4g} | {r.measured:.3g} "
+              f"| {dec} | {r.predicted:.3g} | x{r.predicted / r.measured:.2f} |")
+    for (run, drive), g in fwd[fwd.observable.isin(RECORDS) & (fwd.beds == fwd.beds.max())].groupby(["run", "drive"]):
+        direct = -np.polyfit(np.log(g.fraction), np.log(g.measured), 1)[0]
+        dec = -np.polyfit(np.log(g.fraction), np.log(g.decomposed), 1)[0]
+        print(f"{run} {drive}: duration exponent from the beds {direct:.2f}, by the decomposition {dec:.2f}")
+    for (run, drive), g in fwd[fwd.fraction.eq(1.0) & fwd.observable.isin(RECORDS) & fwd.beds.isin(GROUPS)].groupby(
+            ["run", "drive"]):
+        slope = -np.polyfit(np.log(g.beds), np.log(g.measured), 1)[0]
+        one = g[g.beds == 1].iloc[0]
+        print(f"{run} {drive}: bed-count exponent {slope:.2f} (law {noise.AVERAGING}); one bed's block error "
+              f"{one.block_one_bed:.3g} against the spread of single beds {one.measured:.3g} "
+              f"(x{one.measured / one.block_one_bed:.2f})")
+    normal, wide = (fwd[(fwd.run == run) & (fwd.observable == "u_w_inf") & (fwd.beds == 8) & (fwd.fraction == 1.0)]
+                    for run in ("p10", "p10-wide"))
+    ratio = wide.measured.iloc[0] / normal.measured.iloc[0]
+    print(f"width: u_w_inf error twice as wide / as wide x{ratio:.3f} (exponent {-np.log2(ratio):.2f}, law "
+          f"{noise.AVERAGING})")
 
 
 if __name__ == "__main__":
