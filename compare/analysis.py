@@ -120,6 +120,9 @@ class DriveAnalysis:
     mean_profile: pd.DataFrame   # the whole run: hydrostatics need no steady state
     instant: pd.DataFrame        # seed-averaged profiles of every snapshot, with depth
     delta: pd.DataFrame          # t, delta_u
+    snapshots: np.ndarray        # times of the transient profiles shown and predicted (snapshot_times)
+    samples: tuple[pd.DataFrame, ...]  # independent steady-window profiles (steady_samples)
+    samples_how: str             # what they are: seeds or blocks of one seed
 
     @property
     def response(self) -> str:
@@ -231,17 +234,40 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
     # the final 30 %: a steady plate record can begin while the creep below still deepens (the bed's
     # momentum still grows and the bulk tau lags the plate's)
     check = bulk_tau(plates, profiles, surface, spec.depth, STEADY_WINDOW_LATEST * t_end, t_end)
+    samples, how = steady_samples(profiles, surface, t0, t_end)
     return DriveAnalysis(spec, plates, profiles, series, steady, t0, t_end, slips, check, steady_profile,
-                         mean_profile, inst, delta)
+                         mean_profile, inst, delta, snapshot_times(first.times()), samples, how)
+
+
+#: blocks of a single seed's steady window that stand for independent samples (steady_samples)
+BLOCKS = 4
+
+
+def steady_samples(profiles, surface, t0: float, t_end: float) -> tuple[tuple[pd.DataFrame, ...], str]:
+    """Independent steady-window profiles (every field, with depth below the plate's contact plane
+    ``surface(t)``, sorted by depth): one per seed, or BLOCKS consecutive blocks of a single seed's window."""
+    if len(profiles) >= 2:
+        windows = [(p, t0, t_end) for p in profiles]
+        how = f"spread over {len(profiles)} seeds"
+    else:
+        edges = np.linspace(t0, t_end, BLOCKS + 1)
+        windows = [(profiles[0], lo, hi) for lo, hi in zip(edges[:-1], edges[1:])]
+        how = f"spread over {BLOCKS} blocks of the steady window (1 seed)"
+    out = []
+    for prof, lo, hi in windows:
+        w = prof.window(lo, hi)
+        w.insert(1, "depth", float(np.mean(surface([lo, hi]))) - w.y)
+        out.append(w[w.depth >= 0].sort_values("depth"))
+    return tuple(out), how
 
 
 #: delta_u(t) is measured only once the plate moves at 1 % of its steady speed (before, u/u_w is noise)
 DELTA_MIN_SPEED = 1e-2
 
 
-def snapshot_times(a: DriveAnalysis, n: int = 5) -> np.ndarray:
-    """About ``n`` log-spaced times of the drive's atom snapshots (t > 0): the transient profiles."""
-    t = a.spec.folders[0].times()
+def snapshot_times(times, n: int = 5) -> np.ndarray:
+    """About ``n`` log-spaced times among a drive's atom snapshots ``times`` (t > 0): the transient profiles."""
+    t = np.asarray(times, dtype=float)
     t = t[t > 0]
     picks = np.unique(np.searchsorted(t, np.geomspace(t[0], t[-1], n)).clip(0, len(t) - 1))
     return t[picks]

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 from granstokes.lib.staging import claim, staged
@@ -13,6 +14,7 @@ COMMAND = "compare"
 def run_compare(args) -> int:
     from granstokes.dem.layout import RUN_JSON
 
+    require(args.jobs >= 1, "--jobs", "an integer >= 1 (processes predicting the drives)", args.jobs)
     for run in args.runs:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
@@ -31,7 +33,7 @@ def run_compare(args) -> int:
     from .report import write_report
     from .scorecard import tally
 
-    comparison = build(args.runs, calibration=args.calibration, fit_on_drives=args.fit_on_drives)
+    comparison = build(args.runs, calibration=args.calibration, fit_on_drives=args.fit_on_drives, jobs=args.jobs)
     with staged(args.out, COMMAND, inputs) as work:
         m = write_report(comparison, work)
     if args.json:
@@ -56,5 +58,7 @@ def register(sub) -> None:
     p.add_argument("--fit-on-drives", action="store_true",
                    help="fit mu(I) on the drives' own steady windows instead: a restatement, every row labelled not "
                         "blind and never counted as support for a model")
+    p.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                   help="processes predicting and scoring the drives (default: the machine's cores)")
     p.add_argument("--json", action="store_true", help="also print metrics.json to stdout")
     p.set_defaults(func=run_compare)

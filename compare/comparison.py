@@ -12,6 +12,8 @@ compare.metrics and compare.report only render it.  DEM units throughout; I in t
 from __future__ import annotations
 
 import json
+import multiprocessing as mp
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,7 +30,7 @@ from tqdm import tqdm
 from granstokes.lib.validate import require
 
 from . import calibrate
-from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, nearest_frame, snapshot_times
+from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, nearest_frame
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
 from .models import LOCAL, PAPER, Prediction, ngf_model
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
@@ -209,26 +211,79 @@ def _checks(a: DriveAnalysis) -> Checks:
     return Checks(a.label, widths, cross, summary)
 
 
-def _predict(a: DriveAnalysis, material: Material, models, failure: str) -> DriveComparison:
-    s = a.spec
-    dm = delta_mu(a, material.mu_s)
-    if failure:
-        return DriveComparison(a, None, (), f"no continuum prediction: the mu(I) calibration failed ({failure})", dm)
-    try:
-        scales = s.load.scales(material)
-    except ValueError as err:  # e.g. tau_w >= mu_d p_w: local mu(I) has no steady state at all
-        return DriveComparison(a, None, (), f"no continuum prediction: {err} (the calibrated mu(I) cannot sustain "
-                                            "this drive: the plate would accelerate forever)", dm)
+def prediction_times(a: DriveAnalysis) -> np.ndarray:
+    """The continuum's output times for drive ``a``: log-spaced up to the record's end, plus its snapshots."""
     t_end = float(a.series.t.iloc[-1])
-    times = np.union1d(np.geomspace(t_end / PREDICTION_SPAN, t_end, PREDICTION_TIMES), snapshot_times(a))
+    return np.union1d(np.geomspace(t_end / PREDICTION_SPAN, t_end, PREDICTION_TIMES), a.snapshots)
+
+
+def _predict(a: DriveAnalysis, material: Material, models, failure: str) -> tuple:
+    """(scales, predictions, note, base) of drive ``a``: every model's prediction, or a note saying why none."""
+    if failure:
+        return None, (), f"no continuum prediction: the mu(I) calibration failed ({failure})", ""
+    try:
+        scales = a.spec.load.scales(material)
+    except ValueError as err:  # e.g. tau_w >= mu_d p_w: local mu(I) has no steady state at all
+        return None, (), (f"no continuum prediction: {err} (the calibrated mu(I) cannot sustain this drive: the "
+                          "plate would accelerate forever)"), ""
+    times = prediction_times(a)
     preds = []
     for model in models:
         try:
-            preds.append(model.predict(material, s.drive, times))
+            preds.append(model.predict(material, a.spec.drive, times))
         except RuntimeError as err:  # a solver that gave up (continuum.stepper): said, not hidden
-            return DriveComparison(a, None, (), f"no continuum prediction: the {model.key} model's solver failed "
-                                                f"({err}) at this calibration", dm)
-    return DriveComparison(a, scales, tuple(preds), "", dm, base_reach(a, preds[0].steady.delta_s))
+            return None, (), (f"no continuum prediction: the {model.key} model's solver failed ({err}) at this "
+                              "calibration"), ""
+    return scales, tuple(preds), "", base_reach(a, preds[0].steady.delta_s)
+
+
+@dataclass(frozen=True)
+class ModelSide:
+    """Everything a drive's predictions and scoring need beyond the drive itself (shared by the workers)."""
+
+    material: Material
+    models: tuple
+    failure: str
+    replicates: pd.DataFrame
+    fitted_on: dict
+    independent: bool
+
+
+def _model_drive(a: DriveAnalysis, side: ModelSide) -> tuple:
+    """One drive's model side: (scales, predictions, note, base), its scorecard rows, the band edges' largest
+    relative change and its bands (compare.scorecard.score)."""
+    scales, preds, note, base = _predict(a, side.material, side.models, side.failure)
+    if not preds:
+        return (scales, preds, note, base), pd.DataFrame(), np.nan, {}
+    predictions = {(a.label, p.model): p for p in preds}
+    rows, edges, bands = score([a], list(side.models), predictions, side.material, side.replicates,
+                               {a.label: preds[0].steady.delta_s}, side.fitted_on, False, side.independent)
+    return (scales, preds, note, base), rows, edges, bands
+
+
+#: the drives a forked worker reads (set by model_drives before the pool starts: nothing large is pickled)
+_SHARED: dict = {}
+
+
+def _model_drive_at(i: int) -> tuple:
+    return _model_drive(_SHARED["drives"][i], _SHARED["side"])
+
+
+def model_drives(drives: list[DriveAnalysis], side: ModelSide, jobs: int = 1, progress: bool = True) -> list:
+    """``_model_drive`` of every drive, in ``jobs`` forked processes (the drives are independent), in order."""
+    jobs = max(1, min(jobs, len(drives)))
+    bar = dict(total=len(drives), desc="continuum predictions", disable=not progress or None)
+    if jobs == 1 or "fork" not in mp.get_all_start_methods():
+        return [_model_drive(a, side) for a in tqdm(drives, **bar)]
+    _SHARED.update(drives=drives, side=side)
+    try:
+        with ProcessPoolExecutor(jobs, mp_context=mp.get_context("fork")) as pool:
+            futures = [pool.submit(_model_drive_at, i) for i in range(len(drives))]
+            for _ in tqdm(as_completed(futures), **bar):
+                pass
+            return [f.result() for f in futures]
+    finally:
+        _SHARED.clear()
 
 
 def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.DataFrame:
@@ -252,10 +307,10 @@ def check_grains(cal: Calibration, runs) -> None:
 
 
 def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
-          calibration: str | Path | None = None, fit_on_drives: bool = False) -> Comparison:
+          calibration: str | Path | None = None, fit_on_drives: bool = False, jobs: int = 1) -> Comparison:
     """Analyse every drive of ``run_dirs``; take mu(I) and phi from ``calibration`` (calibration.json,
     refused if its grains differ from the runs') or, only with ``fit_on_drives``, fit them on the steady
-    windows; predict each drive."""
+    windows; predict and score each drive (``jobs`` processes: model_drives)."""
     if (calibration is None) != fit_on_drives:
         raise ValueError("--calibration or --fit-on-drives: exactly one of them (an independent calibration.json of "
                          "granstokes dem calibrate, or a fit on the drives that is never scored as support)")
@@ -289,14 +344,17 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
     models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if ngf else [])
     if ngf:
         replicates = replicates.assign(A=_amplitude_samples(fluidity, len(replicates)))
-    compared = tuple(_predict(a, material, models, failure)
-                     for a in tqdm(drives, desc="continuum predictions", disable=not progress or None))
-    predictions = {(dc.label, p.model): p for dc in compared for p in dc.predictions}
-    delta_s = {dc.label: dc.predictions[0].steady.delta_s for dc in compared if dc.predictions}
-    t0 = {a.label: a.t_window for a in drives}
-    rows, edges, bands = score([dc.dem for dc in compared if dc.predictions], models, predictions, material, replicates,
-                               delta_s, t0, {"ngf": fluidity.drive} if ngf else {}, progress, independent is not None)
-    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a)], len(replicates), edges, bands)
+    side = ModelSide(material, tuple(models), failure, replicates, {"ngf": fluidity.drive} if ngf else {},
+                     independent is not None)
+    results = model_drives(drives, side, jobs, progress)
+    compared = tuple(DriveComparison(a, scales, preds, note, delta_mu(a, material.mu_s), base)
+                     for a, ((scales, preds, note, base), *_) in zip(drives, results))
+    rows = pd.concat([r[1] for r in results if len(r[1])], ignore_index=True) if any(len(r[1]) for r in results) \
+        else pd.DataFrame()
+    edges = [r[2] for r in results if np.isfinite(r[2])]
+    bands = {k: v for r in results for k, v in r[3].items()}
+    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a)], len(replicates),
+                        float(np.max(edges)) if edges else np.nan, bands)
     return Comparison(runs, compared, pairs, cal, source, replicates, material, phi,
                       mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings, law_test(pairs, cal))
 

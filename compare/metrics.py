@@ -8,11 +8,11 @@ from scipy import stats
 
 from granstokes.lib.provenance import provenance
 
-from .analysis import TRANSITS_BEFORE_COMPARISON
+from .analysis import BLOCKS, TRANSITS_BEFORE_COMPARISON
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
 from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_WINDOW, TREND_SIGMA
-from .scorecard import BLOCKS, OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length, tally
+from .scorecard import OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length, tally
 
 #: name -> (unit, definition)
 DEFINITIONS = {

@@ -7,7 +7,7 @@ same drive, at one point per d of depth from WALL_EXCLUSION below the plate to W
 the base, where the DEM's u exceeds U_FLOOR u_w.  Fitting the logarithm of the normalised profile
 weighs every d of depth alike, tail and layer, and fits the profile's shape only: u_w itself stays a
 prediction.  Its 95 % interval: A is fitted on each independent sample of the steady window (seeds,
-or blocks of one seed: compare.scorecard.steady_samples) and the interval is the t interval of
+or blocks of one seed: compare.analysis.steady_samples) and the interval is the t interval of
 their mean.
 """
 from __future__ import annotations
@@ -22,7 +22,6 @@ from scipy.optimize import minimize_scalar
 
 from .analysis import DriveAnalysis
 from .calibrate import PAIR_SPACING, WALL_EXCLUSION
-from .scorecard import steady_samples
 
 #: DEM velocities below this fraction of u_w are noise (a grain's thermal jiggle), not creep
 U_FLOOR = 1e-4
@@ -65,7 +64,7 @@ def _fit_one(material: Material, a: DriveAnalysis, depth, u) -> float:
 
 def fit_amplitude(a: DriveAnalysis, material: Material) -> FluidityFit:
     """A of drive ``a`` (its steady window), with the interval from the spread over independent samples."""
-    samples, how = steady_samples(a, a.t_window)
+    samples, how = a.samples, a.samples_how
     grid = np.arange(0.0, a.spec.depth + PAIR_SPACING / 2, PAIR_SPACING)
     fits = []
     for s in samples:

@@ -24,7 +24,7 @@ from matplotlib.ticker import LogFormatter, LogLocator
 
 from granstokes.lib.page import page
 
-from .analysis import nearest_frame, snapshot_times
+from .analysis import nearest_frame
 from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
@@ -256,7 +256,7 @@ def transient_figure(dc: DriveComparison, material, out: Path, name: str | None 
     vel = dc.predictions[0].profiles
     fig = Figure(figsize=(12, 5), layout="constrained")
     axes = fig.subplots(1, 3, sharey=True)
-    times = snapshot_times(g)
+    times = g.snapshots
     for k, t in enumerate(times):
         dem, cont = nearest_frame(g.instant, t).sort_values("depth"), nearest_frame(vel, t).sort_values("depth")
         model = {"u_x": cont.u, "mu": cont.mu,

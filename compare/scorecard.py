@@ -53,7 +53,6 @@ OBSERVABLES = {
     "t90": ("sqrt(d/g)", "time to 90 % of the change of the free response"),
     "creep_length": ("d", "e-folding length of u below delta_s"),
 }
-BLOCKS = 4
 SIGMA_CONSISTENT = 2.0
 Z95 = stats.norm.ppf(0.975)
 #: t90: the running mean over this fraction of the record reaches this fraction of the change
@@ -126,25 +125,6 @@ def base_reach(a: DriveAnalysis, delta_s: float) -> str:
     return ""
 
 
-def steady_samples(a: DriveAnalysis, t0: float) -> tuple[list[pd.DataFrame], str]:
-    """Independent steady-window profiles (every field, with depth, sorted by depth): one per seed, or
-    BLOCKS consecutive blocks of the window of a single seed."""
-    t_end = a.t_end
-    if len(a.profiles) >= 2:
-        windows = [(p, t0, t_end) for p in a.profiles]
-        how = f"spread over {len(a.profiles)} seeds"
-    else:
-        edges = np.linspace(t0, t_end, BLOCKS + 1)
-        windows = [(a.profiles[0], lo, hi) for lo, hi in zip(edges[:-1], edges[1:])]
-        how = f"spread over {BLOCKS} blocks of the steady window (1 seed)"
-    out = []
-    for prof, lo, hi in windows:
-        w = prof.window(lo, hi)
-        w.insert(1, "depth", float(np.mean(a.surface([lo, hi]))) - w.y)
-        out.append(w[w.depth >= 0].sort_values("depth"))
-    return out, how
-
-
 def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
     """Rows of a depth profile away from plate and base (WALL_EXCLUSION)."""
     return (table.depth > WALL_EXCLUSION) & (table.depth < bed_depth - WALL_EXCLUSION)
@@ -181,12 +161,12 @@ def scene_checks(a: DriveAnalysis) -> list[dict]:
     ]
 
 
-def dem_observables(a: DriveAnalysis, t0: float, delta_s: float) -> dict[str, Measured]:
-    """The DEM's value and error of every observable of drive ``a`` (steady window from t0)."""
+def dem_observables(a: DriveAnalysis, delta_s: float) -> dict[str, Measured]:
+    """The DEM's value and error of every observable of drive ``a`` (its steady window: ``a.samples``)."""
     resp = a.response
     st = a.steady[resp]
     out = {f"{resp}_inf": Measured(st["value"], st["stderr"], st["method"])}
-    samples, how = steady_samples(a, t0)
+    samples, how = a.samples, a.samples_how
     out["delta_u"] = _mean_err([depth_at_fraction(s.depth.to_numpy(), s.u_x.to_numpy(), s.u_x.iloc[0])
                                 for s in samples], how)
     out["creep_length"] = _mean_err([creep_length(s.depth, s.u_x, delta_s, a.spec.depth) for s in samples], how)
@@ -312,18 +292,18 @@ def _unmeasurable(measured: Measured, lo: float, hi: float, combined: float) -> 
 
 
 def score(drives, models: list[SceneModel], predictions: dict, material: Material, replicates: pd.DataFrame,
-          delta_s: dict, t0: dict, fitted_on: dict | None = None, progress: bool = True, independent: bool = True):
+          delta_s: dict, fitted_on: dict | None = None, progress: bool = True, independent: bool = True):
     """Scorecard rows, the band edges' stability (largest relative change from half to all replicates)
     and the free responses' 95 % bands per (drive, model) (linearised).
     ``predictions[(label, key)]``: the central Prediction of each drive and model; ``delta_s[label]``,
-    ``t0[label]``: the calibrated layer depth and steady-window start of each drive; ``fitted_on[key]``:
+    the calibrated layer depth of each drive; ``fitted_on[key]``:
     the drive a model's own parameter was fitted on (its rows there are not blind); ``independent``: mu(I)
     comes from an independent calibration (else no row is blind)."""
     fitted_on = fitted_on or {}
     rows, edges, bands = [], [], {}
     half = len(replicates) // 2
     for a in drives:
-        dem = dem_observables(a, t0[a.label], delta_s[a.label])
+        dem = dem_observables(a, delta_s[a.label])
         base = base_reach(a, delta_s[a.label])
         for model in models:
             pred: Prediction | None = predictions.get((a.label, model.key))

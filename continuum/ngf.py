@@ -70,6 +70,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.polynomial import chebyshev as C
@@ -133,16 +134,25 @@ def yield_depth(scene: BedScene, tau_w: float) -> float:
 
 # --- steady state ------------------------------------------------------------------------------------
 
-def _cheb(n: int, a: float, b: float):
-    """Chebyshev-Lobatto nodes on [a, b] (ascending) and the first/second derivative matrices."""
+@lru_cache(maxsize=8)
+def _cheb_reference(n: int):
+    """Chebyshev-Lobatto nodes on [-1, 1] (ascending) and the derivative matrices there (read-only)."""
     t = -np.cos(np.pi * np.arange(n + 1) / n)
     V = C.chebvander(t, n)
     eye = np.eye(n + 1)
-    d1 = C.chebvander(t, n - 1) @ C.chebder(eye, 1, axis=0)
-    d2 = C.chebvander(t, n - 2) @ C.chebder(eye, 2, axis=0)
     inv = np.linalg.inv(V)
+    d1 = C.chebvander(t, n - 1) @ C.chebder(eye, 1, axis=0) @ inv
+    d2 = C.chebvander(t, n - 2) @ C.chebder(eye, 2, axis=0) @ inv
+    for m in (t, d1, d2):
+        m.flags.writeable = False
+    return t, d1, d2
+
+
+def _cheb(n: int, a: float, b: float):
+    """Chebyshev-Lobatto nodes on [a, b] (ascending) and the first/second derivative matrices."""
+    t, d1, d2 = _cheb_reference(n)
     s = 2.0 / (b - a)
-    return a + (t + 1) * (b - a) / 2, s * d1 @ inv, s * s * d2 @ inv
+    return a + (t + 1) * (b - a) / 2, s * d1, s * s * d2
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,6 +8,7 @@ import shutil
 from html.parser import HTMLParser
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from granstokes.compare.comparison import build
@@ -183,3 +184,22 @@ def test_numbers_labels_and_frames_a_reader_trusts():
     title = next(t for t in fig.findobj(Text) if t.get_text() == fig.get_suptitle())
     extent = title.get_window_extent(FigureCanvasAgg(fig).get_renderer())
     assert fig.get_suptitle().count("\n") >= 1 and 0 <= extent.x0 and extent.x1 <= fig.bbox.width
+
+
+def test_drives_modelled_in_forked_processes_match_one_process(report):
+    """The model side of every drive (predictions, replicates, bands, rows) is the same whether the drives run
+    in one process or in two forked ones, in the drives' order."""
+    from granstokes.compare.comparison import ModelSide, model_drives
+    from granstokes.compare.models import LOCAL, PAPER
+
+    c, _, _ = report
+    a = c.drives[0].dem
+    side = ModelSide(c.material, (LOCAL, PAPER), "", c.replicates.head(12), {}, True)
+    one = model_drives([a, a], side, jobs=1, progress=False)
+    two = model_drives([a, a], side, jobs=2, progress=False)
+    for (head1, rows1, edge1, _), (head2, rows2, edge2, _) in zip(one, two):
+        assert [p.model for p in head1[1]] == [p.model for p in head2[1]] == ["local", "paper"]
+        assert len(rows1) >= 4
+        pd.testing.assert_frame_equal(rows1, rows2)
+        assert edge1 == edge2 or (np.isnan(edge1) and np.isnan(edge2))
+    np.testing.assert_array_equal(one[0][0][1][0].series.u_w, two[1][0][1][0].series.u_w)
