@@ -4,10 +4,11 @@
 
 with ``area`` the plate's area (2D: its length) in d^(D-1), ``duration`` the drive's in sqrt(d/g), and X the
 drive's expected scale of the observable (``SCALES``: what the calibrated local law gives before the run).
-Independent beds and independent lateral strips of one bed average alike: the exponent of seeds x area is
-the central limit's.  One law per scored observable and drive kind; its coefficients (``noise.csv``) are
-fitted by bench/dem_cost_noise.py on the committed studies (C_2 on the 2D disks, C_3 on the 3D spheres with
-the 2D exponents).  ``drive_errors`` predicts a planned drive's errors (``granstokes study --dry-run``).
+Independent beds average at the central limit's rate (the exponent of seeds x area); a wider plate at least as
+fast (its beds' offsets shrink faster: the law is then conservative, bench/RESULTS.md).  One law per scored
+observable and drive kind; its coefficients (``noise.csv``) are fitted by bench/dem_cost_noise.py on the
+committed studies (C_2 on the 2D disks, C_3 on the 3D spheres with the 2D exponents).  ``drive_errors``
+predicts a planned drive's errors (``granstokes study --dry-run``).
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from granstokes.continuum.steady import steady_wall_speed
 
 NOISE_CSV = Path(__file__).with_name("noise.csv")
 #: the observable each drive kind scores (compare.scorecard), in the order printed
@@ -93,8 +95,6 @@ def laws(path: Path = NOISE_CSV) -> dict[tuple[str, str], NoiseLaw]:
 def drive_size(plan, drive_plan, p_w: float) -> DriveSize:
     """A planned drive (dem.sizing.Plan and one of its DrivePlans) as a DriveSize, its scales those of the
     plan's material."""
-    from granstokes.continuum.steady import steady_wall_speed
-
     s = drive_plan.scales
     u_w = (drive_plan.load.u_w if drive_plan.load.kind == "speed"
            else s.U * steady_wall_speed(plan.config.material.friction, s.mu_w))
