@@ -55,7 +55,8 @@ def drives_of(folder: Path) -> tuple[list[DriveAnalysis], ModelSide]:
         plate = plate_geometry(plan)
         record = meta["drives"][label]
         spec = DriveSpec(Path(run), name, dp.load, plan.depth, plate["mass_per_area"], plate["surface_offset"],
-                         dp.steps, record["elastic_start"]["transit_time"], ())
+                         dp.steps, record["elastic_start"]["transit_time"], record["seeds"], plan.n_grains,
+                         plan.dimension)
         stem = slug(display_label(label, labels))
         series = pd.read_csv(folder / f"series_{stem}.csv")
         steady = pd.read_csv(folder / f"steady_profile_{stem}.csv")
@@ -63,7 +64,7 @@ def drives_of(folder: Path) -> tuple[list[DriveAnalysis], ModelSide]:
                                  "method": record[k]["dem_how"]} for k in ("u_w_inf", "mu_w_inf") if k in record}
         drives.append(DriveAnalysis(spec, (), (), series, plate_values, record["t_window"], record["duration"], {},
                                     {}, steady, steady, steady, pd.DataFrame(), snapshot_times(series.t), (steady,),
-                                    "the committed steady profile (timing only)"))
+                                    "the committed steady profile (timing only)", record["frames"], 0))
     ngf = meta["ngf"]
     replicates = replicates_of(cal, cal.replicates["phi_max"])
     rng = np.random.default_rng(1)

@@ -53,7 +53,10 @@ class DriveSpec:
     surface_offset: float        # plate centre of mass above its contact plane
     steps: int                   # drive steps (per seed)
     transit_time: float          # shear-wave transit time over the bed depth (the elastic start)
-    folders: tuple[DriveFolder, ...]
+    seeds: int                   # beds (one folder each)
+    grains: int                  # grains of a bed (with base and plate)
+    dimension: int               # 2 (disks) or 3 (spheres)
+    folders: tuple[DriveFolder, ...] = ()  # the seeds' drive folders (empty when read from tables)
 
     @property
     def kind(self) -> str:
@@ -81,7 +84,7 @@ class DriveSpec:
     @property
     def cost(self) -> float:
         """grains x steps of the drive summed over seeds (the DEM's work)."""
-        return float(len(self.folders) * len(self.folders[0].grains) * self.steps)
+        return float(self.seeds * self.grains * self.steps)
 
 
 def drive_specs(run_dir: Path) -> list[DriveSpec]:
@@ -98,7 +101,8 @@ def drive_specs(run_dir: Path) -> list[DriveSpec]:
         load = Load.from_record(d, float(meta["config"]["p_w"]))
         specs.append(DriveSpec(run_dir, d["name"], load, float(meta["sizing"]["depth"]), float(plate["mass_per_area"]),
                                float(plate["surface_offset"]), int(d["steps"]),
-                               float(meta["sizing"].get("elastic_start", {}).get("transit_time", np.nan)), folders))
+                               float(meta["sizing"].get("elastic_start", {}).get("transit_time", np.nan)),
+                               len(folders), len(folders[0].grains), folders[0].dimension, folders))
     return specs
 
 
@@ -118,11 +122,13 @@ class DriveAnalysis:
     bulk_tau: dict               # coarse-grained bulk tau of the steady window vs the plate's <tau_w>
     steady_profile: pd.DataFrame  # window average over the steady window, with depth
     mean_profile: pd.DataFrame   # the whole run: hydrostatics need no steady state
-    instant: pd.DataFrame        # seed-averaged profiles of every snapshot, with depth
+    instant: pd.DataFrame        # seed-averaged profiles at the snapshot times, with depth
     delta: pd.DataFrame          # t, delta_u
     snapshots: np.ndarray        # times of the transient profiles shown and predicted (snapshot_times)
     samples: tuple[pd.DataFrame, ...]  # independent steady-window profiles (steady_samples)
     samples_how: str             # what they are: seeds or blocks of one seed
+    frames: int                  # snapshots of a bed
+    dropped_frames: int          # snapshots lost to truncated dumps, over the seeds
 
     @property
     def response(self) -> str:
@@ -204,11 +210,16 @@ def _with_depth(table: pd.DataFrame, depth_of_y) -> pd.DataFrame:
     return table
 
 
+def plate_estimates(plates: tuple[PlateRecord, ...], kind: str) -> tuple[pd.DataFrame, dict, dict]:
+    """What the plate records alone give: the ensemble series, the steady values and the slip, pooled over seeds."""
+    series = _ensemble_series(plates)
+    steady = _steady(series, plates, "u_w" if kind == "stress" else "mu_w")
+    return series, steady, pooled([slip(p) for p in plates])
+
+
 def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> DriveAnalysis:
     plates = tuple(PlateRecord.read(f.path) for f in spec.folders)
-    series = _ensemble_series(plates)
-    response = "u_w" if spec.kind == "stress" else "mu_w"
-    steady = _steady(series, plates, response)
+    series, steady, slips = plate_estimates(plates, spec.kind)
     first = spec.folders[0]
     grid = settings.grid_for(next(first.frames([0])))
     profiles = tuple(DepthProfiles(f, settings, grid).run() for f in spec.folders)
@@ -222,6 +233,7 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
     mean_profile = _with_depth(whole, float(np.mean(surface(profiles[0].results.t))) - whole.y)
     inst = ensemble(list(profiles))
     inst.insert(3, "depth", surface(inst.t.to_numpy()) - inst.y.to_numpy())
+    snapshots = snapshot_times(first.times())
     rows = []
     u_scale = steady["u_w"]["value"]
     for t, g in inst.groupby("t"):
@@ -230,13 +242,14 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
         if t > 0 and u_w > DELTA_MIN_SPEED * u_scale:
             rows.append((t, depth_at_fraction(g.depth.to_numpy(), g.u_x.to_numpy(), u_w)))
     delta = pd.DataFrame(rows, columns=["t", "delta_u"])
-    slips = pooled([slip(p) for p in plates])
     # the final 30 %: a steady plate record can begin while the creep below still deepens (the bed's
     # momentum still grows and the bulk tau lags the plate's)
     check = bulk_tau(plates, profiles, surface, spec.depth, STEADY_WINDOW_LATEST * t_end, t_end)
     samples, how = steady_samples(profiles, surface, t0, t_end)
+    shown = inst[np.isin(inst.t, snapshots)].reset_index(drop=True)
+    dropped = sum(f.atoms.dropped + f.contacts.dropped for f in spec.folders)
     return DriveAnalysis(spec, plates, profiles, series, steady, t0, t_end, slips, check, steady_profile,
-                         mean_profile, inst, delta, snapshot_times(first.times()), samples, how)
+                         mean_profile, shown, delta, snapshots, samples, how, len(profiles[0].results.steps), dropped)
 
 
 #: blocks of a single seed's steady window that stand for independent samples (steady_samples)

@@ -1,4 +1,5 @@
-"""``granstokes compare RUN_DIR... --out REPORT_DIR [--calibration DIR/calibration.json] [--json]``."""
+"""``granstokes compare (RUN_DIR... | --tables REPORT_DIR/tables) --out REPORT_DIR [--calibration
+DIR/calibration.json] [--jobs N] [--json]``."""
 from __future__ import annotations
 
 import json
@@ -15,25 +16,35 @@ def run_compare(args) -> int:
     from granstokes.dem.layout import RUN_JSON
 
     require(args.jobs >= 1, "--jobs", "an integer >= 1 (processes predicting the drives)", args.jobs)
+    require(bool(args.runs) != (args.tables is not None), "RUN_DIR / --tables",
+            "either run folders or one tables folder of an earlier report", "both" if args.runs else "neither")
     for run in args.runs:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
-    inputs = [*args.runs, *([args.calibration] if args.calibration is not None else [])]
+    if args.tables is not None:
+        from .tables import DEM_JSON
+        require((args.tables / DEM_JSON).is_file(), "--tables", f"the tables folder of a report (with {DEM_JSON})",
+                str(args.tables))
+    sources = args.runs or [args.tables]
+    inputs = [*sources, *([args.calibration] if args.calibration is not None else [])]
     claim(args.out, "--out", COMMAND, inputs)
     from .calibrate import load
-    from .comparison import build, check_grains
+    from .comparison import analyse, check_grains, compare, run_grains
+    from .tables import read
 
+    tabled = read(args.tables) if args.tables is not None else None
     if args.calibration is None and not args.fit_on_drives:
         raise ValueError("--calibration is required: a calibration.json of granstokes dem calibrate (an independent "
                          "plane-shear calibration of the same grains); or pass --fit-on-drives for a fit on the "
                          "drives that is never scored as support")
     if args.calibration is not None:  # bad calibrations fail before any coarse-graining
         require(not args.fit_on_drives, "--fit-on-drives", "left out when --calibration is given", True)
-        check_grains(load(args.calibration), args.runs)
+        check_grains(load(args.calibration), tabled.grains if tabled else run_grains(args.runs))
     from .report import write_report
     from .scorecard import tally
 
-    comparison = build(args.runs, calibration=args.calibration, fit_on_drives=args.fit_on_drives, jobs=args.jobs)
+    dem = tabled or analyse(args.runs)
+    comparison = compare(dem, calibration=args.calibration, fit_on_drives=args.fit_on_drives, jobs=args.jobs)
     with staged(args.out, COMMAND, inputs) as work:
         m = write_report(comparison, work)
     if args.json:
@@ -50,7 +61,9 @@ def run_compare(args) -> int:
 def register(sub) -> None:
     p = sub.add_parser("compare", help="coarse-grain DEM runs, predict them from mu(I) (independent or fitted), "
                                        "write the report")
-    p.add_argument("runs", type=Path, nargs="+", metavar="RUN_DIR", help="run folders of granstokes dem run")
+    p.add_argument("runs", type=Path, nargs="*", metavar="RUN_DIR", help="run folders of granstokes dem run")
+    p.add_argument("--tables", type=Path, help="instead of run folders: the tables folder of an earlier report "
+                                               "(REPORT_DIR/tables: its DEM side, no dumps needed)")
     p.add_argument("--out", type=Path, required=True, help="report folder (index.html, CSV, metrics.json)")
     p.add_argument("--calibration", type=Path, help="calibration.json of granstokes dem calibrate (same grains): "
                                                     "mu(I) and phi from it, the drives a blind test (required "

@@ -20,9 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from granstokes.continuum.calibration import Calibration, mu_law
-from granstokes.continuum.crossing import crossing_depth
 from granstokes.continuum.scales import Material, Scales
-from granstokes.continuum.steady import DELTA_THRESHOLD
 from granstokes.dem.calibrate import grains_difference
 from granstokes.dem.layout import RUN_JSON
 from tqdm import tqdm
@@ -30,7 +28,7 @@ from tqdm import tqdm
 from granstokes.lib.validate import require
 
 from . import calibrate
-from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error, nearest_frame
+from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
 from .models import LOCAL, PAPER, Prediction, ngf_model
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
@@ -38,9 +36,6 @@ from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings
 from .scorecard import Z95, Scorecard, base_reach, headline, scene_checks, score
 
-#: smoothing of mu_w(t) before the paper's threshold is applied (delta_mu), in time units: single
-#: plate samples scatter by about their mean, the threshold is 1e-3 of the wall excess
-MU_W_SMOOTHING = 0.5
 #: continuum output times per drive (log-spaced from t_end/PREDICTION_SPAN to t_end, plus the snapshots)
 PREDICTION_TIMES, PREDICTION_SPAN = 60, 300
 #: calibration samples pushed through every steady prediction (bootstrap replicates of the fit)
@@ -50,15 +45,13 @@ REPLICATES = 200
 @dataclass(frozen=True, eq=False)
 class DriveComparison:
     """One drive: the DEM analysis, the paper's scales with the calibrated material, the continuum
-    predictions (empty with ``note`` saying why when the calibrated law cannot sustain the drive),
-    delta_mu(t) (the paper's threshold on mu, aligned with ``dem.delta.t``) and ``base``: why the flow
-    reaches the base, or "" (compare.scorecard.base_reach)."""
+    predictions (empty with ``note`` saying why when the calibrated law cannot sustain the drive) and
+    ``base``: why the flow reaches the base, or "" (compare.scorecard.base_reach)."""
 
     dem: DriveAnalysis
     scales: Scales | None
     predictions: tuple[Prediction, ...]
     note: str
-    delta_mu: np.ndarray
     base: str = ""
 
     @property
@@ -76,6 +69,14 @@ class Checks:
     crosscheck: pd.DataFrame
     crosscheck_bulk: dict
 
+    @classmethod
+    def of(cls, drive: str, width: pd.DataFrame, cross: pd.DataFrame, y) -> Checks:
+        """The checks with the crosscheck's bulk summary (CROSSCHECK_MARGIN inside the profile's heights ``y``)."""
+        bulk = cross[(cross.y > y.min() + CROSSCHECK_MARGIN) & (cross.y < y.max() - CROSSCHECK_MARGIN)]
+        summary = {q: float(np.nanmean(np.abs(bulk[f"{q}_diff"])) / np.nanmean(np.abs(bulk[f"{q}_lammps"])))
+                   for q in ("phi", "u_x", "p", "tau_yx", "p_mop", "tau_mop")}
+        return cls(drive, width, cross, summary)
+
     @property
     def plateau(self) -> pd.DataFrame:
         """Fraction of heights where each field plateaus going from each width to the next."""
@@ -84,8 +85,21 @@ class Checks:
 
 
 @dataclass(frozen=True, eq=False)
-class Comparison:
+class DemSide:
+    """Everything the comparison takes from the DEM, before any calibration: the runs (as given), their grains
+    (run label -> (config's grains table, p_w)), every drive's analysis, the coarse-graining checks on the
+    first drive and its mass error.  From dumps (``analyse``) or from its tables (compare.tables)."""
+
     runs: tuple[Path, ...]
+    grains: dict
+    drives: tuple[DriveAnalysis, ...]
+    checks: Checks
+    mass_error: float
+
+
+@dataclass(frozen=True, eq=False)
+class Comparison:
+    dem: DemSide                 # what the comparison took from the DEM (compare.tables writes it)
     drives: tuple[DriveComparison, ...]
     pairs: pd.DataFrame
     calibration: Calibration     # its ``kind``: independent plane shear or the in-drive fit
@@ -93,12 +107,22 @@ class Comparison:
     replicates: pd.DataFrame     # joint samples mu_s, mu_d, I0 (DEM convention), phi
     material: Material
     phi_bulk: float
-    mass_error: float
-    checks: Checks
     scorecard: Scorecard
     fluidity: FluidityFit | None  # the NGF amplitude and the drive it was fitted on
     settings: CGSettings
     law_test: dict  # the drives' steady pairs against the law (law_test); a test only when ``blind``
+
+    @property
+    def runs(self) -> tuple[Path, ...]:
+        return self.dem.runs
+
+    @property
+    def mass_error(self) -> float:
+        return self.dem.mass_error
+
+    @property
+    def checks(self) -> Checks:
+        return self.dem.checks
 
     @property
     def blind(self) -> bool:
@@ -165,23 +189,6 @@ def law_test(pairs: pd.DataFrame, cal: Calibration) -> dict:
     return out
 
 
-def delta_mu(a: DriveAnalysis, mu_s: float) -> np.ndarray:
-    """The paper's definition on the DEM (continuum.steady.DELTA_THRESHOLD): the first depth below
-    the wall layer where (mu - mu_s)/(mu_w(t) - mu_s) falls under 1e-3, mu_s the calibrated one.
-    Reported beside delta_u; single-frame mu fluctuates by more than the threshold, so it is noise-bound."""
-    dt = float(np.median(np.diff(a.series.t)))
-    window = max(1, int(round(MU_W_SMOOTHING / dt)))
-    mu_w_smooth = a.series.mu_w.rolling(window, center=True, min_periods=1).mean()
-    out = []
-    for t in a.delta.t:
-        frame = nearest_frame(a.instant, t).sort_values("depth")
-        keep = (frame.depth >= calibrate.WALL_EXCLUSION) & np.isfinite(frame.mu)
-        mu_w = float(np.interp(t, a.series.t, mu_w_smooth))
-        excess = (frame.mu[keep].to_numpy() - mu_s) / (mu_w - mu_s)
-        out.append(crossing_depth(frame.depth[keep].to_numpy(), excess, DELTA_THRESHOLD))
-    return np.array(out, dtype=float)
-
-
 def early_exponents(a: DriveAnalysis) -> dict:
     """alpha of u_w ~ t^alpha (imposed stress) and delta_u ~ t^alpha over the early window: from the
     first output after the elastic start (spec.compared_from) to the time u_w (delta_u) reaches half its
@@ -203,12 +210,7 @@ def early_exponents(a: DriveAnalysis) -> dict:
 
 def _checks(a: DriveAnalysis) -> Checks:
     widths = width_check(a.spec.folders[0], STEADY_WINDOW_LATEST * a.t_end, a.t_end)
-    cross = lammps_crosscheck(a.profiles[0])
-    y = a.steady_profile.y
-    bulk = cross[(cross.y > y.min() + CROSSCHECK_MARGIN) & (cross.y < y.max() - CROSSCHECK_MARGIN)]
-    summary = {q: float(np.nanmean(np.abs(bulk[f"{q}_diff"])) / np.nanmean(np.abs(bulk[f"{q}_lammps"])))
-               for q in ("phi", "u_x", "p", "tau_yx", "p_mop", "tau_mop")}
-    return Checks(a.label, widths, cross, summary)
+    return Checks.of(a.label, widths, lammps_crosscheck(a.profiles[0]), a.steady_profile.y)
 
 
 def prediction_times(a: DriveAnalysis) -> np.ndarray:
@@ -294,37 +296,56 @@ def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.
     return r[(r.mu_d > r.mu_s) & (r.I0 > 0)].head(n).reset_index(drop=True)
 
 
-def check_grains(cal: Calibration, runs) -> None:
-    """Refuse a calibration of other grains than the runs' (one-line ValueError naming the difference;
-    dem.calibrate.grains_difference: one material, one stiffness k_n at any pressure)."""
-    p_cal = float(cal.info.get("protocol", {}).get("p", np.nan))
+def run_grains(runs) -> dict:
+    """run label -> (its config's grains table, p_w), from each run folder's run.json."""
+    out = {}
     for run in runs:
         config = json.loads((Path(run) / RUN_JSON).read_text())["config"]
-        diff = grains_difference(cal.grains, p_cal if np.isfinite(p_cal) else config.get("p_w", np.nan),
-                                 config["grains"], config.get("p_w", np.nan))
+        out[str(run)] = (config["grains"], config.get("p_w", np.nan))
+    return out
+
+
+def check_grains(cal: Calibration, grains: dict) -> None:
+    """Refuse a calibration of other grains than the runs' (``grains``: run_grains; one-line ValueError naming the
+    difference; dem.calibrate.grains_difference: one material, one stiffness k_n at any pressure)."""
+    p_cal = float(cal.info.get("protocol", {}).get("p", np.nan))
+    for run, (table, p_w) in grains.items():
+        diff = grains_difference(cal.grains, p_cal if np.isfinite(p_cal) else p_w, table, p_w)
         require(not diff, f"--calibration {cal.source}", f"a calibration of the grains of {run}",
                 "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
 
 
-def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
-          calibration: str | Path | None = None, fit_on_drives: bool = False, jobs: int = 1) -> Comparison:
-    """Analyse every drive of ``run_dirs``; take mu(I) and phi from ``calibration`` (calibration.json,
-    refused if its grains differ from the runs') or, only with ``fit_on_drives``, fit them on the steady
-    windows; predict and score each drive (``jobs`` processes: model_drives)."""
-    if (calibration is None) != fit_on_drives:
-        raise ValueError("--calibration or --fit-on-drives: exactly one of them (an independent calibration.json of "
-                         "granstokes dem calibrate, or a fit on the drives that is never scored as support)")
+def analyse(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True) -> DemSide:
+    """Coarse-grain every drive of ``run_dirs`` (complete run folders of granstokes dem run)."""
     runs = tuple(Path(r) for r in run_dirs)
     resolved = [r.resolve() for r in runs]
     require(len(set(resolved)) == len(resolved), "RUN_DIR", "distinct run folders (one was given twice)",
             [str(r) for r in runs])
+    specs = [spec for run in runs for spec in drive_specs(run)]
+    drives = tuple(analyse_drive(spec, settings)
+                   for spec in tqdm(specs, desc="coarse-graining", disable=not progress or None))
+    return DemSide(runs, run_grains(runs), drives, _checks(drives[0]), mass_error(drives[0]))
+
+
+def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
+          calibration: str | Path | None = None, fit_on_drives: bool = False, jobs: int = 1) -> Comparison:
+    """``compare`` the drives of ``run_dirs`` (``analyse``)."""
+    return compare(analyse(run_dirs, settings, progress), settings, progress, calibration, fit_on_drives, jobs)
+
+
+def compare(dem: DemSide, settings: CGSettings = CGSettings(), progress: bool = True,
+            calibration: str | Path | None = None, fit_on_drives: bool = False, jobs: int = 1) -> Comparison:
+    """Take mu(I) and phi from ``calibration`` (calibration.json, refused if its grains differ from the runs') or,
+    only with ``fit_on_drives``, fit them on the drives' steady windows; predict and score each drive of ``dem``
+    (``jobs`` processes: model_drives)."""
+    if (calibration is None) != fit_on_drives:
+        raise ValueError("--calibration or --fit-on-drives: exactly one of them (an independent calibration.json of "
+                         "granstokes dem calibrate, or a fit on the drives that is never scored as support)")
     independent = None
     if calibration is not None:
         independent = calibrate.load(calibration)
-        check_grains(independent, runs)
-    specs = [spec for run in runs for spec in drive_specs(run)]
-    drives = [analyse_drive(spec, settings)
-              for spec in tqdm(specs, desc="coarse-graining", disable=not progress or None)]
+        check_grains(independent, dem.grains)
+    drives = list(dem.drives)
     pairs = steady_pairs(drives)
     phi = float(pairs.phi.mean())
     if independent is None:
@@ -347,7 +368,7 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
     side = ModelSide(material, tuple(models), failure, replicates, {"ngf": fluidity.drive} if ngf else {},
                      independent is not None)
     results = model_drives(drives, side, jobs, progress)
-    compared = tuple(DriveComparison(a, scales, preds, note, delta_mu(a, material.mu_s), base)
+    compared = tuple(DriveComparison(a, scales, preds, note, base)
                      for a, ((scales, preds, note, base), *_) in zip(drives, results))
     rows = pd.concat([r[1] for r in results if len(r[1])], ignore_index=True) if any(len(r[1]) for r in results) \
         else pd.DataFrame()
@@ -355,8 +376,8 @@ def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
     bands = {k: v for r in results for k, v in r[3].items()}
     card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a)], len(replicates),
                         float(np.max(edges)) if edges else np.nan, bands)
-    return Comparison(runs, compared, pairs, cal, source, replicates, material, phi,
-                      mass_error(drives[0]), _checks(drives[0]), card, fluidity, settings, law_test(pairs, cal))
+    return Comparison(dem, compared, pairs, cal, source, replicates, material, phi, card, fluidity, settings,
+                      law_test(pairs, cal))
 
 
 def _fit_fluidity(drives: list[DriveAnalysis], material: Material) -> FluidityFit | None:

@@ -25,8 +25,8 @@ DEFINITIONS = {
     "u_w_inf": (OBSERVABLES["u_w_inf"][0], "steady plate speed: mean over the final quarter of the record"),
     "mu_w_inf": (OBSERVABLES["mu_w_inf"][0], "steady plate friction: final-quarter mean of tau_w/p"),
     "delta_u": ("d", "depth below the plate's contact plane where the steady-window coarse-grained u falls to 5 % "
-                     "of u_w (DEM and continuum alike). delta_mu, the paper's definition ((mu - mu_s) at 1e-3 of the "
-                     "wall excess, calibrated mu_s), is in delta_*.csv but is bound by single-frame noise in mu"),
+                     "of u_w (DEM and continuum alike). The paper's definition ((mu - mu_s) at 1e-3 of the "
+                     "wall excess) is not measured: single-frame noise in mu exceeds its threshold"),
     "t90": ("sqrt(d/g)", f"time for the running mean ({T90_WINDOW:.0%} of the record) of the free response (u_w under "
                          "an imposed stress, mu_w under an imposed speed) to cover 90 % of its change; the continuum "
                          "series are interpolated onto the DEM's output times and treated alike"),
@@ -85,7 +85,7 @@ def drive_metrics(dc: DriveComparison) -> dict:
     expo = early_exponents(g)
     out = {
         "kind": spec.kind, "imposed": spec.load.value, "imposed_unit": "tau_w [rho_p g d]" if spec.kind == "stress"
-        else "u_w [sqrt(g d)]", "p_w": spec.p_w, "depth": spec.depth, "seeds": len(spec.folders),
+        else "u_w [sqrt(g d)]", "p_w": spec.p_w, "depth": spec.depth, "seeds": spec.seeds,
         "duration": g.t_end, "delta_s": dc.scales.delta_s if dc.scales is not None else None,
         "t_s": dc.scales.t_s if dc.scales is not None else None,
         "grains_x_steps": spec.cost, "t_steady": g.steady["t_steady"], "t_window": g.t_window,
@@ -103,8 +103,7 @@ def drive_metrics(dc: DriveComparison) -> dict:
                      "how": g.bulk_tau["cg"]["method"]},
         "elastic_start": {"transit_time": spec.transit_time, "compared_from": spec.compared_from},
         "alpha": {k: {"value": v["alpha"], "ci95": v["ci95"], "n": v["n"]} for k, v in expo.items()},
-        "frames": len(g.profiles[0].results.steps),
-        "dropped_frames": sum(f.atoms.dropped + f.contacts.dropped for f in spec.folders),
+        "frames": g.frames, "dropped_frames": g.dropped_frames,
         "prediction": dc.note or "predicted from the calibration",
         "base_confined": bool(dc.base), "base_note": dc.base,
     }

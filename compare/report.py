@@ -29,6 +29,8 @@ from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
 from .scorecard import MODEL_UNSTEADY, SIGMA_CONSISTENT, T90_WINDOW, tally
+from .tables import CSV_FLOAT
+from .tables import write as write_tables
 
 #: the DEM is blue (C0); the models take colours no verdict (VERDICT_COLOUR: green, red, grey) nor the DEM has
 DEM_COLOUR = "C0"
@@ -42,10 +44,6 @@ FIELD_LABELS = {"u_x": "u [sqrt(g d)]", "phi": "phi", "p": "p = sigma_yy [rho_p 
 T_LABEL, DEPTH_LABEL = "t [sqrt(d/g)]", "depth below the plate [d]"
 RESPONSE_LABEL = {"u_w": "u_w [sqrt(g d)]", "mu_w": "mu_w = <tau_w>/<p>"}
 
-
-
-#: significant digits of the report's CSV tables (the DEM's errors are percent-level)
-CSV_FLOAT = "%.6g"
 
 def slug(label: str) -> str:
     """A file-name stem of a label: letters and digits, every other run of characters one underscore."""
@@ -163,10 +161,10 @@ def drive_figure(dc: DriveComparison, bands: dict, out: Path, name: str | None =
     n = int(T90_WINDOW * len(s))
     smooth = _running(s[resp], n)
     ax[0].plot(s.t, smooth, color=DEM_COLOUR, lw=1.8, label=f"DEM, running mean ({T90_WINDOW:.0%} of the record)")
-    if len(spec.folders) > 1:
+    if spec.seeds > 1:
         ax[0].fill_between(s.t, _running(s[f"{resp}_lo"], n), _running(s[f"{resp}_hi"], n), color=DEM_COLOUR,
                            alpha=0.25,
-                           label=f"DEM, 95 % band of the {len(spec.folders)}-seed mean per output "
+                           label=f"DEM, 95 % band of the {spec.seeds}-seed mean per output "
                                  "(edges: running mean)")
     for p in dc.predictions:
         ax[0].plot(p.series.t, p.series[resp], label=p.label, **MODEL_STYLE[p.model])
@@ -191,7 +189,7 @@ def drive_figure(dc: DriveComparison, bands: dict, out: Path, name: str | None =
         axis.axvline(spec.transit_time, color="0.3", lw=0.8, ls="--", label="shear-wave transit over the bed")
         axis.axvspan(0, spec.compared_from, color="0.85", alpha=0.5, lw=0, label="elastic start (not compared)")
     p = g.steady_profile
-    spread = f"{len(spec.folders)} seeds" if len(spec.folders) > 1 else "the window's frames"
+    spread = f"{spec.seeds} seeds" if spec.seeds > 1 else "the window's frames"
     for a_, scale in ((ax[2], "linear"), (ax[3], "log")):
         a_.plot(p.u_x.clip(lower=1e-6) if scale == "log" else p.u_x, p.depth, color=DEM_COLOUR, lw=1.8,
                 label="DEM steady window")
@@ -220,7 +218,7 @@ def profiles_figure(dc: DriveComparison, material, out: Path, name: str | None =
     p = g.steady_profile
     fig = Figure(figsize=(15, 4.6), layout="constrained")
     axes = fig.subplots(1, 6, sharey=True)
-    spread = f"{len(spec.folders)} seeds" if len(spec.folders) > 1 else "the window's frames"
+    spread = f"{spec.seeds} seeds" if spec.seeds > 1 else "the window's frames"
     for ax, f in zip(axes, FIELD_LABELS):
         ax.plot(p[f], p.depth, color=DEM_COLOUR, label="DEM steady window")
         ax.fill_betweenx(p.depth, p[f"{f}_lo"], p[f"{f}_hi"], color=DEM_COLOUR, alpha=0.25,
@@ -344,7 +342,7 @@ def calibration_figure(c: Comparison, out: Path) -> Path:
         a.errorbar(g.I_dem, g.mu, xerr=g.I_err, yerr=g.mu_err, **style,
                    label=f"{names.get(label, label)} steady pairs" + (" (test)" if c.blind else ""))
         b.errorbar(g.I_dem, g.phi, yerr=g.phi_err, **style, label=f"{names.get(label, label)} steady pairs")
-    dimension = c.drives[0].dem.spec.folders[0].dimension
+    dimension = c.drives[0].dem.spec.dimension
     for colour, pub in zip(PUBLISHED_COLOURS, [x for x in PUBLISHED if x["dimension"] == dimension], strict=False):
         if "mu_1" in pub:
             a.plot(lin, pub["mu_1"] + pub["b"] * lin, color=colour, ls=":", lw=1.4,
@@ -441,7 +439,7 @@ def noise_rows(c: Comparison, names: dict) -> pd.DataFrame:
         for observable, (v, e) in values.items():
             if v and np.isfinite(v) and np.isfinite(e) and e > 0:
                 rows.append({"drive": names.get(dc.label, dc.label), "observable": observable, "cost": g.spec.cost,
-                             "seeds": len(g.spec.folders), "percent": 100 * e / abs(v)})
+                             "seeds": g.spec.seeds, "percent": 100 * e / abs(v)})
     return pd.DataFrame(rows, columns=["drive", "observable", "cost", "seeds", "percent"])
 
 
@@ -648,6 +646,10 @@ FIGURE_TITLES = {"scorecard": "Scorecard", "calibration": "mu(I) calibration", "
                  "transient": "Transient profiles", "fluidity": "Steady fluidity"}
 
 
+#: the DEM side's tables in a report folder (compare.tables: a comparison again without the dumps)
+TABLES = "tables"
+
+
 def write_report(c: Comparison, out_dir) -> dict:
     """Render ``c`` into ``out_dir``: metrics.json, CSV tables, figures, index.html; returns the metrics."""
     out = Path(out_dir)
@@ -664,7 +666,7 @@ def write_report(c: Comparison, out_dir) -> dict:
         stem = slug(name)
         g.series.to_csv(out / f"series_{stem}.csv", index=False, float_format=CSV_FLOAT)
         g.steady_profile.to_csv(out / f"steady_profile_{stem}.csv", index=False, float_format=CSV_FLOAT)
-        g.delta.assign(delta_mu=dc.delta_mu).to_csv(out / f"delta_{stem}.csv", index=False, float_format=CSV_FLOAT)
+        g.delta.to_csv(out / f"delta_{stem}.csv", index=False, float_format=CSV_FLOAT)
         for p in dc.predictions:
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{p.model}.csv", index=False,
                                                   float_format=CSV_FLOAT)
@@ -673,6 +675,7 @@ def write_report(c: Comparison, out_dir) -> dict:
                      ("profiles", profiles_figure(dc, c.material, out, name), name),
                      ("transient", transient_figure(dc, c.material, out, name), name),
                      ("fluidity", fluidity_figure(dc, c.material, out, name), name)]
+    write_tables(c.dem, out / TABLES)
     ch = c.checks
     ch.width.to_csv(out / "width_check.csv", index=False, float_format=CSV_FLOAT)
     ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False, float_format=CSV_FLOAT)

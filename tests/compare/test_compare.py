@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from granstokes.compare.calibrate import fit, load
-from granstokes.compare.comparison import check_grains
+from granstokes.compare.comparison import check_grains, run_grains
 from granstokes.compare.plate import block_estimate, friction, pooled, power_law, steady_state, trend
 from granstokes.continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
 from granstokes.continuum.crossing import depth_at_fraction
@@ -75,16 +75,16 @@ def test_a_calibration_of_other_grains_is_refused(tmp_path):
     (run / "run.json").write_text(json.dumps({"config": {"grains": {"dimension": 2, "mu_p": 0.4,
                                                                     "polydispersity": 0.2}}}))
     with pytest.raises(ValueError, match=r"mu_p calibrated 0.5 vs run 0.4") as err:
-        check_grains(loaded, [run])
+        check_grains(loaded, run_grains([run]))
     assert "\n" not in str(err.value)
     (run / "run.json").write_text(json.dumps({"config": {"grains": doc["grains"]}}))
-    check_grains(loaded, [run])
+    check_grains(loaded, run_grains([run]))
     # a record without a pair style ran pair granular: another contact implementation is other grains
     (run / "run.json").write_text(json.dumps({"config": {"grains": {**doc["grains"], "pair_style": "granular"}}}))
-    check_grains(loaded, [run])
+    check_grains(loaded, run_grains([run]))
     (run / "run.json").write_text(json.dumps({"config": {"grains": {**doc["grains"], "pair_style": "classic"}}}))
     with pytest.raises(ValueError, match=r"pair_style calibrated 'granular' vs run 'classic'"):
-        check_grains(loaded, [run])
+        check_grains(loaded, run_grains([run]))
     # one material at two pressures: the same k_n = kappa p (Hooke) is the same grains, another k_n is not
     from granstokes.dem.calibrate import grains_difference
     grains = {**doc["grains"], "pair_style": "classic"}

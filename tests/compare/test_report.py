@@ -203,3 +203,25 @@ def test_drives_modelled_in_forked_processes_match_one_process(report):
         pd.testing.assert_frame_equal(rows1, rows2)
         assert edge1 == edge2 or (np.isnan(edge1) and np.isnan(edge2))
     np.testing.assert_array_equal(one[0][0][1][0].series.u_w, two[1][0][1][0].series.u_w)
+
+
+def test_a_comparison_from_the_reports_tables_matches_the_one_from_the_dumps(report, smoke_calibration):
+    """The report's tables/ hold the DEM side: compared again from them (no dumps), every scorecard row has the
+    same DEM value, error and prediction as from the dumps (to the tables' six significant digits), and the
+    tables are small."""
+    from granstokes.compare.comparison import compare
+    from granstokes.compare.tables import read
+
+    c, _, out = report
+    folder = out / "compare" / "tables"
+    size = sum(f.stat().st_size for f in folder.rglob("*") if f.is_file())
+    assert 0 < size < 2_000_000
+    again = compare(read(folder), progress=False, calibration=smoke_calibration)
+    a, b = c.scorecard.rows, again.scorecard.rows
+    assert len(a) == len(b) >= 4
+    assert list(a.observable) == list(b.observable) and list(a.model) == list(b.model)
+    for col in ("dem", "dem_err", "predicted", "sigma"):
+        np.testing.assert_allclose(b[col], a[col], rtol=1e-3, atol=1e-9, err_msg=col)
+    assert again.dem.drives[0].spec.seeds == c.dem.drives[0].spec.seeds
+    assert again.mass_error == pytest.approx(c.mass_error, rel=1e-4)
+    assert again.checks.crosscheck_bulk == pytest.approx(c.checks.crosscheck_bulk, rel=1e-3)
