@@ -64,7 +64,8 @@ def drives_of(folder: Path) -> tuple[list[DriveAnalysis], ModelSide]:
                                  "method": record[k]["dem_how"]} for k in ("u_w_inf", "mu_w_inf") if k in record}
         drives.append(DriveAnalysis(spec, (), (), series, plate_values, record["t_window"], record["duration"], {},
                                     {}, steady, steady, steady, pd.DataFrame(), snapshot_times(series.t), (steady,),
-                                    "the committed steady profile (timing only)", record["frames"], 0))
+                                    "the committed steady profile (timing only)", record["frames"], 0,
+                                    pd.DataFrame()))
     ngf = meta["ngf"]
     replicates = replicates_of(cal, cal.replicates["phi_max"])
     rng = np.random.default_rng(1)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from granstokes.continuum.crossing import depth_at_fraction
+from granstokes.continuum.crossing import depth_at_fraction, layer_measures
 from granstokes.continuum.load import Load
 from granstokes.dem import layout
 
@@ -129,6 +129,7 @@ class DriveAnalysis:
     samples_how: str             # what they are: seeds or blocks of one seed
     frames: int                  # snapshots of a bed
     dropped_frames: int          # snapshots lost to truncated dumps, over the seeds
+    layers: pd.DataFrame         # every seed's layer over time (layer_series): seed, t, u_w, delta_50, delta_05, moment
 
     @property
     def response(self) -> str:
@@ -248,8 +249,25 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
     samples, how = steady_samples(profiles, surface, t0, t_end)
     shown = inst[np.isin(inst.t, snapshots)].reset_index(drop=True)
     dropped = sum(f.atoms.dropped + f.contacts.dropped for f in spec.folders)
+    layers = pd.concat([layer_series(prof, plate, spec.surface_offset, u_scale).assign(seed=i)
+                        for i, (prof, plate) in enumerate(zip(profiles, plates))], ignore_index=True)
     return DriveAnalysis(spec, plates, profiles, series, steady, t0, t_end, slips, check, steady_profile,
-                         mean_profile, shown, delta, snapshots, samples, how, len(profiles[0].results.steps), dropped)
+                         mean_profile, shown, delta, snapshots, samples, how, len(profiles[0].results.steps), dropped,
+                         layers)
+
+
+def layer_series(prof: DepthProfiles, plate: PlateRecord, surface_offset: float, u_scale: float) -> pd.DataFrame:
+    """One seed's layer in every frame (t > 0, its plate at DELTA_MIN_SPEED of ``u_scale`` or faster): the plate's
+    u_w and continuum.crossing.layer_measures of the coarse-grained u_x below its own plate."""
+    r, drive = prof.results, prof.drive
+    u = derive(r.additive, r.y, drive.dimension, drive.d, drive.rho_p)["u_x"]
+    rows = []
+    for k, t in enumerate(r.t):
+        u_w = float(np.interp(t, plate.t, plate.u_w))
+        if t > 0 and u_w > DELTA_MIN_SPEED * u_scale:
+            surface = layout.plate_surface(float(np.interp(t, plate.t, plate.y)), surface_offset)
+            rows.append({"t": float(t), "u_w": u_w, **layer_measures(surface - r.y, u[k], u_w)})
+    return pd.DataFrame(rows, columns=["t", "u_w", "delta_50", "delta_05", "moment"])
 
 
 #: blocks of a single seed's steady window that stand for independent samples (steady_samples)

@@ -6,7 +6,8 @@ Layout: ``dem.json`` (the runs, their grains, the mass error, the checks' drive,
 ``checks_width.csv`` and ``checks_crosscheck.csv`` (compare.checks on the first drive), and per drive
 ``drive.json`` (its scene, record, window, snapshot times, frames, the bulk-stress check), ``plates.csv.gz``
 (every seed's plate record), ``samples.csv.gz`` (the independent steady-window profiles: depth, u_x),
-``steady_profile.csv.gz``, ``mean_profile.csv.gz``, ``instant.csv.gz`` (the snapshots) and ``delta.csv``.
+``steady_profile.csv.gz``, ``mean_profile.csv.gz``, ``instant.csv.gz`` (the snapshots), ``delta.csv`` and
+``layers.csv.gz`` (every seed's layer over time: compare.analysis.layer_series).
 Reading recomputes what the plate records give (the ensemble series, the steady values and their errors,
 the slip: compare.analysis.plate_estimates); the coarse-grained profiles are read as written.  DEM units.
 """
@@ -81,6 +82,7 @@ def write_drive(a: DriveAnalysis, folder: Path) -> None:
     for name in ("steady_profile", "mean_profile", "instant"):
         _csv(getattr(a, name), folder / f"{name}.csv.gz")
     _csv(a.delta, folder / "delta.csv")
+    _csv(a.layers, folder / "layers.csv.gz")
 
 
 def read_drive(folder: Path) -> DriveAnalysis:
@@ -98,7 +100,8 @@ def read_drive(folder: Path) -> DriveAnalysis:
     return DriveAnalysis(spec, plates, (), series, steady, record["t_window"], record["t_end"], slips, bulk,
                          profiles["steady_profile"], profiles["mean_profile"], profiles["instant"],
                          pd.read_csv(folder / "delta.csv"), np.asarray(record["snapshots"], dtype=float), samples,
-                         record["samples_how"], record["frames"], record["dropped_frames"])
+                         record["samples_how"], record["frames"], record["dropped_frames"],
+                         pd.read_csv(folder / "layers.csv.gz"))
 
 
 def _folder(i: int, a: DriveAnalysis) -> str:

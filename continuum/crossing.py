@@ -95,3 +95,21 @@ def depth_at_fraction(depth, u, u_w: float, frac: float = U_FRACTION) -> float:
     if not (np.isfinite(u_w) and u_w > 0):
         return np.nan
     return crossing_depth(depth, np.asarray(u) / u_w, frac)
+
+
+#: the layer's depths by threshold of u/u_w (transient observables): where u falls to half the plate's speed,
+#: and delta_u's U_FRACTION
+LAYER_FRACTIONS = {"delta_50": 0.5, "delta_05": U_FRACTION}
+
+
+def layer_measures(depth, u, u_w: float) -> dict:
+    """The layer of one velocity profile u(depth) under a plate moving at u_w: its depth at each LAYER_FRACTIONS
+    of u_w and its first moment int u d(depth) / u_w over depth >= 0 (nan where u_w is not positive)."""
+    depth, u = np.asarray(depth, dtype=float), np.asarray(u, dtype=float)
+    keep = (depth >= 0) & np.isfinite(u)
+    depth, u = depth[keep], u[keep]
+    order = np.argsort(depth)
+    depth, u = depth[order], u[order]
+    out = {k: depth_at_fraction(depth, u, u_w, f) for k, f in LAYER_FRACTIONS.items()}
+    out["moment"] = float(np.trapezoid(u, depth) / u_w) if np.isfinite(u_w) and u_w > 0 else np.nan
+    return out

@@ -223,5 +223,11 @@ def test_a_comparison_from_the_reports_tables_matches_the_one_from_the_dumps(rep
     for col in ("dem", "dem_err", "predicted", "sigma"):
         np.testing.assert_allclose(b[col], a[col], rtol=1e-3, atol=1e-9, err_msg=col)
     assert again.dem.drives[0].spec.seeds == c.dem.drives[0].spec.seeds
+    layers, read_back = c.dem.drives[0].layers, again.dem.drives[0].layers
+    assert len(layers) >= 20 and set(layers.seed) == set(range(c.dem.drives[0].spec.seeds))
+    np.testing.assert_allclose(read_back[["t", "delta_50", "delta_05", "moment"]],
+                               layers[["t", "delta_50", "delta_05", "moment"]], rtol=1e-5)
+    both = layers.dropna(subset=["delta_50", "delta_05"])
+    assert len(both) >= 10 and (both.delta_05 >= both.delta_50).all() and (layers.moment.dropna() > 0).all()
     assert again.mass_error == pytest.approx(c.mass_error, rel=1e-4)
     assert again.checks.crosscheck_bulk == pytest.approx(c.checks.crosscheck_bulk, rel=1e-3)
