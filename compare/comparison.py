@@ -30,6 +30,7 @@ from granstokes.lib.validate import require
 from . import calibrate
 from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
+from .laws import laws as paper_laws
 from .models import LOCAL, PAPER, Prediction, ngf_model
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
@@ -111,6 +112,7 @@ class Comparison:
     fluidity: FluidityFit | None  # the NGF amplitude and the drive it was fitted on
     settings: CGSettings
     law_test: dict  # the drives' steady pairs against the law (law_test); a test only when ``blind``
+    laws: pd.DataFrame  # the paper's laws, one row per law x model (compare.laws)
 
     @property
     def runs(self) -> tuple[Path, ...]:
@@ -377,7 +379,7 @@ def compare(dem: DemSide, settings: CGSettings = CGSettings(), progress: bool = 
     card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a)], len(replicates),
                         float(np.max(edges)) if edges else np.nan, bands)
     return Comparison(dem, compared, pairs, cal, source, replicates, material, phi, card, fluidity, settings,
-                      law_test(pairs, cal))
+                      law_test(pairs, cal), paper_laws(compared))
 
 
 def _fit_fluidity(drives: list[DriveAnalysis], material: Material) -> FluidityFit | None:

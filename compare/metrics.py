@@ -11,6 +11,7 @@ from granstokes.lib.provenance import provenance
 from .analysis import BLOCKS, TRANSITS_BEFORE_COMPARISON
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
+from .laws import SEED_RESAMPLES
 from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_WINDOW, TREND_SIGMA
 from .scorecard import OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length, tally
 
@@ -72,6 +73,11 @@ DEFINITIONS = {
     "alpha": ("1", "exponents of u_w ~ t^alpha and delta_u ~ t^alpha by least squares on log-log from the first "
                    "output to half the final value, with their 95 % interval and number of points"),
     "wall_exclusion": ("d", f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base"),
+    "laws": ("-", "the paper's predictions, one row per law x model (compare/laws.py): the same estimator on the DEM's "
+                  "seed-mean series and on the model's output over the same window; dem_err the spread over "
+                  f"{SEED_RESAMPLES} bootstrap resamples of each drive's seeds; band the model's own value (the "
+                  "calibration's spread is not propagated through the transients), so sigma = (dem - predicted) / "
+                  "dem_err; 'not measurable' or 'not predicted' with the reason where the data cannot decide"),
     "units": ("-", UNITS["dem_units"]),
     "inertial_number": ("-", UNITS["inertial_number"]),
 }
@@ -151,6 +157,7 @@ def metrics(c: Comparison) -> dict:
         "uncertainty": {"replicates": c.scorecard.replicates, "band_edge_stability": c.scorecard.edge_stability},
         "calibration": {**cal.as_dict(), "source": c.calibration_source},
         "blind": c.blind, "calibration_test": c.law_test,
+        "laws": c.laws.to_dict("records"),
         "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
         "phi_bulk": c.phi_bulk, "mass_error": c.mass_error,
         "ngf": None if c.fluidity is None else {"A": c.fluidity.A, "A_err": c.fluidity.err, "ci95": c.fluidity.ci95,

@@ -136,6 +136,14 @@ def test_scorecard_contract(report):
     response = "u_w_inf" if next(iter(m["drives"].values()))["kind"] == "stress" else "mu_w_inf"
     assert {(response, "local"), ("delta_u", "local"), ("t90", "local"), (response, "paper")} <= observables
     assert {"slip", "slip_err", "tau_bulk", "elastic_start"} <= set(next(iter(m["drives"].values())))
+    from granstokes.compare.laws import KEYS, LAWS
+
+    assert {(law.name, law.quantity) for law in LAWS} == {(r["law"], r["quantity"]) for r in m["laws"]}
+    for r in m["laws"]:
+        assert set(KEYS) <= set(r)
+        assert (r["verdict"] in ("consistent", "disagrees")) == (r["note"] == "")
+        if r["note"] == "":
+            assert all(isinstance(r[k], float) and math.isfinite(r[k]) for k in ("dem", "dem_err", "predicted"))
 
 
 def test_every_page_the_demo_writes_is_whole(report):
