@@ -326,6 +326,7 @@ def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFra
     replicas = [{label: s.track(rng.integers(0, len(s.u_w), len(s.u_w))) for label, s in seeds.items()}
                 for _ in range(resamples if bootable else 0)]
     models = dict.fromkeys(p.model for dc in usable for p in dc.predictions)
+    predicted_tracks = {(dc.label, p.model): model_track(p, dc) for dc in usable for p in dc.predictions}
     rows = []
     for law in LAWS:
         drives = _drives(compared, law.kind)
@@ -340,8 +341,7 @@ def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFra
         boot = boot[np.isfinite(boot)]
         dem_err = float(boot.std(ddof=1)) if len(boot) >= 2 else np.nan
         for key in models:
-            model_tracks = [model_track(next(p for p in dc.predictions if p.model == key), dc) for dc in drives]
-            predicted, model_window = estimate(model_tracks, drives)
+            predicted, model_window = estimate([predicted_tracks[(dc.label, key)] for dc in drives], drives)
             note = ""
             if not np.isfinite(dem):
                 note = window
