@@ -7,7 +7,6 @@ import html
 import json
 import math
 import re
-import textwrap
 from pathlib import Path, PurePath
 
 import numpy as np
@@ -20,25 +19,22 @@ from matplotlib import colormaps
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
-from matplotlib.ticker import LogFormatter, LogLocator
+from matplotlib.ticker import LogLocator
 
 from granstokes.lib.page import page
 
+from . import law_figures
 from .analysis import nearest_frame
 from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .metrics import DEFINITIONS, metrics
 from .scorecard import MODEL_UNSTEADY, SIGMA_CONSISTENT, T90_WINDOW, tally
+from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, figure_legend, plain_log, suptitle
 from .tables import CSV_FLOAT
 from .tables import write as write_tables
 
-#: the DEM is blue (C0); the models take colours no verdict (VERDICT_COLOUR: green, red, grey) nor the DEM has
-DEM_COLOUR = "C0"
-DRIVE_MARKERS = "o^vD<>"            # the drives' points where several share a panel (all in DEM blues)
 PUBLISHED_COLOURS = ("C6", "C8", "C9")  # published laws beside the calibration
 SIGMA_CLIP = 20.0                   # the scorecard figure's bars stop here (the value is written on the bar)
-MODEL_STYLE = {"local": dict(color="#7b3294", ls="-"), "paper": dict(color="#e08214", ls="--"),
-               "ngf": dict(color="#8c510a", ls="-.")}
 FIELD_LABELS = {"u_x": "u [sqrt(g d)]", "phi": "phi", "p": "p = sigma_yy [rho_p g d]", "tau": "tau [rho_p g d]",
                 "mu": "mu = tau/p", "I_dem": "I_dem = |du/dy| d/sqrt(p/rho_p)"}
 T_LABEL, DEPTH_LABEL = "t [sqrt(d/g)]", "depth below the plate [d]"
@@ -118,31 +114,6 @@ def fmt_cell(value) -> str:
     if isinstance(value, (float, np.floating)):
         return fmt(float(value))
     return html.escape(str(value))
-
-
-def wrap(text: str, width_in: float, fontsize: float = 12) -> str:
-    """``text`` broken into lines that fit ``width_in`` inches at ``fontsize`` points."""
-    return textwrap.fill(" ".join(text.split()), max(20, int(width_in * 72 / (0.6 * fontsize))))
-
-
-def suptitle(fig, text: str, fontsize: float = 12):
-    """A figure title wrapped to the figure's width."""
-    fig.suptitle(wrap(text, fig.get_figwidth(), fontsize), fontsize=fontsize)
-
-
-def plain_log(axis):
-    """Plain numbers (2, 3, 10) instead of 2x10^0 on a log axis that spans few decades."""
-    axis.set_major_formatter(LogFormatter())
-    axis.set_minor_formatter(LogFormatter(labelOnlyBase=False))
-
-
-def figure_legend(fig, axes, ncols=3, fontsize=8):
-    """One legend below the axes for every labelled artist of ``axes`` (each label once)."""
-    seen = {}
-    for ax in axes:
-        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
-            seen.setdefault(lab, h)
-    fig.legend(seen.values(), seen.keys(), loc="outside lower center", ncols=ncols, fontsize=fontsize, frameon=False)
 
 
 def _running(s: pd.Series, n: int) -> pd.Series:
@@ -537,6 +508,33 @@ def scorecard_html(c: Comparison) -> str:
                    "verdict"], rows)
 
 
+def laws_summary(c: Comparison) -> str:
+    """One sentence per model: how many of the paper's laws the DEM can decide, and how they went."""
+    rows = c.laws
+    if rows.empty:
+        return "No law was evaluated (no drive was predicted)."
+    parts = []
+    for model, g in rows.groupby("model", sort=False):
+        v = g.verdict.value_counts()
+        parts.append(f"{model}: consistent on {v.get('consistent', 0)}, disagrees on {v.get('disagrees', 0)}, "
+                     f"not predicted on {v.get('not predicted', 0)}")
+    n = int((rows.drop_duplicates(["law", "quantity"]).verdict == "not measurable").sum())
+    return (f"Of {rows[['law', 'quantity']].drop_duplicates().shape[0]} law quantities, {n} are not measurable with "
+            f"these drives (each row says why); " + "; ".join(parts) + ".")
+
+
+def laws_html(c: Comparison) -> str:
+    """The laws' rows (compare.laws) as a table, after one summary sentence."""
+    grey = VERDICT_COLOUR["not scored"]
+    rows = [[html.escape(r.law), html.escape(r.quantity), html.escape(r.model), fmt(r.dem, r.dem_err),
+             fmt(r.predicted), fmt_cell(r.sigma) if np.isfinite(r.sigma) else "",
+             f"<span style='color:{VERDICT_COLOUR.get(r.verdict, grey)}'>{html.escape(r.verdict)}</span>",
+             str(r.n_drives), html.escape(r.note or r.window)] for r in c.laws.itertuples()]
+    return (f"<p>{html.escape(laws_summary(c))}</p>"
+            + _table(["law", "quantity", "model", "DEM", "predicted", "sigma", "verdict", "drives",
+                      "window or why not"], rows))
+
+
 def scene_html(c: Comparison) -> str:
     names = display_labels(c)
     rows = [[html.escape(names.get(r.drive, r.drive)), f"{html.escape(r.check)} [{html.escape(r.unit)}]",
@@ -618,7 +616,7 @@ def conclusions(c: Comparison) -> list[str]:
     return out
 
 
-HOW_TO_READ = {
+HOW_TO_READ = {**law_figures.HOW_TO_READ,
     "scorecard": "Each bar is one scorecard row, in its model's colour: how many combined standard errors the DEM "
                  "lies from the prediction. Inside the grey band the prediction is consistent with the DEM; each row's "
                  "label has its verdict's colour (green consistent, red disagrees, grey not scored).",
@@ -643,7 +641,7 @@ HOW_TO_READ = {
 }
 FIGURE_TITLES = {"scorecard": "Scorecard", "calibration": "mu(I) calibration", "cost_noise": "DEM noise and cost",
                  "drive": "Free response and steady velocity", "profiles": "Steady-window profiles",
-                 "transient": "Transient profiles", "fluidity": "Steady fluidity"}
+                 "transient": "Transient profiles", "fluidity": "Steady fluidity", **law_figures.TITLES}
 
 
 #: the DEM side's tables in a report folder (compare.tables: a comparison again without the dumps)
@@ -661,6 +659,8 @@ def write_report(c: Comparison, out_dir) -> dict:
     names = display_labels(c)
     figs = [("scorecard", sigma_figure(c, out), "")] if len(c.scorecard.rows) else []
     figs += [("calibration", calibration_figure(c, out), ""), ("cost_noise", cost_figure(c, out), "")]
+    if any(dc.predictions and dc.scales is not None for dc in c.drives):
+        figs += [(kind, draw(c, out), "") for kind, draw in law_figures.FIGURES.items()]
     for dc in c.drives:
         g, name = dc.dem, names[dc.label]
         stem = slug(name)
@@ -702,6 +702,7 @@ def write_report(c: Comparison, out_dir) -> dict:
         f"most {c.scorecard.edge_stability:.0%} of the band width from half to all replicates); t90 by linearised "
         "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; 2.</p>",
         "<h2>Conclusions</h2><ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>",
+        "<h2>The paper's laws</h2>", laws_html(c),
         "<h2>The scene's own checks</h2>", scene_html(c),
         "<h2>Figures</h2>", figures,
         calibration_section(c),
