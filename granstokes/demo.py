@@ -59,13 +59,25 @@ def run_demo(out_dir, study: str = STUDY) -> Path:
     return out / "index.html"
 
 
+def laws_html(rows: list[dict]) -> str:
+    """The paper's laws the study could measure (DEM against each model), and how many it could not."""
+    measured = [r for r in rows if r["verdict"] in ("consistent", "disagrees")]
+    laws = {(r["law"], r["quantity"]) for r in rows}
+    decided = {(r["law"], r["quantity"]) for r in measured}
+    items = "".join(f"<li>{html.escape(r['law'])} ({html.escape(r['quantity'])}): DEM {r['dem']:.3g} ± "
+                    f"{r['dem_err']:.2g}, {html.escape(r['model'])} {r['predicted']:.3g}, sigma {r['sigma']:+.1f}: "
+                    f"{html.escape(r['verdict'])}</li>" for r in measured)
+    return (f"<h2>The paper's laws</h2><p>{len(decided)} of {len(laws)} law quantities measurable at this study's "
+            f"size; the others say why in the study report.</p>" + (f"<ul>{items}</ul>" if items else ""))
+
+
 def write_index(out: Path, study: Path, clock: dict) -> Path:
     """The demo's front page in ``out``: the verdict and main figure of the study report in ``study`` (the demo's
     STUDY_DIR), links to both reports."""
     metrics = json.loads((study / "metrics.json").read_text())
     timing = ", ".join(f"{k} {v:.0f} s" for k, v in clock.items()) or "resumed: nothing left to run"
     figure = next(iter(sorted(study.glob("drive_*.png"))), None)
-    body = (f"<h1>granstokes demo</h1><p>{html.escape(metrics['verdict'])}</p>"
+    body = (f"<h1>granstokes demo</h1>{laws_html(metrics.get('laws', []))}<p>{html.escape(metrics['verdict'])}</p>"
             f"<ul><li><a href='{STUDY_DIR}/index.html'>the smoke study: every drive against every model, blind "
             "(the full report)</a></li>"
             "<li><a href='continuum/index.html'>continuum: the paper's figures regenerated</a></li></ul>"

@@ -154,6 +154,9 @@ def test_every_page_the_demo_writes_is_whole(report):
     front = check_page(index)
     assert {f"{STUDY_DIR}/index.html", "continuum/index.html"} <= set(front.links)
     assert html.escape(m["verdict"]) in index.read_text() and len(front.images) == 1
+    decided = {(r["law"], r["quantity"]) for r in m["laws"] if r["verdict"] in ("consistent", "disagrees")}
+    opening = f"{len(decided)} of {len({(r['law'], r['quantity']) for r in m['laws']})} law quantities measurable"
+    assert index.read_text().index(opening) < index.read_text().index(html.escape(m["verdict"]))
     compare_page = check_page(out / "compare" / "index.html")
     text = (out / "compare" / "index.html").read_text()
     assert text.index("Scorecard") < text.index("Conclusions") < text.index("Figures")
