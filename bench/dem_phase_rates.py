@@ -3,7 +3,7 @@
     .venv/bin/python bench/dem_phase_rates.py [--out DIR]
 
 Runs, one process at a time on one rank: one bed of each shipped scene preset (smoke, quick: 2D; spheres: 3D;
-``--set seeds=[1]``) with ``granstokes dem run --jobs 1``, and the calibration cells of the smoke grains (2D) and
+``--set seeds=[1]``) with ``granstokes dem run --jobs 1 --np 1``, and the calibration cells of the smoke grains (2D) and
 of a short 3D protocol with ``dem calibrate --jobs 1``, each between two throughput probes of its dimension
 (dem.throughput.probe, alone).  A phase's rate is grains x steps / wall time of its stages (run.json,
 state.json: LAMMPS's own start-up included, as in a real run); its ratio is that over the mean of the probes
@@ -42,7 +42,7 @@ def _granstokes(*args: str, check: bool = True) -> None:
 
 def scene_rates(name: str, out: Path) -> dict:
     """Grain-steps/s of a preset's preparation and drives (one bed, alone)."""
-    _granstokes("dem", "run", "--preset", name, "--set", "seeds=[1]", "--jobs", "1", "--out", str(out))
+    _granstokes("dem", "run", "--preset", name, "--set", "seeds=[1]", "--jobs", "1", "--np", "1", "--out", str(out))
     meta = json.loads((out / "run.json").read_text())
     p = plan(config.parse((out / "config.toml").read_text()))
     prep = meta["stages"]["seed-1"]

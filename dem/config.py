@@ -16,7 +16,7 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
     drive = [{name = "stress", kind = "stress", mu_w_tilde = 0.5, duration_ts = 10.0},
              {name = "speed", kind = "speed", u_w = 5.0, duration = 20.0}]
     output = {plate = 0.02, thermo = 0.1, atoms = 1.0, contacts = 5.0, profiles = 0.5, restart = 2.0}
-    prepare = {ke_per_grain = 1e-5}
+    prepare = {ke_per_grain = 1e-5, settle_ke_per_grain = 0.03}
     # mu(I) calibration by plane shear of the same grains at p = p_w (``granstokes dem calibrate``)
     calibration = {I_min = 1e-3, I_max = 0.5, points = 8, seeds = [1, 2], width = 10.0, strain = 5.0}
 
@@ -160,12 +160,19 @@ class Output:
             _positive(f"output.{f.name}", getattr(self, f.name))
 
 
+#: settling's threshold at most this kinetic energy per grain (m g d): above it the pile still moves as a whole
+SETTLE_KE_MAX = 0.1
+
+
 @dataclass(frozen=True)
 class Prepare:
-    """Preparation: settle under gravity, then relax under the plate until the kinetic energy per
-    grain is below ``ke_per_grain`` (units m g d with m the mean grain mass), each stage capped."""
+    """Preparation: the fall and settling under gravity until the pile has landed (its kinetic energy past
+    its peak) and the kinetic energy per grain is below ``settle_ke_per_grain``, then relaxation under the
+    plate until that of the bed and the plate together is below ``ke_per_grain`` (units m g d with m the
+    mean grain mass, per bed grain), each stage capped."""
 
     ke_per_grain: float = 1e-5
+    settle_ke_per_grain: float = 0.03
     check_every: float = 0.5
     settle_max: float = 60.0
     relax_max: float = 40.0
@@ -174,6 +181,9 @@ class Prepare:
     def __post_init__(self):
         for f in dataclasses.fields(self):
             _positive(f"prepare.{f.name}", getattr(self, f.name))
+        require(self.ke_per_grain <= self.settle_ke_per_grain <= SETTLE_KE_MAX, "prepare.settle_ke_per_grain",
+                f"in [ke_per_grain = {self.ke_per_grain:g}, {SETTLE_KE_MAX:g}] (m g d per grain: a landed pile)",
+                self.settle_ke_per_grain)
 
 
 @dataclass(frozen=True)

@@ -10,9 +10,11 @@ loaded by ``fix addforce`` (p_w A downwards; no gravity on the plate, so p_w is 
 normal stress) and driven either by a constant x force tau_w A (imposed stress) or at a held x
 velocity u_w (imposed speed: rigid-body x force switched off).
 
-* ``prepare_script``: random insertion of polydisperse grains in a loose column, settle under
-  gravity, freeze the bottom grains as a rough base, place the plate, relax under p_w until the
-  kinetic energy per grain is below the threshold, write ``prepared.restart`` at step 0.
+* ``prepare_script``: random insertion of polydisperse grains in a loose column, fall and settle under
+  gravity until the pile has landed and is nearly still (``prepare.settle_ke_per_grain``), freeze the
+  bottom grains as a rough base, bring the plate down at PLATE_APPROACH_SPEED, relax under p_w until the
+  kinetic energy of the bed and the plate per grain is below ``prepare.ke_per_grain``, write
+  ``prepared.restart`` at step 0.
 * ``drive_script``: read a restart (the prepared bed or a drive restart when resuming), apply the
   drive, write the outputs, restart files every ``restart`` steps, ``run N upto``.
 """
@@ -51,6 +53,8 @@ PLATE_RIDGE_PITCH = 0.5
 PLATE_FRICTION = 1.0
 #: bed grains are binned up to this height above the plate's initial position (nothing is lost above it)
 BIN_HEADROOM = 8.0
+#: preparation: the plate starts down at this speed (sqrt(g d)), its terminal speed under p_w against the drag
+PLATE_APPROACH_SPEED = 4.0
 
 
 def _lines(*blocks: str) -> str:
@@ -113,19 +117,24 @@ def _enforce(dim: int, after_rigid: bool = False) -> str:
     return "unfix two_d\nfix two_d all enforce2d" if after_rigid else "fix two_d all enforce2d"
 
 
-def _loop(phase: str, label: str, n: int, check: int, threshold: float) -> str:
-    """Run in chunks of ``check`` steps until the kinetic energy per grain is below ``threshold``."""
+def _loop(phase: str, label: str, n: int, check: int, threshold: float, landed: bool = False) -> str:
+    """Run in chunks of ``check`` steps until the kinetic energy per grain is below ``threshold``;
+    ``landed``: and below its value at the previous check (a falling pile's energy only grows)."""
+    below = f"${{ke_grain}} < {threshold:.10g}"
+    start, test, step, end = ("variable ke_previous equal 0.0\n", f"{below} && ${{ke_grain}} < ${{ke_previous}}",
+                              "variable ke_previous equal ${ke_grain}\n", "variable ke_previous delete\n") \
+        if landed else ("", below, "", "")
     return f"""
 print "PHASE {phase}"
-variable i loop {n}
+{start}variable i loop {n}
 label {phase}
 run {check}
-if "${{ke_grain}} < {threshold:.10g}" then "jump SELF {label}"
-next i
+if "{test}" then "jump SELF {label}"
+{step}next i
 jump SELF {phase}
 label {label}
 variable i delete
-"""
+{end}"""
 
 
 def _deposit(plan: Plan, seed: int, top: float) -> str:
@@ -221,21 +230,22 @@ variable y_plate equal $(c_top+{plan.config.prepare.plate_gap + PLATE_DIAMETER /
 group plate type {PLATE}
 set group plate diameter {PLATE_DIAMETER:g}
 {_density("plate", dim)}
-velocity plate set 0.0 0.0 0.0 units box
+velocity plate set 0.0 {-PLATE_APPROACH_SPEED:g} 0.0 units box
 """)
 
 
 def _load_plate(plan: Plan) -> str:
-    cfg, area = plan.config, plan.area
-    nx, nz, ax, _ = plate_layout(plan)
+    cfg, area, n = plan.config, plan.area, plate_grains(plan)
     return (f"""
-# --- load: p_w = {cfg.p_w:g} on the plate (area {area:g}), y motion only, viscous drag (terminal speed 1) """
-            f"""while relaxing ---
+# --- load: p_w = {cfg.p_w:g} on the plate (area {area:g}), y motion only, viscous drag (terminal speed """
+            f"""{PLATE_APPROACH_SPEED:g}) while relaxing; the kinetic energy per grain counts the plate's from here ---
 fix plate plate rigid single force * off on off torque * off off off
-fix load plate addforce 0.0 {-cfg.p_w * area / (nx * nz):.10g} 0.0
-fix plate_drag plate viscous {cfg.p_w * ax:.10g}
+fix load plate addforce 0.0 {-cfg.p_w * area / n:.10g} 0.0
+fix plate_drag plate viscous {cfg.p_w * area / (n * PLATE_APPROACH_SPEED):.10g}
 {_enforce(plan.dimension, after_rigid=True)}
 variable plate_y equal f_plate[1][2]
+compute ke_plate plate ke
+variable ke_grain equal (c_ke_bed+c_ke_plate)/count(bed)/{grain_mass(1.0, plan.dimension):.10g}
 """)
 
 
@@ -250,20 +260,19 @@ write_dump all custom {GRAINS_DUMP} {" ".join(GRAIN_COLUMNS)} modify sort id
 
 
 def prepare_script(plan: Plan, seed: int) -> str:
-    """Deposit, settle, freeze the base, load the plate, relax; writes prepared.restart."""
-    cfg, check = plan.config, plan.intervals["check"]
+    """Deposit, fall and settle, freeze the base, load the plate, relax; writes prepared.restart."""
+    c, check = plan.config.prepare, plan.intervals["check"]
     box, top = _box(plan)
     n_settle = max(1, math.ceil(plan.settle_steps_max / check))
-    n_relax = max(1, math.ceil(cfg.prepare.relax_max / (check * plan.dt)))
-    thr = cfg.prepare.ke_per_grain
+    n_relax = max(1, math.ceil(c.relax_max / (check * plan.dt)))
     return _lines(
         f"# prepare bed: seed {seed}; generated by dem.scene",
         box, _deposit(plan, seed, top), _pair(plan), _common(plan), _settle(plan),
         _thermo(plan.intervals["thermo"]),
-        _loop("settle", "settled", n_settle, check, thr),
+        _loop("settle", "settled", n_settle, check, c.settle_ke_per_grain, landed=True),
         _freeze_base(plan), _place_plate(plan), _load_plate(plan),
         _thermo(plan.intervals["thermo"], " v_plate_y"),
-        _loop("relax", "relaxed", n_relax, check, thr)
+        _loop("relax", "relaxed", n_relax, check, c.ke_per_grain)
         + 'print "PHASE relaxed ke_grain=${ke_grain} plate_y=${plate_y}"\n',
         _save_prepared(),
     )

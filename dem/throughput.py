@@ -26,8 +26,8 @@ from . import lammps_env
 
 #: grain-steps per second of a phase over the probe chute of its dimension on the same machine, measured by
 #: bench/dem_phase_rates.py (bench/RESULTS.md, "Cost estimates")
-PHASE_RATIO = {2: {"prepare": 1.21, "drive": 0.79, "shear": 1.05},
-               3: {"prepare": 0.59, "drive": 0.39, "shear": 0.63}}
+PHASE_RATIO = {2: {"prepare": 1.32, "drive": 0.73, "shear": 0.95},
+               3: {"prepare": 0.77, "drive": 0.47, "shear": 0.66}}
 PROBE_ATOMS, PROBE_STEPS, WARMUP = {2: 800, 3: 4000}, {2: 20000, 3: 3000}, 1000
 #: the chute benchmark's law (gran/hooke/history, k_n = 2e5, gamma_n = 50, friction 0.5), time step 1e-4,
 #: gravity tilted 26 degrees from the vertical, a frozen bottom layer, equal unit-mass grains on a lattice

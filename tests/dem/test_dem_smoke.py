@@ -2,6 +2,7 @@
 import dataclasses
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -12,7 +13,7 @@ import pandas as pd
 import pytest
 from granstokes.compare.plate import PlateRecord
 from granstokes.compare.plate import slip as plate_slip
-from granstokes.dem import config, lammps_env, layout, outputs, scene
+from granstokes.dem import config, contact, lammps_env, layout, outputs, scene
 from granstokes.dem.sizing import plan
 
 from granstokes.cli import main as granstokes_main  # the `granstokes` console script
@@ -46,6 +47,26 @@ def test_no_grain_lost(smoke):
     counts = {int(text.split("NUMBER OF ATOMS\n")[1].split()[0])
               for _, text in layout.dump_snapshots(out / "seed-1" / "speed" / "atoms.dump")}
     assert counts == {len(grains)}
+
+
+def test_preparation_ends_with_the_plate_landed_and_still(smoke):
+    """Settling ends below its own threshold once the pile has landed; relax counts the plate's kinetic energy,
+    so the prepared plate (row 0 of the drive) rests on the bed grains nested in its gaps, its speed within the
+    bound its share of the threshold sets: 1/2 M u_y^2 <= ke_per_grain N m."""
+    out, _ = smoke
+    p = plan(config.preset("smoke")[0])
+    c = p.config.prepare
+    log = (out / "seed-1" / "prepare" / "log.lammps").read_text()
+    settling = log.split("PHASE relax\n")[0]
+    ke = [float(line.split()[2]) / p.n_grains / contact.grain_mass(1.0, 2)
+          for line in settling.splitlines() if re.fullmatch(r"\s*\d+\s+\S+\s+\S+\s+\d+\s*", line)]
+    assert max(ke) > 100 * c.settle_ke_per_grain > 100 * ke[-1]  # the column's fall; settled at the last check
+    plate = pd.read_csv(out / "seed-1" / "speed" / "plate.csv").iloc[0]
+    geometry = json.loads((out / "run.json").read_text())["plate"]
+    n_bed = len(pd.read_csv(out / "seed-1" / "prepare" / "grains.csv").query("type == 1"))
+    bound = np.sqrt(2 * c.ke_per_grain * n_bed * contact.grain_mass(1.0, 2) / geometry["mass"])
+    assert plate["step"] == 0 and abs(plate["u_y"]) <= bound, (plate["u_y"], bound)
+    assert plate["n_c"] >= geometry["grains"] / 2, plate["n_c"]
 
 
 def test_pressure_grows_hydrostatically_from_p_w(smoke):
