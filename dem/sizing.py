@@ -31,9 +31,10 @@ PACKING = {2: 0.80, 3: 0.60}
 #: LAMMPS counts the steps of a run in a 32-bit integer ("Invalid run command N value" above it)
 MAX_STEPS = 2**31 - 1
 #: preparation's expected settling and relaxation after a grain's fall from the top of the box, in time units
-#: sqrt(d/g): the mean over the beds of the shipped presets' seeds (7.8 to 16.4, bench/dem_prepare.py; each
-#: stage ends on its own convergence, capped by prepare.settle_max and relax_max)
-SETTLE_RELAX_EXPECTED = 12.8
+#: sqrt(d/g): the mean over the beds of the shipped presets' seeds (1.8 to 7.9, bench/dem_prepare.py; settling
+#: ends about one time unit before that fall, relaxing takes the rest; each stage ends on its own convergence,
+#: capped by prepare.settle_max and relax_max)
+SETTLE_RELAX_EXPECTED = 3.5
 #: settling (which begins with the fall) is capped at this many free falls plus prepare.settle_max
 FALL_MARGIN = 1.5
 #: plate statistics (force, speed, slip) are sampled this many times per contact time t_c
