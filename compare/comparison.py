@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import multiprocessing as mp
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -317,8 +317,9 @@ def check_grains(cal: Calibration, grains: dict) -> None:
                 "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
 
 
-def analyse(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True) -> DemSide:
-    """Coarse-grain every drive of ``run_dirs`` (complete run folders of granstokes dem run)."""
+def analyse(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True, root: Path | None = None) -> DemSide:
+    """Coarse-grain every drive of ``run_dirs`` (complete run folders of granstokes dem run); with ``root``, the
+    runs are named by their paths relative to it (a study's report names its own run folders)."""
     runs = tuple(Path(r) for r in run_dirs)
     resolved = [r.resolve() for r in runs]
     require(len(set(resolved)) == len(resolved), "RUN_DIR", "distinct run folders (one was given twice)",
@@ -326,13 +327,21 @@ def analyse(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True
     specs = [spec for run in runs for spec in drive_specs(run)]
     drives = tuple(analyse_drive(spec, settings)
                    for spec in tqdm(specs, desc="coarse-graining", disable=not progress or None))
-    return DemSide(runs, run_grains(runs), drives, _checks(drives[0]), mass_error(drives[0]))
+    grains, checks = run_grains(runs), _checks(drives[0])
+    if root is not None:
+        rel = {str(r): r.resolve().relative_to(Path(root).resolve()) for r in runs}
+        grains = {str(rel[k]): v for k, v in grains.items()}
+        runs = tuple(rel[str(r)] for r in runs)
+        drives = tuple(replace(a, spec=replace(a.spec, run=rel[str(a.spec.run)])) for a in drives)
+        checks = replace(checks, drive=drives[0].label)
+    return DemSide(runs, grains, drives, checks, mass_error(drives[0]))
 
 
 def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
-          calibration: str | Path | None = None, fit_on_drives: bool = False, jobs: int = 1) -> Comparison:
-    """``compare`` the drives of ``run_dirs`` (``analyse``)."""
-    return compare(analyse(run_dirs, settings, progress), settings, progress, calibration, fit_on_drives, jobs)
+          calibration: str | Path | None = None, fit_on_drives: bool = False, jobs: int = 1,
+          root: Path | None = None) -> Comparison:
+    """``compare`` the drives of ``run_dirs`` (``analyse``; ``root``: name the runs relative to it)."""
+    return compare(analyse(run_dirs, settings, progress, root), settings, progress, calibration, fit_on_drives, jobs)
 
 
 def compare(dem: DemSide, settings: CGSettings = CGSettings(), progress: bool = True,

@@ -242,3 +242,16 @@ def test_a_comparison_from_the_reports_tables_matches_the_one_from_the_dumps(rep
     assert len(both) >= 10 and (both.delta_05 >= both.delta_50).all() and (layers.moment.dropna() > 0).all()
     assert again.mass_error == pytest.approx(c.mass_error, rel=1e-4)
     assert again.checks.crosscheck_bulk == pytest.approx(c.checks.crosscheck_bulk, rel=1e-3)
+
+
+def test_runs_named_relative_to_a_root(smoke_run, smoke_calibration):
+    """A study names its runs relative to its folder: labels, runs, grains and the checks' drive carry no
+    absolute path, and the analysis is the same."""
+    from granstokes.compare.comparison import analyse
+
+    dem = analyse([smoke_run], progress=False, root=smoke_run.parent)
+    assert dem.runs == (Path(smoke_run.name),) and list(dem.grains) == [smoke_run.name]
+    assert all(not Path(a.label).is_absolute() and a.label.startswith(f"{smoke_run.name}/") for a in dem.drives)
+    assert dem.checks.drive == dem.drives[0].label
+    plain = analyse([smoke_run], progress=False)
+    assert dem.drives[0].steady["mu_w"]["value"] == plain.drives[0].steady["mu_w"]["value"]
