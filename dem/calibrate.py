@@ -58,7 +58,7 @@ from .contact import Contact, mean_grain_volume
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .runner import Interrupted, RunError, _Lammps, allow_lammps, sigterm_interrupts, stop_all_lammps
 from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, shear_script
-from .sizing import OVERHEAD, PACKING, count, duration_text, makespan
+from .sizing import OVERHEAD, PACKING, count, duration_text, makespan, speedup
 from .throughput import Throughput, measured
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)
@@ -149,10 +149,11 @@ class CalibrationPlan:
 
     def cost_seconds(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
                      speed: Throughput | None = None) -> float:
-        """Expected wall time of the calibration (or of the cells left: ``done`` holds the complete keys)."""
-        speed = speed or measured()
-        work = [self.task_seconds(k, dbl, speed) for k, seed, dbl in self.cells()
-                if self.key(k, seed, dbl) not in done]
+        """Expected wall time of the calibration (or of the cells left: ``done`` holds the complete keys), each cell
+        on ``np_`` ranks (its modelled speedup)."""
+        speed, dim = speed or measured(), self.config.grains.dimension
+        work = [self.task_seconds(k, dbl, speed) / speedup(self.n_doubled if dbl else self.n_grains, dim, np_)
+                for k, seed, dbl in self.cells() if self.key(k, seed, dbl) not in done]
         return OVERHEAD + makespan(work, jobs, np_, contention=speed.contention)
 
     def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),

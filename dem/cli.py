@@ -1,6 +1,6 @@
 """``granstokes dem``: run a DEM scene, or calibrate its grains' mu(I), from a TOML config or a preset.
 
-    granstokes dem run (CONFIG.toml | --preset NAME) --out DIR [--jobs 2] [--np 1] [--launcher 'srun -n {np}']
+    granstokes dem run (CONFIG.toml | --preset NAME) --out DIR [--jobs 2] [--np N] [--launcher 'srun -n {np}']
     granstokes dem run --resume --out DIR                 (continues the run with the config stored in DIR)
     granstokes dem calibrate (CONFIG.toml | --preset NAME) --out DIR [--jobs 2] [--np 1]
     granstokes dem calibrate --resume --out DIR
@@ -92,8 +92,8 @@ def _cmd_run(args) -> int:
         done, left = completed_stages(runner.out, runner.plan)
         print(f"  {_resume_line(done, left, 'stages')}", file=sys.stderr)
     _speed()
-    print(f"  {runner.plan.cost_estimate(runner.jobs, args.np, done)}", file=sys.stderr)
-    _oversubscribed(args.np, runner.jobs)
+    print(f"  {runner.plan.cost_estimate(runner.jobs, runner.lmp.np, done)}", file=sys.stderr)
+    _oversubscribed(runner.lmp.np, runner.jobs)
     if args.dry_run:
         return 0
     result = run(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
@@ -156,7 +156,8 @@ def register(subparsers) -> None:
     r = sub.add_parser("run", help="run a scene from a TOML config or a preset",
                        description="Run a DEM scene: prepare the bed(s), then each drive; outputs in --out.")
     _common(r, "run", "a scene")
-    r.add_argument("--np", type=int, default=DEFAULT_NP, help=f"MPI ranks per LAMMPS process (default {DEFAULT_NP})")
+    r.add_argument("--np", type=int, help="MPI ranks per LAMMPS process (default: 2 for a bed that runs alone when "
+                                          "the measured scaling says they pay, dem/sizing.py RANKS_GAIN; else 1)")
     r.add_argument("--jobs", type=int, default=DEFAULT_JOBS,
                    help=f"seeds' beds run side by side as separate LAMMPS processes (default {DEFAULT_JOBS})")
     r.add_argument("--quiet", action="store_true", help=QUIET_HELP)

@@ -3,10 +3,11 @@
 The run folder's layout is dem.layout's.
 Each seed's bed (preparation, then its drives) is an independent chain of LAMMPS processes, one task of the
 project's executor (granstokes.lib.executor: Dask, ``jobs`` rank slots, a failed bed retried once from its
-restarts, the other beds going on), each process on ``np`` ranks
+restarts, the other beds going on), each process on ``np`` ranks (unless given, dem.sizing.ranks_per_bed: two for
+a bed that runs alone when they are modelled to pay, one otherwise)
 under the mpich wheel's ``mpirun -np N`` (or a ``launcher`` template such as ``srun -n {np}``), its
-screen output feeding a tqdm bar on a terminal, plain lines otherwise (``Lines``).  Defaults
-(DEFAULT_JOBS, DEFAULT_NP) are measured in bench/RESULTS.md.  A failed, killed or interrupted run leaves
+screen output feeding a tqdm bar on a terminal, plain lines otherwise (``Lines``).  DEFAULT_JOBS and the
+ranks' rule are measured in bench/RESULTS.md.  A failed, killed or interrupted run leaves
 run.json saying what happened and the outputs assembled up to that point; ``resume=True`` continues
 every unfinished drive from its last restart file.
 """
@@ -39,8 +40,8 @@ from granstokes.lib.validate import require
 
 from . import lammps_env, layout, outputs, scene
 from .config import Config, parse
-from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, PLAIN_FRACTION, PLAIN_SECONDS
-from .sizing import DrivePlan, Plan, plan
+from .lammps_env import DEFAULT_JOBS, PLAIN_FRACTION, PLAIN_SECONDS
+from .sizing import DrivePlan, Plan, plan, speedup
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)
 COMMAND = "dem run"
@@ -292,11 +293,11 @@ def _restarts(drive_dir: Path) -> list[tuple[int, Path]]:
 class Runner:
     """Holds the state of one run folder; ``execute`` runs whatever is not complete yet."""
 
-    def __init__(self, cfg: Config, text: str, out: Path, np_: int, launcher: str | None, progress: bool,
+    def __init__(self, cfg: Config, text: str, out: Path, np_: int | None, launcher: str | None, progress: bool,
                  jobs: int = 1):
         self.plan = plan(cfg)
         self.cfg, self.text, self.out = cfg, text, Path(out)
-        self.lmp = _Lammps(np_, launcher, progress)
+        self.lmp = _Lammps(self.plan.ranks(jobs, np_), launcher, progress)
         self.jobs = jobs
         self.meta_path = self.out / layout.RUN_JSON
 
@@ -437,7 +438,7 @@ class Runner:
 
     def bed_tasks(self, meta: dict, prefix: str = "") -> list[Task]:
         """The unfinished seeds' beds as executor tasks (keys ``prefix`` + "seed-S"; arguments that rebuild this
-        runner from the folder: picklable), each costing its unfinished stages."""
+        runner from the folder: picklable), each costing its unfinished stages on its ranks."""
         done = {k for k, st in meta["stages"].items() if st.get("status") == "complete"}
         tasks = []
         for seed in self.cfg.seeds:
@@ -445,7 +446,8 @@ class Runner:
             if left:
                 tasks.append(Task(prefix + layout.stage_key(seed), run_bed,
                                   (str(self.out), seed, self.lmp.np, self.lmp.launcher, self.lmp.progress, self.jobs),
-                                  cost=sum(self.plan.stage_seconds(k) for k in left), ranks=self.lmp.np))
+                                  cost=sum(self.plan.stage_seconds(k) for k in left)
+                                  / speedup(self.plan.n_grains, self.plan.dimension, self.lmp.np), ranks=self.lmp.np))
         return tasks
 
     def execute(self, meta: dict, executor: Executor | None = None) -> RunResult:
@@ -493,11 +495,13 @@ def _now() -> str:
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
-def check_request(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
+def check_request(cfg: Config, text: str, out: str | Path, np: int | None = None, resume: bool = False,
                   launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> Runner:
     """Everything ``run`` checks before it touches the folder (ValueError / LammpsNotFound naming the
-    parameter): ranks, jobs, the launcher, the sizing, the wheels, the folder and a resume's config."""
-    require(isinstance(np, int) and np >= 1, "--np", "an integer >= 1 (MPI ranks per LAMMPS process)", np)
+    parameter): ranks (``None``: the sizing's rule), jobs, the launcher, the sizing, the wheels, the folder and a
+    resume's config."""
+    require(np is None or isinstance(np, int) and np >= 1, "--np", "an integer >= 1 (MPI ranks per LAMMPS process)",
+            np)
     require(isinstance(jobs, int) and jobs >= 1, "--jobs", "an integer >= 1 (beds run side by side)", jobs)
     require(launcher is None or "{np}" in launcher, "--launcher", "a command template containing {np}", launcher)
     out = Path(out)
@@ -531,7 +535,7 @@ def completed_stages(out: str | Path, plan_: Plan) -> tuple[list[str], list[str]
     return done, left
 
 
-def begin(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
+def begin(cfg: Config, text: str, out: str | Path, np: int | None = None, resume: bool = False,
           launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> tuple[Runner, dict]:
     """Check the request (``check_request``), then create the run folder (or reopen it with ``resume``): the
     runner and run.json's record, ready for ``Runner.execute`` or a study's executor."""
@@ -549,10 +553,11 @@ def begin(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume:
     return runner, meta
 
 
-def run(cfg: Config, text: str, out: str | Path, np: int = DEFAULT_NP, resume: bool = False,
+def run(cfg: Config, text: str, out: str | Path, np: int | None = None, resume: bool = False,
         launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> RunResult:
     """Run (or with ``resume`` continue) the scene ``cfg`` (TOML ``text``) in folder ``out``, the seeds'
-    beds ``jobs`` at a time (at most one per seed), each LAMMPS process on ``np`` ranks.
+    beds ``jobs`` at a time (at most one per seed), each LAMMPS process on ``np`` ranks (default: the sizing's
+    rule, dem.sizing.ranks_per_bed).
 
     Everything is validated before the folder is touched: a bad config, a missing LAMMPS/MPICH
     wheel, a folder that already holds another run, or a resume whose config differs raise

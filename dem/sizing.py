@@ -146,17 +146,26 @@ class Plan:
         """run.json's keys of a seed's stages in the order they run: the preparation, then each drive."""
         return [stage_key(seed)] + [stage_key(seed, d.drive.name) for d in self.drives]
 
-    def cost_seconds(self, jobs: int = 1, np_: int = 1, done=(), speed: Throughput | None = None) -> float:
-        """Expected wall time of the run (or of what is left: ``done`` holds the complete stages' keys):
-        each seed's bed is one unit of work, ``jobs`` of them at a time."""
-        speed = speed or measured()
-        beds = [sum(self.stage_seconds(k, speed) for k in self.stage_keys(seed) if k not in done)
-                for seed in self.config.seeds]
-        return OVERHEAD + makespan([b for b in beds if b > 0], jobs, np_, contention=speed.contention)
+    def ranks(self, jobs: int, np_: int | None = None) -> int:
+        """MPI ranks of each bed with ``jobs`` beds at a time (ranks_per_bed; ``np_``: the user's --np)."""
+        return ranks_per_bed(self.n_grains, self.dimension, min(jobs, len(self.config.seeds)), np_)
 
-    def cost_estimate(self, jobs: int = 1, np_: int = 1, done=(), speed: Throughput | None = None) -> str:
+    def cost_seconds(self, jobs: int = 1, np_: int | None = None, done=(), speed: Throughput | None = None) -> float:
+        """Expected wall time of the run (or of what is left: ``done`` holds the complete stages' keys):
+        each seed's bed is one unit of work on ``ranks`` ranks (its modelled ``speedup``), ``jobs`` of them at a
+        time, longest first."""
+        speed = speed or measured()
+        np_ = self.ranks(jobs, np_)
+        gain = speedup(self.n_grains, self.dimension, np_)
+        beds = [sum(self.stage_seconds(k, speed) for k in self.stage_keys(seed) if k not in done) / gain
+                for seed in self.config.seeds]
+        return OVERHEAD + makespan(sorted([b for b in beds if b > 0], reverse=True), jobs, np_,
+                                   contention=speed.contention)
+
+    def cost_estimate(self, jobs: int = 1, np_: int | None = None, done=(), speed: Throughput | None = None) -> str:
         """One line: the run's size and its expected wall time on this machine (``cost_seconds``)."""
         speed = speed or measured()
+        np_ = self.ranks(jobs, np_)
         expected, most = self.prepare_steps
         if all(k in done for seed in self.config.seeds for k in self.stage_keys(seed)):
             return "cost: none, every stage is complete"
@@ -238,14 +247,45 @@ def plan(cfg: Config) -> Plan:
     return Plan(cfg, float(depth), n_grains, dt, intervals, tuple(drives), tuple(reasons))
 
 
-def slowdown(processes: int, np_: int = 1, cores: int | None = None, contention: float = 1.0) -> float:
-    """Wall time of each of ``processes`` concurrent LAMMPS processes of ``np_`` ranks over that of one
-    process alone at one rank (ranks are not credited with a speed-up: the rates are measured at one), each of
-    two or more sharing the cores ``contention`` times slower (dem.throughput)."""
-    ranks = processes * np_
+#: grains at which a bed runs as fast on two MPI ranks as on one (each rank's halved work plus the halo
+#: exchange), per dimension: bench/dem_schedule.py scaling (bench/RESULTS.md, "Schedule")
+BREAK_EVEN = {2: 360, 3: 840}
+#: a bed gets two ranks only if it runs alone and two are modelled at least this much faster than one
+RANKS_GAIN = 1.3
+#: MPI ranks beyond the cores: each makes every rank wait for a time slice at each exchange, about this many times
+#: the time of the bed on one rank (the 2D probe chute on 2 cores: 3 ranks 112x, 4 ranks 217x slower than one;
+#: bench/RESULTS.md, "Schedule")
+OVERSUBSCRIBED = 110
+
+
+def speedup(n_grains: int, dim: int, np_: int, cores: int | None = None) -> float:
+    """Modelled wall time of a bed of ``n_grains`` alone at one rank over that at ``np_`` ranks (strong scaling:
+    the grains' work plus a halo exchange worth BREAK_EVEN grains per extra rank, shared by the ranks, or by the
+    cores when the ranks outnumber them)."""
+    used = min(np_, cores or os.cpu_count() or 1)
+    return used * n_grains / (n_grains + (np_ - 1) * BREAK_EVEN[dim])
+
+
+def ranks_per_bed(n_grains: int, dim: int, concurrent: int, np_: int | None = None, cores: int | None = None) -> int:
+    """MPI ranks of each bed: ``np_`` when the user gives it; else two for a bed that runs alone (``concurrent``
+    beds at a time is one) on two cores or more if ``speedup`` at two is at least RANKS_GAIN, and one otherwise
+    (two ranks beside another bed would take its core)."""
+    if np_ is not None:
+        return np_
     cores = cores or os.cpu_count() or 1
-    shared = contention if min(ranks, cores) > 1 else 1.0
-    return shared * max(1.0, ranks / cores)
+    alone = concurrent == 1 and cores >= 2
+    return 2 if alone and speedup(n_grains, dim, 2, cores) >= RANKS_GAIN else 1
+
+
+def slowdown(processes: int, np_: int = 1, cores: int | None = None, contention: float = 1.0) -> float:
+    """Wall time of each of ``processes`` concurrent LAMMPS processes of ``np_`` ranks over that of each alone
+    (a process's own ranks are in its ``speedup``): two or more processes sharing the cores each run
+    ``contention`` times slower (dem.throughput), more of them than the cores hold wait in turn, and MPI ranks
+    beyond the cores cost OVERSUBSCRIBED times each."""
+    cores = cores or os.cpu_count() or 1
+    shared = contention if min(processes, cores) > 1 else 1.0
+    beyond = max(0, processes * np_ - cores) if np_ > 1 else 0
+    return shared * max(1.0, processes * min(np_, cores) / cores) * (1 + OVERSUBSCRIBED * beyond)
 
 
 def makespan(work, jobs: int, np_: int = 1, cores: int | None = None, contention: float = 1.0) -> float:

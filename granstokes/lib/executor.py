@@ -2,12 +2,14 @@
 
 A task is a plain function and its arguments (picklable: remote workers rebuild what they need from the
 folders), with an expected cost in seconds and the MPI ranks it takes.  Tasks start longest first (Dask
-priority); a task of k ranks holds k of its worker's ``RANKS`` resource, so a local cluster of ``jobs`` slots
-runs two 1-rank tasks side by side or one 2-rank task alone.  A task returns an ``Outcome``; a failed outcome
-or an exception (a lost worker too) is retried ``retries`` times, an interrupted one never.  ``KeyboardInterrupt``
-(SIGINT, or a SIGTERM handler that raises) cancels the queue, then calls ``stop`` to end what runs in this process
-(``stop`` must also keep a task that is starting from launching anything); workers of a remote cluster finish
-their current task (Dask cannot stop a running task).
+priority = the cost: each freed slot takes the longest task waiting, so the slots end nearly together and a
+short task, not a long one, runs last; bench/dem_schedule.py); a task of k ranks holds k of its worker's
+``RANKS`` resource, so a local cluster of ``jobs`` slots runs two 1-rank tasks side by side or one 2-rank task
+alone.  A task returns an ``Outcome``; a failed outcome or an exception (a lost worker too) is retried
+``retries`` times, an interrupted one never.  ``KeyboardInterrupt`` (SIGINT, or a SIGTERM handler that raises)
+cancels the queue, then calls ``stop`` to end what runs in this process (``stop`` must also keep a task that is
+starting from launching anything); workers of a remote cluster finish their current task (Dask cannot stop a
+running task).
 """
 from __future__ import annotations
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from granstokes.dem import config as dem_config
 from granstokes.dem.layout import CONFIG_TOML, RUN_JSON
-from granstokes.dem.sizing import Plan, duration_text, makespan, plan
+from granstokes.dem.sizing import Plan, duration_text, makespan, plan, ranks_per_bed, speedup
 from granstokes.dem.throughput import measured
 from granstokes.lib.toml_text import with_entries
 
@@ -105,11 +105,17 @@ class StudyPlan:
                 keys |= {f"{label}/{k}" for k, st in stages.items() if st.get("status") == "complete"}
         return keys
 
+    def ranks(self, jobs: int) -> dict[str, int]:
+        """MPI ranks of each run's beds (dem.sizing.ranks_per_bed), the study's beds ``jobs`` at a time."""
+        concurrent = min(jobs, sum(len(r.plan.config.seeds) for r in self.runs.values()))
+        return {label: ranks_per_bed(r.plan.n_grains, r.plan.dimension, concurrent) for label, r in self.runs.items()}
+
     def cost_seconds(self, jobs: int, out: Path | None = None) -> float:
-        """Every bed (what is left of it in the study folder ``out``), longest first over ``jobs`` slots, at this
-        machine's speed (dem.throughput)."""
-        speed, done = measured(), self.done(out)
+        """Every bed (what is left of it in the study folder ``out``) on its ``ranks``, longest first over ``jobs``
+        slots, at this machine's speed (dem.throughput)."""
+        speed, done, ranks = measured(), self.done(out), self.ranks(jobs)
         beds = [sum(r.plan.stage_seconds(k, speed) for k in r.plan.stage_keys(seed) if f"{label}/{k}" not in done)
+                / speedup(r.plan.n_grains, r.plan.dimension, ranks[label])
                 for label, r in self.runs.items() for seed in r.plan.config.seeds]
         return makespan(sorted([b for b in beds if b > 0], reverse=True), jobs, contention=speed.contention)
 

@@ -95,13 +95,15 @@ class StudyRunner:
 
     # --- stage 2: the runs -----------------------------------------------------------------------------
     def runs(self, sp: StudyPlan) -> dict:
-        """Every unfinished bed of every pressure on one executor (``sp`` as begun: a run folder already begun goes
-        on with the config stored in it); each run folder's status at the end."""
-        runners, tasks = {}, []
+        """Every unfinished bed of every pressure on one executor, longest first, on the ranks of ``sp.ranks``
+        (one on a scheduler, whose workers' slots are unknown here; ``sp`` as begun: a run folder already begun
+        goes on with the config stored in it); each run folder's status at the end."""
+        runners, tasks, ranks = {}, [], sp.ranks(self.jobs)
         for label, r in sp.runs.items():
             folder = sp.folder(self.out, label)
             resume = (folder / layout.RUN_JSON).exists()
-            runner, meta = begin(r.plan.config, r.text, folder, resume=resume, progress=False, jobs=self.jobs)
+            runner, meta = begin(r.plan.config, r.text, folder, np=1 if self.scheduler else ranks[label],
+                                 resume=resume, progress=False, jobs=self.jobs)
             runners[label] = (runner, meta)
             tasks += runner.bed_tasks(meta, prefix=f"{label}/")
 

@@ -2,13 +2,16 @@
 resume has left, and the estimate against a measured smoke run."""
 import json
 import math
+import os
 import re
 
 import pytest
 from granstokes.dem import config, scene, sizing
 from granstokes.dem.calibrate import plan_calibration
-from granstokes.dem.sizing import OVERHEAD, duration_text, makespan, plan, slowdown
+from granstokes.dem.sizing import OVERHEAD, duration_text, makespan, plan, ranks_per_bed, slowdown, speedup
 from granstokes.dem.throughput import Throughput
+
+from granstokes.lib.toml_text import with_entries
 
 #: a machine's speed for the schedule's arithmetic (the real one is probed: dem.throughput)
 SPEED = Throughput({"2": {"prepare": 10e6, "drive": 8e6, "shear": 9e6}, "3": {"prepare": 6e6, "drive": 5e6,
@@ -24,7 +27,11 @@ PREPARE_TOLERANCE, DRIVE_TOLERANCE = 0.3, 0.01
 def test_two_processes_share_two_cores_and_more_wait():
     assert slowdown(1, cores=2, contention=CONTENTION) == 1.0
     assert slowdown(2, cores=2, contention=CONTENTION) == CONTENTION
-    assert slowdown(1, np_=2, cores=2, contention=CONTENTION) == CONTENTION  # ranks are not credited with a speed-up
+    assert slowdown(1, np_=2, cores=2, contention=CONTENTION) == 1.0  # a process's own ranks: its speedup
+    # MPI ranks beyond the cores wait for time slices
+    assert slowdown(1, np_=3, cores=2, contention=CONTENTION) == 1 + sizing.OVERSUBSCRIBED
+    assert slowdown(2, np_=2, cores=2, contention=CONTENTION) == pytest.approx(2 * CONTENTION
+                                                                               * (1 + 2 * sizing.OVERSUBSCRIBED))
     assert slowdown(4, cores=2, contention=CONTENTION) == pytest.approx(2 * CONTENTION)
     assert slowdown(2, cores=1, contention=CONTENTION) == 2.0  # one core: turns, no shared cache to fight over
 
@@ -37,6 +44,56 @@ def test_beds_are_whole_units_spread_over_the_jobs():
     # unequal units: the short one ends first, the long one finishes alone
     assert makespan([10.0, 4.0], 2, cores=2, contention=CONTENTION) == pytest.approx(4 * CONTENTION + 6)
     assert makespan([], 2) == 0.0
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_two_ranks_go_to_a_bed_alone_that_they_speed_up(dim):
+    """The strong-scaling model breaks even at BREAK_EVEN grains; two ranks only for a bed that runs alone on two
+    cores with a modelled speed-up of at least RANKS_GAIN; the user's --np always wins."""
+    n_star = sizing.BREAK_EVEN[dim]
+    assert speedup(n_star, dim, 2, cores=2) == pytest.approx(1.0)
+    assert speedup(n_star, dim, 1, cores=2) == 1.0
+    assert speedup(100 * n_star, dim, 2, cores=2) == pytest.approx(2 * 100 / 101)
+    # ranks beyond the cores: their halos are paid, on the cores there are
+    assert speedup(n_star, dim, 64, cores=2) == pytest.approx(2 / 64)
+    enough = sizing.RANKS_GAIN / (2 - sizing.RANKS_GAIN) * n_star  # speedup(enough, 2) == RANKS_GAIN
+    assert ranks_per_bed(round(1.01 * enough), dim, concurrent=1, cores=2) == 2
+    assert ranks_per_bed(round(0.99 * enough), dim, concurrent=1, cores=2) == 1
+    assert ranks_per_bed(100 * n_star, dim, concurrent=2, cores=2) == 1  # beside another bed
+    assert ranks_per_bed(100 * n_star, dim, concurrent=1, cores=1) == 1
+    assert ranks_per_bed(10, dim, concurrent=2, np_=64, cores=2) == 64
+
+
+def test_the_estimate_runs_each_bed_on_the_ranks_the_run_uses():
+    """One bed alone on the rule's ranks: its time over the modelled speed-up; an explicit --np oversubscribing two
+    cores is charged for the ranks that wait."""
+    p = plan(config.preset("quick")[0])
+    bed = sum(p.stage_seconds(k, SPEED) for k in p.stage_keys(1))
+    one = plan(config.parse(with_entries(config.preset_text("quick"), [("seeds", [1])])))
+    np_ = one.ranks(jobs=2)
+    assert np_ == ranks_per_bed(one.n_grains, 2, concurrent=1)
+    assert one.cost_seconds(jobs=2, speed=SPEED) == pytest.approx(OVERHEAD + bed / speedup(one.n_grains, 2, np_))
+    cores = os.cpu_count()
+    gain = min(64, cores) * p.n_grains / (p.n_grains + 63 * sizing.BREAK_EVEN[2])
+    two, one = (slowdown(k, 64, cores, CONTENTION) for k in (2, 1))  # two beds at once, then the third
+    assert p.cost_seconds(jobs=2, np_=64, speed=SPEED) == pytest.approx(OVERHEAD + (two + one) * bed / gain)
+    assert p.cost_seconds(jobs=2, np_=64, speed=SPEED) > 100 * bed  # each rank beyond the cores waits
+
+
+def test_a_run_takes_the_rules_ranks_unless_given(tmp_path):
+    """A quick bed alone gets two ranks (885 disks: modelled 1.4x on two cores), three quick beds on two slots one
+    each, a smoke bed alone one (543 disks: 1.2x); --np wins."""
+    from granstokes.dem.runner import check_request
+
+    one = with_entries(config.preset_text("quick"), [("seeds", [1])])
+    two = 2 if os.cpu_count() >= 2 else 1
+    assert check_request(config.parse(one), one, tmp_path / "a", jobs=2).lmp.np == two
+    assert check_request(config.parse(one), one, tmp_path / "b", np=3, jobs=2).lmp.np == 3
+    three = config.preset_text("quick")
+    assert check_request(config.parse(three), three, tmp_path / "c", jobs=2).lmp.np == 1
+    assert check_request(config.parse(three), three, tmp_path / "d", jobs=1).lmp.np == two  # one at a time
+    smoke = config.preset_text("smoke")
+    assert check_request(config.parse(smoke), smoke, tmp_path / "e", jobs=2).lmp.np == 1
 
 
 @pytest.mark.parametrize("seconds, text", [(9.44, "9.4 s"), (89, "89 s"), (150, "2.5 min"), (5300, "88 min"),
@@ -66,7 +123,9 @@ def test_the_estimate_follows_the_schedule_and_what_is_left():
     p = plan(config.preset("quick")[0])
     bed = sum(p.stage_seconds(k, SPEED) for k in p.stage_keys(1))
     assert p.cost_seconds(jobs=2, np_=1, speed=SPEED) == pytest.approx(OVERHEAD + bed * CONTENTION + bed)
-    assert p.cost_seconds(jobs=1, speed=SPEED) == pytest.approx(OVERHEAD + 3 * bed)
+    assert p.cost_seconds(jobs=1, np_=1, speed=SPEED) == pytest.approx(OVERHEAD + 3 * bed)
+    gain = speedup(p.n_grains, 2, p.ranks(1))  # one at a time: each bed alone, on the rule's ranks
+    assert p.cost_seconds(jobs=1, speed=SPEED) == pytest.approx(OVERHEAD + 3 * bed / gain)
     done = {"seed-1", "seed-1/stress", "seed-1/speed", "seed-2"}
     left = bed - p.stage_seconds("seed-2", SPEED)
     assert p.cost_seconds(jobs=2, done=done, speed=SPEED) == pytest.approx(OVERHEAD + left * CONTENTION + (bed - left))

@@ -41,6 +41,21 @@ def test_one_slot_runs_the_longest_first(tmp_path):
     assert all(o.status == "complete" and o.attempts == 1 for o in outcomes.values())
 
 
+#: sleeps of the tasks by cost (6 longest): chosen so that no two slots free at once and the start order is the
+#: executor's choice alone: t6 ends at 0.2 s, t5 0.45, t4 0.7, t3 0.95, t2 1.2 (t1 starts then)
+SLEEPS = {6: 0.2, 5: 0.45, 4: 0.5, 3: 0.5, 2: 0.5, 1: 0.1}
+
+
+def test_two_slots_start_the_longest_first_and_take_the_next_longest_as_each_frees(tmp_path):
+    """The schedule's order: the two longest start at once, then each freed slot takes the longest waiting."""
+    log = str(tmp_path / "order")
+    tasks = [Task(f"t{c}", _log, (log, f"t{c}", "complete", SLEEPS[c]), cost=c) for c in (2, 6, 1, 4, 3, 5)]
+    outcomes = Executor(jobs=2).run(tasks)
+    started = Path(log).read_text().split()
+    assert set(started[:2]) == {"t6", "t5"} and started[2:] == ["t4", "t3", "t2", "t1"]
+    assert all(o.status == "complete" for o in outcomes.values())
+
+
 def test_a_failed_task_is_retried_once_then_recorded(tmp_path):
     done = []
     tasks = [Task("flaky", _flaky, (str(tmp_path / "marker"), "flaky")),
