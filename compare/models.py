@@ -70,6 +70,7 @@ class Prediction:
     series: pd.DataFrame      # t, u_w, mu_w, delta_u
     profiles: pd.DataFrame    # t, depth, u, mu
     steady: Steady
+    transient_calibrated: bool = True  # False: the model's time scale was assumed, not measured (SceneModel)
 
 
 def _series(t, depth, u, mu_w) -> pd.DataFrame:
@@ -145,7 +146,9 @@ def _ngf_transient(fluidity: ngf.NonlocalFluidity, material: Material, drive: Dr
 class SceneModel:
     """A registered model: ``steady(material, drive)`` and ``transient(material, drive, times)``;
     ``parameter``: the name of its own fitted parameter (beyond the material), and ``factory`` builds
-    the model at another value of it (uncertainty propagation); ``half_space``: the model's bed has no base."""
+    the model at another value of it (uncertainty propagation); ``half_space``: the model's bed has no base;
+    ``transient_calibrated``: False when the model's own time scale is assumed rather than calibrated (its
+    transient is then not a prediction)."""
 
     key: str
     label: str
@@ -155,6 +158,7 @@ class SceneModel:
     parameter: str | None = None
     factory: Callable | None = None
     half_space: bool = False
+    transient_calibrated: bool = True
 
     def at(self, values) -> SceneModel:
         """This model with its own parameter taken from ``values`` (a mapping), if it has one."""
@@ -163,7 +167,8 @@ class SceneModel:
     def predict(self, material: Material, drive: Drive, times) -> Prediction:
         times = np.asarray(times, dtype=float)
         series, profiles = self.transient(material, drive, times)
-        return Prediction(self.key, self.label, series, profiles, self.steady(material, drive))
+        return Prediction(self.key, self.label, series, profiles, self.steady(material, drive),
+                          self.transient_calibrated)
 
 
 LOCAL = SceneModel("local", "local mu(I), velocity form on the DEM scene", _local_steady, _local_transient)
@@ -172,8 +177,10 @@ PAPER = SceneModel("paper", "paper's model (stress diffusion, tau = mu_s p at t 
 
 
 def ngf_model(A: float) -> SceneModel:
-    """NGF with amplitude A (the model's one parameter; calibrated on one drive's creep profile)."""
+    """NGF with amplitude A (the model's one parameter; calibrated on one drive's creep profile); its fluidity's
+    relaxation time t0 is one local inertial time, assumed and not calibrated, so its transient is not scored."""
     fl = ngf.NonlocalFluidity(A=A)
     return SceneModel("ngf", f"nonlocal fluidity (NGF), A = {A:.3g}",
                       lambda m, d: _ngf_steady(fl, m, d), lambda m, d, t: _ngf_transient(fl, m, d, t),
-                      {"A": A, "boundary": fl.boundary, "t0_hat": fl.t0_hat}, "A", ngf_model)
+                      {"A": A, "boundary": fl.boundary, "t0_hat": fl.t0_hat}, "A", ngf_model,
+                      transient_calibrated=False)

@@ -63,6 +63,7 @@ MODEL_UNSTEADY = 0.05
 #: the observables of the steady state, and those of the layer (meaningless where the flow reaches the base)
 STEADY_OBSERVABLES = ("u_w_inf", "mu_w_inf", "delta_u", "creep_length")
 LAYER_OBSERVABLES = ("delta_u", "creep_length")
+TRANSIENT_OBSERVABLES = ("t90",)
 #: relative step of the central differences of the linearised t90 propagation
 FD_STEP = 1e-3
 PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
@@ -266,6 +267,9 @@ def _not_scored(obs: str, model: SceneModel, base: str, end_value: float, steady
     """Why a row is not scored, or "" (see the module's docstring)."""
     if base and (obs in LAYER_OBSERVABLES or model.half_space):
         return "not scored: " + base + (" (the model's bed is a half-space)" if model.half_space else "")
+    if obs in TRANSIENT_OBSERVABLES and not model.transient_calibrated:
+        return (f"not predicted: {model.key}'s time scale is assumed (t0 one local inertial time), not calibrated, "
+                "so its transient is no prediction")
     if obs not in STEADY_OBSERVABLES:
         return ""
     if steady_value == 0:  # the model's steady state is at rest (no flow): steady once its response is at rest too

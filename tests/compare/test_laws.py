@@ -122,3 +122,23 @@ def test_a_window_the_elastic_start_covers_is_not_measurable_and_says_why():
     assert growth.verdict == "not measurable" and "elastic start" in growth.note and np.isnan(growth.sigma)
     across = row(table, "delta_s_scaling", "slope")
     assert across.verdict == "not measurable" and "1 drive(s)" in across.note
+
+
+def test_a_model_with_an_assumed_time_scale_predicts_no_transient_law():
+    """NGF's t0 is assumed: its transient laws are 'not predicted', its steady ones are scored like any model's."""
+    from dataclasses import replace
+
+    compared = [drive(p_w=p, mu_w=m) for p, m in ((10.0, 0.4), (10.0, 0.5), (20.0, 0.45))]
+    compared = [replace(dc, predictions=(*dc.predictions, replace(dc.predictions[0], model="ngf",
+                                                                  transient_calibrated=False)))
+                for dc in compared]
+    table = laws(compared, resamples=20)
+    ngf = table[table.model == "ngf"].set_index(["law", "quantity"])
+    local = table[table.model == "local"].set_index(["law", "quantity"])
+    for law in LAWS:
+        key = (law.name, law.quantity)
+        if law.transient:
+            assert ngf.loc[key, "verdict"] == "not predicted" and "time scale is assumed" in ngf.loc[key, "note"]
+        else:
+            assert ngf.loc[key, "verdict"] == local.loc[key, "verdict"]
+    assert local.loc[("t_s_collapse", "slope of log t90 against log t_s"), "verdict"] != "not predicted"
