@@ -138,10 +138,11 @@ class StudyRunner:
 
         scored = [label for label in sp.runs if not label.endswith(WIDE)]
         comparison = build([sp.folder(self.out, label) for label in scored], calibration=calibration,
-                           progress=self.progress)
+                           progress=self.progress, jobs=self.jobs, root=self.out)
         with staging.staged(self.out, COMMAND, keep=True) as work:
             metrics = write_report(comparison, work)
-        checks = [width_check(sp.folder(self.out, label), sp.folder(self.out, label[:-len(WIDE)]), comparison)
+        checks = [width_check(sp.folder(self.out, label), sp.folder(self.out, label[:-len(WIDE)]), comparison,
+                              self.out)
                   for label in sp.runs if label.endswith(WIDE)]
         self.record(lambda d: d.update(width_check=[row for rows in checks for row in rows]))
         return metrics
@@ -187,14 +188,15 @@ class StudyStopped(RuntimeError):
         self.status, self.signal = status, signal
 
 
-def width_check(wide: Path, normal: Path, comparison) -> list[dict]:
+def width_check(wide: Path, normal: Path, comparison, root: Path) -> list[dict]:
     """The drives of the run folder ``wide`` (twice as wide) against the same drives of ``normal`` in
-    ``comparison``: the free response's steady value in both and their difference in units of the combined error
-    (|z| > 2: the box's width changes the answer).  The wide drives are analysed, never scored."""
+    ``comparison`` (its runs named relative to ``root``): the free response's steady value in both and their
+    difference in units of the combined error (|z| > 2: the box's width changes the answer).  The wide drives are
+    analysed, never scored."""
     from granstokes.compare.analysis import analyse_drive, drive_specs
 
     normal_by_name = {dc.dem.spec.name: dc.dem for dc in comparison.drives
-                      if Path(dc.dem.spec.run).resolve() == Path(normal).resolve()}
+                      if (Path(root) / dc.dem.spec.run).resolve() == Path(normal).resolve()}
     rows = []
     for spec in drive_specs(wide):
         a, b = normal_by_name.get(spec.name), analyse_drive(spec)
