@@ -114,7 +114,7 @@ class Seeds:
 
 def model_track(pred, dc) -> Track:
     """A model's track of drive ``dc``: its profiles' delta_u (continuum.crossing.layer_measures, the DEM's
-    estimator), its series and its steady state."""
+    estimator), its series, its u_w averaged over the DEM's steady window and its steady profile."""
     times, delta = [], []
     for t, g in pred.profiles.groupby("t"):
         g = g.sort_values("depth")
@@ -122,8 +122,11 @@ def model_track(pred, dc) -> Track:
         delta.append(layer_measures(g.depth, g.u, float(g.u.iloc[0]))["delta_05"])
     st = pred.steady
     delta_s = dc.scales.delta_s if dc.scales is not None else np.nan
+    t = dc.dem.series.t.to_numpy()
+    last = t[t >= t[0] + STEADY_LAST * (t[-1] - t[0])]  # the DEM's steady window: the plate value like with like
+    u_w = float(np.mean(np.interp(last, pred.series.t, pred.series.u_w)))
     return Track(np.array(times), np.array(delta), pred.series.t.to_numpy(), pred.series.u_w.to_numpy(),
-                 pred.series.mu_w.to_numpy(), st.u_w, st.delta_u, creep_length(st.y, st.u, delta_s, dc.dem.spec.depth))
+                 pred.series.mu_w.to_numpy(), u_w, st.delta_u, creep_length(st.y, st.u, delta_s, dc.dem.spec.depth))
 
 
 def _slope(x, y) -> float:
