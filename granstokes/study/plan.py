@@ -9,8 +9,8 @@ from pathlib import Path
 
 from granstokes.dem import config as dem_config
 from granstokes.dem.layout import CONFIG_TOML, RUN_JSON
-from granstokes.dem.sizing import Plan, duration_text, makespan, plan, ranks_per_bed, speedup
-from granstokes.dem.throughput import measured
+from granstokes.dem.sizing import Plan, count, duration_text, makespan, plan, ranks_per_bed, speedup
+from granstokes.dem.throughput import Throughput, measured
 from granstokes.lib.toml_text import with_entries
 
 from .config import Study, rigidity
@@ -20,6 +20,14 @@ WIDE = "-wide"  # the width check's run: label and name suffix
 #: atom and contact snapshots per t_s of the fastest drive at a pressure: the layer's growth over the first t_s
 #: is resolved by this many frames, and a drive of 10 t_s has 10 times as many (coarse-graining's cost)
 FRAMES_PER_TS = 20
+#: the comparison's cost per 2D drive grain-step/s of this machine (dem.throughput: it scales with the probe),
+#: measured beside probes by bench/dem_costs.py --constants (bench/RESULTS.md, "DEM cost estimates"): the
+#: grain-frames coarse-grained per grain-step of a 2D drive (bench/cg_rate.py), and the grain-steps of a 2D drive
+#: worth one drive and model of the model side (its prediction, replicates and bands; bench/compare_cost.py on the
+#: disks study, one process)
+CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
+#: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
+MODELS = 3
 
 
 def pressure_label(p_w: float) -> str:
@@ -119,6 +127,24 @@ class StudyPlan:
                 for label, r in self.runs.items() for seed in r.plan.config.seeds]
         return makespan(sorted([b for b in beds if b > 0], reverse=True), jobs, contention=speed.contention)
 
+    def grain_frames(self) -> int:
+        """Grains x atom snapshots of every drive and bed: what the comparison coarse-grains (the width check's
+        runs too)."""
+        return sum(r.plan.n_grains * len(r.plan.config.seeds) * (d.steps // r.plan.intervals["atoms"] + 1)
+                   for r in self.runs.values() for d in r.plan.drives)
+
+    def scored_drives(self) -> int:
+        """The drives compared with the models (the width check's are analysed only)."""
+        return sum(len(r.plan.drives) for label, r in self.runs.items() if not label.endswith(WIDE))
+
+    def comparison_seconds(self, jobs: int, speed: Throughput | None = None) -> float:
+        """The comparison stage: the coarse-graining of every snapshot (one process), then each scored drive's
+        model side (MODELS models) as a unit of work over ``jobs`` processes (compare.comparison.model_drives)."""
+        speed = speed or measured()
+        rate = speed.rate(2, "drive")
+        model = makespan([MODELS * MODEL_DRIVE_STEPS / rate] * self.scored_drives(), jobs, contention=speed.contention)
+        return self.grain_frames() / (CG_PER_DRIVE_STEP * rate) + model
+
     def lines(self, jobs: int, out: Path | None = None) -> list[str]:
         """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole (what is left of it in
         the study folder ``out``)."""
@@ -132,8 +158,11 @@ class StudyPlan:
                              f"{len(p.config.seeds)} bed(s)")
             lines.append(f"  {label}: {p.cost_estimate(1)}")
         left = " (what is left)" if self.done(out) else ""
-        lines.append(f"  the study's beds{left}: about {duration_text(self.cost_seconds(jobs, out))} with {jobs} "
-                     "job(s)")
+        beds, comparison = self.cost_seconds(jobs, out), self.comparison_seconds(jobs)
+        lines.append(f"  the study's beds{left}: about {duration_text(beds)} with {jobs} job(s)")
+        lines.append(f"  the comparison: about {duration_text(comparison)} ({count(self.grain_frames())} grain-frames "
+                     f"coarse-grained, {self.scored_drives()} drive(s) x {MODELS} models)")
+        lines.append(f"  the study's beds and comparison{left}: about {duration_text(beds + comparison)}")
         return lines
 
 

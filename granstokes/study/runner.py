@@ -21,6 +21,7 @@ from granstokes.dem import config as dem_config
 from granstokes.dem import layout
 from granstokes.dem.calibrate import calibrate, material_table
 from granstokes.dem.runner import Interrupted, allow_lammps, begin, sigterm_interrupts, stop_all_lammps
+from granstokes.dem.sizing import duration_text
 from granstokes.lib import staging
 from granstokes.lib.executor import Executor, Outcome
 from granstokes.lib.provenance import provenance
@@ -167,7 +168,8 @@ class StudyRunner:
                 stopped = [(k, r) for k, r in results.items() if r.status != "complete"]
                 if stopped:
                     raise StudyStopped(stopped[0][1].status, f"run {stopped[0][0]}: {stopped[0][1].message}")
-                self.announce("study: comparing every drive with every model")
+                self.announce("study: comparing every drive with every model (about "
+                              f"{duration_text(sp.comparison_seconds(self.jobs))})")
                 metrics = self.compare(sp, calibration)
                 message = metrics.get("verdict", "")
         except StudyStopped as exc:

@@ -102,6 +102,34 @@ def test_set_overrides_and_presets_print(capsys):
     assert set(capsys.readouterr().out.split()) == set(dem_config.PRESETS)
 
 
+def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_speed):
+    """The smoke study's dry run prints the comparison (every snapshot of every bed coarse-grained, the width
+    check's too; each scored drive's models a unit of work over the jobs) and adds it to the beds' estimate."""
+    from granstokes.dem.sizing import duration_text
+
+    from granstokes.study.plan import CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS, MODELS
+
+    assert granstokes_main(["study", "--preset", "smoke", "--out", str(tmp_path / "s"), "--jobs", "2",
+                            "--dry-run"]) == 0
+    printed = capsys.readouterr().err
+    nominal = dem_config.preset("smoke")[0].material
+    sp = plan_study(config.load(None, "smoke")[0], {k: getattr(nominal, k) for k in dem_config.MATERIAL_KEYS}, "")
+    assert list(sp.runs) == ["p5", "p10", "p10-wide"] and sp.scored_drives() == 4
+    # 2 seeds x (2 drives at p5 and at p10, 1 in the wide run), a snapshot every output.atoms as LAMMPS writes it
+    frames = {label: 2 * sum(d.duration for d in r.plan.drives) / (r.plan.intervals["atoms"] * r.plan.dt)
+              for label, r in sp.runs.items()}
+    assert sp.grain_frames() == pytest.approx(sum(sp.runs[k].plan.n_grains * n for k, n in frames.items()), rel=0.02)
+    rate = canned_speed.rate(2, "drive")
+    cg, model = sp.grain_frames() / (CG_PER_DRIVE_STEP * rate), MODELS * MODEL_DRIVE_STEPS / rate
+    assert sp.comparison_seconds(1) == pytest.approx(cg + 4 * model)  # one process: the drives in turn
+    assert sp.comparison_seconds(2) == pytest.approx(cg + 2 * model * canned_speed.contention)  # two at once
+    beds = sp.cost_seconds(2)
+    assert f"the study's beds: about {duration_text(beds)} with 2 job(s)" in printed
+    assert f"the comparison: about {duration_text(sp.comparison_seconds(2))} (" in printed
+    assert f"the study's beds and comparison: about {duration_text(beds + sp.comparison_seconds(2))}\n" in printed
+    assert not (tmp_path / "s").exists()
+
+
 #: the smoke study cut to what the test needs: one pressure, one drive of 4 t_s, one seed, a 6-point calibration
 SMALL = ["pressures=[10.0]", "seeds=[1]", 'drive=[{kind = "speed", mu_w_tilde = 0.5}]', "min_duration=0.0",
          "duration_ts=4.0",
