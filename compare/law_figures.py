@@ -12,7 +12,7 @@ from matplotlib import colormaps
 from matplotlib.figure import Figure
 
 from .scorecard import creep_length
-from .style import DEM_COLOUR, MODEL_STYLE, figure_legend, suptitle
+from .style import DEM_COLOUR, MODEL_STYLE, figure_legend, plain_log, suptitle
 
 #: the DEM's plate series are drawn as running means over this fraction of the record, at about POINTS times
 SMOOTHING, POINTS = 0.01, 150
@@ -168,6 +168,7 @@ def steady_figure(c, out: Path) -> Path:
              title="steady plate speed (the paper's figure 4)")
     right.set(xlabel="p_w [rho_p g d]", ylabel="creep length below delta_s [d]", xscale="log",
               title="creep length (local mu(I): none)")
+    plain_log(right.xaxis)
     right.plot([], [], "o", color=DEM_COLOUR, label="DEM (circles: stress, squares: speed)")
     figure_legend(fig, [left, right], ncols=4, fontsize=7)
     suptitle(fig, "Steady states against the paper's steady law (calibrated material; DEM units)")
