@@ -170,6 +170,7 @@ def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
     (check,) = record["width_check"]  # the wide drive is analysed against the normal one, never scored
     assert check["drive"] == "speed-mutilde0.5" and check["observable"] == "mu_w_inf" and check["wide_err"] > 0
     metrics = json.loads((out / "metrics.json").read_text())
+    assert list(metrics["drives"]) == ["runs/p10/speed-mutilde0.5"] and metrics["runs"] == ["runs/p10"]
     (drive,) = metrics["drives"].values()
     for key in ("p_w", "kind", "imposed", "seeds", "depth", "duration", "delta_s", "t_s", "base_confined"):
         assert key in drive
