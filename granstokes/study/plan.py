@@ -26,6 +26,10 @@ FRAMES_PER_TS = 20
 #: worth one drive and model of the model side (its prediction, replicates and bands; bench/compare_cost.py on the
 #: disks study, one process)
 CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
+#: the rest of the comparison per scored drive (its figures and tables, the NGF fit, the analysis beyond the
+#: coarse-graining), in grain-steps of a 2D drive: the smoke study's comparison less the two terms above, over its
+#: 4 drives (bench/dem_costs.py; checked on a subset of the disks study)
+REPORT_DRIVE_STEPS = 5.9e7
 #: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
 MODELS = 3
 
@@ -138,12 +142,13 @@ class StudyPlan:
         return sum(len(r.plan.drives) for label, r in self.runs.items() if not label.endswith(WIDE))
 
     def comparison_seconds(self, jobs: int, speed: Throughput | None = None) -> float:
-        """The comparison stage: the coarse-graining of every snapshot (one process), then each scored drive's
-        model side (MODELS models) as a unit of work over ``jobs`` processes (compare.comparison.model_drives)."""
+        """The comparison stage: the coarse-graining of every snapshot (one process), each scored drive's model
+        side (MODELS models) as a unit of work over ``jobs`` processes (compare.comparison.model_drives), then its
+        report (one process)."""
         speed = speed or measured()
-        rate = speed.rate(2, "drive")
-        model = makespan([MODELS * MODEL_DRIVE_STEPS / rate] * self.scored_drives(), jobs, contention=speed.contention)
-        return self.grain_frames() / (CG_PER_DRIVE_STEP * rate) + model
+        rate, drives = speed.rate(2, "drive"), self.scored_drives()
+        model = makespan([MODELS * MODEL_DRIVE_STEPS / rate] * drives, jobs, contention=speed.contention)
+        return (self.grain_frames() / CG_PER_DRIVE_STEP + drives * REPORT_DRIVE_STEPS) / rate + model
 
     def lines(self, jobs: int, out: Path | None = None) -> list[str]:
         """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole (what is left of it in

@@ -104,10 +104,10 @@ def test_set_overrides_and_presets_print(capsys):
 
 def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_speed):
     """The smoke study's dry run prints the comparison (every snapshot of every bed coarse-grained, the width
-    check's too; each scored drive's models a unit of work over the jobs) and adds it to the beds' estimate."""
+    check's too; each scored drive's models a unit of work over the jobs, its report) and adds it to the beds'."""
     from granstokes.dem.sizing import duration_text
 
-    from granstokes.study.plan import CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS, MODELS
+    from granstokes.study.plan import CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS, MODELS, REPORT_DRIVE_STEPS
 
     assert granstokes_main(["study", "--preset", "smoke", "--out", str(tmp_path / "s"), "--jobs", "2",
                             "--dry-run"]) == 0
@@ -121,6 +121,7 @@ def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_sp
     assert sp.grain_frames() == pytest.approx(sum(sp.runs[k].plan.n_grains * n for k, n in frames.items()), rel=0.02)
     rate = canned_speed.rate(2, "drive")
     cg, model = sp.grain_frames() / (CG_PER_DRIVE_STEP * rate), MODELS * MODEL_DRIVE_STEPS / rate
+    cg += 4 * REPORT_DRIVE_STEPS / rate  # each drive's report, one after the other
     assert sp.comparison_seconds(1) == pytest.approx(cg + 4 * model)  # one process: the drives in turn
     assert sp.comparison_seconds(2) == pytest.approx(cg + 2 * model * canned_speed.contention)  # two at once
     beds = sp.cost_seconds(2)
