@@ -77,6 +77,14 @@ def _local(dc):
     return next((p for p in dc.predictions if p.model == "local"), dc.predictions[0])
 
 
+def _finish(fig, axes, title: str, path: Path, ncols: int) -> Path:
+    """Legend below the axes, the title, the PNG written."""
+    figure_legend(fig, axes, ncols=ncols, fontsize=7)
+    suptitle(fig, title)
+    fig.savefig(path, dpi=100)
+    return path
+
+
 def growth_figure(c, out: Path) -> Path:
     drives = _drives(c)
     fig = Figure(figsize=(8, 6.5), layout="constrained")
@@ -93,11 +101,8 @@ def growth_figure(c, out: Path) -> Path:
     ax.plot(x, np.sqrt(x), label="slope 1/2 (the paper's self-similar growth)", **GUIDE)
     ax.plot([], [], lw=0.8, color="0.4", label="local mu(I) on the DEM's scene (same colours)")
     ax.set(xscale="log", yscale="log", xlabel="t / t_s", ylabel="delta_u / delta_s (calibrated)")
-    figure_legend(fig, [ax], ncols=3, fontsize=7)
-    suptitle(fig, "Layer growth in the paper's variables (DEM units; delta_s, t_s from the calibration)")
-    path = out / "law_growth.png"
-    fig.savefig(path, dpi=100)
-    return path
+    return _finish(fig, [ax], "Layer growth in the paper's variables (DEM units; delta_s, t_s from the calibration)",
+                   out / "law_growth.png", 3)
 
 
 def wall_figure(c, out: Path) -> Path:
@@ -128,11 +133,8 @@ def wall_figure(c, out: Path) -> Path:
     for axis in (left, right):
         if not axis.lines[:-1]:
             axis.text(0.5, 0.5, "no drive of this kind", transform=axis.transAxes, ha="center")
-    figure_legend(fig, [left, right], ncols=4, fontsize=7)
-    suptitle(fig, "The plate's response in the paper's variables (points: DEM seed means; lines: local mu(I))")
-    path = out / "law_wall.png"
-    fig.savefig(path, dpi=100)
-    return path
+    return _finish(fig, [left, right], "The plate's response in the paper's variables (points: DEM seed means; "
+                   "lines: local mu(I))", out / "law_wall.png", 4)
 
 
 def steady_figure(c, out: Path) -> Path:
@@ -170,11 +172,8 @@ def steady_figure(c, out: Path) -> Path:
               title="creep length (local mu(I): none)")
     plain_log(right.xaxis)
     right.plot([], [], "o", color=DEM_COLOUR, label="DEM (circles: stress, squares: speed)")
-    figure_legend(fig, [left, right], ncols=4, fontsize=7)
-    suptitle(fig, "Steady states against the paper's steady law (calibrated material; DEM units)")
-    path = out / "law_steady.png"
-    fig.savefig(path, dpi=100)
-    return path
+    return _finish(fig, [left, right], "Steady states against the paper's steady law (calibrated material; DEM units)",
+                   out / "law_steady.png", 4)
 
 
 def profiles_figure(c, out: Path) -> Path:
@@ -192,11 +191,8 @@ def profiles_figure(c, out: Path) -> Path:
             ax.plot(eta, g.u_x / u_w, color=colour, lw=1, label=f"DEM {_label(dc)}" if k == len(inst.t.unique()) - 1
                     else None)
     ax.set(xlim=(0, 4), ylim=(-0.05, 1.1), xlabel="eta = depth / (2 Dmu sqrt(nu_g t))", ylabel="u / u_w")
-    figure_legend(fig, [ax], ncols=3, fontsize=7)
-    suptitle(fig, "Velocity profiles against the similarity variable (DEM snapshots after the elastic start)")
-    path = out / "law_profiles.png"
-    fig.savefig(path, dpi=100)
-    return path
+    return _finish(fig, [ax], "Velocity profiles against the similarity variable (DEM snapshots after the elastic "
+                   "start)", out / "law_profiles.png", 3)
 
 
 FIGURES = {"law_growth": growth_figure, "law_wall": wall_figure, "law_steady": steady_figure,

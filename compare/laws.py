@@ -164,27 +164,28 @@ def _in(t: np.ndarray, values: np.ndarray, t0: float, t1: float) -> tuple[np.nda
 
 # --- per-drive estimators ---------------------------------------------------------------------------------
 
-def growth(track: Track, dc) -> dict:
-    """delta_u ~ t^n over the growth window: exponent and mean delta_u/sqrt(nu_g t)."""
+def _early(t, y, dc, what: str) -> dict:
+    """The early power law of y(t) over the growth window: {"t", "y", "window"} or {"why"}."""
     t0, t1, why = growth_window(dc)
     if why:
         return {"why": why}
-    t, d = _in(track.t_layer, track.delta, t0, t1)
+    t, y = _in(t, y, t0, t1)
     if len(t) < MIN_POINTS:
-        return {"why": f"{len(t)} layer depths in the growth window [{t0:.3g}, {t1:.3g}] (fewer than {MIN_POINTS})"}
-    return {"exponent": _slope(t, d), "prefactor": float(np.mean(d / np.sqrt(dc.scales.nu_g * t))),
-            "window": [t0, t1]}
+        return {"why": f"{len(t)} {what} in the growth window [{t0:.3g}, {t1:.3g}] (fewer than {MIN_POINTS})"}
+    return {"t": t, "y": y, "exponent": _slope(t, y), "window": [t0, t1]}
+
+
+def growth(track: Track, dc) -> dict:
+    """delta_u ~ t^n over the growth window: exponent and mean delta_u/sqrt(nu_g t)."""
+    out = _early(track.t_layer, track.delta, dc, "layer depths")
+    if "t" in out:
+        out["prefactor"] = float(np.mean(out["y"] / np.sqrt(dc.scales.nu_g * out["t"])))
+    return out
 
 
 def sqrt_t(track: Track, dc) -> dict:
     """u_w ~ t^n over the growth window (an imposed stress)."""
-    t0, t1, why = growth_window(dc)
-    if why:
-        return {"why": why}
-    t, u = _in(track.t, track.u_w, t0, t1)
-    if len(t) < MIN_POINTS:
-        return {"why": f"{len(t)} plate speeds in the growth window (fewer than {MIN_POINTS})"}
-    return {"exponent": _slope(t, u), "window": [t0, t1]}
+    return _early(track.t, track.u_w, dc, "plate speeds")
 
 
 def _mu_hat(track: Track, dc) -> np.ndarray:
