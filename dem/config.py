@@ -146,7 +146,9 @@ class Drive:
 
 @dataclass(frozen=True)
 class Output:
-    """Output intervals in time units sqrt(d/g); each is rounded to a multiple of ``plate`` steps."""
+    """Output intervals in time units sqrt(d/g); each is rounded to a multiple of ``plate`` steps.  Over the
+    first ``early`` time units of a drive (0: none) atom snapshots come every ``atoms_early`` (a divisor of
+    ``atoms``): the layer's growth resolved."""
 
     plate: float = 0.02
     thermo: float = 0.1
@@ -154,10 +156,12 @@ class Output:
     contacts: float = 5.0
     profiles: float = 0.5
     restart: float = 2.0
+    early: float = 0.0
+    atoms_early: float = 0.1
 
     def __post_init__(self):
         for f in dataclasses.fields(self):
-            _positive(f"output.{f.name}", getattr(self, f.name))
+            _positive(f"output.{f.name}", getattr(self, f.name), strict=f.name != "early")
 
 
 #: settling's threshold at most this kinetic energy per grain (m g d): above it the pile still moves as a whole

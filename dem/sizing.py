@@ -132,6 +132,13 @@ class Plan:
         expected = fall + round(min(SETTLE_RELAX_EXPECTED, c.settle_max + c.relax_max) / self.dt)
         return expected, self.settle_steps_max + round(c.relax_max / self.dt)
 
+    def atom_frames(self, drive: DrivePlan) -> int:
+        """Atom snapshots of ``drive``: every ``atoms`` steps from step 0, and every ``atoms_early`` over the
+        first ``early`` steps."""
+        iv = self.intervals
+        early = min(iv["early"], drive.steps)
+        return drive.steps // iv["atoms"] + 1 + early // iv["atoms_early"] - early // iv["atoms"]
+
     def stage_seconds(self, key: str, speed: Throughput | None = None) -> float:
         """Expected LAMMPS wall time of one stage (dem.layout.stage_key) run alone at one rank, at ``speed``
         (default: this machine's, dem.throughput.measured)."""
@@ -240,11 +247,20 @@ def plan(cfg: Config) -> Plan:
                  for k in ("plate", "thermo", "atoms", "contacts", "profiles")}
     # contact snapshots coincide with atom snapshots (plane stresses need the positions)
     intervals["contacts"] = max(1, round(intervals["contacts"] / intervals["atoms"])) * intervals["atoms"]
+    intervals.update(_early(cfg.output, dt, intervals["atoms"], plate_steps))
     # restarts fall on profile-window boundaries so that a resumed run loses no averaging window
     intervals["restart"] = max(1, round(cfg.output.restart / dt / intervals["profiles"])) * intervals["profiles"]
     intervals["check"] = max(1, round(cfg.prepare.check_every / dt))
     intervals["sample"] = sample
     return Plan(cfg, float(depth), n_grains, dt, intervals, tuple(drives), tuple(reasons))
+
+
+def _early(out, dt: float, atoms: int, plate_steps: int) -> dict:
+    """The early atom snapshots in steps: ``early`` (a multiple of the atoms interval, 0: none) and
+    ``atoms_early`` (plate steps times the divisor of atoms/plate_steps nearest the requested interval)."""
+    n = atoms // plate_steps
+    k = min((k for k in range(1, n + 1) if n % k == 0), key=lambda k: abs(k * plate_steps * dt - out.atoms_early))
+    return {"early": round(out.early / dt / atoms) * atoms, "atoms_early": k * plate_steps}
 
 
 #: grains at which a bed runs as fast on two MPI ranks as on one (each rank's halved work plus the halo

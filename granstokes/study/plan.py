@@ -20,6 +20,9 @@ WIDE = "-wide"  # the width check's run: label and name suffix
 #: atom and contact snapshots per t_s of the fastest drive at a pressure: the layer's growth over the first t_s
 #: is resolved by this many frames, and a drive of 10 t_s has 10 times as many (coarse-graining's cost)
 FRAMES_PER_TS = 20
+#: atom snapshots per t_s over the first t_s of the fastest drive: the growth window (compare.laws, from three
+#: shear-wave transits to half a t_s) holds tens of frames
+EARLY_FRAMES_PER_TS = 100
 #: the comparison's cost per 2D drive grain-step/s of this machine (dem.throughput: it scales with the probe),
 #: measured beside probes by bench/dem_costs.py --constants (bench/RESULTS.md, "DEM cost estimates"): the
 #: grain-frames coarse-grained per grain-step of a 2D drive (bench/cg_rate.py), and the grain-steps of a 2D drive
@@ -61,7 +64,8 @@ def calibration_text(study: Study, p_w: float) -> str:
 def run_text(study: Study, p_w: float, material: dict, source: str, wide_of: Plan | None = None) -> str:
     """The DEM config of the run at p_w: the preset's grains (one material), the study's seeds and drives, the
     depth and durations sized from ``material`` (the calibration at ``source``), snapshots every t_s/FRAMES_PER_TS
-    of its fastest drive (the plate's and the profiles' intervals no longer).  ``wide_of``: the width check of
+    of its fastest drive (the plate's and the profiles' intervals no longer), every t_s/EARLY_FRAMES_PER_TS
+    over its first t_s.  ``wide_of``: the width check of
     that run, its first drive alone in a box twice as wide and as deep."""
     drives = study.drives[:1] if wide_of else study.drives
     width = study.width or dem_config.preset(study.dem)[0].box.width
@@ -72,11 +76,12 @@ def run_text(study: Study, p_w: float, material: dict, source: str, wide_of: Pla
     header = f"study {study.name} at p_w = {p_w:g}, sized from the calibration {source}"
     text = with_entries(dem_config.preset_text(study.dem), entries, header=header)
     cfg = dem_config.parse(text)
-    frame = min(d.scales.t_s for d in plan(cfg).drives) / FRAMES_PER_TS
-    out = cfg.output
+    t_s = min(d.scales.t_s for d in plan(cfg).drives)
+    frame, out = t_s / FRAMES_PER_TS, cfg.output
     return with_entries(text, [("output.atoms", frame), ("output.contacts", frame), ("output.plate",
                                                                                       min(out.plate, frame)),
-                               ("output.profiles", min(out.profiles, frame))], header=header)
+                               ("output.profiles", min(out.profiles, frame)), ("output.early", t_s),
+                               ("output.atoms_early", t_s / EARLY_FRAMES_PER_TS)], header=header)
 
 
 @dataclass(frozen=True)
@@ -134,7 +139,7 @@ class StudyPlan:
     def grain_frames(self) -> int:
         """Grains x atom snapshots of every drive and bed: what the comparison coarse-grains (the width check's
         runs too)."""
-        return sum(r.plan.n_grains * len(r.plan.config.seeds) * (d.steps // r.plan.intervals["atoms"] + 1)
+        return sum(r.plan.n_grains * len(r.plan.config.seeds) * r.plan.atom_frames(d)
                    for r in self.runs.values() for d in r.plan.drives)
 
     def scored_drives(self) -> int:

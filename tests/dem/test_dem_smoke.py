@@ -114,9 +114,10 @@ def test_plate_held_at_speed_with_interval_averaged_forces(smoke):
 
 def test_killed_run_resumes_with_continuous_output(tmp_path):
     """SIGKILL the whole run (runner and LAMMPS) mid-drive, resume, and find every output step once
-    (the smoke scene, narrower and longer so that the kill lands mid-drive)."""
+    (the smoke scene, narrower and longer so that the kill lands mid-drive, in its denser early snapshots)."""
     text = config.preset_text("smoke").replace("duration = 7.0", "duration = 14.0").replace("width = 40.0",
                                                                                          "width = 16.0")
+    text = text.replace("atoms = 0.04", "atoms = 0.4\nearly = 8.0\natoms_early = 0.04")
     cfg_path = tmp_path / "smoke-long.toml"
     cfg_path.write_text(text)
     out = tmp_path / "run"
@@ -140,8 +141,12 @@ def test_killed_run_resumes_with_continuous_output(tmp_path):
     every = meta["sizing"]["intervals_steps"]["plate"]
     assert steps[0] == 0 and np.all(np.diff(steps) == every)
     assert steps[-1] == meta["sizing"]["drives"][0]["steps"] // every * every
-    snaps = [s for s, _ in layout.dump_snapshots(out / "seed-1" / "speed" / "atoms.dump")]
-    assert np.all(np.diff(snaps) == meta["sizing"]["intervals_steps"]["atoms"]) and snaps[0] == 0
+    snaps = np.array([s for s, _ in layout.dump_snapshots(out / "seed-1" / "speed" / "atoms.dump")])
+    iv = meta["sizing"]["intervals_steps"]
+    assert iv["atoms"] == 10 * iv["atoms_early"] and iv["early"] > info["resumed_from_step"]
+    assert snaps[0] == 0 and np.all(np.diff(snaps[snaps <= iv["early"]]) == iv["atoms_early"])
+    late = snaps[snaps >= iv["early"]]
+    assert late[0] == iv["early"] and np.all(np.diff(late) == iv["atoms"])
     prof = pd.read_csv(out / "seed-1" / "speed" / "profiles.csv")
     assert np.all(np.diff(np.unique(prof["step"])) == meta["sizing"]["intervals_steps"]["profiles"])
     assert not (out / "seed-1" / "speed" / "segments").exists()

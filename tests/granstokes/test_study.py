@@ -16,7 +16,7 @@ from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS
 
 from granstokes.cli import main as granstokes_main
 from granstokes.study import config
-from granstokes.study.plan import FRAMES_PER_TS, calibration_text, plan_study
+from granstokes.study.plan import EARLY_FRAMES_PER_TS, FRAMES_PER_TS, calibration_text, plan_study
 
 ROOT = Path(__file__).resolve().parents[2]
 CALIBRATION = ROOT / "results" / "quick-calibration" / "calibration.json"
@@ -71,6 +71,11 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
         frame = min(d.scales.t_s for d in p.drives) / FRAMES_PER_TS  # the snapshots as LAMMPS writes them
         assert abs(p.intervals["atoms"] * p.dt - frame) <= p.intervals["plate"] * p.dt
         assert p.intervals["plate"] <= p.intervals["atoms"] and p.intervals["profiles"] <= p.intervals["atoms"]
+        # denser over the first t_s: EARLY_FRAMES_PER_TS per t_s, on the coarse grid too (a divisor)
+        fine, early = p.intervals["atoms_early"], p.intervals["early"]
+        assert p.intervals["atoms"] % fine == 0
+        assert abs(early * p.dt - frame * FRAMES_PER_TS) <= p.intervals["atoms"] * p.dt
+        assert abs(fine * p.dt - frame * FRAMES_PER_TS / EARLY_FRAMES_PER_TS) <= p.intervals["plate"] * p.dt
         if label.endswith("-wide"):  # the width check: the first drive alone, twice as wide
             assert [d.drive.name for d in p.drives] == ["stress-mutilde0.5"]
             assert cfg.box.width == 2 * sp.runs["p20"].plan.config.box.width and p_w == 20.0
@@ -115,9 +120,12 @@ def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_sp
     nominal = dem_config.preset("smoke")[0].material
     sp = plan_study(config.load(None, "smoke")[0], {k: getattr(nominal, k) for k in dem_config.MATERIAL_KEYS}, "")
     assert list(sp.runs) == ["p5", "p10", "p10-wide"] and sp.scored_drives() == 4
-    # 2 seeds x (2 drives at p5 and at p10, 1 in the wide run), a snapshot every output.atoms as LAMMPS writes it
-    frames = {label: 2 * sum(d.duration for d in r.plan.drives) / (r.plan.intervals["atoms"] * r.plan.dt)
-              for label, r in sp.runs.items()}
+    # 2 seeds x (2 drives at p5 and at p10, 1 in the wide run), a snapshot every output.atoms as LAMMPS writes it,
+    # every output.atoms_early over the first output.early
+    frames = {label: 2 * sum(d.duration / (r.plan.intervals["atoms"] * r.plan.dt)
+                             + min(d.steps, r.plan.intervals["early"]) * (1 / r.plan.intervals["atoms_early"]
+                                                                         - 1 / r.plan.intervals["atoms"])
+                             for d in r.plan.drives) for label, r in sp.runs.items()}
     assert sp.grain_frames() == pytest.approx(sum(sp.runs[k].plan.n_grains * n for k, n in frames.items()), rel=0.02)
     rate = canned_speed.rate(2, "drive")
     cg, model = sp.grain_frames() / (CG_PER_DRIVE_STEP * rate), MODELS * MODEL_DRIVE_STEPS / rate
