@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import multiprocessing as mp
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +54,7 @@ class DriveComparison:
     predictions: tuple[Prediction, ...]
     note: str
     base: str = ""
+    sensitivity: dict = field(default_factory=dict)  # model key -> compare.scorecard.Sensitivity
 
     @property
     def label(self) -> str:
@@ -254,15 +255,15 @@ class ModelSide:
 
 
 def _model_drive(a: DriveAnalysis, side: ModelSide) -> tuple:
-    """One drive's model side: (scales, predictions, note, base), its scorecard rows, the band edges' largest
-    relative change and its bands (compare.scorecard.score)."""
+    """One drive's model side: (scales, predictions, note, base, sensitivities by model), its scorecard rows, the
+    band edges' largest relative change and its bands (compare.scorecard.score)."""
     scales, preds, note, base = _predict(a, side.material, side.models, side.failure)
     if not preds:
-        return (scales, preds, note, base), pd.DataFrame(), np.nan, {}
+        return (scales, preds, note, base, {}), pd.DataFrame(), np.nan, {}
     predictions = {(a.label, p.model): p for p in preds}
-    rows, edges, bands = score([a], list(side.models), predictions, side.material, side.replicates,
-                               {a.label: preds[0].steady.delta_s}, side.fitted_on, False, side.independent)
-    return (scales, preds, note, base), rows, edges, bands
+    rows, edges, bands, sens = score([a], list(side.models), predictions, side.material, side.replicates,
+                                     {a.label: preds[0].steady.delta_s}, side.fitted_on, False, side.independent)
+    return (scales, preds, note, base, {key: v for (_, key), v in sens.items()}), rows, edges, bands
 
 
 #: the drives a forked worker reads (set by model_drives before the pool starts: nothing large is pickled)
@@ -379,8 +380,7 @@ def compare(dem: DemSide, settings: CGSettings = CGSettings(), progress: bool = 
     side = ModelSide(material, tuple(models), failure, replicates, {"ngf": fluidity.drive} if ngf else {},
                      independent is not None)
     results = model_drives(drives, side, jobs, progress)
-    compared = tuple(DriveComparison(a, scales, preds, note, base)
-                     for a, ((scales, preds, note, base), *_) in zip(drives, results))
+    compared = tuple(DriveComparison(a, *model_side) for a, (model_side, *_) in zip(drives, results))
     rows = pd.concat([r[1] for r in results if len(r[1])], ignore_index=True) if any(len(r[1]) for r in results) \
         else pd.DataFrame()
     edges = [r[2] for r in results if np.isfinite(r[2])]

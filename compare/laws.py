@@ -22,10 +22,11 @@ and across drives:
 * ``creep_length_scaling``: the slope of log creep length against log p_w (local mu(I): no creep at all).
 
 Errors: dem_err is the standard deviation of the DEM's estimate over SEED_RESAMPLES bootstrap resamples of each
-drive's seeds (independent samples); the model's band is its own estimate (the calibration's spread is not
-propagated through these transients), so sigma = (dem - predicted)/dem_err.  A law the data cannot decide (a
-window the elastic start covers, too few points or drives, a model without the quantity) is ``not measurable``
-with the reason, never a number fitted on noise.
+drive's seeds (independent samples); the model's standard deviation s_cal propagates the calibration's replicates
+linearly (compare.scorecard.Sensitivity: the same estimate on the predictions re-solved with each parameter
+shifted), band = predicted -+ 1.96 s_cal, and sigma = (dem - predicted)/sqrt(dem_err^2 + s_cal^2).  A law the
+data cannot decide (a window the elastic start covers, too few points or drives, a model without the quantity)
+is ``not measurable`` with the reason, never a number fitted on noise.
 """
 from __future__ import annotations
 
@@ -40,7 +41,7 @@ from granstokes.continuum.steady import steady_wall_speed
 from scipy import stats
 
 from .plate import STEADY_LAST
-from .scorecard import SIGMA_CONSISTENT, creep_length, t90
+from .scorecard import SIGMA_CONSISTENT, Z95, creep_length, t90
 
 #: the growth window ends at this many t_s (the paper's self-similar regime holds to t~ of order 1)
 GROWTH_END = 0.5
@@ -327,6 +328,17 @@ def _decay_windows(drives, full: dict):
     return out
 
 
+def _calibration_sd(estimate, drives, key: str, predicted: float, shifted_tracks: dict) -> float:
+    """The standard deviation of a model's law from the calibration (Sensitivity.sd of the law re-estimated on
+    every drive's prediction with one parameter shifted); 0 when the drives carry none (a prediction given
+    without its calibration's spread)."""
+    if not all((dc.label, key) in shifted_tracks for dc in drives):
+        return 0.0
+    sens = drives[0].sensitivity[key]
+    return sens.sd(sens.derivatives(
+        lambda j: estimate([shifted_tracks[(dc.label, key)][j] for dc in drives], drives)[0], predicted))
+
+
 def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFrame:
     """Every law x model row (KEYS) over the drives ``compared`` (compare.comparison.DriveComparison)."""
     rng = np.random.default_rng(seed)
@@ -339,6 +351,8 @@ def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFra
     models = dict.fromkeys(p.model for dc in usable for p in dc.predictions)
     calibrated = {p.model: p.transient_calibrated for dc in usable for p in dc.predictions}
     predicted_tracks = {(dc.label, p.model): model_track(p, dc) for dc in usable for p in dc.predictions}
+    shifted_tracks = {(dc.label, key): [model_track(p, dc) for p in sens.shifted]
+                      for dc in usable for key, sens in dc.sensitivity.items()}
     rows = []
     for law in LAWS:
         drives = _drives(compared, law.kind)
@@ -364,9 +378,11 @@ def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFra
                 note = f"not predicted: {model_window.removeprefix('not measurable: ')}"
             elif not (np.isfinite(dem_err) and dem_err > 0):
                 note = "not measurable: no spread over resampled seeds (fewer than 2 seeds per drive)"
-            sigma = (dem - predicted) / dem_err if not note else np.nan
+            s_cal = 0.0 if note else _calibration_sd(estimate, drives, key, predicted, shifted_tracks)
+            sigma = (dem - predicted) / np.hypot(dem_err, s_cal) if not note else np.nan
             rows.append({"law": law.name, "quantity": law.quantity, "unit": law.unit, "dem": dem, "dem_err": dem_err,
-                         "model": key, "predicted": predicted, "band": [predicted, predicted], "sigma": sigma,
+                         "model": key, "predicted": predicted, "band": [predicted - Z95 * s_cal,
+                                                                        predicted + Z95 * s_cal], "sigma": sigma,
                          "verdict": ("not measurable" if note.startswith("not measurable") else "not predicted"
                                      if note else "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees"),
                          "n_drives": len(drives), "window": window if np.isfinite(dem) else "", "note": note})

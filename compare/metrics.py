@@ -75,9 +75,10 @@ DEFINITIONS = {
     "wall_exclusion": ("d", f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base"),
     "laws": ("-", "the paper's predictions, one row per law x model (compare/laws.py): the same estimator on the DEM's "
                   "seed-mean series and on the model's output over the same window; dem_err the spread over "
-                  f"{SEED_RESAMPLES} bootstrap resamples of each drive's seeds; band the model's own value (the "
-                  "calibration's spread is not propagated through the transients), so sigma = (dem - predicted) / "
-                  "dem_err; 'not measurable' or 'not predicted' with the reason where the data cannot decide"),
+                  f"{SEED_RESAMPLES} bootstrap resamples of each drive's seeds; band predicted -+ 1.96 s_cal, s_cal "
+                  "the calibration's replicates propagated linearly (the law re-estimated on predictions re-solved "
+                  "with each parameter shifted); sigma = (dem - predicted) / sqrt(dem_err^2 + s_cal^2); 'not measurable' "
+                  "or 'not predicted' with the reason where the data cannot decide"),
     "units": ("-", UNITS["dem_units"]),
     "inertial_number": ("-", UNITS["inertial_number"]),
 }

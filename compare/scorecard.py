@@ -197,33 +197,56 @@ def _material(base: Material, row) -> Material:
                    I_convention="dem", phi=float(row["phi"]))
 
 
-def _linearised(model: SceneModel, material: Material, drive: Drive, times, a: DriveAnalysis,
-                replicates: pd.DataFrame, central_series: pd.DataFrame) -> tuple[float, pd.DataFrame]:
-    """Linearised propagation J C J^T, C the replicates' covariance of the material's parameters and the
-    model's own, J by one-sided differences from the prediction's ``central_series`` (a transient solve per
-    parameter): the standard deviation of t90 and the 95 % band of the free response on the DEM's output times
-    (t, lo, hi)."""
-    t = a.series.t.to_numpy()
-    names = [*PARAMETERS, *([model.parameter] if model.parameter else [])]
+@dataclass(frozen=True)
+class Sensitivity:
+    """A prediction's linear response to the calibration: each parameter ``names[j]`` (the material's, then the
+    model's own) shifted by ``steps[j]`` gives ``shifted[j]`` (a whole Prediction); ``cov`` is the replicates'
+    covariance of those parameters.  ``sd(f)`` propagates any scalar estimate f(prediction) as sqrt(J C J^T)."""
+
+    names: tuple[str, ...]
+    steps: tuple[float, ...]
+    cov: np.ndarray
+    shifted: tuple[Prediction, ...]
+
+    def sd(self, derivatives) -> float:
+        """Standard deviation from the derivatives dF/dparameter (one per name, in order)."""
+        j = np.asarray(derivatives, dtype=float)
+        return float(np.sqrt(max(j @ self.cov @ j, 0.0))) if np.all(np.isfinite(j)) else np.nan
+
+    def derivatives(self, estimate, central: float) -> list[float]:
+        """One-sided differences of ``estimate(j)`` (the estimate with parameter j shifted) from ``central``."""
+        return [(estimate(j) - central) / h for j, h in enumerate(self.steps)]
+
+
+def sensitivity(model: SceneModel, material: Material, drive: Drive, times, replicates: pd.DataFrame) -> Sensitivity:
+    """The prediction of ``model`` re-solved with each parameter shifted by FD_STEP of its value (one transient and
+    one steady solve per parameter)."""
+    names = (*PARAMETERS, *([model.parameter] if model.parameter else ()))
     base = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
             **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
+    steps = tuple(FD_STEP * abs(base[name]) for name in names)
+    shifted = []
+    for name, h in zip(names, steps):
+        params = {**base, name: base[name] + h}
+        shifted.append(model.at(params).predict(_material(material, params), drive, times))
+    cov = np.atleast_2d(np.cov(replicates[list(names)].to_numpy(), rowvar=False))
+    return Sensitivity(names, steps, cov, tuple(shifted))
 
-    def response(params):
-        series, _ = model.at(params).transient(_material(material, params), drive, times)
-        return np.interp(t, series.t, series[a.response])
+
+def _linearised(sens: Sensitivity, a: DriveAnalysis, central_series: pd.DataFrame) -> tuple[float, pd.DataFrame]:
+    """Linearised propagation J C J^T of the calibration through the free response (the drive's response on the
+    DEM's output times) and its t90: the standard deviation of t90 and the 95 % band (t, lo, hi)."""
+    t = a.series.t.to_numpy()
+
+    def response(pred):
+        return np.interp(t, pred.series.t, pred.series[a.response])
 
     central = np.interp(t, central_series.t, central_series[a.response])
-    jac_series, jac_t90 = [], []
-    for name in names:
-        h = FD_STEP * abs(base[name])
-        shifted = response({**base, name: base[name] + h})
-        jac_series.append((shifted - central) / h)
-        jac_t90.append((t90(t, shifted) - t90(t, central)) / h)
-    cov = np.atleast_2d(np.cov(replicates[names].to_numpy(), rowvar=False))
-    js, jt = np.array(jac_series), np.array(jac_t90)
-    sd = np.sqrt(np.maximum(np.einsum("it,ij,jt->t", js, cov, js), 0.0))
+    js = np.array([(response(p) - central) / h for p, h in zip(sens.shifted, sens.steps)])
+    sd = np.sqrt(np.maximum(np.einsum("it,ij,jt->t", js, sens.cov, js), 0.0))
     band = pd.DataFrame({"t": t, "lo": central - Z95 * sd, "hi": central + Z95 * sd})
-    return float(np.sqrt(max(jt @ cov @ jt, 0.0))), band
+    t90_sd = sens.sd(sens.derivatives(lambda j: t90(t, response(sens.shifted[j])), t90(t, central)))
+    return t90_sd, band
 
 
 @dataclass(frozen=True, eq=False)
@@ -297,14 +320,14 @@ def _unmeasurable(measured: Measured, lo: float, hi: float, combined: float) -> 
 
 def score(drives, models: list[SceneModel], predictions: dict, material: Material, replicates: pd.DataFrame,
           delta_s: dict, fitted_on: dict | None = None, progress: bool = True, independent: bool = True):
-    """Scorecard rows, the band edges' stability (largest relative change from half to all replicates)
-    and the free responses' 95 % bands per (drive, model) (linearised).
+    """Scorecard rows, the band edges' stability (largest relative change from half to all replicates),
+    the free responses' 95 % bands and the Sensitivity per (drive, model) (linearised).
     ``predictions[(label, key)]``: the central Prediction of each drive and model; ``delta_s[label]``,
     the calibrated layer depth of each drive; ``fitted_on[key]``:
     the drive a model's own parameter was fitted on (its rows there are not blind); ``independent``: mu(I)
     comes from an independent calibration (else no row is blind)."""
     fitted_on = fitted_on or {}
-    rows, edges, bands = [], [], {}
+    rows, edges, bands, sensitivities = [], [], {}, {}
     half = len(replicates) // 2
     for a in drives:
         dem = dem_observables(a, delta_s[a.label])
@@ -324,8 +347,8 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                     continue
             times = pred.series.t.to_numpy()
             end_value = _final_quarter(pred.series, a)
-            t90_sd, bands[(a.label, model.key)] = _linearised(model, material, a.spec.drive, times, a, replicates,
-                                                              pred.series)
+            sens = sensitivities[(a.label, model.key)] = sensitivity(model, material, a.spec.drive, times, replicates)
+            t90_sd, bands[(a.label, model.key)] = _linearised(sens, a, pred.series)
             for obs, measured in dem.items():
                 value = central.get(obs)
                 if value is None or not np.isfinite(value) or not np.isfinite(measured.value):
@@ -364,7 +387,7 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                              "scored": not note, "note": note,
                              "blind": independent and fitted_on.get(model.key) != a.label,
                              "asymptote": asymptote if windowed else np.nan})
-    return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands
+    return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands, sensitivities
 
 
 def tally(rows: pd.DataFrame) -> pd.DataFrame:

@@ -142,3 +142,25 @@ def test_a_model_with_an_assumed_time_scale_predicts_no_transient_law():
         else:
             assert ngf.loc[key, "verdict"] == local.loc[key, "verdict"]
     assert local.loc[("t_s_collapse", "slope of log t90 against log t_s"), "verdict"] != "not predicted"
+
+
+def test_the_calibration_spread_propagates_into_a_law_s_band_and_sigma():
+    """Two calibration parameters that scale the model's layer by (1 + c_j theta_j): the prefactor's standard
+    deviation is P sqrt(c C c^T) for the replicates' covariance C, the band is predicted -+ 1.96 of it, and sigma
+    divides by the DEM's and the calibration's errors in quadrature."""
+    from granstokes.compare.scorecard import Z95, Sensitivity
+
+    c, steps = np.array([0.5, -2.0]), (0.01, 0.02)
+    cov = np.array([[0.04, 0.01], [0.01, 0.02]])
+    base = drive(k=1.0, noise=0.1, rng=np.random.default_rng(3))
+    shifted = tuple(drive(k=1.0 + cj * h).predictions[0] for cj, h in zip(c, steps))
+    dc = DriveComparison(base.dem, base.scales, base.predictions, "", sensitivity={
+        "local": Sensitivity(("a", "b"), steps, cov, shifted)})
+    pre = row(laws([dc], resamples=50), "delta_growth_prefactor")
+    s_cal = pre.predicted * np.sqrt(c @ cov @ c)
+    assert (pre.band[1] - pre.band[0]) / (2 * Z95) == pytest.approx(s_cal, rel=0.02)
+    assert pre.sigma == pytest.approx((pre.dem - pre.predicted) / np.hypot(pre.dem_err, s_cal), rel=0.02)
+    # a scale factor leaves the exponent alone: its spread is the depth grid's interpolation, a tenth of what an
+    # exponent scaling like the prefactor would have
+    exponent = row(laws([dc], resamples=50), "delta_growth_exponent")
+    assert (exponent.band[1] - exponent.band[0]) / (2 * Z95) < 0.1 * exponent.predicted * np.sqrt(c @ cov @ c)
