@@ -77,8 +77,8 @@ DEFINITIONS = {
                   "seed-mean series and on the model's output over the same window; dem_err the spread over "
                   f"{SEED_RESAMPLES} bootstrap resamples of each drive's seeds; band predicted -+ 1.96 s_cal, s_cal "
                   "the calibration's replicates propagated linearly (the law re-estimated on predictions re-solved "
-                  "with each parameter shifted); sigma = (dem - predicted) / sqrt(dem_err^2 + s_cal^2); 'not measurable' "
-                  "or 'not predicted' with the reason where the data cannot decide"),
+                  "with each parameter shifted); sigma = (dem - predicted) / sqrt(dem_err^2 + s_cal^2); "
+                  "'not measurable' or 'not predicted' with the reason where the data cannot decide"),
     "units": ("-", UNITS["dem_units"]),
     "inertial_number": ("-", UNITS["inertial_number"]),
 }
