@@ -81,11 +81,16 @@ def _too_fine(value, decimals) -> bool:
     return decimals > MAX_DIGITS + 2 or bool(value) and decimals + int(math.floor(math.log10(abs(value)))) >= MAX_DIGITS
 
 
+#: values closer to zero than this are round-off of an exact zero (a fit's offset through the origin)
+ROUND_OFF = 1e-12
+
+
 def fmt(value, err=None) -> str:
     """A number to the digits its error supports (the error to 2 significant digits), at most MAX_DIGITS
     significant digits; 4 significant digits without an error; an en dash when there is no number."""
     if value is None or not np.isfinite(value):
         return "–"
+    value = 0.0 if abs(value) < ROUND_OFF else value
     if err is None or not np.isfinite(err) or err <= 0:
         return f"{value:.4g}"
     digits = _decimals(err)
@@ -523,6 +528,33 @@ def laws_summary(c: Comparison) -> str:
             f"these drives (each row says why); " + "; ".join(parts) + ".")
 
 
+#: the model whose laws are the paper's predictions (compare.models.PAPER)
+PAPER_MODEL = "paper"
+
+
+def laws_verdict(c: Comparison) -> dict[str, list[str]]:
+    """The paper's predictions in words, from its model's law rows: the laws the DEM supports and refutes (with
+    sigma) and those this scene cannot decide (with why); empty lists are left out."""
+    rows = c.laws[c.laws.model == PAPER_MODEL] if not c.laws.empty else c.laws
+    verbs = {"consistent": "supports", "disagrees": "refutes"}
+    out = {verb: [f"{r.law} ({r.quantity}): DEM {fmt(r.dem, r.dem_err)} against {fmt(r.predicted)}, "
+                  f"{r.sigma:+.1f} sigma" for r in rows.itertuples() if r.verdict == v] for v, verb in verbs.items()}
+    out["cannot decide"] = [f"{r.law} ({r.quantity}): "
+                            + (r.note or "").removeprefix("not measurable: ").removeprefix("not predicted: ")
+                            for r in rows.itertuples() if r.verdict not in verbs]
+    return {k: v for k, v in out.items() if v}
+
+
+def laws_verdict_html(c: Comparison) -> str:
+    verdict = laws_verdict(c)
+    if not verdict:
+        return "<p><b>The paper's predictions.</b> No law of the paper was evaluated (no drive was predicted).</p>"
+    items = "".join(f"<li>The DEM {html.escape(verb)}: {html.escape('; '.join(laws))}.</li>"
+                    for verb, laws in verdict.items())
+    return (f"<p><b>The paper's predictions</b> (its model's rows; the other models': "
+            f"<a href='#laws'>the paper's laws</a>)</p><ul>{items}</ul>")
+
+
 def laws_html(c: Comparison) -> str:
     """The laws' rows (compare.laws) as a table, after one summary sentence."""
     grey = VERDICT_COLOUR["not scored"]
@@ -695,6 +727,7 @@ def write_report(c: Comparison, out_dir) -> dict:
     prov = m["provenance"]
     body = [
         "<h1>granstokes: continuum vs DEM</h1>", verdict_html(c),
+        laws_verdict_html(c),
         f"<p>Runs: {html.escape(', '.join(m['runs']))}. Calibration: {html.escape(c.calibration_source)}. "
         f"DEM units: {html.escape(UNITS['dem_units'])}. Inertial number: {html.escape(UNITS['inertial_number'])}.</p>",
         "<h2>Scorecard</h2>", scorecard_html(c),
@@ -702,7 +735,7 @@ def write_report(c: Comparison, out_dir) -> dict:
         f"most {c.scorecard.edge_stability:.0%} of the band width from half to all replicates); t90 by linearised "
         "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; 2.</p>",
         "<h2>Conclusions</h2><ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>",
-        "<h2>The paper's laws</h2>", laws_html(c),
+        "<h2 id='laws'>The paper's laws</h2>", laws_html(c),
         "<h2>The scene's own checks</h2>", scene_html(c),
         "<h2>Figures</h2>", figures,
         calibration_section(c),

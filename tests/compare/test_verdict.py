@@ -108,3 +108,24 @@ def test_a_row_without_a_dem_error_or_a_band_is_not_scored():
     assert "DEM's error is not measurable" in _unmeasurable(Measured(1.0, np.nan, "one seed"), 0.9, 1.1, np.nan)
     assert "no calibration replicate" in _unmeasurable(Measured(1.0, 0.1, "seeds"), np.nan, np.nan, np.nan)
     assert "sigma is undefined" in _unmeasurable(Measured(1.0, 0.0, "seeds"), 1.0, 1.0, 0.0)
+
+
+def test_the_paper_s_predictions_in_words_come_from_its_model_s_law_rows():
+    """Supported and refuted laws with their sigma (the paper's model's rows only), then what the scene cannot
+    decide with its reason; the other models' rows do not enter the sentence."""
+    from granstokes.compare.report import laws_verdict
+
+    def law(name, model, verdict, dem=1.0, err=0.1, predicted=1.0, sigma=0.0, note=""):
+        return {"law": name, "quantity": "q", "model": model, "verdict": verdict, "dem": dem, "dem_err": err,
+                "predicted": predicted, "sigma": sigma, "note": note}
+
+    rows = pd.DataFrame([law("a", "paper", "consistent", 0.52, 0.04, 0.5, 0.5),
+                         law("b", "paper", "disagrees", 1.75, 0.03, 0.72, 12.9),
+                         law("c", "paper", "not measurable", np.nan, np.nan, np.nan, np.nan,
+                             "not measurable: 2 drives"),
+                         law("d", "local", "disagrees", 9.0, 0.1, 1.0, 80.0)])
+    assert laws_verdict(SimpleNamespace(laws=rows)) == {
+        "supports": ["a (q): DEM 0.520 ± 0.040 against 0.5, +0.5 sigma"],
+        "refutes": ["b (q): DEM 1.750 ± 0.030 against 0.72, +12.9 sigma"], "cannot decide": ["c (q): 2 drives"]}
+    rows.loc[1, "predicted"] = -2.7e-15  # round-off of an exact zero prints as zero
+    assert laws_verdict(SimpleNamespace(laws=rows))["refutes"] == ["b (q): DEM 1.750 ± 0.030 against 0, +12.9 sigma"]
