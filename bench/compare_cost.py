@@ -7,7 +7,7 @@ committed tables (its series, its steady profile, its scene from the study's pla
 calibration), which is all the model side reads.  Both job counts run the same drives in the same process,
 alternating, so that the machine's load cancels in the ratio.
 
-    .venv/bin/python bench/compare_cost.py [--study results/study-disks] [--repeats 1]
+    .venv/bin/python bench/compare_cost.py [--study results/study-disks] [--calibrations results/calibration-disks]
 """
 from __future__ import annotations
 
@@ -37,12 +37,11 @@ from granstokes.study.plan import plan_study
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def drives_of(folder: Path) -> tuple[list[DriveAnalysis], ModelSide]:
+def drives_of(folder: Path, calibrations: Path) -> tuple[list[DriveAnalysis], ModelSide]:
     """The committed study's drives as the model side sees them, and the side (calibration, models)."""
     meta = json.loads((folder / "metrics.json").read_text())
     study = parse((folder / "study.toml").read_text())
-    reference = f"calibration-p{max(study.calibration_pressures):g}"
-    calibration = folder / reference / "calibration.json"
+    calibration = calibrations / f"p{max(study.calibration_pressures):g}" / "calibration.json"
     material, _, _ = material_table(calibration)
     sp = plan_study(study, material, str(calibration))
     cal = load_calibration(calibration)
@@ -96,10 +95,12 @@ def chebyshev_cache(drives: list[DriveAnalysis], side: ModelSide, n: int = 50) -
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--study", type=Path, default=ROOT / "results" / "study-disks")
+    ap.add_argument("--calibrations", type=Path, default=ROOT / "results" / "calibration-disks",
+                    help="the study's calibrations, one folder per pressure (pP/calibration.json)")
     ap.add_argument("--repeats", type=int, default=1)
     ap.add_argument("--out", type=Path, default=ROOT / "bench" / "compare_cost.json")
     args = ap.parse_args()
-    drives, side = drives_of(args.study)
+    drives, side = drives_of(args.study, args.calibrations)
     jobs = os.cpu_count() or 1
     times = {1: [], jobs: []}
     rows = {}
