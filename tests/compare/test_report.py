@@ -44,10 +44,13 @@ class Page(HTMLParser):
     def __init__(self):
         super().__init__()
         self.links, self.images, self.cells, self.tables, self.texts = [], [], [], [], []
+        self.ids = set()
         self._row = self._cell = self._text = None
 
     def handle_starttag(self, tag, attrs):
         a = dict(attrs)
+        if "id" in a:
+            self.ids.add(a["id"])
         if tag == "img":
             self.images.append(a)
         if "href" in a:
@@ -104,6 +107,9 @@ def check_page(path: Path) -> Page:
     page = Page()
     page.feed(path.read_text())
     for target in page.links + [img.get("src", "") for img in page.images]:
+        if target.startswith("#"):  # a place in the page itself
+            assert target[1:] in page.ids, f"{path}: no element with id {target[1:]!r}"
+            continue
         assert (path.parent / target).exists(), f"{path}: {target} missing"
     assert all(img.get("alt") for img in page.images), f"{path}: an image without alt text"
     for cell in page.cells:
