@@ -41,7 +41,7 @@ from granstokes.continuum.steady import steady_wall_speed
 from scipy import stats
 
 from .plate import STEADY_LAST
-from .scorecard import SIGMA_CONSISTENT, Z95, creep_length, t90
+from .scorecard import FD_STEP, SIGMA_CONSISTENT, Z95, creep_length, t90
 
 #: the growth window ends at this many t_s (the paper's self-similar regime holds to t~ of order 1)
 GROWTH_END = 0.5
@@ -379,6 +379,9 @@ def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFra
             elif not (np.isfinite(dem_err) and dem_err > 0):
                 note = "not measurable: no spread over resampled seeds (fewer than 2 seeds per drive)"
             s_cal = 0.0 if note else _calibration_sd(estimate, drives, key, predicted, shifted_tracks)
+            if not np.isfinite(s_cal):
+                note, s_cal = ("not predicted: the law is undefined for a calibration parameter shifted by "
+                               f"{FD_STEP:g} of its value, so its calibration band is unknown"), 0.0
             sigma = (dem - predicted) / np.hypot(dem_err, s_cal) if not note else np.nan
             rows.append({"law": law.name, "quantity": law.quantity, "unit": law.unit, "dem": dem, "dem_err": dem_err,
                          "model": key, "predicted": predicted, "band": [predicted - Z95 * s_cal,

@@ -201,7 +201,8 @@ def _material(base: Material, row) -> Material:
 class Sensitivity:
     """A prediction's linear response to the calibration: each parameter ``names[j]`` (the material's, then the
     model's own) shifted by ``steps[j]`` gives ``shifted[j]`` (a whole Prediction); ``cov`` is the replicates'
-    covariance of those parameters.  ``sd(f)`` propagates any scalar estimate f(prediction) as sqrt(J C J^T)."""
+    covariance of those parameters.  A scalar estimate F of a prediction propagates as sqrt(J C J^T), J from
+    ``derivatives`` (F on each shifted prediction) and ``sd`` (nan when a derivative is not finite)."""
 
     names: tuple[str, ...]
     steps: tuple[float, ...]

@@ -164,3 +164,17 @@ def test_the_calibration_spread_propagates_into_a_law_s_band_and_sigma():
     # exponent scaling like the prefactor would have
     exponent = row(laws([dc], resamples=50), "delta_growth_exponent")
     assert (exponent.band[1] - exponent.band[0]) / (2 * Z95) < 0.1 * exponent.predicted * np.sqrt(c @ cov @ c)
+
+
+def test_a_law_undefined_at_a_shifted_parameter_has_no_band_and_says_so():
+    """A shifted prediction whose layer never grows (u = 0) leaves the prefactor undefined there: the row is
+    not predicted with the reason, never a sigma over an unknown band."""
+    from granstokes.compare.scorecard import Sensitivity
+
+    base = drive(k=1.0, noise=0.1, rng=np.random.default_rng(3))
+    still = base.predictions[0]
+    still = Prediction(still.model, still.label, still.series, still.profiles.assign(u=0.0), still.steady)
+    dc = DriveComparison(base.dem, base.scales, base.predictions, "", sensitivity={
+        "local": Sensitivity(("a",), (0.01,), np.array([[0.04]]), (still,))})
+    pre = row(laws([dc], resamples=20), "delta_growth_prefactor")
+    assert pre.verdict == "not predicted" and "calibration band is unknown" in pre.note and np.isnan(pre.sigma)
