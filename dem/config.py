@@ -12,9 +12,11 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
     grains = {dimension = 2, polydispersity = 0.2, mu_p = 0.5, restitution = 0.5, contact = "hooke", kappa = 1e4}
     box = {width = 32.0}   # widths and depth in d; no depth -> max delta_s + margin (default 5 creep lengths)
     load = {p_w = 20.0}
-    # kind "stress" (mu_w, mu_w_tilde or tau_w) or "speed" (u_w, or mu_w_tilde: the matching steady speed)
+    # kind "stress" (mu_w, mu_w_tilde or tau_w) or "speed" (u_w, or mu_w_tilde: the matching steady speed), held
+    # from t = 0; with omega (1/time) or omega_ts (omega t_s) the load is the amplitude of a sine, run `cycles` periods
     drive = [{name = "stress", kind = "stress", mu_w_tilde = 0.5, duration_ts = 10.0},
-             {name = "speed", kind = "speed", u_w = 5.0, duration = 20.0}]
+             {name = "speed", kind = "speed", u_w = 5.0, duration = 20.0},
+             {name = "wave", kind = "speed", mu_w_tilde = 0.5, omega_ts = 1.0, cycles = 4}]
     output = {plate = 0.02, thermo = 0.1, atoms = 1.0, contacts = 5.0, profiles = 0.5, restart = 2.0}
     prepare = {ke_per_grain = 1e-5, settle_ke_per_grain = 0.03}
     # mu(I) calibration by plane shear of the same grains at p = p_w (``granstokes dem calibrate``)
@@ -42,6 +44,7 @@ from .contact import Contact
 MIN_WIDTH = 8.0  # d: narrower periodic boxes order the packing and correlate the plate with its image
 MIN_WIDTH_Z = 4.0
 MIN_DEPTH = 4.0
+MIN_CYCLES = 2  # an oscillating drive: the first cycle is the start-up, the estimators need one more at least
 MIN_CALIBRATION_STRAIN = 5.0  # each calibration point is measured over at least this strain
 FINITE_SIZE_RTOL = 1e-4  # a calibration.finite_size entry names the point within this relative difference of its I
 KAPPA_MIN = 1e4  # rigid limit: overlap under p_w d at most 1e-4 d
@@ -108,7 +111,9 @@ class Box:
 
 @dataclass(frozen=True)
 class Drive:
-    """One drive of the prepared bed: imposed stress (tau_w = mu_w p_w) or imposed plate speed u_w."""
+    """One drive of the prepared bed: imposed stress (tau_w = mu_w p_w) or imposed plate speed u_w, held from t = 0
+    or, with ``omega`` (angular frequency, 1/sqrt(d/g)) or ``omega_ts`` (omega t_s, t_s of the amplitude's steady
+    layer), the amplitude of a sine run ``cycles`` periods (continuum.load.Load)."""
 
     name: str
     kind: str
@@ -119,6 +124,9 @@ class Drive:
     duration: float | None = None
     duration_ts: float = 10.0
     min_duration: float = 0.0
+    omega: float | None = None
+    omega_ts: float | None = None
+    cycles: float = 4.0
 
     def __post_init__(self):
         require(isinstance(self.name, str) and re.fullmatch(r"[A-Za-z0-9_.-]+", self.name) is not None,
@@ -142,6 +150,17 @@ class Drive:
             _positive(f"{p}.duration", self.duration)
         _positive(f"{p}.duration_ts", self.duration_ts)
         _positive(f"{p}.min_duration", self.min_duration, strict=False)
+        require(self.omega is None or self.omega_ts is None, f"{p}.omega", "left out when omega_ts is given",
+                self.omega)
+        for key in ("omega", "omega_ts"):
+            if getattr(self, key) is not None:
+                _positive(f"{p}.{key}", getattr(self, key))
+        require(finite(self.cycles) and self.cycles >= MIN_CYCLES, f"{p}.cycles",
+                f"a number of periods >= {MIN_CYCLES}", self.cycles)
+
+    @property
+    def oscillating(self) -> bool:
+        return self.omega is not None or self.omega_ts is not None
 
 
 @dataclass(frozen=True)

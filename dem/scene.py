@@ -289,33 +289,61 @@ read_restart {restart}
 """
 
 
-def _drive_forces(plan: Plan, drive: DrivePlan, fresh: bool) -> tuple[str, str, float]:
-    """(description, integration block, applied x force on the plate) of a drive."""
-    area, n_plate = plan.area, plate_grains(plan)
-    if drive.drive.kind == "stress":
-        flags, fx = "force * on on off", drive.load.tau_w * area
-        what = f"imposed stress: x force tau_w A = {fx:.6g} (tau_w = {drive.load.tau_w:.6g})"
-        set_speed = ""
+#: an oscillating speed drive's plate: its x velocity error decays on this many time steps (the tracking force's
+#: feedback; the imposed acceleration does the tracking, the feedback only removes the integrator's round-off)
+TRACKING_STEPS = 100
+
+
+def _drive_forces(plan: Plan, drive: DrivePlan, fresh: bool) -> tuple[str, str]:
+    """(description, integration block) of a drive.  The plate's x force: tau_w A (an imposed stress, times
+    sin(omega t) when it oscillates); none with the x motion held at u_w (a held speed); for an oscillating speed
+    the tracking force M du_w/dt minus the bed's pull on the plate (compute plate_pull, summed before the load is
+    added) plus a feedback over TRACKING_STEPS steps, so the rigid plate moves at u_w(t) = u_w sin(omega t)."""
+    area, n_plate, load, dt = plan.area, plate_grains(plan), drive.load, plan.dt
+    fy = f"{-plan.config.p_w * area / n_plate:.10g}"
+    arg = f"{load.omega:.10g}*step*{dt:.10g}"
+    set_speed, tracking = "", ""
+    if load.kind == "stress":
+        flags, fx = "force * on on off", load.tau_w * area / n_plate
+        if load.oscillating:
+            what = (f"oscillating stress: x force tau_w A sin(omega t), tau_w = {load.tau_w:.6g}, "
+                    f"omega = {load.omega:.6g}")
+            tracking = f"variable fx_plate equal {fx:.10g}*sin({arg})"
+            fx = "v_fx_plate"
+        else:
+            what = f"imposed stress: x force tau_w A = {load.tau_w * area:.6g} (tau_w = {load.tau_w:.6g})"
+    elif load.oscillating:
+        mass = plate_geometry(plan)["mass"]
+        flags = "force * on on off"
+        what = (f"oscillating speed: plate x velocity u_w sin(omega t), u_w = {load.u_w:.6g}, omega = "
+                f"{load.omega:.6g} (tracking force)")
+        half = f"{load.omega:.10g}*(step-0.5)*{dt:.10g}"
+        tracking = f"""compute plate_pull plate reduce sum fx
+variable fx_plate equal ({mass * load.u_w * load.omega:.10g}*cos({arg})-c_plate_pull-{mass:.10g}*(f_plate[1][4]-\
+{load.u_w:.10g}*sin({half}))/{TRACKING_STEPS * dt:.10g})/{n_plate}"""
+        fx = "v_fx_plate"
     else:
         flags, fx = "force * off on off", 0.0
-        what = f"imposed speed: plate x velocity held at u_w = {drive.load.u_w:.6g} (rigid-body x force off)"
-        set_speed = f"velocity plate set {drive.load.u_w:.10g} NULL NULL units box" if fresh else ""
+        what = f"imposed speed: plate x velocity held at u_w = {load.u_w:.6g} (rigid-body x force off)"
+        set_speed = f"velocity plate set {load.u_w:.10g} NULL NULL units box" if fresh else ""
+    fx = fx if isinstance(fx, str) else f"{fx:.10g}"
     block = f"""
 # --- integration: bed grains free, base frozen, plate rigid without rotation ---
-variable t equal step*{plan.dt:.10g}
+variable t equal step*{dt:.10g}
 compute ke_bed bed ke
 {integrator("bed", plan.dimension)}
 fix freeze base freeze
 fix gravity bed gravity 1.0 vector 0 -1 0
 {set_speed}
 fix plate plate rigid single {flags} torque * off off off
-fix load plate addforce {fx / n_plate:.10g} {-plan.config.p_w * area / n_plate:.10g} 0.0
+{tracking}
+fix load plate addforce {fx} {fy} 0.0
 {_enforce(plan.dimension)}
 """
-    return what, block, fx
+    return what, block
 
 
-def _plate_output(plan: Plan, fx: float) -> str:
+def _plate_output(plan: Plan) -> str:
     area, every, sample = plan.area, plan.intervals["plate"], plan.intervals["sample"]
     fmt = ",".join(f"$({v})" for v in ("step", "v_t:%.8g", "v_px:%.10g", "v_py:%.10g", *(
         f"v_out_{k}:%.8g" for k in ("ux", "uy", "fx", "fy", "uc", "nc"))))
@@ -324,16 +352,16 @@ def _plate_output(plan: Plan, fx: float) -> str:
                                                       ("sc", "ucsum"), ("nc", "ncon"))))
     return f"""
 # --- plate time series: unwrapped x and y at the output step; velocity and force of the bed on the
-#     plate per area (sum of the plate grains' forces minus the applied load) averaged over the output
-#     interval, sampled every {sample} steps (fix ave/time); u_c, n_c: x velocity (sum over the samples / count)
-#     and mean number of the bed grains touching a plate grain (slip).  Row 0: the prepared state ---
+#     plate per area (the plate grains' forces summed before the load is added: fix addforce's vector)
+#     averaged over the output interval, sampled every {sample} steps (fix ave/time); u_c, n_c: x velocity
+#     (sum over the samples / count) and mean number of the bed grains touching a plate grain (slip).
+#     Row 0: the prepared state ---
 variable px equal f_plate[1][1]+f_plate[1][13]*lx
 variable py equal f_plate[1][2]
 variable pux equal f_plate[1][4]
 variable puy equal f_plate[1][5]
-compute plate_forces plate reduce sum fx fy
-variable pfx equal (c_plate_forces[1]-{fx:.10g})/{area:.10g}
-variable pfy equal (c_plate_forces[2]+{plan.config.p_w * area:.10g})/{area:.10g}
+variable pfx equal f_load[1]/{area:.10g}
+variable pfy equal f_load[2]/{area:.10g}
 compute touching bed contact/atom plate
 variable touch atom c_touching>0
 variable touch_vx atom v_touch*vx
@@ -387,11 +415,11 @@ def drive_script(plan: Plan, drive: DrivePlan, restart: str, fresh: bool, output
     """Drive phase from ``restart``; ``fresh`` sets the plate speed of a speed drive (not when resuming);
     ``outputs=False`` gives the bare run used to measure the harness overhead."""
     iv = plan.intervals
-    what, forces, fx = _drive_forces(plan, drive, fresh)
+    what, forces = _drive_forces(plan, drive, fresh)
     blocks = [f"# drive {drive.drive.name}: {what}; generated by dem.scene", _read_state(plan, restart),
               _common(plan), forces]
     if outputs:
-        blocks += [_plate_output(plan, fx), _dumps(plan, drive, fresh), _profiles_output(plan), f"""
+        blocks += [_plate_output(plan), _dumps(plan, drive, fresh), _profiles_output(plan), f"""
 # --- restart files every {iv["restart"]} steps (granular pair styles do not restart bit-exactly) ---
 restart {iv["restart"]} ../../{RESTART_DIR}/drive.*.restart
 """]

@@ -6,7 +6,9 @@
   calibration's there);
 * duration of a drive = duration_ts * t_s (default 10 t_s, t_s = delta_s^2/nu_g), unless given;
 * a speed drive with mu_w_tilde runs at the matching steady speed u_w = U u~_w^inf(mu_w) (the paper's
-  u~_w); a stress drive with tau_w has mu_w = tau_w/p_w.
+  u~_w); a stress drive with tau_w has mu_w = tau_w/p_w;
+* an oscillating drive (Stokes' second problem) imposes that value as the amplitude of a sine at omega (given, or
+  omega_ts/t_s) and runs ``cycles`` periods (``duration`` overrides), its depth sized from the amplitude's delta_s.
 Every choice is written into run.json with its reason.
 """
 from __future__ import annotations
@@ -206,22 +208,27 @@ def plan(cfg: Config) -> Plan:
             s = drive_scales(cfg, d)
         except ValueError as exc:
             raise ValueError(f"drive[{d.name}]: {exc}") from None
+        omega = (0.0 if not d.oscillating else d.omega if d.omega is not None else d.omega_ts / s.t_s)
         if d.duration is not None:
             duration, why = d.duration, "given"
+        elif omega:
+            duration = max(d.cycles * 2 * math.pi / omega, d.min_duration)
+            why = f"max({d.cycles:g} periods of omega = {omega:.4g}, min_duration {d.min_duration:g})"
         else:
             duration = max(d.duration_ts * s.t_s, d.min_duration)
             why = f"max({d.duration_ts:g} t_s, min_duration {d.min_duration:g}), t_s = {s.t_s:.4g}"
         if d.kind == "stress":
-            load = Load("stress", cfg.p_w, mu_w=s.mu_w)
+            load = Load("stress", cfg.p_w, mu_w=s.mu_w, omega=omega)
         else:
             u_w = d.u_w if d.u_w is not None else s.U * steady_wall_speed(cfg.material.friction, s.mu_w)
-            load = Load("speed", cfg.p_w, u_w=u_w)
+            load = Load("speed", cfg.p_w, u_w=u_w, omega=omega)
         steps = max(1, round(duration / dt))
         require(steps <= MAX_STEPS, f"drive[{d.name}] duration", f"at most {MAX_STEPS * dt:.4g} time units "
                 f"({MAX_STEPS} steps of dt = {dt:.4g}, LAMMPS's limit)", duration)
         reason = (f"drive {d.name}: mu_w = {s.mu_w:.4g} (mu~_w = {s.mu_w_tilde:.3g}), delta_s = {s.delta_s:.3g} d, "
                   f"t_s = {s.t_s:.3g}, U = {s.U:.3g}; duration {duration:.4g} ({why}); "
-                  + (f"tau_w = {load.tau_w:.4g}" if d.kind == "stress" else f"u_w = {load.u_w:.4g}"))
+                  + (f"tau_w = {load.tau_w:.4g}" if d.kind == "stress" else f"u_w = {load.u_w:.4g}")
+                  + (f" x sin(omega t), omega = {omega:.4g} (omega t_s = {omega * s.t_s:.3g})" if omega else ""))
         drives.append(DrivePlan(d, s, duration, steps, load, reason))
         reasons.append(reason)
     delta_max = max(p.scales.delta_s for p in drives)

@@ -15,7 +15,9 @@ A study is valid with these keys (DEM units; example)::
 
 Optional: ``duration_ts`` (drive length in calibrated t_s, default 10), ``min_duration``, ``width`` (the box's
 x width in d; default the DEM preset's), ``width_check`` (default true: the first drive again at the highest
-pressure in a box twice as wide).  Unknown keys are errors.
+pressure in a box twice as wide).  ``omega_ts`` (a list of omega t_s) makes it a study of the oscillating plate
+(Stokes' second problem): every drive's load is the amplitude of a sine, run at each frequency for ``cycles``
+periods (default 4), and the comparison is compare.oscillation's.  Unknown keys are errors.
 """
 from __future__ import annotations
 
@@ -33,7 +35,7 @@ PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
 DRIVE_KEYS = ("kind", "mu_w_tilde", "mu_w", "tau_w", "u_w")
 SHORT = {"mu_w_tilde": "mutilde", "mu_w": "mu", "tau_w": "tau", "u_w": "u"}  # drive names: stress-mutilde0.5
 TOP = {"name", "dem", "seeds", "pressures", "calibration", "drive", "duration_ts", "min_duration", "width",
-       "width_check"}
+       "width_check", "omega_ts", "cycles"}
 
 
 @dataclass(frozen=True)
@@ -43,14 +45,18 @@ class StudyDrive:
     kind: str
     load_key: str
     value: float
+    omega_ts: float | None = None  # an oscillating drive: omega t_s of its amplitude
+    cycles: float = 4.0
 
     @property
     def name(self) -> str:
-        return f"{self.kind}-{SHORT[self.load_key]}{self.value:g}"
+        wave = "" if self.omega_ts is None else f"-w{self.omega_ts:g}"
+        return f"{self.kind}-{SHORT[self.load_key]}{self.value:g}{wave}"
 
     def table(self, duration_ts: float, min_duration: float) -> dict:
+        wave = {} if self.omega_ts is None else {"omega_ts": self.omega_ts, "cycles": self.cycles}
         return {"name": self.name, "kind": self.kind, self.load_key: self.value, "duration_ts": duration_ts,
-                "min_duration": min_duration}
+                "min_duration": min_duration, **wave}
 
 
 @dataclass(frozen=True)
@@ -66,6 +72,11 @@ class Study:
     min_duration: float = 0.0
     width: float | None = None
     width_check: bool = True
+
+    @property
+    def oscillating(self) -> bool:
+        """A study of the oscillating plate (every drive a sine)."""
+        return any(d.omega_ts is not None for d in self.drives)
 
     @property
     def calibration_pressures(self) -> tuple[float, ...]:
@@ -121,6 +132,14 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     drives = doc.get("drive")
     require(isinstance(drives, list) and drives, "drive", "an array of at least one [[drive]] table", drives)
     built = tuple(_drive(t, k) for k, t in enumerate(drives))
+    omegas, cycles = doc.get("omega_ts"), doc.get("cycles", dem_config.Drive.cycles)
+    require(omegas is None or (isinstance(omegas, list) and omegas and all(finite(w) and w > 0 for w in omegas)
+                               and len(set(omegas)) == len(omegas)), "omega_ts",
+            "a list of distinct omega t_s > 0 (an oscillating plate)", omegas)
+    require(finite(cycles) and cycles >= dem_config.MIN_CYCLES, "cycles",
+            f"a number of periods >= {dem_config.MIN_CYCLES}", cycles)
+    if omegas is not None:
+        built = tuple(dataclasses.replace(d, omega_ts=float(w), cycles=float(cycles)) for d in built for w in omegas)
     require(len({d.name for d in built}) == len(built), "drive", "distinct drives", [d.name for d in built])
     duration_ts, min_duration = doc.get("duration_ts", 10.0), doc.get("min_duration", 0.0)
     require(finite(duration_ts) and duration_ts > 0, "duration_ts", "a finite number > 0", duration_ts)
@@ -128,8 +147,9 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     width = doc.get("width")
     require(width is None or (finite(width) and width >= dem_config.MIN_WIDTH), "width",
             f"a number >= {dem_config.MIN_WIDTH:g} d", width)
-    width_check = doc.get("width_check", True)
-    require(isinstance(width_check, bool), "width_check", "true or false", width_check)
+    width_check = doc.get("width_check", omegas is None)
+    require(isinstance(width_check, bool) and not (width_check and omegas is not None), "width_check",
+            "true or false (false with omega_ts: the width check is a Stokes drive's)", width_check)
     name = doc.get("name", "study")
     require(isinstance(name, str) and name.replace("-", "").replace("_", "").isalnum(), "name",
             "letters, digits, '-' and '_'", name)

@@ -35,6 +35,9 @@ CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
 REPORT_DRIVE_STEPS = 5.9e7
 #: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
 MODELS = 3
+#: an oscillating plate's run: LAMMPS's depth profiles this many times per period (the phase-resolved profiles
+#: of compare.oscillation), the plate's record PLATE_PER_PROFILE times as often, atom snapshots once a period
+PROFILES_PER_PERIOD, PLATE_PER_PROFILE = 24, 4
 
 
 def pressure_label(p_w: float) -> str:
@@ -61,13 +64,18 @@ def calibration_text(study: Study, p_w: float) -> str:
                         header=f"study {study.name}: the calibration of the {study.dem} grains at p_w = {p_w:g}")
 
 
-def run_text(study: Study, p_w: float, material: dict, source: str, wide_of: Plan | None = None) -> str:
+def run_text(study: Study, p_w: float, material: dict, source: str, wide_of: Plan | None = None,
+             omega_ts: float | None = None) -> str:
     """The DEM config of the run at p_w: the preset's grains (one material), the study's seeds and drives, the
     depth and durations sized from ``material`` (the calibration at ``source``), snapshots every t_s/FRAMES_PER_TS
     of its fastest drive (the plate's and the profiles' intervals no longer), every t_s/EARLY_FRAMES_PER_TS
     over its first t_s.  ``wide_of``: the width check of
-    that run, its first drive alone in a box twice as wide and as deep."""
+    that run, its first drive alone in a box twice as wide and as deep.  ``omega_ts``: the oscillating drives at that
+    frequency, their profiles PROFILES_PER_PERIOD times a period of the fastest, the plate PLATE_PER_PROFILE times as
+    often, snapshots once a period (the phase-resolved analysis reads the plate and the profiles)."""
     drives = study.drives[:1] if wide_of else study.drives
+    if omega_ts is not None:
+        drives = tuple(d for d in drives if d.omega_ts == omega_ts)
     width = study.width or dem_config.preset(study.dem)[0].box.width
     entries = [("name", f"{study.name}-{pressure_label(p_w)}{WIDE if wide_of else ''}"), ("seeds", list(study.seeds)),
                *_grains(study, p_w), ("material", material), ("box.margin", None),
@@ -76,6 +84,13 @@ def run_text(study: Study, p_w: float, material: dict, source: str, wide_of: Pla
     header = f"study {study.name} at p_w = {p_w:g}, sized from the calibration {source}"
     text = with_entries(dem_config.preset_text(study.dem), entries, header=header)
     cfg = dem_config.parse(text)
+    if omega_ts is not None:
+        period = min(d.duration / d.drive.cycles for d in plan(cfg).drives)
+        profile = period / PROFILES_PER_PERIOD
+        return with_entries(text, [("output.atoms", period), ("output.contacts", period),
+                                   ("output.plate", min(cfg.output.plate, profile / PLATE_PER_PROFILE)),
+                                   ("output.profiles", profile), ("output.restart", max(cfg.output.restart, period))],
+                            header=header)
     t_s = min(d.scales.t_s for d in plan(cfg).drives)
     frame, out = t_s / FRAMES_PER_TS, cfg.output
     return with_entries(text, [("output.atoms", frame), ("output.contacts", frame), ("output.plate",
@@ -181,6 +196,11 @@ def plan_study(study: Study, material: dict, source: str) -> StudyPlan:
     with ``study.width_check`` the first drive at the reference pressure in a box twice as wide."""
     runs = {}
     for p_w in study.pressures:
+        if study.oscillating:  # one run per frequency: its outputs resolve its period
+            for w in sorted({d.omega_ts for d in study.drives}):
+                text = run_text(study, p_w, material, source, omega_ts=w)
+                runs[f"{pressure_label(p_w)}-w{w:g}"] = StudyRun(p_w, text, plan(dem_config.parse(text)))
+            continue
         text = run_text(study, p_w, material, source)
         runs[pressure_label(p_w)] = StudyRun(p_w, text, plan(dem_config.parse(text)))
     if study.width_check:
