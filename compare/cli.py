@@ -1,5 +1,6 @@
 """``granstokes compare (RUN_DIR... | --tables REPORT_DIR/tables) --out REPORT_DIR [--calibration
-DIR/calibration.json] [--jobs N] [--json]``."""
+DIR/calibration.json] [--ngf-from METRICS.json] [--jobs N] [--json]``: Stokes drives (compare.comparison) or, when the
+runs' drives oscillate, the oscillating plate (compare.oscillation)."""
 from __future__ import annotations
 
 import json
@@ -22,12 +23,21 @@ def run_compare(args) -> int:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
     if args.tables is not None:
+        from .oscillation_tables import DRIVES_JSON
         from .tables import DEM_JSON
-        require((args.tables / DEM_JSON).is_file(), "--tables", f"the tables folder of a report (with {DEM_JSON})",
+        require((args.tables / DEM_JSON).is_file() or (args.tables / DRIVES_JSON).is_file(), "--tables",
+                f"the tables folder of a report (with {DEM_JSON} or {DRIVES_JSON})",
                 str(args.tables))
+    oscillating = _oscillating(args.runs, args.tables)
+    require(args.ngf_from is None or oscillating, "--ngf-from", "only for oscillating drives (a Stokes comparison "
+            "fits NGF's A on its own drives)", str(args.ngf_from))
+    if args.ngf_from is not None:
+        require(args.ngf_from.is_file(), "--ngf-from", "a Stokes report's metrics.json", str(args.ngf_from))
     sources = args.runs or [args.tables]
     inputs = [*sources, *([args.calibration] if args.calibration is not None else [])]
     claim(args.out, "--out", COMMAND, inputs)
+    if oscillating:
+        return _compare_oscillations(args, inputs)
     from .calibrate import load
     from .comparison import analyse, check_grains, compare, run_grains
     from .tables import read
@@ -58,6 +68,42 @@ def run_compare(args) -> int:
     return 0
 
 
+def _oscillating(runs, tables) -> bool:
+    """Whether the runs' (or the tables') drives are oscillating plates: all of them or none (ValueError)."""
+    from granstokes.continuum.load import Load
+    from granstokes.dem.layout import RUN_JSON
+
+    from .oscillation_tables import DRIVES_JSON
+    if tables is not None:
+        return (tables / DRIVES_JSON).is_file()
+    kinds = set()
+    for run in runs:
+        meta = json.loads((run / RUN_JSON).read_text())
+        kinds |= {Load.from_record(d, meta["config"]["p_w"]).oscillating for d in meta["sizing"]["drives"]}
+    require(len(kinds) <= 1, "RUN_DIR", "runs whose drives all oscillate or all are held (Stokes' first problem)",
+            "both kinds")
+    return kinds == {True}
+
+
+def _compare_oscillations(args, inputs) -> int:
+    from .oscillation import compare_oscillations, dem_side
+    from .oscillation_report import write_report
+    from .oscillation_tables import read
+
+    require(args.calibration is not None and not args.fit_on_drives, "--calibration",
+            "a calibration.json (the oscillating drives are predicted blind; no fit on them)", args.calibration)
+    dem = read(args.tables) if args.tables is not None else dem_side(args.runs)
+    comparison = compare_oscillations(dem, args.calibration, args.ngf_from, jobs=args.jobs)
+    with staged(args.out, COMMAND, inputs) as work:
+        m = write_report(comparison, work)
+    if args.json:
+        print(json.dumps(m, default=float))
+        return 0
+    print(m["verdict"])
+    print(f"report: {(args.out / 'index.html').resolve()}")
+    return 0
+
+
 def register(sub) -> None:
     p = sub.add_parser("compare", help="coarse-grain DEM runs, predict them from mu(I) (independent or fitted), "
                                        "write the report")
@@ -71,6 +117,9 @@ def register(sub) -> None:
     p.add_argument("--fit-on-drives", action="store_true",
                    help="fit mu(I) on the drives' own steady windows instead: a restatement, every row labelled not "
                         "blind and never counted as support for a model")
+    p.add_argument("--ngf-from", type=Path, help="oscillating drives: a Stokes report's metrics.json whose NGF "
+                                                 "amplitude A (fitted on a Stokes drive of the same grains) predicts "
+                                                 "them (else no NGF rows)")
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
                    help="processes predicting and scoring the drives (default: the machine's cores)")
     p.add_argument("--json", action="store_true", help="also print metrics.json to stdout")

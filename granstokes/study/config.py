@@ -17,7 +17,9 @@ Optional: ``duration_ts`` (drive length in calibrated t_s, default 10), ``min_du
 x width in d; default the DEM preset's), ``width_check`` (default true: the first drive again at the highest
 pressure in a box twice as wide).  ``omega_ts`` (a list of omega t_s) makes it a study of the oscillating plate
 (Stokes' second problem): every drive's load is the amplitude of a sine, run at each frequency for ``cycles``
-periods (default 4), and the comparison is compare.oscillation's.  Unknown keys are errors.
+periods (default 4), and the comparison is compare.oscillation's; ``ngf_from``: a Stokes report's metrics.json
+whose NGF amplitude A (fitted on a Stokes drive of the same grains) predicts the oscillating drives (else no NGF
+rows).  Unknown keys are errors.
 """
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
 DRIVE_KEYS = ("kind", "mu_w_tilde", "mu_w", "tau_w", "u_w")
 SHORT = {"mu_w_tilde": "mutilde", "mu_w": "mu", "tau_w": "tau", "u_w": "u"}  # drive names: stress-mutilde0.5
 TOP = {"name", "dem", "seeds", "pressures", "calibration", "drive", "duration_ts", "min_duration", "width",
-       "width_check", "omega_ts", "cycles"}
+       "width_check", "omega_ts", "cycles", "ngf_from"}
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,7 @@ class Study:
     min_duration: float = 0.0
     width: float | None = None
     width_check: bool = True
+    ngf_from: str | None = None  # an oscillating study's NGF amplitude: a Stokes report's metrics.json
 
     @property
     def oscillating(self) -> bool:
@@ -126,9 +129,12 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
         require(set(dict(table)) <= known, "calibration keys", f"run and among {sorted(known)}", sorted(dict(table)))
     file = cal.get("file")
     if file is not None:
-        path = Path(file) if Path(file).is_absolute() or base is None else base / file
-        require(path.is_file(), "calibration.file", "a calibration.json of granstokes dem calibrate", str(path))
-        file = str(path.resolve())
+        file = _existing(file, base, "calibration.file", "a calibration.json of granstokes dem calibrate")
+    ngf_from = doc.get("ngf_from")
+    if ngf_from is not None:
+        require(doc.get("omega_ts") is not None, "ngf_from", "only with omega_ts (an oscillating "
+                "study; a Stokes study fits NGF's A on its own drives)", ngf_from)
+        ngf_from = _existing(ngf_from, base, "ngf_from", "a Stokes report's metrics.json")
     drives = doc.get("drive")
     require(isinstance(drives, list) and drives, "drive", "an array of at least one [[drive]] table", drives)
     built = tuple(_drive(t, k) for k, t in enumerate(drives))
@@ -155,7 +161,14 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
             "letters, digits, '-' and '_'", name)
     return Study(name, doc["dem"], tuple(seeds), tuple(float(p) for p in pressures), built, file,
                  table if file is None else (), float(duration_ts), float(min_duration),
-                 None if width is None else float(width), width_check)
+                 None if width is None else float(width), width_check, ngf_from)
+
+
+def _existing(file: str, base: Path | None, name: str, what: str) -> str:
+    """The absolute path of an existing ``file`` (relative to ``base``)."""
+    path = Path(file) if Path(file).is_absolute() or base is None else base / file
+    require(path.is_file(), name, what, str(path))
+    return str(path.resolve())
 
 
 def parse(text: str, base: Path | None = None) -> Study:

@@ -134,10 +134,18 @@ class StudyRunner:
 
     # --- stage 3: the comparison -----------------------------------------------------------------------
     def compare(self, sp: StudyPlan, calibration: Path) -> dict:
+        scored = [label for label in sp.runs if not label.endswith(WIDE)]
+        if self.study.oscillating:
+            from granstokes.compare.oscillation import compare_oscillations
+            from granstokes.compare.oscillation_report import write_report as write_oscillation
+
+            comparison = compare_oscillations([sp.folder(self.out, label) for label in scored], calibration,
+                                              self.study.ngf_from, jobs=self.jobs, root=self.out)
+            with staging.staged(self.out, COMMAND, keep=True) as work:
+                return write_oscillation(comparison, work)
         from granstokes.compare.comparison import build
         from granstokes.compare.report import write_report
 
-        scored = [label for label in sp.runs if not label.endswith(WIDE)]
         comparison = build([sp.folder(self.out, label) for label in scored], calibration=calibration,
                            progress=self.progress, jobs=self.jobs, root=self.out)
         with staging.staged(self.out, COMMAND, keep=True) as work:

@@ -1,0 +1,440 @@
+"""The oscillating plate (Stokes' second problem) confronted with DEM: every drive's records (plate.csv and LAMMPS's
+depth profiles, profiles.csv: no dumps are read) and every model's solution (continuum.oscillation, sampled at the
+same times and depths) go through the same phase-resolved estimators (compare.phase), whole cycles after the first.
+
+Observables of a drive (``OBSERVABLES``; the imposed wall value is A sin(omega t), A = mu_w or u_w):
+* ``response_amplitude``: the fundamental of the free response, u_w [sqrt(g d)] under an imposed stress, mu_w [1]
+  under an imposed speed (the DEM's interval averages undone, compare.phase.harmonic);
+* ``phase_lag`` [rad]: the response's lag behind the imposed sine, in (-pi, pi] (compare.phase.phase_lag);
+* ``yielded_depth`` [d]: the deepest the bed is yielded over the cycle, max over the phase of the depth where the
+  phase-averaged |mu| = |tau_xy|/p reaches the calibrated mu_s (DEM: the method-of-planes stresses of profiles.csv;
+  the zones' map in the (phase, depth) plane is ``zones``);
+* ``dissipation`` [rho_p g d^2 per plate area]: the energy per cycle, the integral of tau_w u_w dt (tau_w the
+  plate's stress on the bed: the loop's area in the (x_w, tau_w) plane);
+* ``remobilization_strain`` [1]: the plate's displacement from a reversal of its velocity until the response
+  regains RESPONSE_FRACTION of its half-cycle peak, over the DEM's yielded depth (both sides: a displacement).
+DEM values are the mean over the beds with their spread / sqrt(n) (one bed: the cycles as blocks).  A model's band
+is its numerical error (Richardson, n_cells/2) and the calibration's, sqrt(J C J^T) with J from solves at each
+calibrated parameter shifted by SHIFT and C the calibration's replicates' covariance (NGF: A's variance too).
+Conventions: DEM units (d, rho_p, g); mu > 0 where the bed resists a plate moving in +x.
+"""
+from __future__ import annotations
+
+import json
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from granstokes.continuum import oscillation as osc
+from granstokes.continuum.load import Load
+from granstokes.continuum.ngf import NonlocalFluidity
+from granstokes.continuum.rules import YieldRule
+from granstokes.continuum.scales import Material
+from granstokes.dem import layout
+
+from granstokes.lib.validate import require
+
+from . import phase
+from .scorecard import SIGMA_CONSISTENT, Z95
+
+OBSERVABLES = {"response_amplitude": None, "phase_lag": "rad", "yielded_depth": "d",
+               "dissipation": "rho_p g d^2 per plate area", "remobilization_strain": "1"}
+#: the start-up: whole cycles discarded before any estimate
+SKIP = 1
+#: a reversal's remobilization ends when the response regains this fraction of its half-cycle peak
+RESPONSE_FRACTION = 0.9
+#: model samples per period (the DEM's plate record has about as many, compare's study plan)
+SAMPLES_PER_PERIOD = 96
+#: relative shift of each calibrated parameter for the calibration band's derivatives
+SHIFT = 0.01
+#: the comparison's numerics: percent-level DEM errors need no more (the rows' numerical_err says what it costs;
+#: continuum.oscillation's defaults verify the solver to 1e-4)
+NUMERICS = osc.OscillationNumerics(n_cells=80, rtol=1e-4, atol=1e-7)
+#: the models compared (continuum.oscillation.MODELS) and their labels
+LABELS = {"local": "local mu(I), velocity form on the DEM scene", "ngf": "nonlocal fluidity (NGF)"}
+PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
+
+
+@dataclass(frozen=True)
+class OscillatingDrive:
+    """A DEM drive of an oscillating load: its run, name, load, scene (depth, plate mass per area, the plate's
+    contact-plane offset), t_s of its amplitude and its beds' folders."""
+
+    run: Path
+    name: str
+    load: Load
+    depth: float
+    plate_mass: float
+    surface_offset: float
+    t_s: float
+    duration: float
+    folders: tuple[Path, ...]
+
+    @property
+    def label(self) -> str:
+        return f"{self.run}/{self.name}"
+
+    @property
+    def omega_ts(self) -> float:
+        return self.load.omega * self.t_s
+
+    @property
+    def response(self) -> str:
+        """The free response: u_w under an imposed stress, mu_w under an imposed speed."""
+        return "u_w" if self.load.kind == "stress" else "mu_w"
+
+    def unit(self, observable: str) -> str:
+        if observable == "response_amplitude":
+            return "sqrt(g d)" if self.response == "u_w" else "1"
+        return OBSERVABLES[observable]
+
+
+def oscillating_drives(run_dir: Path, root: Path | None = None) -> list[OscillatingDrive]:
+    """The oscillating drives of a complete run folder (``root``: name the run relative to it)."""
+    run_dir = Path(run_dir)
+    meta = json.loads((run_dir / layout.RUN_JSON).read_text())
+    unfinished = [k for k, s in meta.get("stages", {}).items() if s.get("status") != "complete"]
+    require(not unfinished, str(run_dir), "a complete run (resume it first)", unfinished)
+    name = run_dir.relative_to(root) if root is not None else run_dir
+    out = []
+    for d in meta["sizing"]["drives"]:
+        load = Load.from_record(d, float(meta["config"]["p_w"]))
+        if load.oscillating:
+            out.append(OscillatingDrive(name, d["name"], load, float(meta["sizing"]["depth"]),
+                                        float(meta["plate"]["mass_per_area"]), float(meta["plate"]["surface_offset"]),
+                                        float(d["expected"]["t_s"]), float(d["duration"]),
+                                        tuple(layout.drive_dir(run_dir, s, d["name"]) for s in meta["seeds"])))
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Record:
+    """One bed or one model solution of a drive: the plate's series (t, x_w, u_w, mu_w, tau_w; ``interval``: the
+    samples' averaging window) and the profiles (t, depth, mu)."""
+
+    plate: pd.DataFrame
+    profiles: pd.DataFrame
+    interval: float = 0.0
+
+
+def dem_record(folder: Path, drive: OscillatingDrive) -> Record:
+    """A bed's plate.csv and profiles.csv as a Record: the plate's rows averaged in blocks of about a period over
+    SAMPLES_PER_PERIOD (x_w at each block's end: the record's ``interval`` grows to the block's), mu = tau_mop/p_mop
+    at the planes between the plate's mean contact plane and the base."""
+    plate = pd.read_csv(folder / layout.PLATE_CSV)
+    plate = plate[plate.t > 0].reset_index(drop=True)
+    step = float(np.median(np.diff(plate.t)))
+    n = max(1, int(round(drive.load.period / SAMPLES_PER_PERIOD / step)))
+    block = plate.index // n
+    mean = plate.groupby(block)[["u_x", "mu_w", "f_x"]].mean()
+    last = plate.groupby(block)[["t", "x"]].last()
+    keep = plate.groupby(block).size() == n  # whole blocks
+    series = pd.DataFrame({"t": last.t, "x_w": last.x, "u_w": mean.u_x, "mu_w": mean.mu_w, "tau_w": -mean.f_x})[keep]
+    prof = pd.read_csv(folder / layout.PROFILES_CSV)
+    surface = layout.plate_surface(plate.y.mean(), drive.surface_offset)
+    prof = prof.assign(depth=surface - prof.y_plane)
+    prof = prof[(prof.depth > 0) & (prof.depth <= drive.depth) & (prof.p_mop > 0)]
+    profiles = pd.DataFrame({"t": prof.t, "depth": prof.depth, "mu": prof.tau_mop / prof.p_mop})
+    return Record(series.reset_index(drop=True), profiles.reset_index(drop=True), n * step)
+
+
+def observables(rec: Record, drive: OscillatingDrive, mu_s: float, depth_scale: float | None = None) -> dict:
+    """Every observable of one record (value, stderr over its cycles), the phase-averaged zones and the plate's
+    loop; ``depth_scale``: the remobilization strain's length (default: this record's yielded depth)."""
+    p, w = rec.plate, drive.load.omega
+    h = phase.harmonic(p.t, p[drive.response], w, SKIP, rec.interval)
+    grid = phase.phase_profile(rec.profiles, w, "mu", skip=SKIP)
+    depths = grid["mean"].columns.to_numpy(float)
+    yielded = phase.yielded_depth(depths, grid["mean"].to_numpy(), mu_s)
+    deepest = float(np.nanmax(yielded)) if len(yielded) else np.nan
+    work = phase.dissipation(p.t, p.u_w, p.tau_w, w, SKIP)
+    strain = phase.remobilization_strain(p.t, p.x_w, p.u_w, p[drive.response], w,
+                                         depth_scale or deepest, RESPONSE_FRACTION, SKIP)
+    loop = phase.phase_average(p.t, p.u_w, w, skip=SKIP).assign(
+        tau_w=phase.phase_average(p.t, p.tau_w, w, skip=SKIP)["mean"])
+    return {"values": {"response_amplitude": (h.amplitude, h.amplitude_err),
+                       "phase_lag": (phase.phase_lag(h), h.phase_err),
+                       "yielded_depth": (deepest, np.nan), "dissipation": (work["value"], work["stderr"]),
+                       "remobilization_strain": (strain["value"], strain["stderr"])},
+            "zones": grid["mean"], "yielded": pd.Series(yielded, index=grid["mean"].index), "loop": loop,
+            "n_cycles": h.n_cycles}
+
+
+@dataclass(frozen=True, eq=False)
+class DemOscillation:
+    """A drive's DEM side: its beds' records, per observable the beds' mean and error (``values``: name -> (value,
+    err, how)), the beds' zones averaged, the yielded depth over the phase and the loop; the periodic-state check
+    per bed."""
+
+    drive: OscillatingDrive
+    records: tuple[Record, ...]
+    values: dict
+    zones: pd.DataFrame
+    yielded: pd.Series
+    loop: pd.DataFrame
+    stationary: list
+    n_cycles: int
+
+
+def analyse_dem(drive: OscillatingDrive, records: list[Record], mu_s: float) -> DemOscillation:
+    """The DEM side of ``drive`` from its beds' ``records`` (dem_record, or a report's tables)."""
+    first = [observables(r, drive, mu_s) for r in records]
+    scale = float(np.nanmean([o["values"]["yielded_depth"][0] for o in first]))
+    per = [observables(r, drive, mu_s, scale) for r in records]
+    values = {}
+    for name in OBSERVABLES:
+        v = np.array([o["values"][name][0] for o in per], dtype=float)
+        if len(v) >= phase.MIN_CYCLES:
+            values[name] = (float(np.nanmean(v)), float(np.nanstd(v, ddof=1) / np.sqrt(np.isfinite(v).sum())),
+                            f"spread over {len(v)} beds (std/sqrt(n))")
+        else:
+            values[name] = (float(v[0]), float(per[0]["values"][name][1]), "one bed: its cycles as blocks")
+    zones = sum(_on_depths(o["zones"], per[0]["zones"].columns) for o in per) / len(per)
+    yielded = sum(o["yielded"] for o in per) / len(per)
+    loop = sum(o["loop"][["phase", "mean", "tau_w"]] for o in per) / len(per)
+    stationary = [phase.stationarity(r.plate.t, r.plate[drive.response], drive.load.omega, SKIP)["steady"]
+                  for r in records]
+    return DemOscillation(drive, tuple(records), values, zones, yielded, loop, stationary,
+                          min(o["n_cycles"] for o in per))
+
+
+def _on_depths(zones: pd.DataFrame, depths) -> pd.DataFrame:
+    """A (phase x depth) table interpolated onto ``depths`` (the beds' profile planes differ with their plate)."""
+    x = zones.columns.to_numpy(float)
+    values = np.array([np.interp(depths, x, row, left=np.nan, right=np.nan) for row in zones.to_numpy(float)])
+    return pd.DataFrame(values, index=zones.index, columns=pd.Index(depths, name="depth"))
+
+
+# --- the models ------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ModelSetup:
+    """What every prediction shares: the calibrated material, the replicates' covariance of PARAMETERS (+ A), NGF's
+    amplitude (None: no NGF rows) and its standard error, the numerics."""
+
+    material: Material
+    covariance: pd.DataFrame
+    ngf_A: float | None = None
+    ngf_A_err: float = 0.0
+    numerics: osc.OscillationNumerics = NUMERICS
+
+    @property
+    def models(self) -> tuple[str, ...]:
+        return ("local", "ngf") if self.ngf_A is not None else ("local",)
+
+
+def model_record(drive: OscillatingDrive, material: Material, model: str, A: float | None, depths,
+                 numerics: osc.OscillationNumerics) -> Record:
+    """A model's solution of ``drive`` as a Record: sampled SAMPLES_PER_PERIOD times a period over the DEM's
+    duration, mu (sign as the DEM's) at the DEM's profile depths."""
+    load = drive.load
+    n = int(round(SAMPLES_PER_PERIOD * (drive.duration / load.period)))
+    t = np.linspace(0.0, drive.duration, n + 1)[1:]
+    scene = osc.BedScene(material, load.p_w, drive.depth, plate_mass=drive.plate_mass)
+    sol = osc.solve_oscillating(scene, load, t, model=model, rule=_rule(drive, material),
+                                fluidity=NonlocalFluidity(A=A) if model == "ngf" else None, numerics=numerics,
+                                error_estimate=False)
+    u_w = sol.u_w
+    x_w = np.concatenate([[0.0], np.cumsum(0.5 * (u_w[1:] + u_w[:-1]) * np.diff(t))]) + u_w[0] * t[0] / 2
+    mu = -np.array([np.interp(depths, sol.y_mu, m) for m in sol.mu])
+    plate = pd.DataFrame({"t": t, "x_w": x_w, "u_w": u_w, "mu_w": sol.mu_w, "tau_w": sol.mu_w * load.p_w})
+    profiles = pd.DataFrame({"t": np.repeat(t, len(depths)), "depth": np.tile(depths, len(t)), "mu": mu.ravel()})
+    return Record(plate, profiles)
+
+
+def _rule(drive: OscillatingDrive, material: Material) -> YieldRule:
+    """The regularised local rule of the DEM-scene predictions, at the amplitude's steady layer."""
+    return YieldRule.for_layer(drive.load.scales(material))
+
+
+@dataclass(frozen=True, eq=False)
+class OscPrediction:
+    """A model's side of a drive: per observable (predicted, numerical error, calibration sd), and the zones,
+    yielded depth over the phase and loop of its central solution."""
+
+    model: str
+    values: dict
+    zones: pd.DataFrame
+    yielded: pd.Series
+    loop: pd.DataFrame
+
+
+def predict(dem: DemOscillation, setup: ModelSetup, model: str) -> OscPrediction:
+    """The model's observables on the DEM's rows and depths: central (``setup.numerics``), on n_cells/2 (the
+    numerical error, |fine - coarse|/3) and at each calibrated parameter shifted by SHIFT (coarse: the bias
+    cancels in the derivative) for s_cal = sqrt(J C J^T)."""
+    drive, depths = dem.drive, dem.zones.columns.to_numpy(float)
+    scale = dem.values["yielded_depth"][0]
+    coarse_numerics = replace(setup.numerics, n_cells=setup.numerics.n_cells // 2)
+
+    def run(material, A, numerics):
+        rec = model_record(drive, material, model, A, depths, numerics)
+        return observables(rec, drive, material.mu_s, scale)
+
+    A = setup.ngf_A if model == "ngf" else None
+    fine = run(setup.material, A, setup.numerics)
+    coarse = run(setup.material, A, coarse_numerics)
+    names = list(PARAMETERS) + (["A"] if model == "ngf" else [])
+    central = {"A": A, **{k: getattr(setup.material, k) for k in PARAMETERS}}
+    jac = {}
+    for k in names:
+        step = central[k] * SHIFT
+        shifted = (replace(setup.material, **{k: central[k] + step}) if k != "A" else setup.material)
+        out = run(shifted, A + step if k == "A" else A, coarse_numerics)
+        jac[k] = {o: _difference(o, out["values"][o][0], coarse["values"][o][0]) / step for o in OBSERVABLES}
+    cov = setup.covariance.reindex(index=names, columns=names).fillna(0.0).to_numpy(copy=True)
+    if model == "ngf":
+        cov[-1, -1] = setup.ngf_A_err ** 2
+    values = {}
+    for o in OBSERVABLES:
+        J = np.array([jac[k][o] for k in names])
+        s_cal = float(np.sqrt(max(J @ cov @ J, 0.0))) if np.all(np.isfinite(J)) else np.nan
+        num = abs(_difference(o, fine["values"][o][0], coarse["values"][o][0])) / 3
+        values[o] = (fine["values"][o][0], num, s_cal)
+    return OscPrediction(model, values, fine["zones"], fine["yielded"], fine["loop"])
+
+
+def _difference(observable: str, a: float, b: float) -> float:
+    """a - b, a phase difference wrapped into (-pi, pi]."""
+    return float(phase.wrap(a - b)) if observable == "phase_lag" else a - b
+
+
+def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model: str, note: str = "") -> dict:
+    drive = dem.drive
+    v, err, how = dem.values[observable]
+    lag = dem.values["phase_lag"][0]
+    row = {"drive": drive.label, "observable": observable, "unit": drive.unit(observable), "dem": v,
+           "dem_err": err, "dem_how": how, "model": model, "model_label": LABELS[model], "predicted": np.nan,
+           "band": [np.nan, np.nan], "numerical_err": np.nan, "calibration_sd": np.nan, "sigma": np.nan,
+           "verdict": "not predicted", "scored": False, "note": note, "blind": True, "kind": drive.load.kind,
+           "omega": drive.load.omega, "omega_ts": drive.omega_ts, "amplitude": drive.load.amplitude,
+           "phase_lag": lag, "phase_lag_predicted": np.nan}
+    if pred is None:
+        return row
+    p, num, s_cal = pred.values[observable]
+    half = Z95 * float(np.hypot(num, s_cal))
+    row.update(predicted=float(p), band=[float(p - half), float(p + half)], numerical_err=num, calibration_sd=s_cal,
+               phase_lag_predicted=pred.values["phase_lag"][0])
+    why = _unmeasurable(dem, observable)
+    if why:
+        row.update(verdict="not measurable", note=why)
+        return row
+    sigma = _difference(observable, v, p) / float(np.sqrt(err ** 2 + num ** 2 + s_cal ** 2))
+    row.update(sigma=sigma, scored=True, verdict="consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees")
+    return row
+
+
+def _unmeasurable(dem: DemOscillation, observable: str) -> str:
+    v, err, _ = dem.values[observable]
+    if not (np.isfinite(v) and np.isfinite(err) and err > 0):
+        return "no error: fewer than two beds or whole cycles after the start-up"
+    if observable in ("yielded_depth", "remobilization_strain") and dem.values["yielded_depth"][0] >= dem.drive.depth:
+        return "the bed is yielded down to its base over the cycle: the yielded depth is the bed's, not the flow's"
+    return ""
+
+
+def scorecard(dems, predictions: dict, setup: ModelSetup, ngf_note: str) -> pd.DataFrame:
+    """Every drive x model x observable (predictions: (drive label, model) -> OscPrediction)."""
+    rows = [_row(d, predictions.get((d.drive.label, m)), o, m, "" if m in setup.models else ngf_note)
+            for d in dems for m in LABELS for o in OBSERVABLES]
+    return pd.DataFrame(rows)
+
+
+def laws(rows: pd.DataFrame) -> pd.DataFrame:
+    """How the yielded depth and the phase lag scale with omega, per drive kind, amplitude and model: n in
+    yielded_depth ~ (omega t_s)^n and s in phase_lag = a + s ln(omega t_s), weighted least squares with the DEM's
+    errors (the model's slope on the same weights, its error from the per-drive bands taken as independent);
+    drives not measurable are left out."""
+    out = []
+    for (kind, amp, model), g in rows[rows.scored].groupby(["kind", "amplitude", "model"]):
+        for law, obs, fx, fy in (("yielded_depth_exponent", "yielded_depth", np.log, np.log),
+                                 ("phase_lag_slope", "phase_lag", np.log, lambda v: v)):
+            s = g[(g.observable == obs) & (g.dem > 0 if obs == "yielded_depth" else g.dem.notna())]
+            s = s[s.predicted > 0] if obs == "yielded_depth" else s
+            base = {"law": law, "kind": kind, "amplitude": amp, "model": model, "n_drives": len(s),
+                    "quantity": "n in yielded_depth ~ (omega t_s)^n" if obs == "yielded_depth"
+                    else "s in phase_lag = a + s ln(omega t_s) [rad]"}
+            if len(s) < 3:
+                out.append({**base, "dem": np.nan, "dem_err": np.nan, "predicted": np.nan, "predicted_err": np.nan,
+                            "sigma": np.nan, "verdict": "not measurable",
+                            "note": f"{len(s)} measurable drive(s): a slope and its error need 3"})
+                continue
+            x = fx(s.omega_ts.to_numpy())
+            scale = s.dem.to_numpy() if obs == "yielded_depth" else 1.0
+            dem_sd = s.dem_err.to_numpy() / scale
+            model_scale = s.predicted.to_numpy() if obs == "yielded_depth" else 1.0
+            model_sd = np.hypot(s.numerical_err, s.calibration_sd).to_numpy() / model_scale
+            w = 1 / dem_sd ** 2
+            dem_slope, dem_err = _weighted_slope(x, fy(s.dem.to_numpy()), w, dem_sd)
+            pred_slope, pred_err = _weighted_slope(x, fy(s.predicted.to_numpy()), w, model_sd)
+            sigma = (dem_slope - pred_slope) / np.hypot(dem_err, pred_err)
+            out.append({**base, "dem": dem_slope, "dem_err": dem_err, "predicted": pred_slope,
+                        "predicted_err": pred_err, "sigma": sigma,
+                        "verdict": "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees", "note": ""})
+    return pd.DataFrame(out)
+
+
+def _weighted_slope(x, y, w, sd) -> tuple[float, float]:
+    """The slope of y on x by least squares with weights w, and its standard error from the points' sd."""
+    xm = np.sum(w * x) / np.sum(w)
+    c = w * (x - xm) / np.sum(w * (x - xm) ** 2)  # slope = sum c y
+    return float(np.sum(c * y)), float(np.sqrt(np.sum((c * sd) ** 2)))
+
+
+@dataclass(frozen=True, eq=False)
+class OscillationComparison:
+    """Everything the oscillation report renders."""
+
+    runs: tuple[str, ...]
+    setup: ModelSetup
+    calibration_source: str
+    ngf_source: str
+    drives: tuple[DemOscillation, ...]
+    predictions: dict
+    rows: pd.DataFrame
+    laws: pd.DataFrame
+
+
+def _predict_one(args):
+    dem, setup, model = args
+    return (dem.drive.label, model), predict(dem, setup, model)
+
+
+def dem_side(run_dirs, root: Path | None = None) -> list[tuple[OscillatingDrive, list[Record]]]:
+    """Every oscillating drive of ``run_dirs`` with its beds' records."""
+    drives = [d for run in run_dirs for d in oscillating_drives(Path(run), root)]
+    require(drives, "RUN_DIR", "run folders with oscillating drives", [str(r) for r in run_dirs])
+    return [(d, [dem_record(f, d) for f in d.folders]) for d in drives]
+
+
+def compare_oscillations(dem, calibration: str | Path, ngf_from: str | Path | None = None,
+                         jobs: int = 1) -> OscillationComparison:
+    """Predict each drive of ``dem`` (dem_side, or compare.oscillation_tables.read) with every model from the
+    independent ``calibration`` (calibration.json); NGF's A from ``ngf_from``, a Stokes report's metrics.json (A
+    fitted on a Stokes drive's creep profile), else no NGF rows."""
+    from . import calibrate
+    from .comparison import replicates_of
+
+    cal = calibrate.load(calibration)
+    require(not cal.failure, "--calibration", "a calibration that determines mu(I)", cal.failure)
+    material = cal.material()
+    reps = replicates_of(cal, cal.replicates["phi_max"])
+    ngf_A, ngf_err, ngf_note = None, 0.0, "no NGF amplitude: give a Stokes report's metrics.json (--ngf-from)"
+    if ngf_from is not None:
+        ngf = json.loads(Path(ngf_from).read_text()).get("ngf") or {}
+        require("A" in ngf, "--ngf-from", "a Stokes report's metrics.json with an NGF fit", str(ngf_from))
+        ngf_A, ngf_err, ngf_note = float(ngf["A"]), float(ngf.get("A_err", 0.0)), ""
+    setup = ModelSetup(material, reps.cov(), ngf_A, ngf_err)
+    dems = [analyse_dem(d, records, material.mu_s) for d, records in dem]
+    tasks = [(d, setup, m) for d in dems for m in setup.models]
+    if jobs > 1:
+        with ProcessPoolExecutor(jobs) as pool:
+            predictions = dict(pool.map(_predict_one, tasks))
+    else:
+        predictions = dict(map(_predict_one, tasks))
+    rows = scorecard(dems, predictions, setup, ngf_note)
+    source = f"NGF's A = {ngf_A:.3g} +- {ngf_err:.2g} from {ngf_from}" if ngf_A is not None else ngf_note
+    return OscillationComparison(tuple(sorted({str(d.run) for d, _ in dem})), setup, cal.source, source,
+                                 tuple(dems), predictions, rows, laws(rows))

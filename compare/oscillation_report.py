@@ -1,0 +1,264 @@
+"""The oscillating plate's report: renders a compare.oscillation.OscillationComparison into metrics.json, CSV tables,
+PNG figures and index.html (nothing is computed here but the words of the verdict)."""
+from __future__ import annotations
+
+import html
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from granstokes.continuum.scales import UNITS  # noqa: E402
+
+from granstokes.lib.page import page  # noqa: E402
+
+from . import oscillation_tables  # noqa: E402
+from .oscillation import LABELS, RESPONSE_FRACTION, SKIP, OscillationComparison  # noqa: E402
+from .report import CSV_FLOAT, TABLES, _table, fmt, fmt_band, slug  # noqa: E402
+from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, plain_log, suptitle  # noqa: E402
+
+DEFINITIONS = {
+    "response_amplitude": "the fundamental's amplitude of the free response: u_w [sqrt(g d)] under an imposed "
+                          "stress, mu_w under an imposed speed",
+    "phase_lag": "the response's lag behind the imposed sine A sin(omega t), in (-pi, pi] rad (> 0: it peaks later)",
+    "yielded_depth": "the deepest depth [d] where the phase-averaged |mu| = |tau_xy|/p reaches the calibrated mu_s "
+                     "over the cycle",
+    "dissipation": "energy per cycle and plate area, the integral of tau_w u_w dt [rho_p g d^2]",
+    "remobilization_strain": f"the plate's displacement from a reversal until the response regains "
+                             f"{RESPONSE_FRACTION:g} of its half-cycle peak, over the DEM's yielded depth",
+    "sigma": "(DEM - predicted)/sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2) (phase differences wrapped)",
+    "cycles": f"estimates on the whole cycles after the first {SKIP} (the start-up); DEM errors: the beds' spread",
+}
+TITLES = {"map": "The oscillating plate across frequencies", "zones": "Static and dynamic zones over a cycle",
+          "loops": "The plate's loops"}
+HOW_TO_READ = {
+    "map": "One column per observable, one row per drive kind, against omega t_s (t_s of the amplitude's steady "
+           "layer) on a log axis: the DEM as points with their 95 % bars over beds (markers: amplitudes), each model "
+           "as a line through its predictions at the same drives (shaded: its 95 % band).",
+    "zones": "|mu|/mu_s over one cycle (phase across, depth down from the plate), phase-averaged: the DEM's beds on "
+             "the left, each model beside it on the same depths; the black line is |mu| = mu_s, the edge of the "
+             "dynamic zone (inside, |mu| > mu_s, the bed flows; outside it is static).",
+    "loops": "The phase-averaged plate stress tau_w on the bed against the plate's speed u_w over a cycle: the area "
+             "of a loop in the (x_w, tau_w) plane is the energy dissipated; a model's loop beside the DEM's.",
+}
+
+
+def metrics(c: OscillationComparison) -> dict:
+    rows = c.rows.replace({np.nan: None})
+    drives = {}
+    for d in c.drives:
+        dr = d.drive
+        drives[dr.label] = {"kind": dr.load.kind, "omega": dr.load.omega, "omega_ts": dr.omega_ts,
+                            "amplitude": dr.load.amplitude, "amplitude_of": "mu_w" if dr.load.kind == "stress"
+                            else "u_w", "p_w": dr.load.p_w, "t_s": dr.t_s, "period": dr.load.period,
+                            "depth": dr.depth, "seeds": len(dr.folders), "whole_cycles": d.n_cycles,
+                            "periodic": d.stationary,
+                            **{k: {"dem": v[0], "dem_err": v[1]} for k, v in d.values.items()}}
+    tally = {m: c.rows[c.rows.model == m].verdict.value_counts().to_dict() for m in LABELS}
+    return {"verdict": verdict(c), "problem": "oscillating plate (Stokes' second problem)",
+            "scorecard": json.loads(rows.to_json(orient="records")), "laws": json.loads(c.laws.to_json(
+                orient="records")), "drives": drives, "tally": tally,
+            "calibration": {"source": c.calibration_source, "mu_s": c.setup.material.mu_s,
+                            "mu_d": c.setup.material.mu_d, "I0_dem": c.setup.material.I0, "phi": c.setup.material.phi},
+            "ngf": c.ngf_source, "definitions": DEFINITIONS, "units": UNITS["dem_units"],
+            "I_convention": UNITS["inertial_number"], "runs": list(c.runs)}
+
+
+def verdict(c: OscillationComparison) -> str:
+    """The report's verdict in words: per model, the observables' agreement; the history effect."""
+    r, parts = c.rows, []
+    for m in LABELS:
+        s = r[(r.model == m) & r.scored]
+        if not len(s):
+            note = r[r.model == m].note.iloc[0] if len(r[r.model == m]) else ""
+            parts.append(f"{LABELS[m]}: not predicted ({note}).")
+            continue
+        per = "; ".join(f"{o.replace('_', ' ')} {int((g.verdict == 'consistent').sum())}/{len(g)} consistent"
+                        for o, g in s.groupby("observable", sort=False))
+        parts.append(f"{LABELS[m]}: {per}.")
+    h = r[(r.observable == "remobilization_strain") & r.scored & (r.model == "local")]
+    if len(h):
+        shows = h[h.sigma > 2]
+        parts.append(f"History: after a reversal the DEM needs a strain of {h.dem.min():.2g} to {h.dem.max():.2g} to "
+                     f"remobilize, local mu(I) {h.predicted.min():.2g} to {h.predicted.max():.2g}; the DEM's is larger "
+                     f"beyond its error in {len(shows)} of {len(h)} drives (sigma up to {h.sigma.max():.1f}).")
+    measured = c.laws[c.laws.verdict != "not measurable"]
+    for (_, kind, amp), g in measured.groupby(["law", "kind", "amplitude"], sort=False):
+        models = ", ".join(f"{r.model} {r.predicted:.2f} ({r.verdict}, {r.sigma:+.1f} sigma)" for r in g.itertuples())
+        parts.append(f"{g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}): DEM {g.dem.iloc[0]:.2f} +- "
+                     f"{g.dem_err.iloc[0]:.2f}; {models}.")
+    return " ".join(parts)
+
+
+def _series(c: OscillationComparison, kind: str, amplitude: float, model: str | None, observable: str):
+    """(omega t_s, value, 95 % half-width) of the DEM (model None) or a model over the drives of kind and amplitude."""
+    s = c.rows[(c.rows.kind == kind) & (c.rows.amplitude == amplitude) & (c.rows.observable == observable)
+               & (c.rows.model == (model or "local"))].sort_values("omega_ts")
+    if model is None:
+        return s.omega_ts.to_numpy(), s.dem.to_numpy(), 1.96 * s.dem_err.to_numpy()
+    half = (s.band.map(lambda b: b[1]).to_numpy(float) - s.predicted.to_numpy(float))
+    return s.omega_ts.to_numpy(), s.predicted.to_numpy(float), half
+
+
+def map_figure(c: OscillationComparison, out: Path) -> str:
+    kinds = sorted(c.rows.kind.unique())
+    shown = ("yielded_depth", "phase_lag", "dissipation", "remobilization_strain")
+    fig, axes = plt.subplots(len(kinds), len(shown), figsize=(16, 3.6 * len(kinds)), squeeze=False)
+    for i, kind in enumerate(kinds):
+        amps = sorted(c.rows[c.rows.kind == kind].amplitude.unique())
+        for j, obs in enumerate(shown):
+            ax = axes[i, j]
+            for k, amp in enumerate(amps):
+                x, y, e = _series(c, kind, amp, None, obs)
+                what = f"mu_w = {amp:.3g}" if kind == "stress" else f"u_w = {amp:.3g}"
+                ax.errorbar(x, y, e, fmt=DRIVE_MARKERS[k], color=DEM_COLOUR, ms=6, capsize=3,
+                            label=f"DEM, {what}")
+                for m in c.setup.models:
+                    xm, ym, hm = _series(c, kind, amp, m, obs)
+                    st = MODEL_STYLE.get(m, {})
+                    ax.plot(xm, ym, marker=DRIVE_MARKERS[k], mfc="none", **st,
+                            label=f"{m}, {what}" if j == 0 else None)
+                    ax.fill_between(xm, ym - hm, ym + hm, color=st.get("color"), alpha=0.15, lw=0)
+            ax.set_xscale("log")
+            plain_log(ax.xaxis)
+            unit = c.rows[c.rows.observable == obs].unit.iloc[0]
+            ax.set_xlabel("omega t_s")
+            ax.set_ylabel(f"{obs.replace('_', ' ')} [{unit}]")
+            ax.set_title(f"imposed {kind}: {obs.replace('_', ' ')}", fontsize=10)
+        axes[i, 0].legend(fontsize=7)
+    suptitle(fig, "Oscillating plate: DEM (points, 95 % over beds) and the models (lines, 95 % bands) "
+                  "against the frequency")
+    fig.tight_layout()
+    path = out / "map.png"
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path.name
+
+
+def _zones_amplitude(c: OscillationComparison, kind: str) -> float:
+    """The amplitude whose zones and loops are drawn: the largest of the kind."""
+    return max(d.drive.load.amplitude for d in c.drives if d.drive.load.kind == kind)
+
+
+def zones_figure(c: OscillationComparison, out: Path, kind: str) -> str:
+    amp = _zones_amplitude(c, kind)
+    drives = sorted([d for d in c.drives if d.drive.load.kind == kind and d.drive.load.amplitude == amp],
+                    key=lambda d: d.drive.omega_ts)
+    cols = ["DEM", *c.setup.models]
+    mu_s = c.setup.material.mu_s
+    fig, axes = plt.subplots(len(drives), len(cols), figsize=(4 * len(cols) + 1, 2.6 * len(drives) + 0.6),
+                             squeeze=False, sharey=True, layout="constrained")
+    image = None
+    for i, d in enumerate(drives):
+        for j, col in enumerate(cols):
+            ax = axes[i, j]
+            zones = d.zones if col == "DEM" else c.predictions[(d.drive.label, col)].zones
+            ph, depth = zones.index.to_numpy(float), zones.columns.to_numpy(float)
+            ratio = np.abs(zones.to_numpy(float).T) / mu_s
+            image = ax.pcolormesh(ph, depth, ratio, cmap="RdYlBu_r", vmin=0, vmax=2, shading="nearest")
+            ax.contour(ph, depth, ratio, levels=[1.0], colors="k", linewidths=1.2)
+            ax.set_ylim(depth.max(), 0)
+            ax.set_title(f"{col}: omega t_s = {d.drive.omega_ts:.3g}", fontsize=9)
+            if i == len(drives) - 1:
+                ax.set_xlabel("phase omega t [rad]")
+            if j == 0:
+                ax.set_ylabel("depth [d]")
+    fig.colorbar(image, ax=axes, label="|mu| / mu_s", shrink=0.8)
+    what = f"mu_w = {amp:.3g}" if kind == "stress" else f"u_w = {amp:.3g} sqrt(g d)"
+    suptitle(fig, f"Static (blue) and dynamic (red) zones over a cycle, imposed {kind} ({what})")
+    path = out / f"zones_{kind}.png"
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path.name
+
+
+def loops_figure(c: OscillationComparison, out: Path) -> str:
+    kinds = sorted(c.rows.kind.unique())
+    per = {k: sorted([d for d in c.drives if d.drive.load.kind == k and d.drive.load.amplitude
+                      == _zones_amplitude(c, k)], key=lambda d: d.drive.omega_ts) for k in kinds}
+    n = max(len(v) for v in per.values())
+    fig, axes = plt.subplots(len(kinds), n, figsize=(3.2 * n, 3.2 * len(kinds)), squeeze=False)
+    for i, k in enumerate(kinds):
+        for j, d in enumerate(per[k]):
+            ax = axes[i, j]
+            loop = d.loop
+            ax.plot(np.r_[loop["mean"], loop["mean"][:1]], np.r_[loop.tau_w, loop.tau_w[:1]], "o-", ms=3,
+                    color=DEM_COLOUR, label="DEM")
+            for m in c.setup.models:
+                lp = c.predictions[(d.drive.label, m)].loop
+                ax.plot(np.r_[lp["mean"], lp["mean"][:1]], np.r_[lp.tau_w, lp.tau_w[:1]], **MODEL_STYLE.get(m, {}),
+                        label=m)
+            ax.set_title(f"{k}, omega t_s = {d.drive.omega_ts:.3g}", fontsize=9)
+            ax.set_xlabel("u_w [sqrt(g d)]")
+            ax.set_ylabel("tau_w [rho_p g d]")
+        for j in range(len(per[k]), n):
+            axes[i, j].axis("off")
+    axes[0, 0].legend(fontsize=7)
+    suptitle(fig, "The plate's stress on the bed against its speed over a cycle (phase-averaged)")
+    fig.tight_layout()
+    path = out / "loops.png"
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path.name
+
+
+def write_report(c: OscillationComparison, out_dir) -> dict:
+    """Render ``c`` into ``out_dir``: metrics.json, scorecard.csv, laws.csv, the phase-averaged tables, figures and
+    index.html; returns the metrics."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    m = metrics(c)
+    (out / "metrics.json").write_text(json.dumps(m, indent=2))
+    c.rows.to_csv(out / "scorecard.csv", index=False, float_format=CSV_FLOAT)
+    c.laws.to_csv(out / "laws.csv", index=False, float_format=CSV_FLOAT)
+    for d in c.drives:
+        stem = slug(d.drive.label)
+        d.zones.to_csv(out / f"zones_{stem}_dem.csv", float_format=CSV_FLOAT)
+        d.loop.to_csv(out / f"loop_{stem}_dem.csv", index=False, float_format=CSV_FLOAT)
+        for model in c.setup.models:
+            p = c.predictions[(d.drive.label, model)]
+            p.zones.to_csv(out / f"zones_{stem}_{model}.csv", float_format=CSV_FLOAT)
+            p.loop.to_csv(out / f"loop_{stem}_{model}.csv", index=False, float_format=CSV_FLOAT)
+    oscillation_tables.write([(d.drive, list(d.records)) for d in c.drives], out / TABLES)
+    figures = [("map", map_figure(c, out))]
+    figures += [("zones", zones_figure(c, out, k)) for k in sorted(c.rows.kind.unique())]
+    figures += [("loops", loops_figure(c, out))]
+    (out / "index.html").write_text(page("granstokes: the oscillating plate", _body(c, m, figures)))
+    return m
+
+
+def _body(c: OscillationComparison, m: dict, figures) -> str:
+    rows = [[html.escape(r.drive), html.escape(r.observable), fmt(r.dem, r.dem_err), html.escape(r.model),
+             fmt(r.predicted, r.dem_err) if np.isfinite(r.predicted) else "–",
+             fmt_band(r.band, r.dem_err) if np.isfinite(r.predicted) else "–",
+             fmt(r.sigma) if np.isfinite(r.sigma) else "–", html.escape(r.verdict), html.escape(r.note)]
+            for r in c.rows.itertuples()]
+    laws = [[html.escape(r.law), html.escape(r.kind), fmt(r.amplitude), html.escape(r.model),
+             fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err), fmt(r.sigma) if np.isfinite(r.sigma) else "–",
+             html.escape(r.verdict), html.escape(r.note)] for r in c.laws.itertuples()]
+    drives = [[html.escape(label), d["kind"], fmt(d["amplitude"]), fmt(d["omega"]), fmt(d["omega_ts"]),
+               str(d["seeds"]), str(d["whole_cycles"]), ", ".join("yes" if s else "no" for s in d["periodic"])]
+              for label, d in m["drives"].items()]
+    figs = "".join(f"<h3>{html.escape(TITLES[k])}</h3><p class='how'>{html.escape(HOW_TO_READ[k])}</p>"
+                   f"<img src='{f}' alt='{html.escape(TITLES[k])}'>" for k, f in figures)
+    defs = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in DEFINITIONS.items())
+    return (f"<h1>The oscillating plate (Stokes' second problem): DEM against the models</h1>"
+            f"<p><b>Verdict.</b> {html.escape(m['verdict'])}</p>"
+            f"<p>Calibration: {html.escape(c.calibration_source)} (mu_s = {fmt(m['calibration']['mu_s'])}, mu_d = "
+            f"{fmt(m['calibration']['mu_d'])}, I0 = {fmt(m['calibration']['I0_dem'])} in the DEM convention, phi = "
+            f"{fmt(m['calibration']['phi'])}); {html.escape(c.ngf_source)}. Units: {html.escape(m['units'])}; "
+            f"{html.escape(m['I_convention'])}.</p>"
+            f"<img src='{figures[0][1]}' alt='map'>"
+            f"<h2 id='laws'>Laws in omega</h2>"
+            + _table(["law", "kind", "amplitude", "model", "DEM", "predicted", "sigma", "verdict", "note"], laws)
+            + "<h2 id='scorecard'>Scorecard</h2>"
+            + _table(["drive", "observable", "DEM", "model", "predicted", "95 % band", "sigma", "verdict", "note"],
+                     rows)
+            + "<h2>Drives</h2>"
+            + _table(["drive", "kind", "amplitude", "omega", "omega t_s", "beds", "whole cycles",
+                      "periodic (per bed)"], drives)
+            + f"<h2>Figures</h2>{figs}<h2>Definitions</h2><ul>{defs}</ul>")
+
