@@ -6,9 +6,11 @@ Observables of a drive (``OBSERVABLES``; the imposed wall value is A sin(omega t
 * ``response_amplitude``: the fundamental of the free response, u_w [sqrt(g d)] under an imposed stress, mu_w [1]
   under an imposed speed (the DEM's interval averages undone, compare.phase.harmonic);
 * ``phase_lag`` [rad]: the response's lag behind the imposed sine, in (-pi, pi] (compare.phase.phase_lag);
-* ``yielded_depth`` [d]: the deepest the bed is yielded over the cycle, max over the phase of the depth where the
-  phase-averaged |mu| = |tau_xy|/p reaches the calibrated mu_s (DEM: the method-of-planes stresses of profiles.csv;
-  the zones' map in the (phase, depth) plane is ``zones``);
+* ``yielded_depth`` [d]: the cycle's mean depth of the edge between the dynamic and the static zone, the deepest
+  depth where the phase-averaged |mu| = |tau_xy|/p reaches the calibrated mu_s, averaged over the phase (DEM: the
+  method-of-planes stresses of profiles.csv; the zones' map in the (phase, depth) plane is ``zones``).  Not its
+  maximum over the phase: below the layer |mu| falls slowly with depth (tau nearly uniform, p growing), so the
+  noise of mu moves the crossing by noise/|dmu/dy| and the maximum of noisy crossings is biased deep;
 * ``dissipation`` [rho_p g d^2 per plate area]: the energy per cycle, the integral of tau_w u_w dt (tau_w the
   plate's stress on the bed: the loop's area in the (x_w, tau_w) plane);
 * ``remobilization_strain`` [1]: the plate's displacement from a reversal of its velocity until the response
@@ -148,15 +150,15 @@ def observables(rec: Record, drive: OscillatingDrive, mu_s: float, depth_scale: 
     grid = phase.phase_profile(rec.profiles, w, "mu", skip=SKIP)
     depths = grid["mean"].columns.to_numpy(float)
     yielded = phase.yielded_depth(depths, grid["mean"].to_numpy(), mu_s)
-    deepest = float(np.nanmax(yielded)) if len(yielded) else np.nan
+    edge = float(np.nanmean(yielded)) if len(yielded) else np.nan
     work = phase.dissipation(p.t, p.u_w, p.tau_w, w, SKIP)
     strain = phase.remobilization_strain(p.t, p.x_w, p.u_w, p[drive.response], w,
-                                         depth_scale or deepest, RESPONSE_FRACTION, SKIP)
+                                         depth_scale or edge, RESPONSE_FRACTION, SKIP)
     loop = phase.phase_average(p.t, p.u_w, w, skip=SKIP).assign(
         tau_w=phase.phase_average(p.t, p.tau_w, w, skip=SKIP)["mean"])
     return {"values": {"response_amplitude": (h.amplitude, h.amplitude_err),
                        "phase_lag": (phase.phase_lag(h), h.phase_err),
-                       "yielded_depth": (deepest, np.nan), "dissipation": (work["value"], work["stderr"]),
+                       "yielded_depth": (edge, np.nan), "dissipation": (work["value"], work["stderr"]),
                        "remobilization_strain": (strain["value"], strain["stderr"])},
             "zones": grid["mean"], "yielded": pd.Series(yielded, index=grid["mean"].index), "loop": loop,
             "n_cycles": h.n_cycles}
@@ -330,8 +332,8 @@ def _unmeasurable(dem: DemOscillation, observable: str) -> str:
     v, err, _ = dem.values[observable]
     if not (np.isfinite(v) and np.isfinite(err) and err > 0):
         return "no error: fewer than two beds or whole cycles after the start-up"
-    if observable in ("yielded_depth", "remobilization_strain") and dem.values["yielded_depth"][0] >= dem.drive.depth:
-        return "the bed is yielded down to its base over the cycle: the yielded depth is the bed's, not the flow's"
+    if observable in ("yielded_depth", "remobilization_strain") and np.nanmax(dem.yielded) >= dem.zones.columns.max():
+        return "at some phase the bed yields down to its deepest plane: the edge is censored by the base"
     return ""
 
 

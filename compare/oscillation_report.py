@@ -24,8 +24,8 @@ DEFINITIONS = {
     "response_amplitude": "the fundamental's amplitude of the free response: u_w [sqrt(g d)] under an imposed "
                           "stress, mu_w under an imposed speed",
     "phase_lag": "the response's lag behind the imposed sine A sin(omega t), in (-pi, pi] rad (> 0: it peaks later)",
-    "yielded_depth": "the deepest depth [d] where the phase-averaged |mu| = |tau_xy|/p reaches the calibrated mu_s "
-                     "over the cycle",
+    "yielded_depth": "the edge of the dynamic zone [d], the deepest depth where the phase-averaged |mu| = "
+                     "|tau_xy|/p reaches the calibrated mu_s, averaged over the cycle",
     "dissipation": "energy per cycle and plate area, the integral of tau_w u_w dt [rho_p g d^2]",
     "remobilization_strain": f"the plate's displacement from a reversal until the response regains "
                              f"{RESPONSE_FRACTION:g} of its half-cycle peak, over the DEM's yielded depth",
