@@ -196,8 +196,8 @@ def analyse_dem(drive: OscillatingDrive, records: list[Record], mu_s: float) -> 
     zones = sum(_on_depths(o["zones"], per[0]["zones"].columns) for o in per) / len(per)
     yielded = sum(o["yielded"] for o in per) / len(per)
     loop = sum(o["loop"][["phase", "mean", "tau_w"]] for o in per) / len(per)
-    stationary = [phase.stationarity(r.plate.t, r.plate[drive.response], drive.load.omega, SKIP)["steady"]
-                  for r in records]
+    checks = [phase.stationarity(r.plate.t, r.plate[drive.response], drive.load.omega, SKIP) for r in records]
+    stationary = [c["steady"] if np.isfinite(c["z"]) else None for c in checks]  # None: fewer than 3 cycles
     return DemOscillation(drive, tuple(records), values, zones, yielded, loop, stationary,
                           min(o["n_cycles"] for o in per))
 

@@ -232,7 +232,7 @@ def write_report(c: OscillationComparison, out_dir) -> dict:
 
 def _body(c: OscillationComparison, m: dict, figures) -> str:
     rows = [[html.escape(r.drive), html.escape(r.observable), fmt(r.dem, r.dem_err), html.escape(r.model),
-             fmt(r.predicted, r.dem_err) if np.isfinite(r.predicted) else "–",
+             fmt(r.predicted, np.hypot(r.numerical_err, r.calibration_sd)) if np.isfinite(r.predicted) else "–",
              fmt_band(r.band, r.dem_err) if np.isfinite(r.predicted) else "–",
              fmt(r.sigma) if np.isfinite(r.sigma) else "–", html.escape(r.verdict), html.escape(r.note)]
             for r in c.rows.itertuples()]
@@ -240,7 +240,8 @@ def _body(c: OscillationComparison, m: dict, figures) -> str:
              fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err), fmt(r.sigma) if np.isfinite(r.sigma) else "–",
              html.escape(r.verdict), html.escape(r.note)] for r in c.laws.itertuples()]
     drives = [[html.escape(label), d["kind"], fmt(d["amplitude"]), fmt(d["omega"]), fmt(d["omega_ts"]),
-               str(d["seeds"]), str(d["whole_cycles"]), ", ".join("yes" if s else "no" for s in d["periodic"])]
+               str(d["seeds"]), str(d["whole_cycles"]),
+               ", ".join({True: "yes", False: "no", None: "untested"}[s] for s in d["periodic"])]
               for label, d in m["drives"].items()]
     figs = "".join(f"<h3>{html.escape(TITLES[k])}</h3><p class='how'>{html.escape(HOW_TO_READ[k])}</p>"
                    f"<img src='{f}' alt='{html.escape(TITLES[k])}'>" for k, f in figures)
@@ -259,6 +260,6 @@ def _body(c: OscillationComparison, m: dict, figures) -> str:
                      rows)
             + "<h2>Drives</h2>"
             + _table(["drive", "kind", "amplitude", "omega", "omega t_s", "beds", "whole cycles",
-                      "periodic (per bed)"], drives)
+                      "periodic (per bed: no trend of the cycles' amplitudes; untested below 3 cycles)"], drives)
             + f"<h2>Figures</h2>{figs}<h2>Definitions</h2><ul>{defs}</ul>")
 

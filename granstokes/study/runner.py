@@ -136,11 +136,11 @@ class StudyRunner:
     def compare(self, sp: StudyPlan, calibration: Path) -> dict:
         scored = [label for label in sp.runs if not label.endswith(WIDE)]
         if self.study.oscillating:
-            from granstokes.compare.oscillation import compare_oscillations
+            from granstokes.compare.oscillation import compare_oscillations, dem_side
             from granstokes.compare.oscillation_report import write_report as write_oscillation
 
-            comparison = compare_oscillations([sp.folder(self.out, label) for label in scored], calibration,
-                                              self.study.ngf_from, jobs=self.jobs, root=self.out)
+            dem = dem_side([sp.folder(self.out, label) for label in scored], root=self.out)
+            comparison = compare_oscillations(dem, calibration, self.study.ngf_from, jobs=self.jobs)
             with staging.staged(self.out, COMMAND, keep=True) as work:
                 return write_oscillation(comparison, work)
         from granstokes.compare.comparison import build
