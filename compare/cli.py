@@ -79,7 +79,8 @@ def _oscillating(runs, tables) -> bool:
     kinds = set()
     for run in runs:
         meta = json.loads((run / RUN_JSON).read_text())
-        kinds |= {Load.from_record(d, meta["config"]["p_w"]).oscillating for d in meta["sizing"]["drives"]}
+        drives = meta.get("sizing", {}).get("drives", [])  # a run not yet sized has none: its own error follows
+        kinds |= {Load.from_record(d, meta["config"]["p_w"]).oscillating for d in drives}
     require(len(kinds) <= 1, "RUN_DIR", "runs whose drives all oscillate or all are held (Stokes' first problem)",
             "both kinds")
     return kinds == {True}

@@ -61,6 +61,7 @@ def test_newtonian_finite_bed_matches_the_closed_form_within_the_estimate():
     assert np.max(np.abs(ps.u - semi)) > 30 * SAFETY * est_u  # the finite bed is not the semi-infinite one
 
 
+@pytest.mark.slow
 def test_newtonian_deep_bed_is_the_semi_infinite_stokes_layer():
     """kH = 8: u = U e^{-ky} sin(omega t - ky) (the issue's formula) within the estimate plus e^{-kH} U (measured:
     6.1e-4 U against 5.9e-4 U + 3.4e-4 U; 23 cycles to tol 1e-6)."""
@@ -115,6 +116,7 @@ def test_jacobian_is_the_rate_s_derivative(kind):
     np.testing.assert_allclose(pb.jac(t, x).toarray(), numeric, rtol=1e-6, atol=1e-6 * np.max(np.abs(numeric)))
 
 
+@pytest.mark.slow
 def test_mu_i_speed_drive(flowing):
     """The plate follows the imposed speed exactly, |mu_w| < mu_d, the plate's work per cycle is positive and is
     the bed's dissipation sum over faces of sigma_xy du/dy h (the semi-discrete energy balance, up to the phase
@@ -130,6 +132,7 @@ def test_mu_i_speed_drive(flowing):
     np.testing.assert_allclose(ps.mu_w[half:], -ps.mu_w[:half], atol=1e-5)
 
 
+@pytest.mark.slow
 def test_mu_i_stress_drive_moves_the_plate_above_mu_s_and_creeps_below(flowing):
     """Amplitude 0.43 > mu_s: the plate flows (|u_w| ~ 2); 0.5 mu_s: it only creeps through the regularised law,
     u_w proportional to eps (a viscosity mu_s p/eps), below 1% of the flowing amplitude at eps = 1e-3."""
@@ -143,6 +146,7 @@ def test_mu_i_stress_drive_moves_the_plate_above_mu_s_and_creeps_below(flowing):
     assert np.max(np.abs(creep[1e-2].u_w)) / still == pytest.approx(10, rel=0.05)  # measured 9.9
 
 
+@pytest.mark.slow
 def test_ngf_speed_drive_is_periodic_after_a_few_cycles():
     """NGF (A = 0.5) under u_w = 2 sin(0.5 t): mu_w sampled at the same phases cycle after cycle settles (changes
     decreasing), and the periodic mu_w is anti-periodic over half a cycle."""
