@@ -93,6 +93,10 @@ def _compare_oscillations(args, inputs) -> int:
 
     require(args.calibration is not None and not args.fit_on_drives, "--calibration",
             "a calibration.json (the oscillating drives are predicted blind; no fit on them)", args.calibration)
+    if args.runs:  # a calibration of other grains is refused before any work
+        from .calibrate import load
+        from .comparison import check_grains, run_grains
+        check_grains(load(args.calibration), run_grains(args.runs))
     dem = read(args.tables) if args.tables is not None else dem_side(args.runs)
     comparison = compare_oscillations(dem, args.calibration, args.ngf_from, jobs=args.jobs)
     with staged(args.out, COMMAND, inputs) as work:
