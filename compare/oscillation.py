@@ -116,17 +116,19 @@ def oscillating_drives(run_dir: Path, root: Path | None = None) -> list[Oscillat
 @dataclass(frozen=True, eq=False)
 class Record:
     """One bed or one model solution of a drive: the plate's series (t, x_w, u_w, mu_w, tau_w; ``interval``: the
-    samples' averaging window) and the profiles (t, depth, mu)."""
+    samples' averaging window), the stress profiles (t, depth, mu) and the velocity profiles (t, depth, u)."""
 
     plate: pd.DataFrame
     profiles: pd.DataFrame
+    velocity: pd.DataFrame
     interval: float = 0.0
 
 
 def dem_record(folder: Path, drive: OscillatingDrive) -> Record:
     """A bed's plate.csv and profiles.csv as a Record: the plate's rows averaged in blocks of about a period over
     SAMPLES_PER_PERIOD (x_w at each block's end: the record's ``interval`` grows to the block's), mu = tau_mop/p_mop
-    at the planes between the plate's mean contact plane and the base."""
+    at the planes between the plate's mean contact plane and the base, u_x at the bins' centres; the profiles dated
+    at the centre of the interval each averages."""
     plate = pd.read_csv(folder / layout.PLATE_CSV)
     plate = plate[plate.t > 0].reset_index(drop=True)
     step = float(np.median(np.diff(plate.t)))
@@ -137,11 +139,16 @@ def dem_record(folder: Path, drive: OscillatingDrive) -> Record:
     keep = plate.groupby(block).size() == n  # whole blocks
     series = pd.DataFrame({"t": last.t, "x_w": last.x, "u_w": mean.u_x, "mu_w": mean.mu_w, "tau_w": -mean.f_x})[keep]
     prof = pd.read_csv(folder / layout.PROFILES_CSV)
+    # a profile row averages the interval ending at its time: dated at the interval's centre, like a model's sample
+    prof = prof.assign(t=prof.t - np.median(np.diff(np.unique(prof.t))) / 2)
     surface = layout.plate_surface(plate.y.mean(), drive.surface_offset)
+    inside = (surface - prof.y > 0) & (surface - prof.y <= drive.depth)
+    velocity = pd.DataFrame({"t": prof.t, "depth": surface - prof.y, "u": prof.u_x})[inside]
     prof = prof.assign(depth=surface - prof.y_plane)
     prof = prof[(prof.depth > 0) & (prof.depth <= drive.depth) & (prof.p_mop > 0)]
     profiles = pd.DataFrame({"t": prof.t, "depth": prof.depth, "mu": prof.tau_mop / prof.p_mop})
-    return Record(series.reset_index(drop=True), profiles.reset_index(drop=True), n * step)
+    return Record(series.reset_index(drop=True), profiles.reset_index(drop=True), velocity.reset_index(drop=True),
+                  n * step)
 
 
 def observables(rec: Record, drive: OscillatingDrive, mu_s: float, depth_scale: float | None = None) -> dict:
@@ -158,19 +165,21 @@ def observables(rec: Record, drive: OscillatingDrive, mu_s: float, depth_scale: 
                                          depth_scale or edge, RESPONSE_FRACTION, SKIP)
     loop = phase.phase_average(p.t, p.u_w, w, skip=SKIP).assign(
         tau_w=phase.phase_average(p.t, p.tau_w, w, skip=SKIP)["mean"])
+    velocity = phase.phase_profile(rec.velocity, w, "u", skip=SKIP)["mean"]
     return {"values": {"response_amplitude": (h.amplitude, h.amplitude_err),
                        "phase_lag": (phase.phase_lag(h), h.phase_err),
                        "yielded_depth": (edge, np.nan), "dissipation": (work["value"], work["stderr"]),
                        "remobilization_strain": (strain["value"], strain["stderr"])},
             "zones": grid["mean"], "yielded": pd.Series(yielded, index=grid["mean"].index), "loop": loop,
+            "velocity": velocity,
             "n_cycles": h.n_cycles}
 
 
 @dataclass(frozen=True, eq=False)
 class DemOscillation:
     """A drive's DEM side: its beds' records, per observable the beds' mean and error (``values``: name -> (value,
-    err, how)), the beds' zones averaged, the yielded depth over the phase and the loop; the periodic-state check
-    per bed."""
+    err, how)), the beds' zones averaged, the yielded depth over the phase, the loop, the phase-averaged velocity
+    profiles (mean over the beds and its error, their spread / sqrt(n)); the periodic-state check per bed."""
 
     drive: OscillatingDrive
     records: tuple[Record, ...]
@@ -178,6 +187,8 @@ class DemOscillation:
     zones: pd.DataFrame
     yielded: pd.Series
     loop: pd.DataFrame
+    velocity: pd.DataFrame
+    velocity_err: pd.DataFrame
     stationary: list
     n_cycles: int
 
@@ -198,9 +209,13 @@ def analyse_dem(drive: OscillatingDrive, records: list[Record], mu_s: float) -> 
     zones = sum(_on_depths(o["zones"], per[0]["zones"].columns) for o in per) / len(per)
     yielded = sum(o["yielded"] for o in per) / len(per)
     loop = sum(o["loop"][["phase", "mean", "tau_w"]] for o in per) / len(per)
+    beds = np.array([_on_depths(o["velocity"], per[0]["velocity"].columns).to_numpy(float) for o in per])
+    frame = lambda a: pd.DataFrame(a, index=per[0]["velocity"].index, columns=per[0]["velocity"].columns)
+    velocity = frame(beds.mean(axis=0))
+    velocity_err = frame(beds.std(axis=0, ddof=1) / np.sqrt(len(per)) if len(per) >= MIN_BEDS else np.nan * beds[0])
     checks = [phase.stationarity(r.plate.t, r.plate[drive.response], drive.load.omega, SKIP) for r in records]
     stationary = [c["steady"] if np.isfinite(c["z"]) else None for c in checks]  # None: fewer than 3 cycles
-    return DemOscillation(drive, tuple(records), values, zones, yielded, loop, stationary,
+    return DemOscillation(drive, tuple(records), values, zones, yielded, loop, velocity, velocity_err, stationary,
                           min(o["n_cycles"] for o in per))
 
 
@@ -230,9 +245,9 @@ class ModelSetup:
 
 
 def model_record(drive: OscillatingDrive, material: Material, model: str, A: float | None, depths,
-                 numerics: osc.OscillationNumerics) -> Record:
+                 numerics: osc.OscillationNumerics, velocity_depths=None) -> Record:
     """A model's solution of ``drive`` as a Record: sampled SAMPLES_PER_PERIOD times a period over the DEM's
-    duration, mu (sign as the DEM's) at the DEM's profile depths."""
+    duration, mu (sign as the DEM's) at the DEM's profile depths, u at ``velocity_depths`` (default: those)."""
     load = drive.load
     n = int(round(SAMPLES_PER_PERIOD * (drive.duration / load.period)))
     t = np.linspace(0.0, drive.duration, n + 1)[1:]
@@ -248,7 +263,10 @@ def model_record(drive: OscillatingDrive, material: Material, model: str, A: flo
     top = -sol.mu[:, 0] * (load.p_w + scene.weight_gradient * sol.y_mu[0])
     plate = pd.DataFrame({"t": t, "x_w": x_w, "u_w": u_w, "mu_w": sol.mu_w, "tau_w": top})
     profiles = pd.DataFrame({"t": np.repeat(t, len(depths)), "depth": np.tile(depths, len(t)), "mu": mu.ravel()})
-    return Record(plate, profiles)
+    vd = depths if velocity_depths is None else np.asarray(velocity_depths, dtype=float)
+    u = np.array([np.interp(vd, sol.y, row) for row in sol.u])
+    velocity = pd.DataFrame({"t": np.repeat(t, len(vd)), "depth": np.tile(vd, len(t)), "u": u.ravel()})
+    return Record(plate, profiles, velocity)
 
 
 def _rule(drive: OscillatingDrive, material: Material) -> YieldRule:
@@ -259,13 +277,14 @@ def _rule(drive: OscillatingDrive, material: Material) -> YieldRule:
 @dataclass(frozen=True, eq=False)
 class OscPrediction:
     """A model's side of a drive: per observable (predicted, numerical error, calibration sd), and the zones,
-    yielded depth over the phase and loop of its central solution."""
+    yielded depth over the phase, loop and phase-averaged velocity profiles of its central solution."""
 
     model: str
     values: dict
     zones: pd.DataFrame
     yielded: pd.Series
     loop: pd.DataFrame
+    velocity: pd.DataFrame
 
 
 def predict(dem: DemOscillation, setup: ModelSetup, model: str) -> OscPrediction:
@@ -277,7 +296,7 @@ def predict(dem: DemOscillation, setup: ModelSetup, model: str) -> OscPrediction
     coarse_numerics = replace(setup.numerics, n_cells=setup.numerics.n_cells // 2)
 
     def run(material, A, numerics):
-        rec = model_record(drive, material, model, A, depths, numerics)
+        rec = model_record(drive, material, model, A, depths, numerics, dem.velocity.columns.to_numpy(float))
         return observables(rec, drive, material.mu_s, scale)
 
     A = setup.ngf_A if model == "ngf" else None
@@ -300,7 +319,7 @@ def predict(dem: DemOscillation, setup: ModelSetup, model: str) -> OscPrediction
         s_cal = float(np.sqrt(max(J @ cov @ J, 0.0))) if np.all(np.isfinite(J)) else np.nan
         num = abs(_difference(o, fine["values"][o][0], coarse["values"][o][0])) / 3
         values[o] = (fine["values"][o][0], num, s_cal)
-    return OscPrediction(model, values, fine["zones"], fine["yielded"], fine["loop"])
+    return OscPrediction(model, values, fine["zones"], fine["yielded"], fine["loop"], fine["velocity"])
 
 
 def _difference(observable: str, a: float, b: float) -> float:

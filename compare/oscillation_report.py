@@ -33,7 +33,7 @@ DEFINITIONS = {
     "cycles": f"estimates on the whole cycles after the first {SKIP} (the start-up); DEM errors: the beds' spread",
 }
 TITLES = {"map": "The oscillating plate across frequencies", "zones": "Static and dynamic zones over a cycle",
-          "loops": "The plate's loops"}
+          "profiles": "Velocity profiles at fixed phase", "loops": "The plate's loops"}
 HOW_TO_READ = {
     "map": "One column per observable, one row per drive kind, against omega t_s (t_s of the amplitude's steady "
            "layer) on a log axis: the DEM as points with their 95 % bars over beds (markers: amplitudes), each model "
@@ -41,6 +41,9 @@ HOW_TO_READ = {
     "zones": "|mu|/mu_s over one cycle (phase across, depth down from the plate), phase-averaged: the DEM's beds on "
              "the left, each model beside it on the same depths; the black line is |mu| = mu_s, the edge of the "
              "dynamic zone (inside, |mu| > mu_s, the bed flows; outside it is static).",
+    "profiles": "The velocity u(depth) averaged over the cycles at four phases of the imposed sine (0, pi/2, pi, "
+                "3 pi/2; phase bins of 2 pi/24), at omega t_s nearest 1 and the largest amplitude: the DEM's mean over "
+                "beds with its 95 % band, each model as a line on the same depths.",
     "loops": "The phase-averaged plate stress tau_w on the bed against the plate's speed u_w over a cycle: the area "
              "of a loop in the (x_w, tau_w) plane is the energy dissipated; a model's loop beside the DEM's.",
 }
@@ -175,6 +178,41 @@ def zones_figure(c: OscillationComparison, out: Path, kind: str) -> str:
     return path.name
 
 
+#: the phases of the velocity profiles drawn, as fractions of the cycle
+PROFILE_PHASES = (0.0, 0.25, 0.5, 0.75)
+
+
+def profiles_figure(c: OscillationComparison, out: Path) -> str:
+    kinds = sorted(c.rows.kind.unique())
+    fig, axes = plt.subplots(len(kinds), len(PROFILE_PHASES), figsize=(3.4 * len(PROFILE_PHASES), 3.4 * len(kinds)),
+                             squeeze=False, sharey="row", layout="constrained")
+    for i, kind in enumerate(kinds):
+        amp = _zones_amplitude(c, kind)
+        d = min((d for d in c.drives if d.drive.load.kind == kind and d.drive.load.amplitude == amp),
+                key=lambda d: abs(np.log(d.drive.omega_ts)))
+        depth = d.velocity.columns.to_numpy(float)
+        for j, frac in enumerate(PROFILE_PHASES):
+            ax = axes[i, j]
+            row = int(np.argmin(np.abs(d.velocity.index.to_numpy() - (2 * np.pi * frac + np.pi / len(d.velocity)))))
+            u, e = d.velocity.iloc[row].to_numpy(float), 1.96 * d.velocity_err.iloc[row].to_numpy(float)
+            ax.fill_betweenx(depth, u - e, u + e, color=DEM_COLOUR, alpha=0.25, lw=0)
+            ax.plot(u, depth, "o-", ms=3, color=DEM_COLOUR, label="DEM")
+            for m in c.setup.models:
+                v = c.predictions[(d.drive.label, m)].velocity
+                ax.plot(v.iloc[row].to_numpy(float), v.columns.to_numpy(float), **MODEL_STYLE.get(m, {}), label=m)
+            ax.axvline(0, color="0.7", lw=0.8)
+            ax.set_ylim(depth.max(), 0)
+            ax.set_title(f"{kind}, omega t_s = {d.drive.omega_ts:.3g}, phase {frac:g} x 2 pi", fontsize=9)
+            ax.set_xlabel("u [sqrt(g d)]")
+        axes[i, 0].set_ylabel("depth [d]")
+    axes[0, 0].legend(fontsize=7)
+    suptitle(fig, "Velocity profiles averaged over the cycles at fixed phase (DEM: mean over beds, 95 % band)")
+    path = out / "profiles.png"
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path.name
+
+
 def loops_figure(c: OscillationComparison, out: Path) -> str:
     kinds = sorted(c.rows.kind.unique())
     per = {k: sorted([d for d in c.drives if d.drive.load.kind == k and d.drive.load.amplitude
@@ -225,7 +263,7 @@ def write_report(c: OscillationComparison, out_dir) -> dict:
     oscillation_tables.write([(d.drive, list(d.records)) for d in c.drives], out / TABLES)
     figures = [("map", map_figure(c, out))]
     figures += [("zones", zones_figure(c, out, k)) for k in sorted(c.rows.kind.unique())]
-    figures += [("loops", loops_figure(c, out))]
+    figures += [("profiles", profiles_figure(c, out)), ("loops", loops_figure(c, out))]
     (out / "index.html").write_text(page("granstokes: the oscillating plate", _body(c, m, figures)))
     return m
 

@@ -1,6 +1,6 @@
 """An oscillation report's DEM side as small tables (REPORT_DIR/tables): every drive's scene and each bed's records
-(the plate's block-averaged series and the method-of-planes mu profiles, compare.oscillation.dem_record), so that
-``granstokes compare --tables`` predicts and renders again without the run folders."""
+(the plate's block-averaged series, the method-of-planes mu and the velocity profiles, compare.oscillation.dem_record),
+so that ``granstokes compare --tables`` predicts and renders again without the run folders."""
 from __future__ import annotations
 
 import json
@@ -33,6 +33,8 @@ def write(dem, folder: Path) -> None:
             r.plate.to_csv(folder / f"{_stem(drive)}__bed{k}_plate.csv.gz", index=False, float_format=TABLE_FLOAT)
             r.profiles.to_csv(folder / f"{_stem(drive)}__bed{k}_profiles.csv.gz", index=False,
                               float_format=TABLE_FLOAT)
+            r.velocity.to_csv(folder / f"{_stem(drive)}__bed{k}_velocity.csv.gz", index=False,
+                              float_format=TABLE_FLOAT)
     (folder / DRIVES_JSON).write_text(json.dumps(drives, indent=1))
 
 
@@ -43,7 +45,8 @@ def read(folder: Path) -> list[tuple[OscillatingDrive, list[Record]]]:
         drive = OscillatingDrive(Path(d["run"]), d["name"], Load.from_record(d["load"], d["p_w"]), d["depth"],
                                  d["plate_mass"], d["surface_offset"], d["t_s"], d["duration"], ())
         records = [Record(pd.read_csv(folder / f"{_stem(drive)}__bed{k}_plate.csv.gz"),
-                          pd.read_csv(folder / f"{_stem(drive)}__bed{k}_profiles.csv.gz"), d["intervals"][k])
+                          pd.read_csv(folder / f"{_stem(drive)}__bed{k}_profiles.csv.gz"),
+                          pd.read_csv(folder / f"{_stem(drive)}__bed{k}_velocity.csv.gz"), d["intervals"][k])
                    for k in range(d["folders"])]
         out.append((drive, records))
     return out

@@ -36,7 +36,7 @@ def _beds(drive: osc.OscillatingDrive, material: Material) -> list[osc.Record]:
         for col in ("u_w", "mu_w", "tau_w"):
             plate[col] += NOISE * plate[col].abs().max() * rng.standard_normal(len(plate))
         profiles = rec.profiles.assign(mu=rec.profiles.mu + NOISE * rng.standard_normal(len(rec.profiles)))
-        beds.append(osc.Record(plate, profiles))
+        beds.append(osc.Record(plate, profiles, rec.velocity.copy()))
     return beds
 
 
