@@ -362,9 +362,13 @@ def _unmeasurable(dem: DemOscillation, observable: str) -> str:
 
 
 def scorecard(dems, predictions: dict, setup: ModelSetup, ngf_note: str) -> pd.DataFrame:
-    """Every drive x model x observable (predictions: (drive label, model) -> OscPrediction)."""
-    rows = [_row(d, predictions.get((d.drive.label, m)), o, m, "" if m in setup.models else ngf_note)
-            for d in dems for m in LABELS for o in OBSERVABLES]
+    """Every drive x model x observable (predictions: (drive label, model) -> OscPrediction, or why not)."""
+    rows = []
+    for d in dems:
+        for m in LABELS:
+            p = predictions.get((d.drive.label, m))
+            note = (p if isinstance(p, str) else "") if m in setup.models else ngf_note
+            rows += [_row(d, p if isinstance(p, OscPrediction) else None, o, m, note) for o in OBSERVABLES]
     return pd.DataFrame(rows)
 
 
@@ -424,8 +428,12 @@ class OscillationComparison:
 
 
 def _predict_one(args):
+    """(drive label, model) -> its OscPrediction, or the solver's failure as a string (the rows say why)."""
     dem, setup, model = args
-    return (dem.drive.label, model), predict(dem, setup, model)
+    try:
+        return (dem.drive.label, model), predict(dem, setup, model)
+    except RuntimeError as exc:  # solve_ivp gave up (continuum.oscillation raises it with scipy's message)
+        return (dem.drive.label, model), f"the {model} solver failed on this drive: {exc}"
 
 
 def dem_side(run_dirs, root: Path | None = None) -> list[tuple[OscillatingDrive, list[Record]]]:

@@ -16,7 +16,7 @@ from granstokes.continuum.scales import UNITS  # noqa: E402
 from granstokes.lib.page import page  # noqa: E402
 
 from . import oscillation_tables  # noqa: E402
-from .oscillation import LABELS, RESPONSE_FRACTION, SKIP, OscillationComparison  # noqa: E402
+from .oscillation import LABELS, RESPONSE_FRACTION, SKIP, OscillationComparison, OscPrediction  # noqa: E402
 from .report import CSV_FLOAT, TABLES, _table, fmt, fmt_band, slug  # noqa: E402
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, plain_log, suptitle  # noqa: E402
 
@@ -141,6 +141,12 @@ def map_figure(c: OscillationComparison, out: Path) -> str:
     return path.name
 
 
+def _prediction(c: OscillationComparison, d, model: str):
+    """The model's OscPrediction of drive ``d``, or None where its solver failed (its rows say why)."""
+    p = c.predictions.get((d.drive.label, model))
+    return p if isinstance(p, OscPrediction) else None
+
+
 def _zones_amplitude(c: OscillationComparison, kind: str) -> float:
     """The amplitude whose zones and loops are drawn: the largest of the kind."""
     return max(d.drive.load.amplitude for d in c.drives if d.drive.load.kind == kind)
@@ -158,7 +164,11 @@ def zones_figure(c: OscillationComparison, out: Path, kind: str) -> str:
     for i, d in enumerate(drives):
         for j, col in enumerate(cols):
             ax = axes[i, j]
-            zones = d.zones if col == "DEM" else c.predictions[(d.drive.label, col)].zones
+            pred = None if col == "DEM" else _prediction(c, d, col)
+            if col != "DEM" and pred is None:
+                ax.text(0.5, 0.5, "the solver failed", transform=ax.transAxes, ha="center")
+                continue
+            zones = d.zones if col == "DEM" else pred.zones
             ph, depth = zones.index.to_numpy(float), zones.columns.to_numpy(float)
             ratio = np.abs(zones.to_numpy(float).T) / mu_s
             image = ax.pcolormesh(ph, depth, ratio, cmap="RdYlBu_r", vmin=0, vmax=2, shading="nearest")
@@ -198,7 +208,9 @@ def profiles_figure(c: OscillationComparison, out: Path) -> str:
             ax.fill_betweenx(depth, u - e, u + e, color=DEM_COLOUR, alpha=0.25, lw=0)
             ax.plot(u, depth, "o-", ms=3, color=DEM_COLOUR, label="DEM")
             for m in c.setup.models:
-                v = c.predictions[(d.drive.label, m)].velocity
+                if (pred := _prediction(c, d, m)) is None:
+                    continue
+                v = pred.velocity
                 ax.plot(v.iloc[row].to_numpy(float), v.columns.to_numpy(float), **MODEL_STYLE.get(m, {}), label=m)
             ax.axvline(0, color="0.7", lw=0.8)
             ax.set_ylim(depth.max(), 0)
@@ -226,7 +238,9 @@ def loops_figure(c: OscillationComparison, out: Path) -> str:
             ax.plot(np.r_[loop["mean"], loop["mean"][:1]], np.r_[loop.tau_w, loop.tau_w[:1]], "o-", ms=3,
                     color=DEM_COLOUR, label="DEM")
             for m in c.setup.models:
-                lp = c.predictions[(d.drive.label, m)].loop
+                if (pred := _prediction(c, d, m)) is None:
+                    continue
+                lp = pred.loop
                 ax.plot(np.r_[lp["mean"], lp["mean"][:1]], np.r_[lp.tau_w, lp.tau_w[:1]], **MODEL_STYLE.get(m, {}),
                         label=m)
             ax.set_title(f"{k}, omega t_s = {d.drive.omega_ts:.3g}", fontsize=9)
@@ -257,7 +271,8 @@ def write_report(c: OscillationComparison, out_dir) -> dict:
         d.zones.to_csv(out / f"zones_{stem}_dem.csv", float_format=CSV_FLOAT)
         d.loop.to_csv(out / f"loop_{stem}_dem.csv", index=False, float_format=CSV_FLOAT)
         for model in c.setup.models:
-            p = c.predictions[(d.drive.label, model)]
+            if (p := _prediction(c, d, model)) is None:
+                continue
             p.zones.to_csv(out / f"zones_{stem}_{model}.csv", float_format=CSV_FLOAT)
             p.loop.to_csv(out / f"loop_{stem}_{model}.csv", index=False, float_format=CSV_FLOAT)
     oscillation_tables.write([(d.drive, list(d.records)) for d in c.drives], out / TABLES)

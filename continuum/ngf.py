@@ -352,6 +352,8 @@ class _Transient:
         self.dyc = np.diff(self.yc)
         # boundary distances for the Dirichlet option (wall value at distance h/2 from the cell centre)
         self.p_wall = (scene.p_w, scene.p_w + scene.weight_gradient * scene.depth)
+        #: the fluidity a static region relaxes to (0: the local law's; an oscillating wall sets the bed at rest's)
+        self.g_floor = 0.0
 
     def split(self, x):
         nu = self.n - self.first
@@ -376,7 +378,7 @@ class _Transient:
         du[1:] = (tau[:-1] - tau[1:]) / self.mass[1:]
         du[0] = (self.tau_w - tau[0]) / self.mass[0] if self.imposed == "stress" else 0.0
         amu = np.abs(mu)
-        gl = local_fluidity(m, self.fluidity, amu, self.pc)
+        gl = np.maximum(local_fluidity(m, self.fluidity, amu, self.pc), self.g_floor)
         flux = np.zeros(self.n + 1)
         flux[1:-1] = np.diff(g) / self.dyc
         if self.fluidity.boundary == "dirichlet":

@@ -117,11 +117,15 @@ class OscillatingVelocity:
 
 
 class OscillatingNGF(_Transient):
-    """ngf's transient (state [u free nodes, ln g cells]) with the wall value of the load at time t."""
+    """ngf's transient (state [u free nodes, ln g cells]) with the wall value of the load at time t.  Below yield
+    the fluidity relaxes to the bed at rest's, g_rest, not to 0: over a slow cycle's static phase ln g would fall
+    without bound (at |mu - mu_s|/t0) and the stress p gamma/g of any creep blow up (solve_ivp's step collapsed
+    on the oscillating-disks study's slowest stress drive)."""
 
     def __init__(self, scene: BedScene, load: Load, fluidity: NonlocalFluidity, numerics: TransientNumerics):
         super().__init__(scene, fluidity, numerics, load.tau_w, load.u_w)
         self.load, self.y_mu, self.p_mu = load, self.yc, self.pc
+        self.g_floor = numerics.g_rest
 
     def rate(self, t, x):
         _wall(self, self.load, t)
