@@ -106,6 +106,10 @@ def _series(c: OscillationComparison, kind: str, amplitude: float, model: str | 
     return s.omega_ts.to_numpy(), s.predicted.to_numpy(float), half
 
 
+#: the map's observables that span decades over the frequencies (log axes)
+LOG_Y = ("dissipation", "remobilization_strain")
+
+
 def map_figure(c: OscillationComparison, out: Path) -> str:
     kinds = sorted(c.rows.kind.unique())
     shown = ("yielded_depth", "phase_lag", "dissipation", "remobilization_strain")
@@ -127,6 +131,8 @@ def map_figure(c: OscillationComparison, out: Path) -> str:
                     ax.fill_between(xm, ym - hm, ym + hm, color=st.get("color"), alpha=0.15, lw=0)
             ax.set_xscale("log")
             plain_log(ax.xaxis)
+            if obs in LOG_Y:
+                ax.set_yscale("log", nonpositive="mask")
             unit = c.rows[c.rows.observable == obs].unit.iloc[0]
             ax.set_xlabel("omega t_s")
             ax.set_ylabel(f"{obs.replace('_', ' ')} [{unit}]")
