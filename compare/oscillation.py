@@ -134,10 +134,11 @@ def dem_record(folder: Path, drive: OscillatingDrive) -> Record:
     step = float(np.median(np.diff(plate.t)))
     n = max(1, int(round(drive.load.period / SAMPLES_PER_PERIOD / step)))
     block = plate.index // n
-    mean = plate.groupby(block)[["u_x", "mu_w", "f_x"]].mean()
+    mean = plate.groupby(block)[["u_x", "mu_w", "f_x", "u_c"]].mean()
     last = plate.groupby(block)[["t", "x"]].last()
     keep = plate.groupby(block).size() == n  # whole blocks
-    series = pd.DataFrame({"t": last.t, "x_w": last.x, "u_w": mean.u_x, "mu_w": mean.mu_w, "tau_w": -mean.f_x})[keep]
+    series = pd.DataFrame({"t": last.t, "x_w": last.x, "u_w": mean.u_x, "mu_w": mean.mu_w, "tau_w": -mean.f_x,
+                           "u_c": mean.u_c})[keep]
     prof = pd.read_csv(folder / layout.PROFILES_CSV)
     # a profile row averages the interval ending at its time: dated at the interval's centre, like a model's sample
     prof = prof.assign(t=prof.t - np.median(np.diff(np.unique(prof.t))) / 2)
@@ -179,7 +180,8 @@ def observables(rec: Record, drive: OscillatingDrive, mu_s: float, depth_scale: 
 class DemOscillation:
     """A drive's DEM side: its beds' records, per observable the beds' mean and error (``values``: name -> (value,
     err, how)), the beds' zones averaged, the yielded depth over the phase, the loop, the phase-averaged velocity
-    profiles (mean over the beds and its error, their spread / sqrt(n)); the periodic-state check per bed."""
+    profiles (mean over the beds and its error, their spread / sqrt(n)), the slip (``_slip``, mean over the beds);
+    the periodic-state check per bed."""
 
     drive: OscillatingDrive
     records: tuple[Record, ...]
@@ -189,6 +191,7 @@ class DemOscillation:
     loop: pd.DataFrame
     velocity: pd.DataFrame
     velocity_err: pd.DataFrame
+    slip: float
     stationary: list
     n_cycles: int
 
@@ -214,9 +217,18 @@ def analyse_dem(drive: OscillatingDrive, records: list[Record], mu_s: float) -> 
     velocity = frame(beds.mean(axis=0))
     velocity_err = frame(beds.std(axis=0, ddof=1) / np.sqrt(len(per)) if len(per) >= MIN_BEDS else np.nan * beds[0])
     checks = [phase.stationarity(r.plate.t, r.plate[drive.response], drive.load.omega, SKIP) for r in records]
+    slip = float(np.mean([_slip(r.plate, drive.load.omega) for r in records]))
     stationary = [c["steady"] if np.isfinite(c["z"]) else None for c in checks]  # None: fewer than 3 cycles
-    return DemOscillation(drive, tuple(records), values, zones, yielded, loop, velocity, velocity_err, stationary,
+    return DemOscillation(drive, tuple(records), values, zones, yielded, loop, velocity, velocity_err, slip, stationary,
                           min(o["n_cycles"] for o in per))
+
+
+def _slip(plate: pd.DataFrame, omega: float) -> float:
+    """rms(u_c - u_w)/rms(u_w) over the whole cycles after the start-up: u_c, the x velocity of the bed grains
+    touching the plate (dem.scene), lagging or lagged by the plate (a scene check: the models have no slip)."""
+    kept = np.concatenate(list(phase.cycles(plate.t, omega, SKIP).values()) or [np.zeros(0, int)])
+    p = plate.iloc[kept]
+    return float(np.sqrt(((p.u_c - p.u_w) ** 2).mean() / (p.u_w ** 2).mean())) if len(p) else np.nan
 
 
 def _on_depths(zones: pd.DataFrame, depths) -> pd.DataFrame:
@@ -261,7 +273,7 @@ def model_record(drive: OscillatingDrive, material: Material, model: str, A: flo
     # tau_w: the stress on the bed's top (as the DEM's plate record measures it; under an imposed stress the plate's
     # inertia makes it differ from the load within the cycle, not over it)
     top = -sol.mu[:, 0] * (load.p_w + scene.weight_gradient * sol.y_mu[0])
-    plate = pd.DataFrame({"t": t, "x_w": x_w, "u_w": u_w, "mu_w": sol.mu_w, "tau_w": top})
+    plate = pd.DataFrame({"t": t, "x_w": x_w, "u_w": u_w, "mu_w": sol.mu_w, "tau_w": top, "u_c": u_w})  # no slip
     profiles = pd.DataFrame({"t": np.repeat(t, len(depths)), "depth": np.tile(depths, len(t)), "mu": mu.ravel()})
     vd = depths if velocity_depths is None else np.asarray(velocity_depths, dtype=float)
     u = np.array([np.interp(vd, sol.y, row) for row in sol.u])

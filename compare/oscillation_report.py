@@ -57,7 +57,7 @@ def metrics(c: OscillationComparison) -> dict:
         drives[dr.label] = {"kind": dr.load.kind, "omega": dr.load.omega, "omega_ts": dr.omega_ts,
                             "amplitude": dr.load.amplitude, "amplitude_of": "mu_w" if dr.load.kind == "stress"
                             else "u_w", "p_w": dr.load.p_w, "t_s": dr.t_s, "period": dr.load.period,
-                            "depth": dr.depth, "seeds": len(dr.folders), "whole_cycles": d.n_cycles,
+                            "depth": dr.depth, "seeds": len(d.records), "whole_cycles": d.n_cycles, "slip": d.slip,
                             "periodic": d.stationary,
                             **{k: {"dem": v[0], "dem_err": v[1]} for k, v in d.values.items()}}
     tally = {m: c.rows[c.rows.model == m].verdict.value_counts().to_dict() for m in LABELS}
@@ -299,7 +299,7 @@ def _body(c: OscillationComparison, m: dict, figures) -> str:
              fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err), fmt(r.sigma) if np.isfinite(r.sigma) else "–",
              html.escape(r.verdict), html.escape(r.note)] for r in c.laws.itertuples()]
     drives = [[html.escape(label), d["kind"], fmt(d["amplitude"]), fmt(d["omega"]), fmt(d["omega_ts"]),
-               str(d["seeds"]), str(d["whole_cycles"]),
+               str(d["seeds"]), str(d["whole_cycles"]), f"{100 * d['slip']:.1f} %",
                ", ".join({True: "yes", False: "no", None: "untested"}[s] for s in d["periodic"])]
               for label, d in m["drives"].items()]
     figs = "".join(f"<h3>{html.escape(TITLES[k])}</h3><p class='how'>{html.escape(HOW_TO_READ[k])}</p>"
@@ -319,6 +319,7 @@ def _body(c: OscillationComparison, m: dict, figures) -> str:
                      rows)
             + "<h2>Drives</h2>"
             + _table(["drive", "kind", "amplitude", "omega", "omega t_s", "beds", "whole cycles",
+                      "slip rms(u_c - u_w)/rms(u_w)",
                       "periodic (per bed: no trend of the cycles' amplitudes; untested below 3 cycles)"], drives)
             + f"<h2>Figures</h2>{figs}<h2>Definitions</h2><ul>{defs}</ul>")
 
