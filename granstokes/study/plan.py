@@ -35,6 +35,10 @@ CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
 REPORT_DRIVE_STEPS = 5.9e7
 #: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
 MODELS = 3
+#: an oscillating study's comparison per drive, in grain-steps of a 2D drive: its models' solves (central, coarse and
+#: at each shifted calibrated parameter, local and NGF) and its share of the report, no dump read; the
+#: oscillating-disks study's comparison, 7.2 CPU min for 20 drives beside probes of 10 M grain-steps/s
+OSCILLATION_DRIVE_STEPS = 2.2e8
 #: an oscillating plate's run: LAMMPS's depth profiles this many times per period (the phase-resolved profiles
 #: of compare.oscillation), the plate's record PLATE_PER_PROFILE times as often, atom snapshots once a period
 PROFILES_PER_PERIOD, PLATE_PER_PROFILE = 24, 4
@@ -167,6 +171,8 @@ class StudyPlan:
         report (one process)."""
         speed = speed or measured()
         rate, drives = speed.rate(2, "drive"), self.scored_drives()
+        if self.study.oscillating:
+            return makespan([OSCILLATION_DRIVE_STEPS / rate] * drives, jobs, contention=speed.contention)
         model = makespan([MODELS * MODEL_DRIVE_STEPS / rate] * drives, jobs, contention=speed.contention)
         return (self.grain_frames() / CG_PER_DRIVE_STEP + drives * REPORT_DRIVE_STEPS) / rate + model
 
@@ -185,8 +191,10 @@ class StudyPlan:
         left = " (what is left)" if self.done(out) else ""
         beds, comparison = self.cost_seconds(jobs, out), self.comparison_seconds(jobs)
         lines.append(f"  the study's beds{left}: about {duration_text(beds)} with {jobs} job(s)")
-        lines.append(f"  the comparison: about {duration_text(comparison)} ({count(self.grain_frames())} grain-frames "
-                     f"coarse-grained, {self.scored_drives()} drive(s) x {MODELS} models)")
+        what = (f"{self.scored_drives()} drive(s), each model's solves; no dump is read" if self.study.oscillating else
+                f"{count(self.grain_frames())} grain-frames coarse-grained, {self.scored_drives()} drive(s) x {MODELS} "
+                "models")
+        lines.append(f"  the comparison: about {duration_text(comparison)} ({what})")
         lines.append(f"  the study's beds and comparison{left}: about {duration_text(beds + comparison)}")
         return lines
 
