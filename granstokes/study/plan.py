@@ -37,8 +37,9 @@ REPORT_DRIVE_STEPS = 5.9e7
 MODELS = 3
 #: an oscillating study's comparison per drive, in grain-steps of a 2D drive: its models' solves (central, coarse and
 #: at each shifted calibrated parameter, local and NGF) and its share of the report, no dump read; the
-#: oscillating-disks study's comparison, 7.2 CPU min for 20 drives beside probes of 10 M grain-steps/s
-OSCILLATION_DRIVE_STEPS = 2.2e8
+#: oscillating-disks study's comparison, 4.0 min on 2 processes for 20 drives (7.2 CPU min) beside probes of 10 M
+#: grain-steps/s, through the same contention model as the beds
+OSCILLATION_DRIVE_STEPS = 1.6e8
 #: an oscillating plate's run: LAMMPS's depth profiles this many times per period (the phase-resolved profiles
 #: of compare.oscillation), the plate's record PLATE_PER_PROFILE times as often, atom snapshots once a period
 PROFILES_PER_PERIOD, PLATE_PER_PROFILE = 24, 4
