@@ -71,7 +71,12 @@ def metrics(c: OscillationComparison) -> dict:
 
 
 def verdict(c: OscillationComparison) -> str:
-    """The report's verdict in words: per model, the observables' agreement; the history effect."""
+    """The report's verdict in words (``verdict_parts`` joined)."""
+    return " ".join(verdict_parts(c))
+
+
+def verdict_parts(c: OscillationComparison) -> list[str]:
+    """The verdict's sentences: per model, the observables' agreement; the history effect; the laws in omega."""
     r, parts = c.rows, []
     for m in LABELS:
         s = r[(r.model == m) & r.scored]
@@ -93,7 +98,7 @@ def verdict(c: OscillationComparison) -> str:
         models = ", ".join(f"{r.model} {r.predicted:.2f} ({r.verdict}, {r.sigma:+.1f} sigma)" for r in g.itertuples())
         parts.append(f"{g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}): DEM {g.dem.iloc[0]:.2f} +- "
                      f"{g.dem_err.iloc[0]:.2f}; {models}.")
-    return " ".join(parts)
+    return parts
 
 
 def _series(c: OscillationComparison, kind: str, amplitude: float, model: str | None, observable: str):
@@ -289,14 +294,18 @@ def write_report(c: OscillationComparison, out_dir) -> dict:
     return m
 
 
+def _sigma(value: float) -> str:
+    return f"{value:+.1f}" if np.isfinite(value) else "–"
+
+
 def _body(c: OscillationComparison, m: dict, figures) -> str:
     rows = [[html.escape(r.drive), html.escape(r.observable), fmt(r.dem, r.dem_err), html.escape(r.model),
              fmt(r.predicted, np.hypot(r.numerical_err, r.calibration_sd)) if np.isfinite(r.predicted) else "–",
              fmt_band(r.band, r.dem_err) if np.isfinite(r.predicted) else "–",
-             fmt(r.sigma) if np.isfinite(r.sigma) else "–", html.escape(r.verdict), html.escape(r.note)]
+             _sigma(r.sigma), html.escape(r.verdict), html.escape(r.note)]
             for r in c.rows.itertuples()]
     laws = [[html.escape(r.law), html.escape(r.kind), fmt(r.amplitude), html.escape(r.model),
-             fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err), fmt(r.sigma) if np.isfinite(r.sigma) else "–",
+             fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err), _sigma(r.sigma),
              html.escape(r.verdict), html.escape(r.note)] for r in c.laws.itertuples()]
     drives = [[html.escape(label), d["kind"], fmt(d["amplitude"]), fmt(d["omega"]), fmt(d["omega_ts"]),
                str(d["seeds"]), str(d["whole_cycles"]), f"{100 * d['slip']:.1f} %",
@@ -305,8 +314,8 @@ def _body(c: OscillationComparison, m: dict, figures) -> str:
     figs = "".join(f"<h3>{html.escape(TITLES[k])}</h3><p class='how'>{html.escape(HOW_TO_READ[k])}</p>"
                    f"<img src='{f}' alt='{html.escape(TITLES[k])}'>" for k, f in figures)
     defs = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in DEFINITIONS.items())
-    return (f"<h1>The oscillating plate (Stokes' second problem): DEM against the models</h1>"
-            f"<p><b>Verdict.</b> {html.escape(m['verdict'])}</p>"
+    return ("<h1>The oscillating plate (Stokes' second problem): DEM against the models</h1>"
+            "<h2>Verdict</h2><ul>" + "".join(f"<li>{html.escape(p)}</li>" for p in verdict_parts(c)) + "</ul>"
             f"<p>Calibration: {html.escape(c.calibration_source)} (mu_s = {fmt(m['calibration']['mu_s'])}, mu_d = "
             f"{fmt(m['calibration']['mu_d'])}, I0 = {fmt(m['calibration']['I0_dem'])} in the DEM convention, phi = "
             f"{fmt(m['calibration']['phi'])}); {html.escape(c.ngf_source)}. Units: {html.escape(m['units'])}; "
