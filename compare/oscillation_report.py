@@ -95,9 +95,11 @@ def verdict_parts(c: OscillationComparison) -> list[str]:
                      f"beyond its error in {len(shows)} of {len(h)} drives (sigma up to {h.sigma.max():.1f}).")
     measured = c.laws[c.laws.verdict != "not measurable"]
     for (_, kind, amp), g in measured.groupby(["law", "kind", "amplitude"], sort=False):
-        models = ", ".join(f"{r.model} {r.predicted:.2f} ({r.verdict}, {r.sigma:+.1f} sigma)" for r in g.itertuples())
-        parts.append(f"{g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}): DEM {g.dem.iloc[0]:.2f} +- "
-                     f"{g.dem_err.iloc[0]:.2f}; {models}.")
+        err = g.dem_err.iloc[0]
+        models = ", ".join(f"{r.model} {fmt(r.predicted, err)} ({r.verdict}, {r.sigma:+.1f} sigma)"
+                           for r in g.itertuples())
+        parts.append(f"{g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}): DEM {fmt(g.dem.iloc[0], err)}; "
+                     f"{models}.")
     return parts
 
 
