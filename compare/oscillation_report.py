@@ -96,7 +96,7 @@ def verdict_parts(c: OscillationComparison) -> list[str]:
     measured = c.laws[c.laws.verdict != "not measurable"]
     for (_, kind, amp), g in measured.groupby(["law", "kind", "amplitude"], sort=False):
         err = g.dem_err.iloc[0]
-        models = ", ".join(f"{r.model} {fmt(r.predicted, err)} ({r.verdict}, {r.sigma:+.1f} sigma)"
+        models = ", ".join(f"{r.model} {fmt(r.predicted, err).split(' ± ')[0]} ({r.verdict}, {r.sigma:+.1f} sigma)"
                            for r in g.itertuples())
         parts.append(f"{g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}): DEM {fmt(g.dem.iloc[0], err)}; "
                      f"{models}.")
