@@ -63,8 +63,8 @@ def test_newtonian_finite_bed_matches_the_closed_form_within_the_estimate():
 
 @pytest.mark.slow
 def test_newtonian_deep_bed_is_the_semi_infinite_stokes_layer():
-    """kH = 8: u = U e^{-ky} sin(omega t - ky) (the issue's formula) within the estimate plus e^{-kH} U (measured:
-    6.1e-4 U against 5.9e-4 U + 3.4e-4 U; 23 cycles to tol 1e-6)."""
+    """kH = 8: the semi-infinite Stokes layer u = U e^{-ky} sin(omega t - ky) within the estimate plus e^{-kH} U
+    (measured: 6.1e-4 U against 5.9e-4 U + 3.4e-4 U; 23 cycles to tol 1e-6)."""
     ps = newtonian(8, tol=1e-6)
     semi = U * np.exp(-K * ps.y) * np.sin(OMEGA * ps.t[:, None] - K * ps.y)
     assert np.max(np.abs(ps.u - semi)) < np.max(ps.u_err) + math.exp(-8) * U

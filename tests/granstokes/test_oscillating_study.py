@@ -12,7 +12,7 @@ from granstokes.cli import main as granstokes_main
 pytestmark = pytest.mark.slow
 
 SMALL = ["seeds=[1]", "omega_ts=[2.0]", "cycles=3", "calibration.I=[0.01, 0.03, 0.08, 0.2, 0.4, 0.6]"]
-#: the plate's x speed within this fraction of the imposed amplitude (the issue's acceptance)
+#: the plate's x speed within this fraction of the imposed amplitude
 TRACKING = 0.01
 
 
