@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 from granstokes.continuum.closed_forms import uwall_asymp
+from granstokes.continuum.paper.equations import eq
 from granstokes.continuum.steady import steady_wall_speed
 from matplotlib import colormaps
 from matplotlib.figure import Figure
@@ -28,8 +29,9 @@ HOW_TO_READ = {
                 f"over {SMOOTHING:.0%} of the record); lines: local mu(I).",
     "law_steady": "Left: steady plate speed u~_w^inf against mu~_w = (mu_d - mu_w)/Dmu: DEM imposed stresses (circles, "
                   "95 % error bars) and imposed speeds (squares, at the DEM's steady friction), the exact steady "
-                  "integral (line) and eq. Uwall_asymp (dashed). Right: the creep length below delta_s against p_w: "
-                  "DEM (points with errors over seeds) and NGF (crosses); local mu(I) has no creep.",
+                  f"integral (line) and {eq('Uwall_asymp', named=True)} (dashed). Right: the creep length below "
+                  "delta_s against p_w: DEM (points with errors over seeds) and NGF (crosses); local mu(I) has no "
+                  "creep.",
     "law_profiles": "Velocity profiles at the snapshot times after the elastic start, u/u_w against the similarity "
                     "variable eta = depth/(2 Dmu sqrt(nu_g t)) (the paper's figure 5): if the layer grows "
                     "self-similarly the curves of every drive and time fall on one.",
@@ -145,7 +147,7 @@ def steady_figure(c, out: Path) -> Path:
     grid = np.linspace(0.02, 0.98, 60)
     mu_grid = fr.mu_d - grid * fr.dmu
     left.plot(grid, [steady_wall_speed(fr, m) for m in mu_grid], color="k", lw=1, label="exact steady integral")
-    left.plot(grid, uwall_asymp(fr, grid), color="k", lw=1, ls="--", label="eq. Uwall_asymp")
+    left.plot(grid, uwall_asymp(fr, grid), color="k", lw=1, ls="--", label=eq("Uwall_asymp"))
     for dc in drives:
         sc, st, colour = dc.scales, dc.dem.steady, _colour(dc, drives)
         if dc.dem.spec.kind == "stress":

@@ -17,8 +17,8 @@ and across drives:
 * ``t_s_collapse``: the slope of log t90 against log t_s over the imposed stresses (the paper: 1);
 * ``t_mud_scaling``: the slope of log t~_mud against log u~_w over the imposed speeds (the paper: 2), t_mud the
   first time after the elastic start that (mu_w - mu_s)/Dmu falls below MUD_LEVEL;
-* ``steady_speed_law``: u~_w^inf over the exact steady integral f(beta_w) (eq. UwallInt with the exact profile)
-  and over eq. Uwall_asymp, averaged over the imposed stresses (the paper: 1);
+* ``steady_speed_law``: u~_w^inf over the exact steady integral f(beta_w) (eq. (3.11) with the exact profile)
+  and over its asymptote, eq. (3.12), averaged over the imposed stresses (the paper: 1);
 * ``creep_length_scaling``: the slope of log creep length against log p_w (local mu(I): no creep at all).
 
 Errors: dem_err is the standard deviation of the DEM's estimate over SEED_RESAMPLES bootstrap resamples of each
@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 from granstokes.continuum.closed_forms import uwall_asymp
 from granstokes.continuum.crossing import depth_at_fraction, layer_measures
+from granstokes.continuum.paper.equations import eq
 from granstokes.continuum.steady import steady_wall_speed
 from scipy import stats
 
@@ -307,7 +308,7 @@ LAWS = (
                 lambda tr, dc: t_mud(tr, dc) / _scale(dc, "t_s"), "a t_mud")),
     Law("steady_speed_law", "u~_w^inf / f(beta_w), exact steady integral", "1", "stress",
         _mean_of(_steady_window(_ratio_exact), "r"), transient=False),
-    Law("steady_speed_law", "u~_w^inf / eq. Uwall_asymp", "1", "stress",
+    Law("steady_speed_law", f"u~_w^inf / {eq('Uwall_asymp', named=True)}", "1", "stress",
         _mean_of(_steady_window(_ratio_asymp), "r"), transient=False),
     Law("creep_length_scaling", "slope of log creep length against log p_w", "1", None,
         _across(lambda tr, dc: dc.dem.spec.p_w, lambda tr, dc: tr.creep, "a creep length"), transient=False),

@@ -1,8 +1,8 @@
 """The paper's approximate solutions, in its dimensionless variables.
 
-Short time (eq. SolutionSS), long time (eq. SolutionLONG), steady wall-speed approximations
-(eqs. Uwall_asymp, Uwall_muS), the imposed-speed short-time profile
-(eq. muShortTime_VelocityImposed) and the imposed-speed time scales (eqs. TimeScaleMuD, TimeScaleMuW).
+Short time (eq. (3.3)), long time (eq. (3.5)), steady wall-speed approximations
+(eqs. (3.12), (3.13)), the imposed-speed short-time profile
+(eq. (3.20)) and the imposed-speed time scales (eqs. (3.17), (3.18)).
 """
 from __future__ import annotations
 
@@ -17,13 +17,13 @@ from .steady import DELTA_THRESHOLD, SELF_SIMILAR_DELTA  # noqa: F401 (re-export
 
 
 def self_similar_mu(fr: Friction, mu_w: float, y, t):
-    """mu ~ mu_s + (mu_w - mu_s)(1 - y~) erfc(y~/(2 Dmu sqrt(t~))) (eq. SolutionSS)."""
+    """mu ~ mu_s + (mu_w - mu_s)(1 - y~) erfc(y~/(2 Dmu sqrt(t~))) (eq. (3.3))."""
     y = np.asarray(y, dtype=float)
     return fr.mu_s + (mu_w - fr.mu_s) * (1.0 - y) * erfc(y / (2.0 * fr.dmu * np.sqrt(t)))
 
 
 def wall_speed_of_profile(fr: Friction, mu_w: float, mu_of_y) -> float:
-    """u~_w = int_0^1 sqrt(1 + beta_w y~)/Dmu (1/mu~ - 1) dy~ (eq. IreWrittenNonDim) for a profile
+    """u~_w = int_0^1 sqrt(1 + beta_w y~)/Dmu (1/mu~ - 1) dy~ (eq. (3.10)) for a profile
     mu(y~) given as a function, by adaptive quadrature."""
     beta = fr.beta(mu_w)
 
@@ -35,7 +35,7 @@ def wall_speed_of_profile(fr: Friction, mu_w: float, mu_of_y) -> float:
 
 
 def self_similar_wall_speed(fr: Friction, mu_w: float, t: float) -> float:
-    """Wall speed of the erfc profile (eq. SolutionSS inserted in eq. IreWrittenNonDim)."""
+    """Wall speed of the erfc profile (eq. (3.3) inserted in eq. (3.10))."""
     return wall_speed_of_profile(fr, mu_w, lambda y: self_similar_mu(fr, mu_w, y, t))
 
 
@@ -53,7 +53,7 @@ def _gauss_legendre(n: int):
 
 
 class WKB:
-    """Long-time series (eq. SolutionLONG): linearise eq. GranularStokesEqn_muLINlong with
+    """Long-time series (eq. (3.5)): linearise eq. (3.4) with
     (mu_d - mu) ~ Dmu, in y^ = 1 + beta_w y~ in [1, R], R = mu_w/mu_s:
 
         tau~ ~ 1 + y^(a) sum_m Lambda_m exp(-lambda_m^2 t~) sin(m pi z),  z = (y^(3/4) - 1)/(R^(3/4) - 1),
@@ -103,15 +103,15 @@ class WKB:
 
 
 def uwall_asymp(fr: Friction, mu_w_tilde):
-    """u~_w^inf ~ -(1/Dmu)[1 + log(mu~_w)/(1 - mu~_w)] + O(beta_w) (eq. Uwall_asymp)."""
+    """u~_w^inf ~ -(1/Dmu)[1 + log(mu~_w)/(1 - mu~_w)] + O(beta_w) (eq. (3.12))."""
     mt = np.asarray(mu_w_tilde, dtype=float)
     return -(1.0 + np.log(mt) / (1.0 - mt)) / fr.dmu
 
 
 def uwall_mus(fr: Friction, mu_w, b2: float | None = None):
-    """u~_w^inf ~ mu_s/(2 Dmu^2) (beta_w + b2 beta_w^2) for mu_w -> mu_s (eq. Uwall_muS).
+    """u~_w^inf ~ mu_s/(2 Dmu^2) (beta_w + b2 beta_w^2) for mu_w -> mu_s (eq. (3.13)).
 
-    The paper prints b2 = -5/2.  Expanding eq. UwallInt's exact integrand (1/mu~ - 1 =
+    The paper prints b2 = -5/2.  Expanding eq. (3.11)'s exact integrand (1/mu~ - 1 =
     e/(Dmu - e), e = mu_s beta (1 - y~)/(1 + beta y~), times sqrt(1 + beta y~)) to second order gives
     b2 = 2 mu_s/(3 Dmu) - 1/6 (0.797 for the paper's glass beads), which is the default: with it the
     error against the exact steady speed falls as beta_w^3, with -5/2 only as beta_w^2 (tests).
@@ -122,24 +122,24 @@ def uwall_mus(fr: Friction, mu_w, b2: float | None = None):
     return fr.mu_s / (2.0 * fr.dmu**2) * (beta + b2 * beta**2)
 
 
-#: the paper's printed second-order coefficient of eq. Uwall_muS
+#: the paper's printed second-order coefficient of eq. (3.13)
 UWALL_MUS_PRINTED_B2 = -2.5
 
 
 def speed_short_time_mu(fr: Friction, mu_w_t, y, t):
     """Imposed speed, t~ <= O(1): mu ~ mu_s + (mu_w(t~) - mu_s) erfc(y~/(2 Dmu sqrt(t~)))
-    (eq. muShortTime_VelocityImposed), mu_w(t~) taken from the numerics."""
+    (eq. (3.20)), mu_w(t~) taken from the numerics."""
     return fr.mu_s + (mu_w_t - fr.mu_s) * erfc(np.asarray(y, dtype=float) / (2.0 * fr.dmu * np.sqrt(t)))
 
 
 def speed_time_scales(fr: Friction, u_w: float, mu_w_inf: float) -> dict:
-    """Scales of the two imposed-speed stages: t_mud ~ u~_w^2 (eq. TimeScaleMuD) while mu_w ~ mu_d,
-    t_muw ~ (u~_w/(mu_w^inf - mu_s))^2 (eq. TimeScaleMuW) to reach the steady mu_w^inf."""
+    """Scales of the two imposed-speed stages: t_mud ~ u~_w^2 (eq. (3.17)) while mu_w ~ mu_d,
+    t_muw ~ (u~_w/(mu_w^inf - mu_s))^2 (eq. (3.18)) to reach the steady mu_w^inf."""
     return {"t_mud": u_w**2, "t_muw": (u_w / (mu_w_inf - fr.mu_s)) ** 2}
 
 
 class SmallTimeLimit:
-    """The t~ -> 0 (beta_w -> 0) similarity solution of eq. GranularStokesEqn for an imposed stress.
+    """The t~ -> 0 (beta_w -> 0) similarity solution of eq. (2.15) for an imposed stress.
 
     For t~ << 1 the layer is thin, p~ = 1 + beta_w y~ -> 1, and tau~ = F(eta), eta = y~/sqrt(t~),
     solves -(eta/2) F' = (mu_d - mu_w F)^2 F'' with F(0) = 1, F(inf) = mu_s/mu_w (the initial state);

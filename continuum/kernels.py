@@ -80,7 +80,7 @@ class BdfKernels(NamedTuple):
 @jitable
 def laplacians(x, tau0, tau, lap, cols, weights):
     """d2 tau~/dy~2 at nodes 1..N-1 into ``lap`` (continuum.mesh.Stencil: cols, weights); ``tau`` (N + 1 values)
-    gets tau~ at every node: tau0 at the wall, x[1:] inside, 1 at the bottom (eq. BCStokesEqn)."""
+    gets tau~ at every node: tau0 at the wall, x[1:] inside, 1 at the bottom (eqs. (2.8)-(2.9))."""
     n = len(x)
     tau[0] = tau0
     tau[1:n] = x[1:]

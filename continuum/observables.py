@@ -20,7 +20,7 @@ def friction_profile(fr: Friction, mu_w: float, mesh: Mesh, tau):
 
 
 def shear_rate(fr: Friction, mu_w: float, mesh: Mesh, tau):
-    """-du~/dy~ = sqrt(p~)/Dmu (1/mu~ - 1) (eq. IreWrittenNonDim), as (mu - mu_s)/(mu_d - mu): no
+    """-du~/dy~ = sqrt(p~)/Dmu (1/mu~ - 1) (eq. (3.10)), as (mu - mu_s)/(mu_d - mu): no
     cancellation where mu ~ mu_s."""
     mu = friction_profile(fr, mu_w, mesh, tau)
     with np.errstate(divide="ignore"):  # mu = mu_d at an imposed speed's wall before t~_mud: infinite

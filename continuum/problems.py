@@ -2,14 +2,14 @@
 
 Unknowns x are tau~ at nodes 0..N-1 of a Mesh; tau~(y~=1) = 1 is fixed.  The mesh's d2/dy~2 and
 quadrature are of ``order`` 2 (three-point, trapezoid) or 4 (continuum.mesh).  Written as
-M x' = F(x) for continuum.stepper: the interior rows are eq. GranularStokesEqn,
+M x' = F(x) for continuum.stepper: the interior rows are eq. (2.15),
 
     d tau~/d t~ = D(y~, tau~) d2 tau~/dy~2,   D = (mu_d p~ - mu_w tau~)^2 / p~^(3/2),  p~ = 1 + beta_w y~,
 
 and row 0 is algebraic (mass 0): tau~(0) = 1 for an imposed stress, or the integral condition
-eq. GranularStokesEqn_muBIS_BCs for an imposed speed.  With an imposed speed, mu_w is the steady
+eq. (3.15) for an imposed speed.  With an imposed speed, mu_w is the steady
 mu_w^inf and tau~ = mu p~/mu_w^inf; the interior equation is then exactly
-eq. GranularStokesEqn_muBIS written for tau~ instead of mu~ (same scaling, same steady state).
+eq. (3.14) written for tau~ instead of mu~ (same scaling, same steady state).
 """
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from .steady import mu_w_for_speed
 
 
 class ShearStressDiffusion:
-    """Interior rate of eq. GranularStokesEqn and its banded Jacobian; row 0 is the wall."""
+    """Interior rate of eq. (2.15) and its banded Jacobian; row 0 is the wall."""
 
     imposed: str
     dense_wall: bool
@@ -59,7 +59,7 @@ class ShearStressDiffusion:
         self._wall_at = self.ku - wall, wall
 
     def initial(self) -> np.ndarray:
-        """tau~(y~, 0) = mu_s p~/mu_w at nodes 0..N-1 (eq. InitStokesEqn)."""
+        """tau~(y~, 0) = mu_s p~/mu_w at nodes 0..N-1 (eq. (2.7))."""
         return self.friction.mu_s * self.p[:-1] / self.mu_w
 
     def full(self, x: np.ndarray) -> np.ndarray:
@@ -152,7 +152,7 @@ class ImposedStress(ShearStressDiffusion):
 
 class ImposedSpeed(ShearStressDiffusion):
     """Imposed wall speed u~_w: the wall stress is the extra unknown fixed by
-    eq. GranularStokesEqn_muBIS_BCs, u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~: the first cell by
+    eq. (3.15), u~_w = int_0^1 sqrt(p~)/Dmu (1/mu~ - 1) dy~: the first cell by
     product integration, exact for mu~ linear in the cell (``first_cell``), the others by the mesh's
     rule of the problem's order on nodes 1..N (the quadrature that gives the velocity profile, so the
     constraint holds to round-off).

@@ -1,9 +1,9 @@
-"""The mu(I) law (paper eq. MuI) and the inertial-number conventions.
+"""The mu(I) law (paper eq. (2.1)) and the inertial-number conventions.
 
 Convention (stated once, used everywhere):
 
 * ``"paper"``: I = |gamma_dot| d / sqrt(p/rho_p) with |gamma_dot| = 1/2 |du/dy|
-  (the second invariant of the strain-rate tensor, paper eq. InertialNumberMuI).
+  (the second invariant of the strain-rate tensor, paper eq. (2.4)).
 * ``"dem"``:   I = |du/dy| d / sqrt(p/rho_p), the usual choice in DEM papers.
 
 The same material has I_dem = 2 I_paper, hence I0_dem = 2 I0_paper; mu_s, mu_d are unchanged.
@@ -29,7 +29,7 @@ def convert_I(value, source: str, target: str):
 
 
 def jop_law(I, mu_s, mu_d, I0):
-    """mu(I) = mu_s + (mu_d - mu_s)/(1 + I0/I) (eq. MuI, Jop et al. 2006) and its slope dmu/dI;
+    """mu(I) = mu_s + (mu_d - mu_s)/(1 + I0/I) (eq. (2.1), Jop et al. 2006) and its slope dmu/dI;
     I and I0 in the same convention.  The package's one implementation of the law."""
     I = np.asarray(I, dtype=float)
     return jop_mu(I, mu_s, mu_d, I0), (mu_d - mu_s) * I0 / (I + I0) ** 2
@@ -54,7 +54,7 @@ class Friction:
 
     @property
     def dmu(self) -> float:
-        """Delta mu = mu_d - mu_s (paper, below eq. step2StokesEqn)."""
+        """Delta mu = mu_d - mu_s (paper, below eq. (2.13))."""
         return self.mu_d - self.mu_s
 
     def check_mu_w(self, mu_w: float) -> float:
@@ -63,26 +63,26 @@ class Friction:
         return float(mu_w)
 
     def mu_w_from_tilde(self, mu_w_tilde: float) -> float:
-        """Wall friction from the paper's normalised value mu~_w = (mu_d - mu_w)/Delta mu (eq. nonDIMmu)."""
+        """Wall friction from the paper's normalised value mu~_w = (mu_d - mu_w)/Delta mu (eq. (3.9))."""
         require(finite(mu_w_tilde) and 0 < mu_w_tilde < 1, "mu_w_tilde", "in the open interval (0, 1)", mu_w_tilde)
         return self.mu_d - mu_w_tilde * self.dmu
 
     def tilde(self, mu):
-        """mu~ = (mu_d - mu)/Delta mu (eq. nonDIMmu): 1 at yield, 0 at mu_d."""
+        """mu~ = (mu_d - mu)/Delta mu (eq. (3.9)): 1 at yield, 0 at mu_d."""
         return (self.mu_d - mu) / self.dmu
 
     def beta(self, mu_w: float) -> float:
-        """beta_w = mu_w/mu_s - 1, the relative wall-stress surplus (eq. ShearLayerThickness)."""
+        """beta_w = mu_w/mu_s - 1, the relative wall-stress surplus (eq. (2.11))."""
         return mu_w / self.mu_s - 1.0
 
     def mu_and_slope(self, I, I0: float):
-        """mu(I) (eq. MuI) and dmu/dI; I and I0 in the same convention."""
+        """mu(I) (eq. (2.1)) and dmu/dI; I and I0 in the same convention."""
         return jop_law(I, self.mu_s, self.mu_d, I0)
 
     def mu_of_I(self, I, I0: float):
         return jop_mu(I, self.mu_s, self.mu_d, I0)
 
     def I_of_mu(self, mu, I0: float):
-        """Inverse of eq. MuI: I = I0 (mu - mu_s)/(mu_d - mu) for mu_s <= mu < mu_d."""
+        """Inverse of eq. (2.1): I = I0 (mu - mu_s)/(mu_d - mu) for mu_s <= mu < mu_d."""
         mu = np.asarray(mu, dtype=float)
         return I0 * (mu - self.mu_s) / (self.mu_d - mu)

@@ -69,12 +69,12 @@ class Scales:
     """The paper's scales for a material loaded at the wall with pressure p_w and (steady) wall
     friction mu_w; dimensional values in the material's units.
 
-    nu_g: the paper prints it twice, as (d/(2 phi Dmu I0)) sqrt(p_w/rho) (eq. GranularStokesEqnDIM,
-    Conclusion) and as (d/(phi Dmu I0)) sqrt(p_w/rho) (below eq. nonDIMv).  Only the first one makes
-    eq. IreWrittenNonDim follow from eq. IreWritten with U = g delta_s^2/(beta_w nu_g):
+    nu_g: the paper prints it twice, as (d/(2 phi Dmu I0)) sqrt(p_w/rho) (eq. (2.14),
+    Conclusion) and as (d/(phi Dmu I0)) sqrt(p_w/rho) (below eq. (3.8)).  Only the first one makes
+    eq. (3.10) follow from eq. (2.12) with U = g delta_s^2/(beta_w nu_g):
     U = 2 I0 Dmu delta_s sqrt(p_w/rho)/d needs g delta_s^2/(beta_w nu_g) with the factor 2, because
-    g delta_s phi/beta_w = p_w/rho.  It is also the coefficient of eq. GranularStokesEqnDIM, so
-    t~ = nu_g t/delta_s^2 turns that equation into eq. GranularStokesEqn.  We use the factor 2.
+    g delta_s phi/beta_w = p_w/rho.  It is also the coefficient of eq. (2.14), so
+    t~ = nu_g t/delta_s^2 turns that equation into eq. (2.15).  We use the factor 2.
     """
 
     material: Material
@@ -110,7 +110,7 @@ class Scales:
 
     @property
     def beta_w(self) -> float:
-        """beta_w = mu_w/mu_s - 1 (eq. ShearLayerThickness)."""
+        """beta_w = mu_w/mu_s - 1 (eq. (2.11))."""
         return self.mu_w / self.material.mu_s - 1.0
 
     @property
@@ -119,13 +119,13 @@ class Scales:
 
     @property
     def delta_s(self) -> float:
-        """Steady layer thickness delta_s = beta_w p_w/(phi rho g) (eq. ShearLayerThickness)."""
+        """Steady layer thickness delta_s = beta_w p_w/(phi rho g) (eq. (2.11))."""
         m = self.material
         return self.beta_w * self.p_w / (m.phi * m.rho_p * m.g)
 
     @property
     def nu_g(self) -> float:
-        """Granular diffusivity nu_g = (d/(2 phi Dmu I0)) sqrt(p_w/rho_p) (eq. GranularStokesEqnDIM),
+        """Granular diffusivity nu_g = (d/(2 phi Dmu I0)) sqrt(p_w/rho_p) (eq. (2.14)),
         I0 in the paper's convention."""
         m = self.material
         return m.d / (2 * m.phi * self.dmu * m.I0_paper) * math.sqrt(self.p_w / m.rho_p)
@@ -137,7 +137,7 @@ class Scales:
 
     @property
     def U(self) -> float:
-        """Velocity scale U = g delta_s^2/(beta_w nu_g) (eq. nonDIMv)."""
+        """Velocity scale U = g delta_s^2/(beta_w nu_g) (eq. (3.8))."""
         return self.material.g * self.delta_s**2 / (self.beta_w * self.nu_g)
 
     # --- conversions (dimensional <-> tilde) -----------------------------------------------------
@@ -172,7 +172,7 @@ class Scales:
         return tau_tilde * self.mu_w * self.p_w
 
     def pressure(self, y):
-        """Hydrostatic pressure p(y) = p_w + phi rho_p g y (eq. StokesEqn2)."""
+        """Hydrostatic pressure p(y) = p_w + phi rho_p g y (eq. (2.6))."""
         m = self.material
         return self.p_w + m.phi * m.rho_p * m.g * y
 

@@ -1,6 +1,6 @@
 """The local mu(I) steady state of the DEM's own scene (continuum.velocity.BedScene), in its units.
 
-The paper's exact steady state (continuum.steady, eq. MuSteadyState) scaled with continuum.scales:
+The paper's exact steady state (continuum.steady, eq. (2.10)) scaled with continuum.scales:
 u(y) = U [u~(y/delta_s) - u~(H/delta_s)] on a bed of depth H with a no-slip base (the layer is cut at
 the base when H < delta_s: the velocity there is then zero, not U u~(H/delta_s)).  For an imposed speed
 mu_w is the root of u(0) = u_w.  Exact up to rounding."""

@@ -34,7 +34,7 @@ UNGRADED_SPEED_ORDER = 1
 #: the first output time's layer is given this fraction of the mesh (the exponential map's xi at delta(t_min))
 LAYER_SHARE = 0.3
 #: an imposed speed's wall sub-layer mu~ ~ a + b y + c y ln y, through the lift-off of mu_w from mu_d
-#: (t~_mud = u~_w^2, eq. TimeScaleMuD), is resolved by a map of at least WALL_FOLDS e-folds in all
+#: (t~_mud = u~_w^2, eq. (3.17)), is resolved by a map of at least WALL_FOLDS e-folds in all
 #: (``map_for``: the layer's stretch plus a wall cluster, continuum.mesh); on the exponential map alone by
 #: a stretch of at least WALL_STRETCH (measured: fourth order from stretch 11, first order below: the first
 #: cell misses the y ln y below a/b), which costs delta: its cells near delta are stretch/N of it
@@ -202,7 +202,7 @@ def map_for(fr: Friction, mu_w: float, imposed: str, t_min: float) -> tuple[floa
     """The map (stretch, wall_folds) of a solve whose first output time is t_min (continuum.mesh): the
     stretch of the layer at t_min (``stretch_for``) of the short-time thickness delta ~ SELF_SIMILAR_DELTA
     Dmu mu~_w sqrt(t~) of a stress (the wall diffusivity is (Dmu mu~_w)^2), SELF_SIMILAR_DELTA Dmu sqrt(t~)
-    of a speed (eq. muShortTime_VelocityImposed, while mu_w = mu_d), at least CLUSTER_MIN_STRETCH; a speed's
+    of a speed (eq. (3.20), while mu_w = mu_d), at least CLUSTER_MIN_STRETCH; a speed's
     map gets a wall cluster up to WALL_FOLDS e-folds in all."""
     if imposed == "stress":
         return stretch_for(SELF_SIMILAR_DELTA * fr.dmu * max(fr.tilde(mu_w), 0.05) * math.sqrt(t_min)), 0.0
@@ -451,7 +451,7 @@ def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, est
 
 def solve_stress(friction: Friction, mu_w: float, times, numerics: Numerics | None = None, *,
                  accuracy: float | None = None, estimate: bool = False, fixed_times=None) -> Solution:
-    """Imposed wall stress: eq. GranularStokesEqn with tau~(0) = tau~(1) = 1.  ``accuracy``: refine
+    """Imposed wall stress: eq. (2.15) with tau~(0) = tau~(1) = 1.  ``accuracy``: refine
     (from ``numerics``) until every estimated relative error is below it; None: one solve as given,
     with error estimates (from the coarser companion solve) if ``estimate``."""
     mu_w = friction.check_mu_w(mu_w)
@@ -461,8 +461,8 @@ def solve_stress(friction: Friction, mu_w: float, times, numerics: Numerics | No
 
 def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics | None = None, *,
                 accuracy: float | None = None, estimate: bool = False, fixed_times=None) -> Solution:
-    """Imposed wall speed: eq. GranularStokesEqn_muBIS with the integral condition
-    eq. GranularStokesEqn_muBIS_BCs (``accuracy``, ``estimate`` as for solve_stress)."""
+    """Imposed wall speed: eq. (3.14) with the integral condition
+    eq. (3.15) (``accuracy``, ``estimate`` as for solve_stress)."""
     mu_w = mu_w_for_speed(friction, u_w)
     return _solve(lambda mesh, order: ImposedSpeed(friction, u_w, mesh, order), "speed", mu_w, friction, times,
                   numerics, accuracy, estimate, fixed_times, early_until(u_w, (numerics or Numerics()).early_span))

@@ -1,8 +1,8 @@
 """Exact steady state of the paper's problem, in its dimensionless variables.
 
 Steady shear stress is uniform, tau~ = 1, so mu = mu_w / (1 + beta_w y~) on y~ <= 1
-(eq. MuSteadyState) and mu = mu_s below (y~ >= 1, i.e. y >= delta_s, eq. ShearLayerThickness).
-The velocity follows by integrating eq. IreWrittenNonDim from u~(1) = 0; with
+(eq. (2.10)) and mu = mu_s below (y~ >= 1, i.e. y >= delta_s, eq. (2.11)).
+The velocity follows by integrating eq. (3.10) from u~(1) = 0; with
 s = sqrt(1 + beta_w y~) the integrand is rational in s and integrates in closed form
 (checked against scipy.integrate.quad in the tests).
 """
@@ -30,12 +30,12 @@ def _erfc_inverse(q: float) -> float:
     return x
 
 
-#: delta/(Dmu sqrt(t~)) of the erfc solution (eq. SolutionSS): 2 erfc^-1(1e-3) = 4.653 (the paper prints 4.66)
+#: delta/(Dmu sqrt(t~)) of the erfc solution (eq. (3.3)): 2 erfc^-1(1e-3) = 4.653 (the paper prints 4.66)
 SELF_SIMILAR_DELTA = 2.0 * _erfc_inverse(DELTA_THRESHOLD)
 
 
 def steady_mu(fr: Friction, mu_w: float, y):
-    """Steady friction profile mu(y~) (eq. MuSteadyState), mu_s for y~ >= 1."""
+    """Steady friction profile mu(y~) (eq. (2.10)), mu_s for y~ >= 1."""
     y = np.asarray(y, dtype=float)
     return np.where(y <= 1.0, mu_w / (1.0 + fr.beta(mu_w) * np.minimum(y, 1.0)), fr.mu_s)
 
@@ -50,7 +50,7 @@ def _antiderivative(fr: Friction, mu_w: float, s):
 
 
 def steady_velocity(fr: Friction, mu_w: float, y):
-    """Steady velocity u~(y~) from eq. IreWrittenNonDim with u~(1) = 0; zero for y~ >= 1."""
+    """Steady velocity u~(y~) from eq. (3.10) with u~(1) = 0; zero for y~ >= 1."""
     fr.check_mu_w(mu_w)
     y = np.clip(np.asarray(y, dtype=float), 0.0, 1.0)
     beta = fr.beta(mu_w)
@@ -58,7 +58,7 @@ def steady_velocity(fr: Friction, mu_w: float, y):
 
 
 def steady_wall_speed(fr: Friction, mu_w: float) -> float:
-    """u~_w^inf, the exact steady wall speed (integral of eq. IreWrittenNonDim over the layer)."""
+    """u~_w^inf, the exact steady wall speed (integral of eq. (3.10) over the layer)."""
     return float(steady_velocity(fr, mu_w, 0.0))
 
 
@@ -66,7 +66,7 @@ def mu_w_for_speed(fr: Friction, u_w: float) -> float:
     """Steady wall friction mu_w^inf that sustains the wall speed u~_w (root of steady_wall_speed).
 
     u~_w^inf increases monotonically from 0 (mu_w -> mu_s) to infinity (mu_w -> mu_d,
-    logarithmically, eq. Uwall_asymp), so the root is unique; it is bracketed in
+    logarithmically, eq. (3.12)), so the root is unique; it is bracketed in
     log(mu~_w), since mu~_w ~ exp(-Delta mu u~_w) for large speeds.
     """
     require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)

@@ -1,5 +1,5 @@
 """Velocity-form mu(I) solver for the DEM's own scene: a bed of finite depth H on a rough base,
-a plate with mass, any initial state (paper eqs. StokesEqn1-2 without the stress-diffusion rewrite).
+a plate with mass, any initial state (paper eqs. (2.5)-(2.6) without the stress-diffusion rewrite).
 
     phi rho_p du/dt = d sigma_xy/dy + b   on 0 < y < H (y downward from the plate),   u(H) = 0,
     sigma_xy = s(g, p) from a YieldRule (continuum.rules), g = 1/2 du/dy, p = p_w + phi rho_p g y,
@@ -228,7 +228,7 @@ YIELD_BISECTIONS = 64
 
 
 def initial_at_yield(problem: VelocityProblem) -> np.ndarray:
-    """The paper's initial state tau = mu_s p (eq. InitStokesEqn) as a velocity field: on each
+    """The paper's initial state tau = mu_s p (eq. (2.7)) as a velocity field: on each
     face the creep rate g < 0 with |s(g)| = mu_s p (exists for the regularised law: |s| rises
     from 0 to mu(I) p >= mu_s p), integrated up from u(H) = 0.  Tends to u = 0 as eps -> 0.
     All faces at once: |s| is increasing in |g|, bracketed from eps up by decades, then bisected."""
@@ -252,7 +252,7 @@ def solve_velocity(scene: BedScene, times, *, mu_w=None, u_w=None, rule: YieldRu
 
     ``initial``: "rest" (unsheared bed, u = 0, sigma_xy = 0) or "yield" (tau = mu_s p, the paper's
     state).  ``compare_steady`` requires H >= delta_s so the steady state is the paper's
-    (eq. MuSteadyState); set it False to run a shallower bed.
+    (eq. (2.10)); set it False to run a shallower bed.
     """
     m, fr = scene.material, scene.material.friction
     require((mu_w is None) != (u_w is None), "mu_w/u_w", "exactly one of them", (mu_w, u_w))

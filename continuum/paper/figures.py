@@ -33,6 +33,7 @@ from ..rheology import Friction
 from ..scales import UNITS
 from ..solver import Numerics, Solution, solve_speed, solve_stress, stretch_for
 from ..steady import steady_mu, steady_velocity, steady_wall_speed
+from .equations import eq
 
 FRICTION = Friction(math.tan(math.radians(21.0)), math.tan(math.radians(33.0)))
 STRESS_CASES = (0.9, 0.5, 0.1)              # imposed mu~_w
@@ -40,7 +41,7 @@ SPEED_CASES = (0.198, 1.334, 4.629)         # imposed u~_w
 DECADES = 10.0 ** np.arange(-4, 2)          # t~ = 1e-4 ... 10; figs 5, 6, 9 start at 1e-3
 FIG4_CASES = (0.99, 0.9, 0.75, 0.5, 0.3, 0.1, 0.03)  # mu~_w of the long-time circles of fig. 4
 FIG4_T = 50.0                               # their "long time"
-PAPER_SPEED_DELTA = 3.66                    # delta ~ 3.66 Dmu sqrt(t~), quoted with eq. TimeScaleMu
+PAPER_SPEED_DELTA = 3.66                    # delta ~ 3.66 Dmu sqrt(t~), quoted with eq. (3.16)
 T_MIN = 1e-4                                # time series are plotted from here on
 WKB_T_MIN = 1e-2                            # the 40-mode WKB series has not converged before this
 ETA_MAX = 2.5                               # similarity-variable plots stop here
@@ -81,7 +82,7 @@ class Runs:
 
     stress: dict[float, Solution]           # keyed by mu~_w
     speed: dict[float, Solution]            # keyed by u~_w
-    wkb: dict[float, WKB]                   # eq. SolutionLONG of each stress case
+    wkb: dict[float, WKB]                   # eq. (3.5) of each stress case
     long_time: dict[float, float]           # u~_w(t~ = FIG4_T) keyed by mu~_w
 
 
@@ -170,7 +171,7 @@ def eta(y, t) -> np.ndarray:
 
 
 def self_similar_velocity(mu_w: float, eta_out):
-    """u~/sqrt(t~) of eq. SolutionSS for beta_w y~ -> 0: eq. IreWrittenNonDim in eta gives
+    """u~/sqrt(t~) of eq. (3.3) for beta_w y~ -> 0: eq. (3.10) in eta gives
     2 int_eta^inf (1/mu~ - 1) ds with mu~ = 1 - (1 - mu~_w) erfc(s)."""
     s = np.linspace(0.0, 7.0, 20001)
     a = 1.0 - FRICTION.tilde(mu_w)
@@ -181,7 +182,8 @@ def self_similar_velocity(mu_w: float, eta_out):
 # --- the figures --------------------------------------------------------------------------------------
 @figure(2, 3)
 def fig1_shear_stress(sh: Sheet, runs: Runs):
-    """Fig. 1: tau~ of eq. GranularStokesEqn; delta/delta_s vs 4.653 Dmu sqrt(t~) (eq. SolutionSS) and steady"""
+    """Fig. 1: tau~ of eq. (2.15), the stress diffusion equation; delta/delta_s vs 4.653 Dmu sqrt(t~) (eq. (3.3),
+    the short-time erfc solution) and steady"""
     for j, (mt, sol) in enumerate(runs.stress.items()):
         (top, bottom), y, ser, case = sh.axes[:, j], sol.mesh.y, late(sol), f"mu_w_tilde={mt}"
         initial = FRICTION.mu_s * (1.0 + sol.beta_w * y) / sol.mu_w_inf
@@ -193,7 +195,7 @@ def fig1_shear_stress(sh: Sheet, runs: Runs):
         for t, tau in zip(sol.t, sol.tau):
             sh.curve(top, y, tau, curve="numerics", t=t, **at(t))
         sh.curve(bottom, ser.t, ser.delta, curve="numerics", color="k", label="numerics")
-        sh.curve(bottom, ser.t, SELF_SIMILAR_DELTA * FRICTION.dmu * np.sqrt(ser.t), curve="eq. SolutionSS",
+        sh.curve(bottom, ser.t, SELF_SIMILAR_DELTA * FRICTION.dmu * np.sqrt(ser.t), curve=eq("SolutionSS"),
                  color="C3", ls="--", label=r"$4.653\,\Delta\mu\sqrt{\tilde t}$")
         sh.curve(bottom, ser.t.iloc[[0, -1]], sol.steady["delta"], curve="steady", color="0.4", ls=":", label="steady")
         bottom.set_ylim(top=2.0)
@@ -201,11 +203,12 @@ def fig1_shear_stress(sh: Sheet, runs: Runs):
 
 @figure(2, 3)
 def fig2_friction_profiles(sh: Sheet, runs: Runs):
-    """Fig. 2: mu, numerics (solid) vs eq. SolutionSS (top) and eq. SolutionLONG, 40 modes, t~ >= 1e-2 (bottom)"""
+    """Fig. 2: mu, numerics (solid) vs eq. (3.3), the short-time erfc solution (top), and eq. (3.5), the long-time
+    WKB series, 40 modes, t~ >= 1e-2 (bottom)"""
     for j, (mt, sol) in enumerate(runs.stress.items()):
         y, wkb = sol.mesh.y, runs.wkb[mt]
-        approx = (("eq. SolutionSS", "--", 0.0, lambda t: self_similar_mu(FRICTION, sol.mu_w_inf, y, t)),
-                  ("eq. SolutionLONG", "-.", WKB_T_MIN, lambda t: wkb.mu(y, t)))
+        approx = ((eq("SolutionSS"), "--", 0.0, lambda t: self_similar_mu(FRICTION, sol.mu_w_inf, y, t)),
+                  (eq("SolutionLONG"), "-.", WKB_T_MIN, lambda t: wkb.mu(y, t)))
         for ax, row, (name, ls, t_min, mu_of_t) in zip(sh.axes[:, j], ("top", "bottom"), approx):
             sh.frame(ax, f"{'abc'[j]}_{row}", "y", "mu", panel_title(j, "mu_w_tilde", mt), case=f"mu_w_tilde={mt}",
                      xlim=(0, 1), ylim=(FRICTION.mu_s - 0.005, sol.mu_w_inf + 0.01))
@@ -218,26 +221,28 @@ def fig2_friction_profiles(sh: Sheet, runs: Runs):
 
 @figure(1, 3)
 def fig3_wall_speed(sh: Sheet, runs: Runs):
-    """Fig. 3: u~_w, numerics (dots) vs eq. SolutionSS (squares) and eq. SolutionLONG (+, t~ >= 1e-2)"""
+    """Fig. 3: u~_w, numerics (dots) vs eq. (3.3), the short-time erfc solution (squares), and eq. (3.5), the
+    long-time WKB series (+, t~ >= 1e-2)"""
     t_ss = np.logspace(-4, 1, 11)
     t_wkb = t_ss[t_ss >= WKB_T_MIN]
     for j, (mt, sol) in enumerate(runs.stress.items()):
         ax, ser = sh.axes[0, j], late(sol)
         sh.frame(ax, "abc"[j], "t", "u_w", panel_title(j, "mu_w_tilde", mt), log="xy", case=f"mu_w_tilde={mt}")
         sh.curve(ax, ser.t, ser.u_w, curve="numerics", color="k", marker="o", ms=2.5, ls="none", label="numerics")
-        sh.curve(ax, t_ss, [self_similar_wall_speed(FRICTION, sol.mu_w_inf, t) for t in t_ss], curve="eq. SolutionSS",
-                 color="C0", marker="s", ms=8, mfc="none", ls="none", label="eq. SolutionSS")
-        sh.curve(ax, t_wkb, [runs.wkb[mt].wall_speed(t) for t in t_wkb], curve="eq. SolutionLONG", color="C3",
-                 marker="+", ms=11, mew=1.5, ls="none", label="eq. SolutionLONG")
+        sh.curve(ax, t_ss, [self_similar_wall_speed(FRICTION, sol.mu_w_inf, t) for t in t_ss], curve=eq("SolutionSS"),
+                 color="C0", marker="s", ms=8, mfc="none", ls="none", label=eq("SolutionSS"))
+        sh.curve(ax, t_wkb, [runs.wkb[mt].wall_speed(t) for t in t_wkb], curve=eq("SolutionLONG"), color="C3",
+                 marker="+", ms=11, mew=1.5, ls="none", label=eq("SolutionLONG"))
         sh.curve(ax, t_ss, self_similar_velocity(sol.mu_w_inf, 0.0) * np.sqrt(t_ss), curve="sqrt(t~) limit",
-                 color="0.5", ls="--", label=r"$\propto\sqrt{\tilde t}$ (eq. SolutionSS, $\tilde t\to0$)")
+                 color="0.5", ls="--", label=rf"$\propto\sqrt{{\tilde t}}$ ({eq('SolutionSS')}, $\tilde t\to0$)")
         sh.curve(ax, t_ss[[0, -1]], sol.steady["u_w"], curve="steady", color="0.3", ls=":", label="steady")
         ax.set_ylim(top=3 * sol.steady["u_w"])
 
 
 @figure(1, 2, (5.5, 4.2))
 def fig4_steady_wall_speed(sh: Sheet, runs: Runs):
-    """Fig. 4: steady u~_w^inf, exact vs eqs. Uwall_asymp, Uwall_muS and the numerics at t~ = 50 (circles)"""
+    """Fig. 4: steady u~_w^inf, exact vs eq. (3.12), its asymptote, eq. (3.13), its form near yield, and the
+    numerics at t~ = 50 (circles)"""
     mt = np.linspace(0.002, 0.998, 499)  # step 0.002, includes 0.5
     mu_w = FRICTION.mu_d - mt * FRICTION.dmu
     exact = np.array([steady_wall_speed(FRICTION, m) for m in mu_w])
@@ -246,11 +251,11 @@ def fig4_steady_wall_speed(sh: Sheet, runs: Runs):
     for ax, panel, title, lim in zip(sh.axes[0], "ab", ("(a)", r"(b) zoom, $\mu_w\to\mu_s$"), ((0, 1), (0.8, 1))):
         sh.frame(ax, panel, "mu_w_tilde", "u_w_inf", title, case="steady")
         sh.curve(ax, mt, exact, curve="exact", color="k", lw=1, label="exact steady")
-        sh.curve(ax, mt, uwall_asymp(FRICTION, mt), curve="eq. Uwall_asymp", color="C0", label="eq. Uwall_asymp")
-        sh.curve(ax, mt, uwall_mus(FRICTION, mu_w, UWALL_MUS_PRINTED_B2), curve="eq. Uwall_muS", color="C3", ls="--",
-                 label=r"eq. Uwall_muS, printed $-\frac{5}{2}\beta_w^2$")
-        sh.curve(ax, mt, uwall_mus(FRICTION, mu_w), curve="eq. Uwall_muS, derived b2", color="C1", ls=":", lw=2,
-                 label=rf"eq. Uwall_muS, derived ${b2:+.3f}\,\beta_w^2$")
+        sh.curve(ax, mt, uwall_asymp(FRICTION, mt), curve=eq("Uwall_asymp"), color="C0", label=eq("Uwall_asymp"))
+        sh.curve(ax, mt, uwall_mus(FRICTION, mu_w, UWALL_MUS_PRINTED_B2), curve=eq("Uwall_muS"), color="C3", ls="--",
+                 label=rf"{eq('Uwall_muS')}, printed $-\frac{{5}}{{2}}\beta_w^2$")
+        sh.curve(ax, mt, uwall_mus(FRICTION, mu_w), curve=f"{eq('Uwall_muS')}, derived b2", color="C1", ls=":", lw=2,
+                 label=rf"{eq('Uwall_muS')}, derived ${b2:+.3f}\,\beta_w^2$")
         sh.curve(ax, circles[:, 0], circles[:, 1], curve="numerics", t=FIG4_T, color="k", marker="o", ms=7,
                  mfc="none", mew=1.5, ls="none", label=rf"numerics, $\tilde t={FIG4_T:g}$")
         top = exact[(mt >= lim[0]) & (mt <= lim[1])].max()
@@ -259,7 +264,8 @@ def fig4_steady_wall_speed(sh: Sheet, runs: Runs):
 
 @figure(3, 3)
 def fig5_velocity_profiles(sh: Sheet, runs: Runs):
-    """Fig. 5: u~ and its collapse in eta (u~_w^inf of eq. Uwall_asymp) vs eq. SolutionSS (beta_w y~ -> 0)"""
+    """Fig. 5: u~ and its collapse in eta (u~_w^inf of eq. (3.12)) vs eq. (3.3), the short-time erfc solution
+    (beta_w y~ -> 0)"""
     e = np.linspace(0.0, ETA_MAX, 200)
     for j, (mt, sol) in enumerate(runs.stress.items()):
         y, (top, mid, bottom), case = sol.mesh.y, sh.axes[:, j], f"mu_w_tilde={mt}"
@@ -274,12 +280,13 @@ def fig5_velocity_profiles(sh: Sheet, runs: Runs):
             sh.curve(bottom, eta(y, t)[keep], u[keep] / (u_inf * np.sqrt(t)), curve="numerics", t=t, **at(t))
         sh.curve(top, y, steady_velocity(FRICTION, sol.mu_w_inf, y), curve="steady", **STEADY)
         for ax, norm in ((mid, f[0]), (bottom, u_inf)):
-            sh.curve(ax, e, f / norm, curve="eq. SolutionSS", color="C3", ls="--", lw=2, label="eq. SolutionSS")
+            sh.curve(ax, e, f / norm, curve=eq("SolutionSS"), color="C3", ls="--", lw=2, label=eq("SolutionSS"))
 
 
 @figure(2, 3)
 def fig6_speed_profiles(sh: Sheet, runs: Runs):
-    """Fig. 6: imposed u~_w, eqs. GranularStokesEqn_muBIS(_BCs); thick dashed: steady eq. MuSteadyState"""
+    """Fig. 6: imposed u~_w, eq. (3.14) with the integral condition eq. (3.15); thick dashed: the steady state,
+    eq. (2.10)"""
     for j, (uw, sol) in enumerate(runs.speed.items()):
         (top, bottom), case = sh.axes[:, j], f"u_w={uw}"
         title = panel_title(j, "u_w", uw) + rf", $\tilde\mu_w^\infty$ = {FRICTION.tilde(sol.mu_w_inf):.3f}"
@@ -295,8 +302,8 @@ def fig6_speed_profiles(sh: Sheet, runs: Runs):
 
 @figure(1, 1, (6.5, 4.5))
 def fig7_speed_layer(sh: Sheet, runs: Runs):
-    """Fig. 7: imposed u~_w, delta/delta_s vs 4.653 Dmu sqrt(t~)
-    (eq. muShortTime_VelocityImposed) and 3.66 Dmu sqrt(t~) (eq. TimeScaleMu)"""
+    """Fig. 7: imposed u~_w, delta/delta_s vs 4.653 Dmu sqrt(t~) (eq. (3.20), the imposed-speed erfc profile)
+    and 3.66 Dmu sqrt(t~) (quoted with eq. (3.16))"""
     ax = sh.axes[0, 0]
     sh.frame(ax, "a", "t", "delta", log="xy")
     for j, (uw, sol) in enumerate(runs.speed.items()):
@@ -312,13 +319,13 @@ def fig7_speed_layer(sh: Sheet, runs: Runs):
 
 @figure(1, 3)
 def fig8_speed_wall_friction(sh: Sheet, runs: Runs):
-    """Fig. 8: imposed u~_w, mu_w(t~) against t~ rescaled with eqs. TimeScaleMuD, TimeScaleMuW; dashed:
-    eq. TimeScaleMu as printed, mu_w - mu_s = u~_w/(3.66 Dmu sqrt(t~))"""
+    """Fig. 8: imposed u~_w, mu_w(t~) against t~ rescaled with the time scales t~_mud (eq. (3.17)) and t~_muw
+    (eq. (3.18)); dashed: eq. (3.16) as printed, mu_w - mu_s = u~_w/(3.66 Dmu sqrt(t~))"""
     ax_t, ax_d, ax_w = sh.axes[0]
     sh.frame(ax_t, "a", "t", "mu_w", "(a) wall friction", log="x")
-    sh.frame(ax_d, "b", "t/u_w^2", "mu_w-mu_s", "(b) eq. TimeScaleMuD", log="xy", ylim=(1e-2, 0.5))
-    sh.frame(ax_w, "c", "t*(mu_w_inf-mu_s)^2/u_w^2", "(mu_w-mu_s)/(mu_w_inf-mu_s)", "(c) eq. TimeScaleMuW", log="xy",
-             ylim=(0.5, 30))
+    sh.frame(ax_d, "b", "t/u_w^2", "mu_w-mu_s", f"(b) {eq('TimeScaleMuD')}", log="xy", ylim=(1e-2, 0.5))
+    sh.frame(ax_w, "c", "t*(mu_w_inf-mu_s)^2/u_w^2", "(mu_w-mu_s)/(mu_w_inf-mu_s)", f"(c) {eq('TimeScaleMuW')}",
+             log="xy", ylim=(0.5, 30))
     for j, (uw, sol) in enumerate(runs.speed.items()):
         ser, excess = late(sol), sol.mu_w_inf - FRICTION.mu_s
         scales, style = speed_time_scales(FRICTION, uw, sol.mu_w_inf), dict(curve="numerics", **case_style(j, uw))
@@ -330,13 +337,14 @@ def fig8_speed_wall_friction(sh: Sheet, runs: Runs):
         ax.axhline(plateau, color="0.5", lw=0.8)
     scaled = np.logspace(-2, 3, 50)
     for ax in (ax_d, ax_w):
-        sh.curve(ax, scaled, 1.0 / (PAPER_SPEED_DELTA * FRICTION.dmu * np.sqrt(scaled)), curve="eq. TimeScaleMu",
-                 color="k", ls="--", label="eq. TimeScaleMu")
+        sh.curve(ax, scaled, 1.0 / (PAPER_SPEED_DELTA * FRICTION.dmu * np.sqrt(scaled)), curve=eq("TimeScaleMu"),
+                 color="k", ls="--", label=eq("TimeScaleMu"))
 
 
 @figure(1, 3)
 def fig9_speed_self_similar(sh: Sheet, runs: Runs):
-    """Fig. 9: imposed u~_w, mu~ vs eq. muShortTime_VelocityImposed (dashed) with the numerical mu_w(t~)"""
+    """Fig. 9: imposed u~_w, mu~ vs eq. (3.20), the imposed-speed erfc profile (dashed), with the numerical
+    mu_w(t~)"""
     for j, (uw, sol) in enumerate(runs.speed.items()):
         ax = sh.axes[0, j]
         sh.frame(ax, "abc"[j], "eta", "mu_tilde", panel_title(j, "u_w", uw), case=f"u_w={uw}", xlim=(0, ETA_MAX),
@@ -346,9 +354,9 @@ def fig9_speed_self_similar(sh: Sheet, runs: Runs):
             keep = eta(y, t) <= ETA_MAX
             approx = FRICTION.tilde(speed_short_time_mu(FRICTION, mu_w, y, t))
             sh.curve(ax, eta(y, t)[keep], mt[keep], curve="numerics", t=t, **at(t))
-            sh.curve(ax, eta(y, t)[keep], approx[keep], curve="eq. muShortTime_VelocityImposed", t=t, ls="--",
+            sh.curve(ax, eta(y, t)[keep], approx[keep], curve=eq("muShortTime_VelocityImposed"), t=t, ls="--",
                      lw=2, **at(t, label=False))
-        key(ax, "eq. muShortTime_VelocityImposed", ls="--", lw=2)
+        key(ax, eq("muShortTime_VelocityImposed"), ls="--", lw=2)
 
 
 def paper_figures(out_dir, numerics: FigureNumerics = FIGURE_NUMERICS) -> dict:

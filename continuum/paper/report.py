@@ -16,6 +16,7 @@ from ..closed_forms import SELF_SIMILAR_DELTA, UWALL_MUS_PRINTED_B2, WKB, uwall_
 from ..scales import UNITS
 from ..solver import solve_speed, solve_stress
 from ..steady import steady_wall_speed
+from .equations import eq
 from .figures import FRICTION, paper_figures
 
 
@@ -36,8 +37,8 @@ def steady_table() -> pd.DataFrame:
     for mt in (0.99, 0.9, 0.5, 0.1, 0.01):
         mu_w = fr.mu_w_from_tilde(mt)
         rows.append({"mu~_w": mt, "mu_w": mu_w, "beta_w": fr.beta(mu_w), "u~_w^inf exact": steady_wall_speed(fr, mu_w),
-                     "eq. Uwall_asymp": uwall_asymp(fr, mt), "eq. Uwall_muS (derived b2)": uwall_mus(fr, mu_w),
-                     "eq. Uwall_muS (printed b2=-5/2)": uwall_mus(fr, mu_w, UWALL_MUS_PRINTED_B2)})
+                     eq("Uwall_asymp"): uwall_asymp(fr, mt), f"{eq('Uwall_muS')} (derived b2)": uwall_mus(fr, mu_w),
+                     f"{eq('Uwall_muS')} (printed b2=-5/2)": uwall_mus(fr, mu_w, UWALL_MUS_PRINTED_B2)})
     return pd.DataFrame(rows)
 
 
@@ -58,19 +59,20 @@ def discrepancies() -> pd.DataFrame:
     return pd.DataFrame([
         {"item": "nu_g prefactor", "printed": "d/(2 phi Dmu I0) and d/(phi Dmu I0)",
          "numerics / derivation": "factor 2: the only one with U = g delta_s^2/(beta_w nu_g) consistent "
-                                  "with eq. IreWritten (tests/test_steady_and_scales.py)"},
+                                  f"with {eq('IreWritten')} (tests/continuum/test_steady_and_scales.py)"},
         {"item": "delta/(Dmu sqrt t~), imposed stress, mu~_w = 0.9", "printed": "4.66",
          "numerics / derivation": f"{coeff_stress.mean():.3f} at t~ = 1e-4..1e-3; erfc gives 2 erfcinv(1e-3) = "
                                   f"{SELF_SIMILAR_DELTA:.3f}"},
-        {"item": "delta/(Dmu sqrt t~), imposed speed u~_w = 1.334", "printed": "3.66 (with eq. TimeScaleMu)",
+        {"item": "delta/(Dmu sqrt t~), imposed speed u~_w = 1.334", "printed": f"3.66 (with {eq('TimeScaleMu')})",
          "numerics / derivation": f"{coeff_speed.mean():.3f} at t~ = 1e-4..1e-3 (same 1e-3 threshold)"},
-        {"item": "eq. TimeScaleMu prefactor of u~_w/sqrt(t~)", "printed": f"1/(3.66 Dmu) = {1 / (3.66 * fr.dmu):.2f}",
+        {"item": f"{eq('TimeScaleMu')} prefactor of u~_w/sqrt(t~)",
+         "printed": f"1/(3.66 Dmu) = {1 / (3.66 * fr.dmu):.2f}",
          "numerics / derivation": f"{prefactor:.2f} (u~_w = 0.198, t~ = 5 u~_w^2); a momentum balance in the tilde "
                                   "variables gives (mu_w - mu_s) ~ Dmu u~_w delta~/t~: Dmu belongs in the numerator"},
-        {"item": "eq. Uwall_muS second-order coefficient", "printed": "-5/2",
+        {"item": f"{eq('Uwall_muS')} second-order coefficient", "printed": "-5/2",
          "numerics / derivation": f"2 mu_s/(3 Dmu) - 1/6 = {2 * fr.mu_s / (3 * fr.dmu) - 1 / 6:.3f}; relative error at "
                                   f"beta_w = 0.01: printed {mus_err[0]:.1e}, derived {mus_err[1]:.1e}"},
-        {"item": "eq. SolutionLONG amplitude and Lambda_m", "printed": "y^(-1/8), Lambda_m integrated in dy^",
+        {"item": f"{eq('SolutionLONG')} amplitude and Lambda_m", "printed": "y^(-1/8), Lambda_m integrated in dy^",
          "numerics / derivation": f"y^(+1/8) and projection in z; max |tau~ - numerics| at t~ = 1, mu~_w = 0.9: "
                                   f"printed {wkb_err[0]:.1e}, consistent {wkb_err[1]:.1e}"},
     ])
@@ -93,7 +95,8 @@ def write_continuum_report(out_dir) -> Path:
             f"plotting {result['timing']['plot']['cpu_s']:.2f} s.</p>",
             "<h2>Where the numerics disagree with printed numbers</h2>", table_html(notes, "Printed vs computed"),
             "<h2>Steady wall speed</h2>",
-            table_html(steady, "u~_w^inf: exact quadrature vs the paper's approximations"),
+            table_html(steady, "u~_w^inf: exact quadrature vs the paper's approximations, "
+                               f"{eq('Uwall_asymp', named=True)} and {eq('Uwall_muS', named=True)}"),
             "<h2>The paper's figures, regenerated</h2>"]
     body.append("<p>Every figure is in the paper's dimensionless tilde variables (above); each PNG has its data "
                 "beside it as CSV.</p>")

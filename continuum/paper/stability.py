@@ -54,7 +54,7 @@ VELOCITY_P_W = 10.0     # plate pressure of the velocity-form maps (the tilde re
 
 
 def explicit_bound(fr: Friction, mu_w: float, mesh: Mesh) -> float:
-    """Largest stable forward-Euler step for eq. GranularStokesEqn on ``mesh``: 2/|lambda_min(D L)|
+    """Largest stable forward-Euler step for eq. (2.15) on ``mesh``: 2/|lambda_min(D L)|
     with D = Dmu^2 sqrt(p~) (the largest diffusivity any admissible state has)."""
     p = 1.0 + fr.beta(mu_w) * mesh.y[1:-1]
     D = fr.dmu**2 * np.sqrt(p)
@@ -341,7 +341,7 @@ def plot_maps(table: pd.DataFrame, out: Path) -> list[Path]:
 
 def wellposedness_profiles(materials: dict[str, Material], mu_w_tildes=(0.9, 0.5, 0.1), n=400) -> pd.DataFrame:
     """Barker et al. (2015) eq. 3.9 along the steady layer y~ in [0, 1]: I(y~) from the steady
-    mu(y~) (eq. MuSteadyState) through the inverse mu(I) law; negative = well posed."""
+    mu(y~) (eq. (2.10)) through the inverse mu(I) law; negative = well posed."""
     rows = []
     y = np.linspace(0.0, 1.0, n + 1)[:-1]
     for label, m in materials.items():

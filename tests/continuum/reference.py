@@ -1,20 +1,20 @@
 """Independent converged reference for the continuum solver: test-only code.
 
-Imposed stress: eq. GranularStokesEqn_mu (the paper's equation for mu, not the solver's tau~ form)
+Imposed stress: eq. (3.1) (the paper's equation for mu, not the solver's tau~ form)
 for v = (mu - mu_s)/(mu_w - mu_s), the quantity that defines delta,
 
     dv/dt~ = (Dmu - (mu_w - mu_s) v)^2 (2 beta_w/sqrt(p~) dv/dy~ + sqrt(p~) d2v/dy~2),   p~ = 1 + beta_w y~,
 
-v(0) = 1, v(1) = 0, v(y~ > 0, 0) = 0 (eqs. InitStokesEqn, BCStokesEqn).  Space: Chebyshev collocation
+v(0) = 1, v(1) = 0, v(y~ > 0, 0) = 0 (eqs. (2.7), (2.8)-(2.9)).  Space: Chebyshev collocation
 of degree n in s in [0, 1] under y~ = (e^(a s) - 1)/(e^a - 1), whose stretch a puts the wall diffusion
 length Dmu mu~_w sqrt(t~_min) at s = WALL_SHARE; time: scipy's Radau IIA (order 5) with the analytic
 Jacobian from t~ = 0.  Observables with the solver's definitions (continuum.observables):
-u~_w = int_0^1 sqrt(p~)/Dmu (mu - mu_s)/(mu_d - mu) dy~ (eq. IreWrittenNonDim) by Clenshaw-Curtis,
+u~_w = int_0^1 sqrt(p~)/Dmu (mu - mu_s)/(mu_d - mu) dy~ (eq. (3.10)) by Clenshaw-Curtis,
 mu_w = mu(0), delta = the first depth where v = DELTA_THRESHOLD, a root of the interpolant.
 
 Converged means: the degree-COARSE_DEGREE, rtol-COARSE_RTOL companion differs by less than CONVERGED
 (relative) in every quantity at every time.  Imposed speed (``speed_reference``): the same collocation
-of eq. GranularStokesEqn_muBIS, converged at every time by pieces (``pieces``): on wall-clustered maps before
+of eq. (3.14), converged at every time by pieces (``pieces``): on wall-clustered maps before
 and through the lift-off of mu_w from mu_d, on the exponential map after it (see there).  The
 values of both, at both resolutions, are cached in data/reference.csv, written by
 ``python -m tests.continuum.reference [CASE-PREFIX ...]`` (tests/continuum/test_reference.py checks the cache).
@@ -202,7 +202,7 @@ def wall_stretch(fr: Friction, mu_w: float, t_min: float) -> float:
 
 
 def stress_reference(fr: Friction, mu_w: float, times=TIMES, degree: int = DEGREE, rtol: float = RTOL) -> Reference:
-    """u~_w(t~), mu_w(t~) = mu_w and delta(t~) for an imposed wall stress (eq. GranularStokesEqn_mu)."""
+    """u~_w(t~), mu_w(t~) = mu_w and delta(t~) for an imposed wall stress (eq. (3.1))."""
     t = np.asarray(times, dtype=float)
     beta, excess = fr.beta(mu_w), mu_w - fr.mu_s
     grid = ChebyshevMap(degree, wall_stretch(fr, mu_w, t[0]))
@@ -276,9 +276,9 @@ def _remapped(old: ChebyshevMap, x: np.ndarray, new: ChebyshevMap, weights: np.n
 
 def speed_reference(fr: Friction, u_w: float, times=TIMES, degree: int = SPEED_DEGREE, rtol: float = RTOL,
                     wall_folds: float = 0.0, remap: tuple | None = None) -> Reference:
-    """u~_w(t~), mu_w(t~) and delta(t~) for an imposed wall speed: eq. GranularStokesEqn_muBIS for mu~ at the
+    """u~_w(t~), mu_w(t~) and delta(t~) for an imposed wall speed: eq. (3.14) for mu~ at the
     interior nodes (mu~(1) = 1, mu~(y~, 0) = 1, beta_w from the steady mu_w^inf) and q = ln(1/mu~_w) at the
-    wall, from eq. GranularStokesEqn_muBIS_BCs (Clenshaw-Curtis weights w_j) differentiated in time,
+    wall, from eq. (3.15) (Clenshaw-Curtis weights w_j) differentiated in time,
 
         w_0 sqrt(p~_0) e^q dq/dt~ = sum_j>0 w_j sqrt(p~_j) (dmu~_j/dt~)/mu~_j^2,
 

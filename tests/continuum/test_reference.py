@@ -1,6 +1,6 @@
 """The independent reference (tests/continuum/reference.py: Chebyshev collocation of
-eq. GranularStokesEqn_mu, Radau in time) is converged to 1e-9 and the solver agrees with it; the
-imposed speed's (eq. GranularStokesEqn_muBIS) at every time by pieces: on the wall-clustered maps before and
+eq. (3.1), Radau in time) is converged to 1e-9 and the solver agrees with it; the
+imposed speed's (eq. (3.14)) at every time by pieces: on the wall-clustered maps before and
 through the lift-off of mu_w from mu_d, on the exponential map after it (reference.pieces)."""
 import numpy as np
 import pytest

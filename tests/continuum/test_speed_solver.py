@@ -1,4 +1,4 @@
-"""Imposed wall speed (eq. GranularStokesEqn_muBIS with eq. GranularStokesEqn_muBIS_BCs)."""
+"""Imposed wall speed (eq. (3.14) with eq. (3.15))."""
 import functools
 from dataclasses import replace
 
@@ -108,7 +108,7 @@ def test_layer_grows_as_sqrt_t(paper_friction, u_w):
 def test_short_time_self_similarity(paper_friction, u_w):
     """For t~ << t_mud the excess (mu - mu_s)/(mu_w(t) - mu_s) is a function of
     eta = y~/(2 Dmu sqrt(t~)) alone (the paper's figure 9: collapse within 1 %), and the erfc form
-    eq. muShortTime_VelocityImposed is the 'reasonable fit' the paper reports: within 25 %."""
+    eq. (3.20) is the 'reasonable fit' the paper reports: within 25 %."""
     fr = paper_friction
     times = [1e-4, 1e-3, 1e-2]
     sol = solve_speed(fr, u_w, times)

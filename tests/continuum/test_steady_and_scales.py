@@ -15,7 +15,7 @@ def test_paper_steady_wall_speeds(paper_friction, mu_w_tilde, expected):
     fr = paper_friction
     mu_w = fr.mu_w_from_tilde(mu_w_tilde)
     assert steady_wall_speed(fr, mu_w) == pytest.approx(expected, abs=2e-5)
-    # the closed-form antiderivative equals adaptive quadrature of eq. IreWrittenNonDim
+    # the closed-form antiderivative equals adaptive quadrature of eq. (3.10)
     beta = fr.beta(mu_w)
     integrand = lambda y: math.sqrt(1 + beta * y) / fr.dmu * (1 / fr.tilde(mu_w / (1 + beta * y)) - 1)
     for y0 in (0.0, 0.3, 0.9):
@@ -57,13 +57,13 @@ def test_uwall_asymp_relative_error_is_order_beta(paper_friction):
 
 
 def test_nu_g_factor_two_makes_U_consistent():
-    """Integrating the dimensional eq. IreWritten over the steady layer gives U * u~_w^inf only
+    """Integrating the dimensional eq. (2.12) over the steady layer gives U * u~_w^inf only
     with nu_g = (d/(2 phi Dmu I0)) sqrt(p_w/rho) (the paper prints a second version without the 2)."""
     m = Material(I0=0.3, I_convention="paper", phi=0.58, d=2e-3, rho_p=2500.0, g=9.81)
     p_w, mu_w = 3000.0, m.friction.mu_w_from_tilde(0.5)
     sc = Scales(m, p_w, mu_w)
 
-    def dudy(y):  # eq. IreWritten, paper convention
+    def dudy(y):  # eq. (2.12), paper convention
         p = p_w + m.phi * m.rho_p * m.g * y
         mu = mu_w * p_w / p
         return 2 * m.I0 * math.sqrt(p / (m.rho_p * m.d**2)) * (mu - m.mu_s) / (m.mu_d - mu)
@@ -115,7 +115,7 @@ def test_bad_loading(paper_friction):
 
 
 def test_conversions_are_consistent_with_hydrostatics():
-    """p~ = 1 + beta_w y~ must be the hydrostatic p(y)/p_w (eq. StokesEqn2) given delta_s; tau~ = 1 is
+    """p~ = 1 + beta_w y~ must be the hydrostatic p(y)/p_w (eq. (2.6)) given delta_s; tau~ = 1 is
     tau_w = mu_w p_w; u~ converts with U."""
     m = Material(phi=0.58)
     sc = Scales(m, 12.0, m.friction.mu_w_from_tilde(0.4))

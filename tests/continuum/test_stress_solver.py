@@ -1,4 +1,4 @@
-"""Imposed wall stress (eq. GranularStokesEqn): convergence, growth laws, bounds, closed forms."""
+"""Imposed wall stress (eq. (2.15)): convergence, growth laws, bounds, closed forms."""
 
 import numpy as np
 import pytest
@@ -79,7 +79,7 @@ def test_delta_grows_as_sqrt_t(solutions, paper_friction, mt):
     sol = solutions[mt]
     d1, d2 = sol.delta[:2]
     assert np.log(d2 / d1) / np.log(10.0) == pytest.approx(0.5, abs=0.02)
-    if mt == 0.9:  # eq. SolutionSS: delta/delta_s = 4.66 Dmu sqrt(t~) (2 erfc^-1(1e-3) = 4.653)
+    if mt == 0.9:  # eq. (3.3): delta/delta_s = 4.66 Dmu sqrt(t~) (2 erfc^-1(1e-3) = 4.653)
         coeff = sol.delta[:2] / (paper_friction.dmu * np.sqrt(sol.t[:2]))
         assert coeff == pytest.approx([4.66, 4.66], rel=0.05)
         assert coeff == pytest.approx([SELF_SIMILAR_DELTA] * 2, rel=0.01)
@@ -111,7 +111,7 @@ def test_friction_stays_between_mu_s_and_mu_d(paper_friction, mt):
 
 
 def test_erfc_solution_at_short_times(solutions, paper_friction):
-    """eq. SolutionSS holds for t~ << 1 where the diffusivity is ~ Dmu^2 (mu~_w -> 1): for
+    """eq. (3.3) holds for t~ << 1 where the diffusivity is ~ Dmu^2 (mu~_w -> 1): for
     mu~_w = 0.9 within 2 % of the wall excess at t~ <= 1e-2; it fails for mu~_w = 0.1, where the wall
     diffusivity is (0.1 Dmu)^2 (the paper's figure 2 shows the same)."""
     fr = paper_friction
@@ -127,7 +127,7 @@ def test_erfc_solution_at_short_times(solutions, paper_friction):
 
 
 def test_wkb_series(solutions, paper_friction):
-    """eq. SolutionLONG: its initial value is the initial state (away from the wall, where the
+    """eq. (3.5): its initial value is the initial state (away from the wall, where the
     sine series has its Gibbs layer), and for mu~_w = 0.9 it follows the numerics for t~ >= 1 to 2 %
     of the stress deficit 1 - mu_s/mu_w, better as t~ grows."""
     fr = paper_friction

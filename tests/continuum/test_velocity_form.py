@@ -43,7 +43,7 @@ def unsheared():
 
 def test_unsheared_start_reaches_the_paper_steady_state(unsheared):
     """From a bed at rest (sigma_xy = 0), the yield front h(t) deepens monotonically to delta_s and the
-    steady state is eq. MuSteadyState with its velocity profile (creep below delta_s ~ eps)."""
+    steady state is eq. (2.10) with its velocity profile (creep below delta_s ~ eps)."""
     sol = unsheared
     front = sol.series["yield_front"].to_numpy()
     assert np.all(np.diff(front) > -1e-6 * SC.delta_s)

@@ -71,7 +71,7 @@ def test_preparation_ends_with_the_plate_landed_and_still(smoke):
 
 def test_pressure_grows_hydrostatically_from_p_w(smoke):
     """Time-averaged normal stress on horizontal planes (method of planes, the pressure of the paper's
-    y momentum balance, eq. StokesEqn2) grows from p_w at the plate with slope phi rho_p g."""
+    y momentum balance, eq. (2.6)) grows from p_w at the plate with slope phi rho_p g."""
     out, _ = smoke
     cfg, _ = config.preset("smoke")
     d = out / "seed-1" / "speed"
