@@ -55,10 +55,11 @@ from granstokes.lib.validate import require
 from . import lammps_env, layout
 from .config import Config, Grains, parse
 from .contact import Contact, mean_grain_volume
+from .estimate import Estimate, duration_text
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP
 from .runner import Interrupted, RunError, _Lammps, allow_lammps, sigterm_interrupts, stop_all_lammps
 from .shear import COMPRESS_MAX, COMPRESS_RATE, PRE_PACKING, SQUEEZE_TIME, ShearPoint, shear_script
-from .sizing import OVERHEAD, PACKING, count, duration_text, makespan, speedup
+from .sizing import OVERHEAD, PACKING, count, makespan, speedup
 from .throughput import Throughput, measured
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)
@@ -80,6 +81,11 @@ DENSE_CRITERION = f"kinetic part of P_yy <= {KINETIC_MAX:g} P_yy"
 #: I = 0.46: the dilation from the compressed packing overshoots to phi = 0.39-0.45 and phi settles after a strain of
 #: 4-6 in the doubled cell, ~1 in the normal one; at I = 0.1 neither overshoots)
 FINITE_SIZE_START = 5.0
+#: bytes a cell's folder holds (its LAMMPS log, series, profile and blocks: 1.4-2.2e5 in the smoke study's 2D cells;
+#: bench/estimates.py measures a calibration's folder against the estimate)
+CELL_BYTES = 2e5
+#: seconds of the fit and its bootstrap after the cells (1-2 s for 7-14 points x 1-3 seeds, measured)
+FIT_SECONDS = 2.0
 
 
 @dataclass(frozen=True)
@@ -155,6 +161,14 @@ class CalibrationPlan:
         work = [self.task_seconds(k, dbl, speed) / speedup(self.n_doubled if dbl else self.n_grains, dim, np_)
                 for k, seed, dbl in self.cells() if self.key(k, seed, dbl) not in done]
         return OVERHEAD + makespan(work, jobs, np_, contention=speed.contention)
+
+    def estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
+                 speed: Throughput | None = None) -> Estimate:
+        """The calibration's wall time (``cost_seconds`` and its fit) and the bytes of its cells left (CELL_BYTES
+        each)."""
+        cells = sum(1 for cell in self.cells() if self.key(*cell) not in done)
+        return Estimate().plus("calibration", self.cost_seconds(jobs, np_, done, speed) + FIT_SECONDS,
+                               cells * CELL_BYTES)
 
     def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
                       speed: Throughput | None = None) -> str:
@@ -487,6 +501,7 @@ def check_calibration(cfg: Config, out: str | Path, jobs: int = DEFAULT_JOBS, np
         stored = parse((out / layout.CONFIG_TOML).read_text())
         require(stored.as_dict() == cfg.as_dict(), "--resume", f"the config stored in {out / layout.CONFIG_TOML}",
                 "a different config")
+        staging.require_unchanged(out, "--out")
     else:
         require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
                 str(out))
@@ -517,6 +532,7 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
     if resume:
         state = json.loads(state_path.read_text())
         state.setdefault("resumes", []).append(_now())
+        staging.resume(out, COMMAND)
     else:
         state = {"name": cfg.name, "status": "running", "message": "", "plan": plan.as_dict(),
                  "provenance": {**provenance(), **lammps_env.lammps_info(), "np": np, "jobs": jobs},
@@ -568,4 +584,6 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
         state["finished"] = _now()
         state["wall_time_this_invocation"] = time.monotonic() - t0
         save()
+        # every file recorded once complete; else the config alone (a cell stopped elsewhere may still be writing)
+        staging.seal(out, COMMAND, None if state["status"] == "complete" else [layout.CONFIG_TOML])
     return CalibrateResult(out, state["status"], state["message"], cal, signum)

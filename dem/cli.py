@@ -18,6 +18,7 @@ from granstokes.lib.toml_text import parse_assignment, with_entries
 from granstokes.lib.validate import require
 
 from . import config as config_mod
+from .estimate import STARTUP
 from .lammps_env import DEFAULT_JOBS, DEFAULT_NP, PLAIN_FRACTION, PLAIN_SECONDS
 
 QUIET_HELP = (f"no progress report (otherwise a bar per LAMMPS process on a terminal, or a line every "
@@ -93,6 +94,8 @@ def _cmd_run(args) -> int:
         print(f"  {_resume_line(done, left, 'stages')}", file=sys.stderr)
     _speed()
     print(f"  {runner.plan.cost_estimate(runner.jobs, runner.lmp.np, done)}", file=sys.stderr)
+    print(f"  {runner.plan.estimate(runner.jobs, runner.lmp.np, done).plus('start-up', STARTUP['dem']).line()}",
+          file=sys.stderr)
     _oversubscribed(runner.lmp.np, runner.jobs)
     if args.dry_run:
         return 0
@@ -117,6 +120,8 @@ def _cmd_calibrate(args) -> int:
         print(f"  {_resume_line(done, left, 'points')}", file=sys.stderr)
     _speed()
     print(f"  {plan.cost_estimate(args.jobs, args.np, done)}", file=sys.stderr)
+    print(f"  {plan.estimate(args.jobs, args.np, done).plus('start-up', STARTUP['dem']).line()}",
+          file=sys.stderr)
     _oversubscribed(args.np, args.jobs)
     if args.dry_run:
         return 0

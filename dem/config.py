@@ -284,6 +284,7 @@ class Config:
     seeds: tuple[int, ...] = (1,)
     dt: float | None = None
     calibration: Calibration = field(default_factory=Calibration)
+    absent: tuple[str, ...] = ()  # the optional tables the document did not give: their defaults apply
 
     def __post_init__(self):
         require(isinstance(self.name, str) and re.fullmatch(r"[A-Za-z0-9_.-]+", self.name) is not None,
@@ -322,6 +323,27 @@ class Config:
     @property
     def time_step(self) -> float:
         return self.contact.dt_max if self.dt is None else self.dt
+
+    def describe(self) -> list[str]:
+        """The resolved scene a physicist checks before any run, one line per table (the defaults named)."""
+        g, b, o, p = self.grains, self.box, self.output, self.prepare
+        shape = "disks" if g.dimension == 2 else "spheres"
+        m = self.material
+        lines = [f"{g.dimension}D {shape}, p_w = {self.p_w:g} rho_p g d, seeds {list(self.seeds)}; sized from mu_s = "
+                 f"{m.mu_s:.4g}, mu_d = {m.mu_d:.4g}, I0 = {m.I0:.4g} ({m.I_convention} convention), phi = {m.phi:.3g}",
+                 f"grains: diameters in [{1 - g.polydispersity:g}, {1 + g.polydispersity:g}] d, mu_p = {g.mu_p:g}, "
+                 f"restitution {g.restitution:g}, {g.contact} contact (pair_style {g.pair_style}), kappa = "
+                 f"{g.kappa:g}, k_t/k_n = {g.kt_over_kn:.3g}",
+                 f"box: width {b.width:g} d" + (f", width_z {self.width_z:g} d" if self.width_z else "")
+                 + f", base {b.base_thickness:g} d, depth " + (f"{b.depth:g} d" if b.depth is not None else "sized"),
+                 f"outputs every (sqrt(d/g)): plate {o.plate:g}, thermo {o.thermo:g}, atoms {o.atoms:g}, contacts "
+                 f"{o.contacts:g}, profiles {o.profiles:g}, restart {o.restart:g}"
+                 + (f"; atoms every {o.atoms_early:g} over the first {o.early:g}" if o.early else ""),
+                 f"preparation: settle to {p.settle_ke_per_grain:g} m g d per grain (at most {p.settle_max:g}), relax "
+                 f"to {p.ke_per_grain:g} (at most {p.relax_max:g}), plate gap {p.plate_gap:g} d"]
+        if self.absent:
+            lines.append("defaults (no table in the config): " + ", ".join(f"[{k}]" for k in self.absent))
+        return lines
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -376,7 +398,8 @@ def from_dict(doc: dict) -> Config:
         kwargs["seeds"] = tuple(doc["seeds"])
     if "dt" in doc and doc["dt"] != "auto":
         kwargs["dt"] = doc["dt"]
-    return Config(name=doc.get("name", "dem"), **kwargs)
+    absent = tuple(k for k in (*_TABLES, "load") if k not in doc and k != "material")
+    return Config(name=doc.get("name", "dem"), absent=absent, **kwargs)
 
 
 def parse(text: str) -> Config:

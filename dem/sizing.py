@@ -25,7 +25,9 @@ from granstokes.lib.validate import require
 
 from .config import Config, Drive
 from .contact import grain_volume, mean_grain_volume
+from .estimate import Estimate, duration_text
 from .layout import stage_key
+from .outputs import CONTACTS_PER_GRAIN, PREPARE_LOG_BYTES, PROFILE_EXTRA_BINS, ROW_BYTES
 from .throughput import Throughput, measured
 
 #: packing fractions used to turn a bed depth into a grain count (random close packing, loose side)
@@ -43,8 +45,6 @@ FALL_MARGIN = 1.5
 SAMPLES_PER_CONTACT = 2
 #: a run's or a calibration's fixed wall time in seconds: start-up, the LAMMPS library query, the merges
 OVERHEAD = 1.0
-#: durations up to this many seconds are printed in s, up to this many minutes in min, beyond in h
-SECONDS_SHOWN, MINUTES_SHOWN = 90, 90
 
 
 def drive_scales(cfg: Config, drive: Drive) -> Scales:
@@ -151,6 +151,25 @@ class Plan:
         steps = next(d.steps for d in self.drives if d.drive.name == drive)
         return self.n_grains * steps / speed.rate(self.dimension, "drive")
 
+    def stage_bytes(self, key: str) -> float:
+        """Bytes one stage (dem.layout.stage_key) writes: the prepared bed and its log, or a drive's dumps,
+        profiles, plate record, log and last restart (dem.outputs.ROW_BYTES)."""
+        dim, n, iv, row = self.dimension, self.n_grains, self.intervals, ROW_BYTES
+        drive = key.partition("/")[2]
+        if not drive:
+            return 2 * n * row["restart"] + PREPARE_LOG_BYTES  # prepared.restart and grains.csv
+        d = next(d for d in self.drives if d.drive.name == drive)
+        return (self.atom_frames(d) * n * row["atom"][dim]
+                + (d.steps // iv["contacts"] + 1) * n * CONTACTS_PER_GRAIN[dim] * row["contact"][dim]
+                + d.steps // iv["profiles"] * (self.depth + PROFILE_EXTRA_BINS) * row["profile"][dim]
+                + (d.steps // iv["plate"] + 1) * row["plate"] + d.steps // iv["thermo"] * row["thermo"]
+                + n * row["restart"])
+
+    def estimate(self, jobs: int = 1, np_: int | None = None, done=(), speed: Throughput | None = None) -> Estimate:
+        """The run's wall time (``cost_seconds``) and the bytes of its stages (what is left: not in ``done``)."""
+        disk = sum(self.stage_bytes(k) for seed in self.config.seeds for k in self.stage_keys(seed) if k not in done)
+        return Estimate().plus("beds", self.cost_seconds(jobs, np_, done, speed), disk)
+
     def stage_keys(self, seed: int) -> list[str]:
         """run.json's keys of a seed's stages in the order they run: the preparation, then each drive."""
         return [stage_key(seed)] + [stage_key(seed, d.drive.name) for d in self.drives]
@@ -200,7 +219,7 @@ def plan(cfg: Config) -> Plan:
     """Size the scene; raises ValueError (naming the drive) when a load is outside mu(I)'s range."""
     dt = cfg.time_step
     c = cfg.contact
-    reasons = [f"dt = {dt:.4g} ({'given' if cfg.dt else 'default'}; bound t_c/20 = {c.dt_max:.4g}, "
+    reasons = [*cfg.describe(), f"dt = {dt:.4g} ({'given' if cfg.dt else 'default'}; bound t_c/20 = {c.dt_max:.4g}, "
                f"t_c = {c.t_c:.4g}, k_n = {c.k_n:.4g} from kappa = {c.kappa:g})"]
     drives = []
     for d in cfg.drives:
@@ -328,10 +347,3 @@ def makespan(work, jobs: int, np_: int = 1, cores: int | None = None, contention
 def count(n: float) -> str:
     """A large count to two significant digits, e.g. 1.6e5."""
     return f"{n:.2g}".replace("e+0", "e").replace("e+", "e")
-
-
-def duration_text(seconds: float) -> str:
-    """``seconds`` as a readable duration in s, min or h (two significant digits, whole units from 100)."""
-    value, unit = ((seconds, "s") if seconds < SECONDS_SHOWN else (seconds / 60, "min")
-                   if seconds < MINUTES_SHOWN * 60 else (seconds / 3600, "h"))
-    return f"{value:.2g} {unit}" if value < 100 else f"{value:.0f} {unit}"

@@ -66,7 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
     dem_register(sub)
     compare_register(sub)
     study_register(sub)
-    d = sub.add_parser("demo", help="the quick continuum-vs-DEM comparison: paper figures, quick DEM presets, report")
+    d = sub.add_parser("demo", help="what make demo runs: the paper's figures regenerated and the smoke study "
+                                    "(calibration, DEM drives at two pressures, blind comparison), one front page")
     d.add_argument("--out", type=Path, default=Path("demo-out"), help="output folder (default %(default)s)")
     d.set_defaults(func=run_demo)
     return parser

@@ -8,8 +8,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from granstokes.dem import config as dem_config
+from granstokes.dem.estimate import STARTUP, Estimate, duration_text
 from granstokes.dem.layout import CONFIG_TOML, RUN_JSON
-from granstokes.dem.sizing import Plan, count, duration_text, makespan, plan, ranks_per_bed, speedup
+from granstokes.dem.sizing import Plan, count, makespan, plan, ranks_per_bed, speedup
 from granstokes.dem.throughput import Throughput, measured
 from granstokes.lib.toml_text import with_entries
 
@@ -33,6 +34,9 @@ CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
 #: coarse-graining), in grain-steps of a 2D drive: the smoke study's comparison less the two terms above, over its
 #: 4 drives (bench/dem_costs.py; checked on a subset of the disks study)
 REPORT_DRIVE_STEPS = 5.9e7
+#: bytes of the report per scored drive: its figures, tables and predictions (the smoke study's report, 10 MB over 4
+#: drives; bench/estimates.py)
+REPORT_BYTES_PER_DRIVE = 2.5e6
 #: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
 MODELS = 3
 #: an oscillating study's comparison per drive, in grain-steps of a 2D drive: its models' solves (central, coarse and
@@ -47,6 +51,11 @@ PROFILES_PER_PERIOD, PLATE_PER_PROFILE = 24, 4
 
 def pressure_label(p_w: float) -> str:
     return f"p{p_w:g}"
+
+
+def calibration_folder(out: Path, p_w: float) -> Path:
+    """The study's plane-shear calibration at p_w (a ``granstokes dem calibrate`` folder)."""
+    return out / f"calibration-{pressure_label(p_w)}"
 
 
 def _grains(study: Study, p_w: float) -> list[tuple[str, object]]:
@@ -156,6 +165,16 @@ class StudyPlan:
                 for label, r in self.runs.items() for seed in r.plan.config.seeds]
         return makespan(sorted([b for b in beds if b > 0], reverse=True), jobs, contention=speed.contention)
 
+    def estimate(self, jobs: int, out: Path | None = None, calibration: Estimate = Estimate()) -> Estimate:
+        """The whole study on this machine: ``calibration`` (its stage, if it runs), the beds and their bytes (what
+        is left in the study folder ``out``), the comparison and its report, the command's start-up."""
+        done = self.done(out)
+        disk = sum(r.plan.stage_bytes(k) for label, r in self.runs.items() for seed in r.plan.config.seeds
+                   for k in r.plan.stage_keys(seed) if f"{label}/{k}" not in done)
+        return (calibration.plus("beds", self.cost_seconds(jobs, out), disk)
+                .plus("comparison", self.comparison_seconds(jobs), self.scored_drives() * REPORT_BYTES_PER_DRIVE)
+                .plus("start-up", STARTUP["study"]))
+
     def grain_frames(self) -> int:
         """Grains x atom snapshots of every drive and bed: what the comparison coarse-grains (the width check's
         runs too)."""
@@ -196,7 +215,6 @@ class StudyPlan:
                 f"{count(self.grain_frames())} grain-frames coarse-grained, {self.scored_drives()} drive(s) x {MODELS} "
                 "models")
         lines.append(f"  the comparison: about {duration_text(comparison)} ({what})")
-        lines.append(f"  the study's beds and comparison{left}: about {duration_text(beds + comparison)}")
         return lines
 
 

@@ -59,7 +59,7 @@ def test_calibrate_dry_run_prints_the_plan_and_its_cost_and_writes_nothing(tmp_p
     assert main(["dem", "calibrate", "--preset", "smoke", "--out", str(out), "--dry-run"]) == 0
     err = capsys.readouterr().err
     cp = plan_calibration(config.preset("smoke")[0])
-    assert f"{cp.summary(out)}\n  {cp.cost_estimate(2, 1)}\n" in err and "4 inertial numbers" in err
+    assert f"{cp.summary(out)}\n  {cp.cost_estimate(2, 1)}\n" in err and "7 inertial numbers" in err
     assert not out.exists()
 
 
@@ -73,7 +73,8 @@ def test_calibrate_resume_reads_the_stored_config_and_counts_the_points(tmp_path
     assert main(["dem", "calibrate", "--resume", "--out", str(out), "--dry-run"]) == 0
     err = capsys.readouterr().err
     # run order: longest (smallest I) first
-    assert "resume: 2 of 4 points complete (I-0/seed-1, I-3/seed-1); left: I-1/seed-1, I-2/seed-1" in err
+    assert ("resume: 2 of 7 points complete (I-0/seed-1, I-3/seed-1); left: I-1/seed-1, I-2/seed-1, I-4/seed-1, "
+            "I-5/seed-1, I-6/seed-1") in err
     assert "of what is left" in err
 
 

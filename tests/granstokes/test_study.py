@@ -2,6 +2,7 @@
 the smoke study through a Dask scheduler, killed mid-way and resumed."""
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -109,8 +110,10 @@ def test_set_overrides_and_presets_print(capsys):
 
 def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_speed):
     """The smoke study's dry run prints the comparison (every snapshot of every bed coarse-grained, the width
-    check's too; each scored drive's models a unit of work over the jobs, its report) and adds it to the beds'."""
-    from granstokes.dem.sizing import duration_text
+    check's too; each scored drive's models a unit of work over the jobs, its report) and one total: the
+    calibrations, the beds, the comparison and the start-up, with the disk."""
+    from granstokes.dem.calibrate import plan_calibration
+    from granstokes.dem.estimate import STARTUP, duration_text
 
     from granstokes.study.plan import CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS, MODELS, REPORT_DRIVE_STEPS
 
@@ -135,7 +138,11 @@ def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_sp
     beds = sp.cost_seconds(2)
     assert f"the study's beds: about {duration_text(beds)} with 2 job(s)" in printed
     assert f"the comparison: about {duration_text(sp.comparison_seconds(2))} (" in printed
-    assert f"the study's beds and comparison: about {duration_text(beds + sp.comparison_seconds(2))}\n" in printed
+    calibration = sum(plan_calibration(dem_config.parse(calibration_text(config.load(None, "smoke")[0], p))).estimate(2)
+                      .seconds for p in (5.0, 10.0))
+    total = calibration + beds + sp.comparison_seconds(2) + STARTUP["study"]
+    assert re.search(rf"total: about {re.escape(duration_text(total))} on this machine \(calibration "
+                     rf"{re.escape(duration_text(calibration))} \+ beds .* and [\d.]+ MB of disk", printed)
     assert not (tmp_path / "s").exists()
 
 
