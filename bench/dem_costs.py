@@ -1,21 +1,23 @@
-"""The cost estimates against the measured wall time: every shipped DEM preset and study preset, the estimate
-``--dry-run`` prints against the command then run, on the same machine, one row after the other.
+"""The cost estimates against the measured wall time and disk: every shipped DEM preset and study preset, the total
+``--dry-run`` prints against the command then run, on the same machine, one row after the other; with
+``--shared``, each row again beside one busy process per core (the stretch a shared machine gives).
 
-    .venv/bin/python bench/dem_costs.py [--rows NAME ...] [--out DIR] [--constants]
+    .venv/bin/python bench/dem_costs.py [--rows NAME ...] [--shared] [--constants]
 
 Each row takes the CPU lock (/work/runs/cpu.lock, as ``flock`` does) for itself only: a fresh probe
-(``granstokes dem probe``), the dry run (its printed "about ..." read back: a run's or calibration's cost line;
-a study's calibration lines plus its "beds and comparison" line), then the real command into a new folder,
-timed from start to exit; the load average before and after.  The presets of hours (the paper scene, the disks
-and spheres studies) are measured on a subset, and the estimate is the dry run of that same subset: one bed
-with its drives shortened; one seed of every run with a committed calibration; a calibration at one pressure
-with three inertial numbers and one seed.  A study's comparison stage is also timed on its own (from the line
-announcing it to the exit) against ``StudyPlan.comparison_seconds``.
+(``granstokes dem probe``, before any busy process starts: the estimate is the idle machine's), the dry run (its
+"total: about ... and N MB of disk" line read back, with its stages), then the real command into a new folder,
+timed from start to exit, and the folder's size; the load average before and after.  The presets of hours (the
+paper scene, the disks and spheres studies) are measured on a subset, and the estimate is the dry run of that
+same subset: one bed with its drives shortened; one seed of every run with a committed calibration; a
+calibration at one pressure with three inertial numbers and one seed.  A study's comparison stage is also timed
+on its own (from the line announcing it to the exit) against the total's comparison stage.
 
 ``--constants`` measures the comparison's two constants (granstokes/study/plan.py) instead: the
 coarse-graining rate (bench/cg_rate.py) and the model side of the disks study on one process
 (bench/compare_cost.py), each between two probes, under one lock.
-Writes bench/dem_costs.json (merged: rows not rerun are kept) and prints the table for bench/RESULTS.md.
+Writes bench/dem_costs.json (merged: rows not rerun are kept; shared rows under "shared") and prints the tables
+for bench/RESULTS.md.
 """
 from __future__ import annotations
 
@@ -67,7 +69,9 @@ ROWS = {
     "dem paper": (f"one bed, its 6 drives {PAPER_DRIVE:g} time units each",
                   lambda: ["dem", "run", "--preset", "paper",
                            *_sets("seeds=[1]", *(f"drive.{k}.duration={PAPER_DRIVE}" for k in range(6)))]),
+    "dem calibrate quick": ("the preset's calibration", lambda: ["dem", "calibrate", "--preset", "quick"]),
     "study smoke": ("the preset", lambda: ["study", "--preset", "smoke"]),
+    "study oscillating-smoke": ("the preset", lambda: ["study", "--preset", "oscillating-smoke"]),
     "study disks": (f"seed 1 of every run, drives of {DISKS_TS:g} t_s, the committed calibration",
                     lambda: ["study", "--preset", "disks",
                              *_sets("seeds=[1]", f"duration_ts={DISKS_TS}",
@@ -83,9 +87,11 @@ ROWS = {
                                       f"calibration={{file = \"{SPHERES_CALIBRATION}\"}}")]),
 }
 UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0}
-ABOUT = re.compile(r"about ([\d.]+) (s|min|h)\b")
-COMPARISON = "the comparison:"
-STUDY_TOTAL = "the study's beds and comparison:"
+BYTES = {"B": 1.0, "kB": 1e3, "MB": 1e6, "GB": 1e9}
+TOTAL = re.compile(r"total: about ([\d.]+) (s|min|h) on this machine \((.*)\) and ([\d.]+) (B|kB|MB|GB) of disk")
+STAGE = re.compile(r"([a-z-]+) ([\d.]+) (s|min|h)")
+#: the rows the acceptance of the estimates names (idle within 30 %, and their stretch when shared)
+ACCEPTANCE = ("dem smoke", "dem quick", "dem spheres", "dem calibrate quick", "study smoke", "study oscillating-smoke")
 
 
 @contextmanager
@@ -99,19 +105,27 @@ def cpu_lock():
             fcntl.flock(fh, fcntl.LOCK_UN)
 
 
-def seconds(line: str) -> float:
-    value, unit = ABOUT.search(line).groups()
-    return float(value) * UNITS[unit]
+def estimate(lines: list[str]) -> dict:
+    """The dry run's total line: seconds, disk, and each stage's seconds."""
+    value, unit, stages, size, size_unit = TOTAL.search(next(x for x in lines if "total: about" in x)).groups()
+    return {"total": float(value) * UNITS[unit], "disk": float(size) * BYTES[size_unit],
+            **{what: float(v) * UNITS[u] for what, v, u in STAGE.findall(stages)}}
 
 
-def estimate(lines: list[str], study: bool) -> dict:
-    """The dry run's estimate: a run's or calibration's cost line; a study's calibrations plus its beds and
-    comparison (and the comparison alone)."""
-    if not study:
-        return {"total": seconds(next(x for x in lines if "cost:" in x and "about" in x))}
-    calibrations = [seconds(x) for x in lines if x.startswith("study: calibration at")]
-    return {"total": sum(calibrations) + seconds(next(x for x in lines if STUDY_TOTAL in x)),
-            "calibration": sum(calibrations), "comparison": seconds(next(x for x in lines if COMPARISON in x))}
+@contextmanager
+def busy(processes: int):
+    """``processes`` busy Python loops (another user's CPU work), stopped on exit."""
+    loops = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(processes)]
+    try:
+        yield
+    finally:
+        for p in loops:
+            p.kill()
+            p.wait()
+
+
+def folder_bytes(folder: Path) -> int:
+    return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
 
 
 def probe() -> dict:
@@ -121,7 +135,7 @@ def probe() -> dict:
     return json.loads(cache_path().read_text())["probe"]
 
 
-def measure(name: str) -> dict:
+def measure(name: str, shared: bool = False) -> dict:
     what, command = ROWS[name]
     argv = command()
     out = SCRATCH / re.sub(r"\W+", "-", name)
@@ -130,25 +144,28 @@ def measure(name: str) -> dict:
         load = [os.getloadavg()[0]]
         speed = probe()
         dry = subprocess.run([*GS, *argv, "--out", str(out), "--dry-run"], capture_output=True, text=True, check=True)
-        est = estimate(dry.stderr.splitlines(), argv[0] == "study")
-        t0 = time.perf_counter()
-        proc = subprocess.Popen([*GS, *argv, "--out", str(out)], stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
-                                text=True)
-        compare_start, log = None, []
-        for line in proc.stderr:
-            log.append(f"{time.perf_counter() - t0:8.1f} {line.rstrip()}")
-            if compare_start is None and "comparing every drive" in line:
-                compare_start = time.perf_counter() - t0
-        proc.wait()
-        wall = time.perf_counter() - t0
-        load.append(os.getloadavg()[0])
-    (SCRATCH / f"{out.name}.log").write_text("\n".join(log) + "\n")
+        est = estimate(dry.stderr.splitlines())
+        with busy(os.cpu_count() if shared else 0):
+            t0 = time.perf_counter()
+            proc = subprocess.Popen([*GS, *argv, "--out", str(out)], stderr=subprocess.PIPE,
+                                    stdout=subprocess.DEVNULL, text=True)
+            compare_start, log = None, []
+            for line in proc.stderr:
+                log.append(f"{time.perf_counter() - t0:8.1f} {line.rstrip()}")
+                if compare_start is None and "comparing every drive" in line:
+                    compare_start = time.perf_counter() - t0
+            proc.wait()
+            wall = time.perf_counter() - t0
+            load.append(os.getloadavg()[0])
+    (SCRATCH / f"{out.name}{'-shared' if shared else ''}.log").write_text("\n".join(log) + "\n")
     if proc.returncode != 0:
         raise SystemExit(f"{name}: exit {proc.returncode} (log in {SCRATCH / out.name}.log)")
     row = {"what": what, "command": "granstokes " + " ".join(argv), "estimate": est, "measured": wall,
-           "ratio": est["total"] / wall, "probe": speed, "load": load, "when": time.strftime("%Y-%m-%d %H:%M")}
+           "ratio": est["total"] / wall, "disk": folder_bytes(out), "probe": speed, "load": load,
+           "when": time.strftime("%Y-%m-%d %H:%M")}
     if compare_start is not None:
         row["measured_comparison"] = wall - compare_start
+    subprocess.run(["rm", "-rf", str(out)], check=True)
     return row
 
 
@@ -182,44 +199,53 @@ def relative(cg_rate: float, cg_probe: float, model_seconds: float, model_probe:
     return {"CG_PER_DRIVE_STEP": cg_rate / (drive * cg_probe), "MODEL_DRIVE_STEPS": model_seconds * drive * model_probe}
 
 
-def table(rows: dict) -> str:
-    lines = ["| preset (what is run) | estimate | measured | estimate against measured | load before, after |",
-             "|---|---|---|---|---|"]
+def table(rows: dict, shared: dict) -> str:
+    lines = ["| preset (what is run) | estimate | measured idle | estimate against measured | disk estimated, "
+             "measured | load before, after | measured shared | stretch |", "|---|---|---|---|---|---|---|---|"]
     for name in ROWS:
         if name not in rows:
             continue
-        r = rows[name]
+        r, s = rows[name], shared.get(name)
         est = r["estimate"]
+        disk = (f"{est['disk'] / 1e6:.3g}, {r['disk'] / 1e6:.3g} MB" if "disk" in r and "disk" in est else "")
+        wide = (f"{s['measured']:.0f} s | {s['measured'] / r['measured']:.2f}x" if s else " | ")
         lines.append(f"| {name} ({r['what']}) | {est['total']:.0f} s | {r['measured']:.0f} s | "
-                     f"{100 * (r['ratio'] - 1):+.0f} % | {r['load'][0]:.1f}, {r['load'][1]:.1f} |")
-    comparisons = [(n, r) for n, r in rows.items() if "measured_comparison" in r]
+                     f"{100 * (r['ratio'] - 1):+.0f} % | {disk} | {r['load'][0]:.1f}, {r['load'][1]:.1f} | {wide} |")
+    comparisons = [(n, r) for n, r in rows.items() if "measured_comparison" in r and "comparison" in r["estimate"]]
     if comparisons:
         lines += ["", "| study, its comparison stage | estimate | measured | estimate against measured |",
                   "|---|---|---|---|"]
         for name, r in comparisons:
             e, m = r["estimate"]["comparison"], r["measured_comparison"]
             lines.append(f"| {name} | {e:.0f} s | {m:.0f} s | {100 * (e / m - 1):+.0f} % |")
+    stretch = [shared[n]["measured"] / rows[n]["measured"] for n in ACCEPTANCE if n in rows and n in shared]
+    if stretch:
+        lines += ["", f"Stretch beside one busy process per core: {min(stretch):.2f}-{max(stretch):.2f}x "
+                      "(dem/estimate.py SHARED_STRETCH)."]
     return "\n".join(lines)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--rows", nargs="*", choices=list(ROWS), default=list(ROWS))
+    ap.add_argument("--rows", nargs="*", choices=list(ROWS), default=list(ACCEPTANCE))
+    ap.add_argument("--shared", action="store_true", help="run each row beside one busy process per core")
     ap.add_argument("--constants", action="store_true", help="measure the comparison's constants instead")
     ap.add_argument("--json", type=Path, default=ROOT / "bench" / "dem_costs.json")
     args = ap.parse_args()
     stored = json.loads(args.json.read_text()) if args.json.is_file() else {"rows": {}}
+    stored.setdefault("shared", {})
     if args.constants:
         stored["constants"] = constants()
         print(json.dumps(stored["constants"], indent=2))
     else:
         for name in args.rows:
-            stored["rows"][name] = measure(name)
-            r = stored["rows"][name]
-            print(f"{name}: estimate {r['estimate']['total']:.0f} s, measured {r['measured']:.0f} s "
-                  f"({100 * (r['ratio'] - 1):+.0f} %)", flush=True)
+            row = measure(name, args.shared)
+            stored["shared" if args.shared else "rows"][name] = row
+            print(f"{name}{' (shared)' if args.shared else ''}: estimate {row['estimate']['total']:.0f} s, measured "
+                  f"{row['measured']:.0f} s ({100 * (row['ratio'] - 1):+.0f} %), disk {row['disk'] / 1e6:.3g} MB "
+                  f"(estimate {row['estimate']['disk'] / 1e6:.3g})", flush=True)
             args.json.write_text(json.dumps(stored, indent=2))
-        print(table(stored["rows"]))
+        print(table(stored["rows"], stored["shared"]))
     args.json.write_text(json.dumps(stored, indent=2))
 
 

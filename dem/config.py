@@ -332,8 +332,8 @@ class Config:
         lines = [f"{g.dimension}D {shape}, p_w = {self.p_w:g} rho_p g d, seeds {list(self.seeds)}; sized from mu_s = "
                  f"{m.mu_s:.4g}, mu_d = {m.mu_d:.4g}, I0 = {m.I0:.4g} ({m.I_convention} convention), phi = {m.phi:.3g}",
                  f"grains: diameters in [{1 - g.polydispersity:g}, {1 + g.polydispersity:g}] d, mu_p = {g.mu_p:g}, "
-                 f"restitution {g.restitution:g}, {g.contact} contact (pair_style {g.pair_style}), kappa = "
-                 f"{g.kappa:g}, k_t/k_n = {g.kt_over_kn:.3g}",
+                 f"restitution {g.restitution:g}, {g.contact} contact (pair_style {g.pair_style}), k_n = "
+                 f"{self.contact.k_n:.4g} (kappa = {g.kappa:g} at this p_w), k_t/k_n = {g.kt_over_kn:.3g}",
                  f"box: width {b.width:g} d" + (f", width_z {self.width_z:g} d" if self.width_z else "")
                  + f", base {b.base_thickness:g} d, depth " + (f"{b.depth:g} d" if b.depth is not None else "sized"),
                  f"outputs every (sqrt(d/g)): plate {o.plate:g}, thermo {o.thermo:g}, atoms {o.atoms:g}, contacts "

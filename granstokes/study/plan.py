@@ -199,9 +199,11 @@ class StudyPlan:
     def lines(self, jobs: int, out: Path | None = None) -> list[str]:
         """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole (what is left of it in
         the study folder ``out``)."""
-        lines = []
+        first = next(iter(self.runs.values())).plan.config.describe()
+        lines = [f"  {first[1]}"]  # one material: the grains of every run
         for label, r in self.runs.items():
             p = r.plan
+            lines.append(f"  {label}: {p.config.describe()[0]}")
             for d in p.drives:
                 lines.append(f"  {label}, {d.drive.name}: delta_s = {d.scales.delta_s:.3g} d, t_s = "
                              f"{d.scales.t_s:.3g}, depth {p.depth:g} d, width {p.config.box.width:g} d, duration "
