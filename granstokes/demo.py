@@ -47,7 +47,7 @@ def run_demo(out_dir, study: str = STUDY) -> Path:
     stored = folder / STUDY_JSON
     resume = stored.exists() and json.loads(stored.read_text()).get("status") != "complete"
     if not stored.exists() or resume:
-        st, text = ((study_config.parse((folder / STUDY_TOML).read_text()), (folder / STUDY_TOML).read_text())
+        st, text = ((study_config.parse((folder / STUDY_TOML).read_text(), folder), (folder / STUDY_TOML).read_text())
                     if resume else study_config.load(None, study))
         record = _stage(f"the {study} study (calibration, DEM drives, blind comparison)", clock,
                         lambda: run_study(st, text, folder, resume=resume))

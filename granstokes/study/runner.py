@@ -2,9 +2,9 @@
 every pressure's run on one executor (granstokes.lib.executor: Dask, local or a scheduler), then the
 comparison of all drives against every model from the calibration.
 
-Folder: DIR/study.toml (the study as given), DIR/study.json (status, grid, every run with its status and path,
-the calibration, provenance), DIR/calibration-pP/ (dem calibrate), DIR/runs/pP/ (dem run folders),
-DIR/metrics.json, DIR/index.html and the report's figures and tables.  ``resume`` continues whatever is
+Folder: DIR/study.toml (the study as given, its files relative to DIR), DIR/study.json (status, grid, every run
+with its status and path, the calibration, provenance), DIR/calibration-pP/ (dem calibrate), DIR/runs/pP/ (dem
+run folders), DIR/metrics.json, DIR/index.html and the report's figures and tables.  ``resume`` continues whatever is
 unfinished; a finished calibration, bed or drive is never redone.
 """
 from __future__ import annotations
@@ -12,6 +12,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
+import os
 import signal
 import sys
 import time
@@ -74,7 +75,8 @@ class StudyRunner:
         pressure (each calibration pressure run or resumed; their mu(I) compared in study.json)."""
         s = self.study
         if s.calibration_file is not None:
-            self.record(lambda d: d.update(calibration={"source": s.calibration_file, "ran": False}))
+            self.record(lambda d: d.update(calibration={"source": relative(s.calibration_file, self.out),
+                                                        "ran": False}))
             return Path(s.calibration_file)
         results = {}
         for p_w in s.calibration_pressures:
@@ -90,8 +92,10 @@ class StudyRunner:
                     raise StudyStopped(result.status, f"calibration at p = {p_w:g}: {result.message}", result.signal)
             results[p_w] = str(folder / layout.CALIBRATION_JSON)
         reference = results[s.reference_pressure]
-        self.record(lambda d: d.update(calibration={"source": reference, "ran": True, "files": results,
-                                                    "pressure_dependence": pressure_dependence(results)}))
+        self.record(lambda d: d.update(calibration={
+            "source": relative(reference, self.out), "ran": True,
+            "files": {p_w: relative(f, self.out) for p_w, f in results.items()},
+            "pressure_dependence": pressure_dependence(results)}))
         return Path(reference)
 
     # --- stage 2: the runs -----------------------------------------------------------------------------
@@ -140,13 +144,14 @@ class StudyRunner:
             from granstokes.compare.oscillation_report import write_report as write_oscillation
 
             dem = dem_side([sp.folder(self.out, label) for label in scored], root=self.out)
-            comparison = compare_oscillations(dem, calibration, self.study.ngf_from, jobs=self.jobs)
+            ngf_from = None if self.study.ngf_from is None else as_given(self.study.ngf_from)
+            comparison = compare_oscillations(dem, as_given(calibration), ngf_from, jobs=self.jobs)
             with staging.staged(self.out, COMMAND, keep=True) as work:
                 return write_oscillation(comparison, work)
         from granstokes.compare.comparison import build
         from granstokes.compare.report import write_report
 
-        comparison = build([sp.folder(self.out, label) for label in scored], calibration=calibration,
+        comparison = build([sp.folder(self.out, label) for label in scored], calibration=as_given(calibration),
                            progress=self.progress, jobs=self.jobs, root=self.out)
         with staging.staged(self.out, COMMAND, keep=True) as work:
             metrics = write_report(comparison, work)
@@ -236,6 +241,18 @@ def pressure_dependence(files: dict) -> dict:
     return out
 
 
+def relative(path, folder) -> str:
+    """``path`` as the study folder ``folder`` records it: relative to the folder (which can move with what it
+    names), never this machine's absolute path."""
+    return os.path.relpath(Path(path).resolve(), Path(folder).resolve())
+
+
+def as_given(path) -> str:
+    """``path`` relative to the working directory, as paths are given on the command line: how a study's report
+    names its calibration and NGF's source."""
+    return os.path.relpath(path)
+
+
 def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None = None, resume: bool = False,
               progress: bool = True, announce=None) -> dict:
     """Run (or with ``resume`` continue) ``study`` in ``out``; returns study.json's record."""
@@ -244,8 +261,9 @@ def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None
     runner = StudyRunner(study, text, out, jobs, scheduler, progress, announce)
     if not resume:
         staging.start(out, COMMAND)
-        if study.calibration_file is not None:  # resolved: a resume reads it from the study folder
-            text = with_entries(text, [("calibration.file", study.calibration_file)])
+        files = [("calibration.file", study.calibration_file), ("ngf_from", study.ngf_from)]
+        # relative to the study folder, where a resume reads them from
+        text = with_entries(text, [(key, relative(path, out)) for key, path in files if path is not None])
         (out / STUDY_TOML).write_text(text)
         runner.record(lambda d: d.update(
             name=study.name, status="running", message="", started=_now(), runs={},
