@@ -188,7 +188,9 @@ class CalibrationPlan:
         """One line: what the calibration measures, and where."""
         c = self.config.calibration
         doubled = f" (+ {len(self.finite_size)} cell(s) twice as wide)" if self.finite_size else ""
-        return (f"dem calibrate: '{self.config.name}' grains, {len(self.points)} inertial numbers in [{c.I_min:g}, "
+        shape = "disks" if self.config.grains.dimension == 2 else "spheres"
+        return (f"dem calibrate: '{self.config.name}' grains ({self.config.grains.dimension}D {shape}), "
+                f"{len(self.points)} inertial numbers in [{c.I_min:g}, "
                 f"{c.I_max:g}] x {len(c.seeds)} seed(s){doubled}, {self.n_grains} grains at p = {self.config.p_w:g}, "
                 f"{self.as_dict()['total_steps']:.3g} steps -> {out}")
 

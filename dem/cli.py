@@ -114,6 +114,7 @@ def _cmd_calibrate(args) -> int:
     cfg, text = _config(args, "calibrate")
     plan = check_calibration(cfg, args.out, jobs=args.jobs, np=args.np, resume=args.resume, launcher=args.launcher)
     print(plan.summary(args.out), file=sys.stderr)
+    print(f"  {cfg.describe()[1]}", file=sys.stderr)
     done = []
     if args.resume:
         done, left = completed_points(args.out, plan)

@@ -213,15 +213,17 @@ class Prepare:
 class Calibration:
     """Plane-shear calibration of the config's grains (dem.calibrate) at the normal stress p = p_w, so
     that the rigidity is the Stokes scene's kappa: ``points`` inertial numbers log-spaced in [I_min,
-    I_max] (DEM convention), or the increasing list ``I`` (then I_min, I_max and points follow from it),
+    I_max] (DEM convention; the default's 2 decades up to 0.7 reach where mu(I) bends towards mu_d: below I ~ 0.3
+    the law is nearly linear and mu_d, I0 are not determined), or the increasing list ``I`` (then I_min, I_max and
+    points follow from it),
     each seed an independent cell of width ``width`` d (square in 2D, cubic in 3D), sheared
     ``strain_start`` (discarded) then ``strain`` (measured), sampled every ``sample``.  ``finite_size``: some
     of the points' inertial numbers, at each of which one more cell of twice the width (first seed) checks
     the cell size (dem.calibrate; not fitted)."""
 
-    I_min: float = 1e-2
-    I_max: float = 0.3
-    points: int = 4
+    I_min: float = 5e-3
+    I_max: float = 0.7
+    points: int = 7
     seeds: tuple[int, ...] = (1,)
     width: float = 12.0
     strain_start: float = 1.0

@@ -59,7 +59,9 @@ def test_calibrate_dry_run_prints_the_plan_and_its_cost_and_writes_nothing(tmp_p
     assert main(["dem", "calibrate", "--preset", "smoke", "--out", str(out), "--dry-run"]) == 0
     err = capsys.readouterr().err
     cp = plan_calibration(config.preset("smoke")[0])
-    assert f"{cp.summary(out)}\n  {cp.cost_estimate(2, 1)}\n" in err and "7 inertial numbers" in err
+    cfg = config.preset("smoke")[0]
+    assert f"{cp.summary(out)}\n  {cfg.describe()[1]}\n  {cp.cost_estimate(2, 1)}\n" in err
+    assert "'smoke' grains (2D disks), 7 inertial numbers in [0.005, 0.7]" in err and "k_n = " in err
     assert not out.exists()
 
 
@@ -120,3 +122,38 @@ def test_lammps_progress_without_a_terminal_is_plain_lines(tmp_path, capsys, mon
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 10 and all(line.startswith("seed-1 settle: ") for line in lines)
     assert lines[0].startswith("seed-1 settle: 10% (100/1000 steps, t=0.1)") and "100% (1000/1000" in lines[-1]
+
+
+def test_the_plan_prints_every_resolved_parameter_and_the_defaults_it_used(tmp_path, capsys):
+    """A config with only its required tables runs at the defaults, and its dry run says which: p_w, the dimension,
+    the contact law with k_n, the seeds, each drive's duration, the depth, the output intervals, and the tables left
+    out; a given table is not listed as a default."""
+    path = tmp_path / "bare.toml"
+    path.write_text(textwrap.dedent("""\
+        name = "bare"
+        [material]
+        mu_s = 0.28
+        mu_d = 0.58
+        I0 = 0.3
+        I_convention = "dem"
+        phi = 0.8
+        [[drive]]
+        name = "push"
+        kind = "stress"
+        mu_w_tilde = 0.5
+        """))
+    assert main(["dem", "run", str(path), "--out", str(tmp_path / "run"), "--dry-run"]) == 0
+    err = capsys.readouterr().err
+    cfg = config.load(path)[0]
+    p = plan(cfg)
+    assert cfg.p_w == config.Config.p_w and cfg.grains == config.Grains()
+    assert f"2D disks, p_w = {config.Config.p_w:g} rho_p g d, seeds [1]; sized from mu_s = 0.28" in err
+    assert f"hooke contact (pair_style classic), k_n = {cfg.contact.k_n:.4g} (kappa = 10000 at this p_w)" in err
+    assert f"duration {p.drives[0].duration:.4g} (max(10 t_s" in err and f"depth {p.depth:g} d = ceil(" in err
+    assert f"outputs every (sqrt(d/g)): plate {config.Output().plate:g}, thermo" in err
+    assert "defaults (no table in the config): [grains], [box], [output], [prepare], [calibration], [load]" in err
+    path.write_text(path.read_text() + "[load]\np_w = 5.0\n")
+    assert main(["dem", "run", str(path), "--out", str(tmp_path / "run"), "--dry-run"]) == 0
+    err = capsys.readouterr().err
+    assert "p_w = 5 rho_p g d" in err and "[load]" not in err.split("defaults (no table in the config): ")[1]
+    assert not (tmp_path / "run").exists()
