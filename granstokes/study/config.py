@@ -33,6 +33,9 @@ from granstokes.lib.toml_text import parse_assignment, with_entries
 from granstokes.lib.validate import finite, require
 
 PRESET_DIR = Path(__file__).parent / "presets"
+#: a preset's relative paths name the committed results of the granstokes repository: they are resolved against
+#: its root (the folder holding the package's source), whatever the working directory
+PRESET_BASE = PRESET_DIR.resolve().parents[2]
 PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
 DRIVE_KEYS = ("kind", "mu_w_tilde", "mu_w", "tau_w", "u_w")
 SHORT = {"mu_w_tilde": "mutilde", "mu_w": "mu", "tau_w": "tau", "u_w": "u"}  # drive names: stress-mutilde0.5
@@ -165,9 +168,9 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
 
 
 def _existing(file: str, base: Path | None, name: str, what: str) -> str:
-    """The absolute path of an existing ``file`` (relative to ``base``)."""
+    """The absolute path of an existing ``file`` (relative to ``base``); a missing one is named as missing."""
     path = Path(file) if Path(file).is_absolute() or base is None else base / file
-    require(path.is_file(), name, what, str(path))
+    require(path.is_file(), name, f"{what} (this file is missing)" if not path.exists() else what, str(path))
     return str(path.resolve())
 
 
@@ -190,7 +193,7 @@ def load(config: str | None, preset: str | None, sets=()) -> tuple[Study, str]:
     text = Path(config).read_text() if config is not None else preset_text(preset)
     text = with_entries(text, [parse_assignment(a) for a in sets],
                         header=f"{config or preset} with --set " + " ".join(sets))
-    return parse(text, Path(config).resolve().parent if config is not None else Path.cwd()), text
+    return parse(text, Path(config).resolve().parent if config is not None else PRESET_BASE), text
 
 
 def rigidity(kappa: float, contact: str, p_max: float, p_w: float) -> float:

@@ -261,3 +261,50 @@ def test_a_resume_plans_a_begun_run_as_its_stored_config(tmp_path):
     assert first.duration == pytest.approx(3 * first.scales.t_s)
     assert begun.done(tmp_path) == {f"p10/{k}" for k in stages}
     assert begun.cost_seconds(1, tmp_path) < begun.cost_seconds(1)
+
+
+def test_a_resume_past_the_calibration_sizes_from_it_and_does_not_cost_it_again(tmp_path, capsys):
+    """A smoke study whose calibrations completed: its resumed dry run sizes the runs from the reference
+    pressure's calibration.json (not the preset's nominal material), prints no calibration cost, and its total
+    has no calibration stage; a study not yet calibrated still prints both."""
+    from granstokes.dem.layout import CALIBRATION_JSON, CALIBRATION_STATE
+
+    from granstokes.study.plan import calibration_folder
+
+    out = tmp_path / "s"
+    out.mkdir()
+    (out / "study.toml").write_text(config.preset_text("smoke"))
+    study = config.load(None, "smoke")[0]
+    for p_w in study.calibration_pressures:
+        folder = calibration_folder(out, p_w)
+        folder.mkdir()
+        (folder / CALIBRATION_JSON).write_bytes(CALIBRATION.read_bytes())
+        (folder / CALIBRATION_STATE).write_text(json.dumps({"status": "complete", "points": {}}))
+    assert granstokes_main(["study", "--resume", "--out", str(out), "--dry-run"]) == 0
+    err = capsys.readouterr().err
+    reference = calibration_folder(out, study.reference_pressure) / CALIBRATION_JSON
+    assert f"sized from {reference.parent.relative_to(out)} ->" in err and "nominal material" not in err
+    assert "study: calibration at p" not in err and "(calibration " not in err and "total: about" in err
+    material = material_table(CALIBRATION)[0]
+    sp = plan_study(study, material, "")
+    assert f"depth {sp.runs['p10'].plan.depth:g} d" in err  # sized from the calibration
+    (calibration_folder(out, study.reference_pressure) / CALIBRATION_STATE).write_text('{"status": "running"}')
+    assert granstokes_main(["study", "--resume", "--out", str(out), "--dry-run"]) == 0
+    err = capsys.readouterr().err
+    assert "nominal material" in err and "study: calibration at p = 10" in err and "(calibration " in err
+    assert "study: calibration at p = 5" not in err  # complete: not run again, not costed
+
+
+def test_a_preset_runs_from_any_working_directory_and_a_missing_file_is_named(tmp_path, monkeypatch, capsys):
+    """The oscillating-disks preset names committed results relative to the repository: its dry run works from
+    any folder; the same text saved elsewhere (its paths now relative to that file) is refused with the file
+    named as missing, before any work."""
+    monkeypatch.chdir(tmp_path)
+    assert granstokes_main(["study", "--preset", "oscillating-disks", "--out", "s", "--dry-run"]) == 0
+    assert "total: about" in capsys.readouterr().err and not (tmp_path / "s").exists()
+    saved = tmp_path / "mine.toml"
+    saved.write_text(config.preset_text("oscillating-disks"))
+    assert granstokes_main(["study", str(saved), "--out", "s", "--dry-run"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "calibration.file must be" in err[0] and "(this file is missing)" in err[0]
+    assert str(tmp_path / "results" / "calibration-disks" / "p20" / "calibration.json") in err[0]
