@@ -462,13 +462,18 @@ class Runner:
         return self.finish(meta, outcomes.values(), t0)
 
     def finish(self, meta: dict, outcomes, t0: float) -> RunResult:
-        """run.json's status from the beds' outcomes (complete, or the first failure or interrupt) and timings."""
+        """run.json's status from the beds' outcomes (complete, or the first failure or interrupt) and timings; the
+        manifest records the checksums of every file once complete, else of the config and the complete stages
+        (granstokes.lib.staging.seal: a bed stopped elsewhere may still be writing its stage)."""
         stopped = [o for o in outcomes if o.status != "complete"]
         meta["status"], meta["message"] = (stopped[0].status, stopped[0].message) if stopped else ("complete", "")
         meta["timings"]["finished"] = _now()
         meta["timings"]["wall_time_this_invocation"] = time.monotonic() - t0
         self.save(meta)
         meta["stages"] = json.loads(self.meta_path.read_text())["stages"]
+        finished = [layout.CONFIG_TOML, *(st["path"] for st in meta["stages"].values()
+                                          if st.get("status") == "complete" and st.get("path"))]
+        staging.seal(self.out, COMMAND, None if meta["status"] == "complete" else finished)
         return RunResult(self.out, meta["status"], meta["message"], meta["stages"], meta)
 
 
@@ -516,6 +521,7 @@ def check_request(cfg: Config, text: str, out: str | Path, np: int | None = None
         stored = parse((out / layout.CONFIG_TOML).read_text())
         require(stored.as_dict() == cfg.as_dict(), "--resume",
                 f"given with the config stored in {out / layout.CONFIG_TOML}", "a different config")
+        staging.require_unchanged(out, "--out")
     else:
         require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
                 str(out))
@@ -545,6 +551,7 @@ def begin(cfg: Config, text: str, out: str | Path, np: int | None = None, resume
         meta = json.loads((out / layout.RUN_JSON).read_text())
         meta["status"], meta["message"] = "running", ""
         meta.setdefault("resumes", []).append(_now())
+        staging.resume(out, COMMAND)
     else:
         meta = runner.new_metadata()  # queries the LAMMPS library: fails before anything is written
         staging.start(out, COMMAND)

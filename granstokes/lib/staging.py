@@ -4,40 +4,65 @@ Every command that writes a folder claims it first (``claim``, before any work):
 
 * a new or empty folder is taken;
 * a folder holding a manifest of the same command (``MANIFEST``, written with every output) is taken,
-  and only the files that manifest lists may be replaced;
+  and only the files that manifest lists may be replaced or removed, each only while unchanged since the
+  command wrote it;
 * anything else is refused with one line naming the option: a file, a folder holding files granstokes
-  did not write there, or a folder equal to, inside or containing one of the command's inputs.
+  did not write there, a listed file that was changed since it was written, or a folder equal to, inside
+  or containing one of the command's inputs.
+
+The manifest lists the files a command owns (``files``) and records each one's ``checksum`` (sha256 and size,
+under ``checksums``) as written.  A listed file whose content no longer matches its record was changed by
+someone else, and no command replaces or removes it (``require_unchanged``: one line naming the file); a
+listed file that is gone is not there to replace.  A listed file without a record is owned as listed:
+manifests written by earlier versions have no records, and a progressive output's files have none while its
+command writes them.
 
 An all-at-once output (a report, figures, a saved solve) is then written through ``staged``: the work
 goes into a hidden folder inside the target; on success each file moves into place with ``os.replace``
 (atomic per file), files the previous manifest listed and the new output lacks are removed, and the new
-manifest is written last.  On failure only the hidden folder goes.  A file no manifest lists is never
-touched, and a new output that would overwrite one (or need one out of the way to make a folder) is refused.
+manifest, with the new files' records, is written last.  Just before the moves, under the folder's lock, the
+files to be replaced or removed are checked again (one changed while the command ran is refused, nothing
+moved).  On failure only the hidden folder goes.  A file no manifest lists is never touched, and a new
+output that would overwrite one (or need one out of the way to make a folder) is refused.
 A manifest names only paths inside its folder: an entry that is absolute, climbs with ``..`` or resolves
 outside the folder through a link is ignored.  Concurrent commits into one folder take turns (a lock on
 the folder), so neither loses the other's entries.
 
-A progressive output (a DEM run, a calibration, the demo: written as it goes, resumed with
+A progressive output (a DEM run, a calibration, a study, the demo: written as it goes, resumed with
 ``--resume``) writes its manifest when it starts (``start``), so that a resumed or repeated command
-recognises the folder as its own.
+recognises the folder as its own.  A resume checks the recorded files before any work
+(``require_unchanged``), then drops the records (``resume``): it rewrites its own partial files, and a run
+killed before its end leaves files changed since their records.  Each invocation ends with ``seal``: the
+manifest lists every file of the folder (files added while it ran included; a nested output, a subfolder
+with its own manifest, excepted) and records the checksums of the finished ones: all of them once the
+command completed, those of its finished stages when it stopped (a stopped run's tasks may still be ending
+elsewhere).
+
+Files are created with the mode the user's umask gives (``_create``; ``tempfile``'s are private, 0600, and
+a rename keeps the mode).
 """
 from __future__ import annotations
 
 import datetime as _dt
 import fcntl
+import hashlib
 import json
 import os
+import secrets
 import shutil
+import stat
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
 from .validate import output_dir, require
 
-#: the manifest each output folder carries: the command that wrote it and the files it owns there
+#: the manifest each output folder carries: the command that wrote it, the files it owns there and their checksums
 MANIFEST = "granstokes-manifest.json"
-#: prefix of the hidden folders a staged output is written into (only granstokes names folders so)
+#: prefix of the hidden folders and files an output is written through (only granstokes names them so)
 STAGE_PREFIX = ".granstokes-stage-"
+#: bytes read at a time when a file is hashed
+CHUNK = 1 << 20
 
 
 def read_manifest(folder) -> dict | None:
@@ -50,6 +75,16 @@ def read_manifest(folder) -> dict | None:
     return doc if isinstance(doc, dict) and isinstance(doc.get("command"), str) else None
 
 
+def checksum(path) -> dict:
+    """The record of the file ``path``: ``{"sha256": hex digest of its content, "size": bytes}``."""
+    digest, size = hashlib.sha256(), 0
+    with open(path, "rb") as f:
+        while chunk := f.read(CHUNK):
+            digest.update(chunk)
+            size += len(chunk)
+    return {"sha256": digest.hexdigest(), "size": size}
+
+
 def _inside(folder: Path, rel: str) -> bool:
     """Whether the manifest entry ``rel`` names a path inside ``folder`` (links followed)."""
     parts = Path(rel).parts
@@ -59,12 +94,61 @@ def _inside(folder: Path, rel: str) -> bool:
     return top in (folder / rel).resolve().parents
 
 
+def _listed(folder: Path, doc: dict | None) -> set[str]:
+    """The files the manifest ``doc`` of ``folder`` lists, those that are safely inside it."""
+    if doc is None or not isinstance(doc.get("files"), list):
+        return set()
+    return {rel for rel in doc["files"] if isinstance(rel, str) and _inside(folder, rel)}
+
+
 def _owned(folder: Path, command: str) -> set[str]:
     """The files of ``folder``'s manifest when ``command`` wrote it, those that are safely inside it."""
     doc = read_manifest(folder)
-    if doc is None or doc.get("command") != command or not isinstance(doc.get("files"), list):
-        return set()
-    return {rel for rel in doc["files"] if isinstance(rel, str) and _inside(folder, rel)}
+    return _listed(folder, doc) if doc is not None and doc.get("command") == command else set()
+
+
+def _records(folder: Path, doc: dict | None) -> dict[str, dict]:
+    """The well-formed checksum records of the files the manifest ``doc`` of ``folder`` lists."""
+    raw = doc.get("checksums") if doc is not None else None
+    if not isinstance(raw, dict):
+        return {}
+    listed = _listed(folder, doc)
+    return {rel: {"sha256": r["sha256"], "size": r["size"]} for rel, r in raw.items()
+            if rel in listed and isinstance(r, dict) and isinstance(r.get("sha256"), str)
+            and isinstance(r.get("size"), int) and not isinstance(r.get("size"), bool)}
+
+
+def _changed(path: Path, record: dict) -> bool:
+    """Whether the file ``path`` no longer is what ``record`` says (gone: not changed, nothing to replace)."""
+    try:
+        st = path.lstat()
+    except FileNotFoundError:
+        return False
+    if not stat.S_ISREG(st.st_mode) or st.st_size != record["size"]:
+        return True
+    try:
+        return checksum(path)["sha256"] != record["sha256"]
+    except FileNotFoundError:
+        return False
+
+
+def _changed_error(option: str, path: Path, command: str) -> ValueError:
+    return ValueError(f"{option}: {path} was changed since granstokes {command} wrote it; move it away or choose "
+                      "another folder")
+
+
+def require_unchanged(folder, option: str, nested: bool = False) -> None:
+    """``ValueError`` naming ``option`` and the first file of ``folder``'s manifest (``nested``: of every manifest
+    below it too) that was changed since its command wrote it (its checksum record differs)."""
+    folder = Path(folder)
+    found = [folder]
+    if nested:
+        found += sorted(Path(root) for root, _, files in os.walk(folder) if MANIFEST in files and Path(root) != folder)
+    for place in found:
+        doc = read_manifest(place)
+        for rel, record in sorted(_records(place, doc).items()):
+            if _changed(place / rel, record):
+                raise _changed_error(option, place / rel, doc["command"])
 
 
 def _content(folder: Path) -> list[Path]:
@@ -90,19 +174,34 @@ def claim(path, option: str, command: str, inputs=()) -> Path:
         require(manifest is not None and manifest.get("command") == command, option,
                 f"a new or empty folder, or an earlier output of 'granstokes {command}' "
                 f"(this one holds files that granstokes {command} did not write)", str(path))
+        require_unchanged(path, option)
     return path
 
 
-def _manifest(command: str, files, inputs, progressive: bool) -> dict:
+def _manifest(command: str, files, inputs, progressive: bool, records: dict) -> dict:
+    files = sorted(files)
     return {"command": command, "progressive": progressive,
             "written": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
-            "inputs": [str(p) for p in inputs], "files": sorted(files),
-            "note": f"written by granstokes {command}; a later run of it may replace the files listed here, "
-                    "and nothing else in this folder"}
+            "inputs": [str(p) for p in inputs], "files": files,
+            "checksums": {rel: records[rel] for rel in files if rel in records},
+            "note": f"written by granstokes {command}; a later run of it may replace the files listed here while each "
+                    "is as written (its sha256 and size under checksums), and nothing else in this folder"}
+
+
+def _create(folder: Path, prefix: str = STAGE_PREFIX, suffix: str = "") -> tuple[int, Path]:
+    """A new file in ``folder`` named ``prefix``, a random part and ``suffix``, open for writing, with the mode the
+    umask gives (``tempfile.mkstemp``'s is 0600, which a rename into place would keep)."""
+    for _ in range(100):
+        path = folder / f"{prefix}{secrets.token_hex(6)}{suffix}"
+        try:
+            return os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666), path
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"no free temporary file name {prefix}*{suffix} in {folder}")
 
 
 def _write_manifest(folder: Path, doc: dict) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=STAGE_PREFIX, dir=folder)
+    fd, tmp = _create(folder)
     with os.fdopen(fd, "w") as f:
         f.write(json.dumps(doc, indent=2))
     os.replace(tmp, folder / MANIFEST)
@@ -114,8 +213,61 @@ def start(path, command: str, inputs=()) -> Path:
     path.mkdir(parents=True, exist_ok=True)
     old = read_manifest(path)
     if old is None:
-        _write_manifest(path, _manifest(command, [], inputs, progressive=True))
+        _write_manifest(path, _manifest(command, [], inputs, progressive=True, records={}))
     return path
+
+
+def resume(path, command: str) -> Path:
+    """Reopen ``path``, a progressive output of ``command`` checked by ``require_unchanged``, to write in it: its
+    manifest keeps listing its files, without checksum records until ``seal``.  ``ValueError`` naming --out if
+    another command wrote it."""
+    path = Path(path)
+    with locked(path):
+        old = read_manifest(path)
+        require(old is None or old.get("command") == command, "--out", f"a folder of granstokes {command} to resume",
+                f"{path} (written by granstokes {(old or {}).get('command')})")
+        inputs = (old or {}).get("inputs", [])
+        _write_manifest(path, _manifest(command, _listed(path, old), inputs if isinstance(inputs, list) else [],
+                                        progressive=True, records={}))
+    return path
+
+
+def _tree(folder: Path) -> list[str]:
+    """The files below ``folder`` (links not followed) except its manifest, hidden stage entries and nested outputs
+    (subfolders holding their own manifest)."""
+    found = []
+    for root, dirs, files in os.walk(folder):
+        here = Path(root)
+        dirs[:] = [d for d in dirs if not d.startswith(STAGE_PREFIX) and not (here / d / MANIFEST).exists()]
+        found += [str((here / name).relative_to(folder)) for name in files
+                  if not name.startswith(STAGE_PREFIX) and not (here == folder and name == MANIFEST)]
+    return sorted(found)
+
+
+def _within(rel: str, places) -> bool:
+    """Whether ``rel`` is one of ``places`` (relative paths of files or folders) or inside one."""
+    return any(rel == p or rel.startswith(p.rstrip("/") + "/") for p in places)
+
+
+def seal(path, command: str, finished=None) -> None:
+    """End an invocation of the progressive output ``path`` of ``command``: its manifest lists every file in it
+    (``_tree``) and records the checksums of the ``finished`` ones (relative paths of files or folders; None: all),
+    keeping the records written meanwhile (``staged``) for the others."""
+    path = Path(path)
+    with locked(path):
+        old = read_manifest(path)
+        files = _tree(path)
+        records = _records(path, old) if old is not None and old.get("command") == command else {}
+        for rel in files:
+            if finished is None or _within(rel, finished):
+                try:
+                    if stat.S_ISREG((path / rel).lstat().st_mode):
+                        records[rel] = checksum(path / rel)
+                except FileNotFoundError:  # removed meanwhile (a finished drive's clean-up)
+                    records.pop(rel, None)
+        inputs = (old or {}).get("inputs", [])
+        _write_manifest(path, _manifest(command, files, inputs if isinstance(inputs, list) else [], progressive=True,
+                                        records=records))
 
 
 def _files(folder: Path) -> list[str]:
@@ -154,7 +306,7 @@ def locked(folder: Path):
 def write_json(path, doc: dict) -> None:
     """Write ``doc`` to ``path`` atomically (a hidden temporary file beside it, then a rename)."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    fd, tmp = _create(path.parent, f"{STAGE_PREFIX}{path.name}-")
     with os.fdopen(fd, "w") as f:
         json.dump(doc, f, indent=2, default=str)
     os.replace(tmp, path)
@@ -187,24 +339,35 @@ def _blocked(target: Path, rel: str, owned: set[str]) -> bool:
 
 def _commit(work: Path, target: Path, command: str, inputs, keep: bool) -> None:
     with locked(target):
+        old = read_manifest(target)
+        mine = old is not None and old.get("command") == command
         owned = _owned(target, command)
+        records = _records(target, old) if mine else {}
+        progressive = bool(mine and old.get("progressive"))
         new = _files(work)
         foreign = [rel for rel in new if _blocked(target, rel, owned)]
         require(not foreign, "output", f"free of files granstokes {command} did not write (it would replace "
                 "them)", f"{target}: {', '.join(foreign[:3])}")
-        # listed before they move: an interruption between the moves leaves every file owned, none foreign
-        _write_manifest(target, _manifest(command, owned | set(new), inputs, progressive=False))
+        kept = {rel for rel in owned - set(new) if os.path.lexists(target / rel)} if keep else set()
+        stale = owned - set(new) - kept
+        for rel in sorted((owned & set(new)) | stale):
+            if rel in records and _changed(target / rel, records[rel]):
+                raise _changed_error("output", target / rel, command)
+        fresh = {rel: checksum(work / rel) for rel in new if stat.S_ISREG((work / rel).lstat().st_mode)}
+        # listed before they move, the moving ones without records: an interruption between the moves leaves
+        # every file owned, none foreign
+        _write_manifest(target, _manifest(command, owned | set(new), inputs, progressive,
+                                          {rel: r for rel, r in records.items() if rel not in fresh}))
         for rel in new:
             dest = target / rel
             dest.parent.mkdir(parents=True, exist_ok=True)
             os.replace(work / rel, dest)
-        kept = owned - set(new) if keep else set()
-        for rel in sorted(owned - set(new) - kept):
-            stale = target / rel
-            if stale.is_file() or stale.is_symlink():
-                stale.unlink()
-            _prune(stale.parent, target)
-        _write_manifest(target, _manifest(command, set(new) | kept, inputs, progressive=False))
+        for rel in sorted(stale):
+            gone = target / rel
+            if gone.is_file() or gone.is_symlink():
+                gone.unlink()
+            _prune(gone.parent, target)
+        _write_manifest(target, _manifest(command, set(new) | kept, inputs, progressive, records | fresh))
 
 
 def _prune(folder: Path, top: Path) -> None:
@@ -220,10 +383,10 @@ def new_file(path):
     fails rather than replace a file that appeared meanwhile (``ValueError``)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=STAGE_PREFIX, suffix=path.suffix, dir=path.parent)
+    fd, tmp = _create(path.parent, suffix=path.suffix)
     os.close(fd)
     try:
-        yield Path(tmp)
+        yield tmp
         try:
             os.link(tmp, path)
         except FileExistsError:

@@ -41,13 +41,15 @@ def _now() -> str:
 
 
 def check_folder(study: Study, out: Path, resume: bool) -> None:
-    """The folder: new or empty, or with ``resume`` a study of the same grid (ValueError naming the option)."""
+    """The folder: new or empty, or with ``resume`` a study of the same grid whose files, its runs' and its
+    calibrations' included, are unchanged since written (ValueError naming the option)."""
     require(not out.exists() or out.is_dir(), "--out", "a folder (this path is an existing file)", str(out))
     if resume:
         stored = out / STUDY_TOML
         require(stored.is_file(), "--resume", f"given with a study folder (holding {STUDY_TOML})", str(out))
         require(parse(stored.read_text(), out) == study, "--resume", f"the study stored in {stored}",
                 "a different study")
+        staging.require_unchanged(out, "--out", nested=True)
     else:
         require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
                 str(out))
@@ -162,7 +164,9 @@ class StudyRunner:
         return metrics
 
     def run(self) -> dict:
-        """The three stages in order; study.json's status: complete, failed or interrupted (with why)."""
+        """The three stages in order; study.json's status: complete, failed or interrupted (with why); the manifest
+        records the checksums of every file of the study's own once complete, else of study.toml and its report
+        (granstokes.lib.staging.seal)."""
         status, message, signum = "complete", "", None
         try:
             with sigterm_interrupts():
@@ -192,7 +196,9 @@ class StudyRunner:
             status, message = "interrupted", f"interrupted by {signal.Signals(signum).name}; continue with --resume"
         except Exception as exc:  # a drive the calibrated law cannot sustain, a lost scheduler, a bug: recorded
             status, message = "failed", f"{type(exc).__name__}: {exc}"
-        return self.record(lambda d: d.update(status=status, message=message, finished=_now(), signal=signum))
+        record = self.record(lambda d: d.update(status=status, message=message, finished=_now(), signal=signum))
+        staging.seal(self.out, COMMAND, None if status == "complete" else [STUDY_TOML])
+        return record
 
 
 class StudyStopped(RuntimeError):
@@ -272,6 +278,7 @@ def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None
             units="DEM units: d = rho_p = g = 1; p_w in rho_p g d, times in sqrt(d/g)",
             provenance={**provenance(), "jobs": jobs, "scheduler": scheduler or "local"}))
     else:
+        staging.resume(out, COMMAND)
         runner.record(lambda d: d.update(status="running", message="", resumes=[*d.get("resumes", []), _now()]))
     allow_lammps()
     return runner.run()
