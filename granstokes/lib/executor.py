@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 
 from tqdm import tqdm
 
+from granstokes.lib.validate import require
+
 RANKS = "ranks"  # the worker resource a task's MPI ranks hold
 DEFAULT_RETRIES = 1
 
@@ -51,20 +53,51 @@ def _call(fn, args) -> Outcome:
         return Outcome("failed", f"{type(exc).__name__}: {exc}")
 
 
-def check_scheduler(address: str) -> None:
-    """A running scheduler at ``address`` whose workers offer the RANKS resource (ValueError naming --scheduler)."""
-    from distributed import Client
+#: the form of --scheduler, and how long a scheduler has to answer
+SCHEDULER_FORM, CONNECT_TIMEOUT = "SCHEME://HOST:PORT (e.g. tcp://node12:8786)", 5
+
+
+def scheduler_address(address: str) -> str:
+    """``address`` if it has the form SCHEME://HOST:PORT of a Dask comm (tcp, tls, ws, wss, ucx), a port 1-65535;
+    nothing is contacted (ValueError naming --scheduler)."""
+    from distributed.comm import registry
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    schemes = sorted(set(registry.backends) - {"inproc"})  # inproc: this process only
+    try:
+        scheme, location = parse_address(address, strict=True)
+        host, port = parse_host_port(location)
+    except (ValueError, TypeError):
+        scheme, host, port = None, "", 0
+    require(scheme in schemes and bool(host) and isinstance(port, int) and 1 <= port <= 65535, "--scheduler",
+            f"a Dask scheduler's address {SCHEDULER_FORM}, SCHEME one of {', '.join(schemes)}", address)
+    return address
+
+
+def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
+    """A running scheduler at ``address`` whose workers offer the RANKS resource (ValueError naming --scheduler;
+    an address that does not answer as a Dask scheduler within ``timeout`` seconds is refused)."""
+    import asyncio
+
+    from distributed.core import rpc
+
+    scheduler_address(address)
+
+    async def identity() -> dict:
+        async with rpc(address, timeout=timeout) as scheduler:
+            return await asyncio.wait_for(scheduler.identity(), timeout)  # a service that never answers too
 
     try:
-        with Client(address, timeout=10) as client:
-            workers = client.scheduler_info()["workers"].values()
-    except OSError as exc:
-        raise ValueError(f"--scheduler must be the address of a running Dask scheduler, got {address!r} ({exc})") \
-            from None
-    offering = [w for w in workers if RANKS in w.get("resources", {})]
+        info = asyncio.run(identity())
+        workers = list(info["workers"].values())
+    except Exception as exc:  # refused, unresolved, timed out, not a Dask scheduler: all the same to the user
+        why = " ".join(str(exc).split()) or f"no Dask scheduler answered within {timeout:g} s"
+        raise ValueError(f"--scheduler must be the address {SCHEDULER_FORM} of a running Dask scheduler, got "
+                         f"{address!r} ({why})") from None
+    offering = [w for w in workers if RANKS in (w.get("resources") or {})]
     if not offering:
         raise ValueError(f"--scheduler must have workers offering the '{RANKS}' resource (dask worker --resources "
-                         f"{RANKS}=N), got {len(list(workers))} worker(s) without it at {address}")
+                         f"{RANKS}=N), got {len(workers)} worker(s) without it at {address}")
 
 
 class Executor:

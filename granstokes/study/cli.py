@@ -37,10 +37,12 @@ def _cmd_study(args) -> int:
     else:
         study, text = config.load(args.config, args.preset, args.set or ())
     check_folder(study, Path(args.out), args.resume)
-    if args.scheduler is not None:
-        from granstokes.lib.executor import check_scheduler
+    if args.scheduler is not None:  # a dry run checks the address's form; a run, that its scheduler answers
+        from granstokes.lib.executor import check_scheduler, scheduler_address
 
-        check_scheduler(args.scheduler)
+        (scheduler_address if args.dry_run else check_scheduler)(args.scheduler)
+        print(f"study: on the scheduler {args.scheduler}, its workers set the concurrency (the estimates below "
+              f"assume {args.jobs} job(s))", file=sys.stderr)
     from granstokes.dem.throughput import measured
 
     measured(announce=lambda line: print(f"study: {line}", file=sys.stderr))

@@ -1,11 +1,13 @@
-"""The executor (granstokes.lib.executor): order, retry, failure records, interrupts, rank slots, a scheduler."""
+"""The executor (granstokes.lib.executor): order, retry, failure records, interrupts, rank slots, a scheduler
+(its address's form, one that does not answer)."""
+import socket
 import threading
 import time
 from pathlib import Path
 
 import pytest
 
-from granstokes.lib.executor import Executor, Outcome, Task, check_scheduler
+from granstokes.lib.executor import Executor, Outcome, Task, check_scheduler, scheduler_address
 
 _LOCK = threading.Lock()
 
@@ -125,9 +127,39 @@ def test_an_interrupt_cancels_the_queue_and_calls_stop(tmp_path):
 def test_a_scheduler_without_rank_slots_is_refused():
     from distributed import LocalCluster
 
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=None,
                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
         with pytest.raises(ValueError, match="--scheduler must have workers offering the 'ranks' resource"):
             check_scheduler(cluster.scheduler_address)
-    with pytest.raises(ValueError, match="--scheduler must be the address of a running Dask scheduler"):
+    with pytest.raises(ValueError, match="--scheduler must be the address .* of a running Dask scheduler"):
         check_scheduler("tcp://127.0.0.1:9")
+
+
+@pytest.mark.parametrize("address", ["127.0.0.1", "127.0.0.1:8786", "tcp://127.0.0.1", "tcp://:8786",
+                                     "tcp://host:0", "tcp://host:70000", "tcp://host:port", "foo://host:8786",
+                                     "inproc://host:8786", ""])
+def test_a_malformed_scheduler_address_is_refused_naming_the_option(address):
+    with pytest.raises(ValueError, match=r"^--scheduler must be a Dask scheduler's address SCHEME://HOST:PORT"):
+        scheduler_address(address)
+
+
+@pytest.mark.parametrize("address", ["tcp://127.0.0.1:8786", "tcp://node12:8786", "tls://[::1]:1", "ws://h:65535"])
+def test_a_well_formed_scheduler_address_passes_without_contact(address):
+    assert scheduler_address(address) == address
+
+
+def test_an_address_where_no_scheduler_answers_is_refused_within_the_timeout():
+    """A port nobody listens on, and a listener that never speaks Dask: one ValueError naming --scheduler each,
+    within the connect timeout (not Dask's default of 30 s, nor forever)."""
+    with socket.socket() as closed:
+        closed.bind(("127.0.0.1", 0))
+        refused = closed.getsockname()[1]
+    with socket.socket() as silent:  # the kernel accepts the connection; nothing ever answers
+        silent.bind(("127.0.0.1", 0))
+        silent.listen()
+        for port in (refused, silent.getsockname()[1]):
+            start = time.monotonic()
+            with pytest.raises(ValueError, match=r"^--scheduler must be the address .* of a running Dask scheduler, "
+                                                 rf"got 'tcp://127.0.0.1:{port}' \(.+\)$"):
+                check_scheduler(f"tcp://127.0.0.1:{port}", timeout=1.0)
+            assert time.monotonic() - start < 5

@@ -146,6 +146,28 @@ def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_sp
     assert not (tmp_path / "s").exists()
 
 
+def test_a_scheduler_address_is_checked_and_a_dry_run_needs_no_scheduler(tmp_path, capsys):
+    """--scheduler: a malformed address is one line naming the option (exit 2), an address where nothing answers
+    too, within seconds; a dry run checks the form only, prints the plan and says the workers set the
+    concurrency."""
+    import socket
+
+    out = tmp_path / "s"
+    with socket.socket() as closed:
+        closed.bind(("127.0.0.1", 0))
+        nobody = f"tcp://127.0.0.1:{closed.getsockname()[1]}"
+    for address in ("127.0.0.1", "tcp://127.0.0.1", nobody):
+        start = time.monotonic()
+        assert granstokes_main(["study", "--preset", "smoke", "--out", str(out), "--scheduler", address]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("granstokes: error: --scheduler must be ") and err.count("\n") == 1, err
+        assert time.monotonic() - start < 15 and not out.exists()
+    assert granstokes_main(["study", "--preset", "smoke", "--out", str(out), "--scheduler", nobody, "--dry-run"]) == 0
+    err = capsys.readouterr().err
+    assert f"study: on the scheduler {nobody}, its workers set the concurrency" in err
+    assert "the study's beds" in err and not out.exists()
+
+
 #: the smoke study cut to what the test needs: one pressure, one drive of 4 t_s, one seed, a 6-point calibration
 SMALL = ["pressures=[10.0]", "seeds=[1]", 'drive=[{kind = "speed", mu_w_tilde = 0.5}]', "min_duration=0.0",
          "duration_ts=4.0",
