@@ -10,6 +10,7 @@
 from __future__ import annotations
 
 import os
+import shlex
 import signal
 import sys
 from pathlib import Path
@@ -53,6 +54,15 @@ def _config(args, command: str):
 def _resume_line(done: list[str], left: list[str], what: str) -> str:
     return (f"resume: {len(done)} of {len(done) + len(left)} {what} complete ({', '.join(done) or 'none'}); "
             f"left: {', '.join(left) or 'none'}")
+
+
+def _interrupted_line(prefix: str, command: str, args, signum: int, defaults: dict) -> str:
+    """The last line of an interrupted run or calibration: the signal and the command that continues it (with the
+    options given that are not stored in the folder: --jobs, --np, --launcher)."""
+    again = [x for option, default in (*defaults.items(), ("--launcher", None))
+             if (value := getattr(args, option[2:])) != default for x in (option, str(value))]
+    return (f"{prefix}: interrupted ({signal.Signals(signum).name}); continue with: "
+            + shlex.join(["granstokes", "dem", command, "--resume", "--out", str(args.out), *again]))
 
 
 def _speed():
@@ -101,10 +111,12 @@ def _cmd_run(args) -> int:
         return 0
     result = run(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
                  progress=not args.quiet, jobs=args.jobs)
+    if result.status == "interrupted":
+        signum = int(result.metadata.get("signal", signal.SIGINT))
+        print(_interrupted_line("dem", "run", args, signum, {"--np": None, "--jobs": DEFAULT_JOBS}), file=sys.stderr)
+        return 128 + signum  # 130 SIGINT, 143 SIGTERM
     print(f"dem: {result.status}" + (f": {result.message}" if result.message else "")
           + f" (see {result.out / 'run.json'})", file=sys.stderr)
-    if result.status == "interrupted":
-        return 128 + int(result.metadata.get("signal", signal.SIGINT))  # 130 SIGINT, 143 SIGTERM
     return 0 if result.ok else 1
 
 
@@ -128,10 +140,13 @@ def _cmd_calibrate(args) -> int:
         return 0
     result = calibrate(cfg, text, args.out, jobs=args.jobs, np=args.np, resume=args.resume, launcher=args.launcher,
                        progress=not args.quiet)
+    if result.status == "interrupted":
+        signum = int(result.signal or signal.SIGINT)
+        print(_interrupted_line("dem calibrate", "calibrate", args, signum,
+                                {"--np": DEFAULT_NP, "--jobs": DEFAULT_JOBS}), file=sys.stderr)
+        return 128 + signum  # 130 SIGINT, 143 SIGTERM
     print(f"dem calibrate: {result.status}" + (f": {result.message}" if result.message else "")
           + f" (see {result.out})", file=sys.stderr)
-    if result.status == "interrupted":
-        return 128 + int(result.signal or signal.SIGINT)  # 130 SIGINT, 143 SIGTERM
     return 0 if result.status == "complete" else 1
 
 

@@ -13,9 +13,11 @@ running task).
 """
 from __future__ import annotations
 
+import logging
 import sys
 import uuid
 from collections.abc import Callable
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 
 from tqdm import tqdm
@@ -100,6 +102,22 @@ def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
                          f"{RANKS}=N), got {len(workers)} worker(s) without it at {address}")
 
 
+@contextmanager
+def _quiet(prefix: str = "distributed"):
+    """Dask's loggers silent in the block: an interrupted run's shutdown cancels its in-process worker's running
+    tasks, which Dask reports as warnings (CancelledError) that say nothing to the user."""
+    loggers = [logging.getLogger(name) for name in [prefix, *list(logging.root.manager.loggerDict)]
+               if name == prefix or name.startswith(prefix + ".")]
+    levels = [log.level for log in loggers]
+    for log in loggers:
+        log.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for log, level in zip(loggers, levels, strict=True):
+            log.setLevel(level)
+
+
 class Executor:
     """``jobs`` rank slots on a local in-process cluster, or the cluster at ``scheduler`` (an address)."""
 
@@ -145,31 +163,33 @@ class Executor:
             futures[future] = task
             return future
 
-        try:
-            pending = as_completed([submit(t) for t in tasks])
-            for future in pending:
-                task = futures.pop(future)
-                try:
-                    outcome = future.result()
-                except Exception as exc:  # a lost worker (KilledWorker, a closed connection): the task failed
-                    outcome = Outcome("failed", f"{type(exc).__name__}: {exc}")
-                outcome = Outcome(outcome.status, outcome.message, outcome.info, attempts[task.key])
-                if outcome.status == "failed" and attempts[task.key] <= self.retries:
-                    attempts[task.key] += 1
-                    pending.add(submit(task))
-                    continue
-                outcomes[task.key] = outcome
-                bar.update(round(task.cost))
-                if on_done is not None:
-                    on_done(task, outcome)
-        except BaseException:
-            client.cancel(list(futures))  # nothing queued starts; then what runs here is stopped
-            if stop is not None:
-                stop()
-            raise
-        finally:
-            bar.close()
-            client.close()
-            if cluster is not None:
-                cluster.close()
+        with ExitStack() as shutdown:
+            try:
+                pending = as_completed([submit(t) for t in tasks])
+                for future in pending:
+                    task = futures.pop(future)
+                    try:
+                        outcome = future.result()
+                    except Exception as exc:  # a lost worker (KilledWorker, a closed connection): the task failed
+                        outcome = Outcome("failed", f"{type(exc).__name__}: {exc}")
+                    outcome = Outcome(outcome.status, outcome.message, outcome.info, attempts[task.key])
+                    if outcome.status == "failed" and attempts[task.key] <= self.retries:
+                        attempts[task.key] += 1
+                        pending.add(submit(task))
+                        continue
+                    outcomes[task.key] = outcome
+                    bar.update(round(task.cost))
+                    if on_done is not None:
+                        on_done(task, outcome)
+            except BaseException:
+                shutdown.enter_context(_quiet())  # until the cluster is closed
+                client.cancel(list(futures))  # nothing queued starts; then what runs here is stopped
+                if stop is not None:
+                    stop()
+                raise
+            finally:
+                bar.close()
+                client.close()
+                if cluster is not None:
+                    cluster.close()
         return outcomes

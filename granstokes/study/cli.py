@@ -6,6 +6,8 @@ independent calibration) on Dask, and ``granstokes preset``: print a DEM or stud
 """
 from __future__ import annotations
 
+import shlex
+import signal
 import sys
 from dataclasses import asdict
 from pathlib import Path
@@ -14,6 +16,21 @@ from granstokes.dem.lammps_env import DEFAULT_JOBS
 from granstokes.lib.validate import require
 
 from . import config
+
+
+def final_line(record: dict, args) -> str:
+    """The study's last line: the report (complete), why and the record (failed), or the command that continues it
+    (interrupted); paths as given in --out."""
+    out, said = Path(args.out), f": {record['message']}" if record.get("message") else ""
+    if record["status"] == "complete":
+        return f"study: complete{said} (report: {out / 'index.html'}; record: {out / 'study.json'})"
+    if record["status"] == "interrupted":
+        name = signal.Signals(int(record.get("signal") or signal.SIGINT)).name
+        again = ["--scheduler", args.scheduler] if args.scheduler else \
+            ["--jobs", str(args.jobs)] if args.jobs != DEFAULT_JOBS else []
+        return f"study: interrupted ({name}); continue with: " + shlex.join(
+            ["granstokes", "study", "--resume", "--out", str(out), *again])
+    return f"study: {record['status']}{said} (see {out / 'study.json'})"
 
 
 def _cmd_study(args) -> int:
@@ -81,8 +98,7 @@ def _cmd_study(args) -> int:
         return 0
     record = run_study(study, text, args.out, jobs=args.jobs, scheduler=args.scheduler, resume=args.resume,
                        progress=not args.quiet)
-    print(f"study: {record['status']}" + (f": {record['message']}" if record["message"] else "")
-          + f" (see {Path(args.out) / 'study.json'})", file=sys.stderr)
+    print(final_line(record, args), file=sys.stderr)
     if record["status"] == "interrupted":
         return 128 + int(record.get("signal") or 2)  # 130 SIGINT, 143 SIGTERM
     return 0 if record["status"] == "complete" else 1

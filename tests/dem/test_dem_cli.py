@@ -157,3 +157,20 @@ def test_the_plan_prints_every_resolved_parameter_and_the_defaults_it_used(tmp_p
     err = capsys.readouterr().err
     assert "p_w = 5 rho_p g d" in err and "[load]" not in err.split("defaults (no table in the config): ")[1]
     assert not (tmp_path / "run").exists()
+
+
+def test_an_interrupted_calibration_ends_with_the_command_that_continues_it(tmp_path, capsys, monkeypatch):
+    """dem calibrate stopped by SIGTERM (the calibration itself stands in): exit 143, and the last line is the
+    resume command with the options given that the folder does not store (--jobs, --launcher)."""
+    import signal
+
+    from granstokes.dem import calibrate
+
+    out = tmp_path / "cal"
+    monkeypatch.setattr(calibrate, "calibrate", lambda cfg, text, folder, **_: calibrate.CalibrateResult(
+        folder, "interrupted", "interrupted by SIGTERM; continue with --resume", None, signal.SIGTERM))
+    assert main(["dem", "calibrate", "--preset", "smoke", "--out", str(out), "--jobs", "3", "--launcher",
+                 "srun -n {np}"]) == 143
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"dem calibrate: interrupted (SIGTERM); continue with: granstokes dem calibrate --resume --out {out} "
+        "--jobs 3 --launcher 'srun -n {np}'")

@@ -175,7 +175,8 @@ def test_contact_dump_balances_the_static_bed(smoke):
 
 
 def test_sigterm_interrupts_with_status_143_and_says_so(tmp_path):
-    """SIGTERM to the runner mid-drive: exit status 143, run.json says interrupted (never running)."""
+    """SIGTERM to the runner mid-drive: exit status 143, run.json says interrupted (never running), the last line
+    the command that continues it."""
     out = tmp_path / "run"
     proc = subprocess.Popen([sys.executable, "-m", "granstokes.cli", "dem", "run", "--preset", "smoke", "--out",
                              str(out), "--quiet"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -188,7 +189,8 @@ def test_sigterm_interrupts_with_status_143_and_says_so(tmp_path):
     _, err = proc.communicate(timeout=60)
     meta = json.loads((out / "run.json").read_text())
     assert proc.returncode == 143 and meta["status"] == "interrupted" and "SIGTERM" in meta["message"], (meta, err)
-    assert "Traceback" not in err
+    assert "Traceback" not in err and "CancelledError" not in err
+    assert err.splitlines()[-1] == f"dem: interrupted (SIGTERM); continue with: granstokes dem run --resume --out {out}"
 
 
 def test_seeds_run_side_by_side_under_a_launcher_template(tmp_path):

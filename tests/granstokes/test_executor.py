@@ -1,6 +1,9 @@
-"""The executor (granstokes.lib.executor): order, retry, failure records, interrupts, rank slots, a scheduler
-(its address's form, one that does not answer)."""
+"""The executor (granstokes.lib.executor): order, retry, failure records, interrupts (a quiet shutdown), rank
+slots, a scheduler (its address's form, one that does not answer)."""
+import signal
 import socket
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -163,3 +166,35 @@ def test_an_address_where_no_scheduler_answers_is_refused_within_the_timeout():
                                                  rf"got 'tcp://127.0.0.1:{port}' \(.+\)$"):
                 check_scheduler(f"tcp://127.0.0.1:{port}", timeout=1.0)
             assert time.monotonic() - start < 5
+
+
+#: a run of sleeping tasks on the local cluster that reports its interrupt and prints nothing else
+INTERRUPTED = """
+import sys, time
+from pathlib import Path
+from granstokes.lib.executor import Executor, Outcome, Task
+
+def nap(marker, key):
+    Path(marker).touch()
+    time.sleep(2)
+    return Outcome("complete", key)
+
+try:
+    Executor(jobs=2).run([Task(f"t{i}", nap, (sys.argv[1], f"t{i}"), cost=10 - i) for i in range(6)])
+except KeyboardInterrupt:
+    print("interrupted", file=sys.stderr)
+"""
+
+
+def test_an_interrupt_shuts_the_local_cluster_down_quietly(tmp_path):
+    """SIGINT while tasks run on the in-process cluster: the interrupt reaches the caller and Dask's reports of
+    the running tasks it cancels (CancelledError warnings) stay off stderr."""
+    marker = tmp_path / "started"
+    proc = subprocess.Popen([sys.executable, "-c", INTERRUPTED, str(marker)], stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not marker.exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.2)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert err == "interrupted\n", err

@@ -175,10 +175,11 @@ SMALL = ["pressures=[10.0]", "seeds=[1]", 'drive=[{kind = "speed", mu_w_tilde = 
 
 
 @pytest.mark.slow
-def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
+def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path, capsys):
     """The study runs its beds on a LocalCluster of 2 worker processes the test starts (--scheduler); SIGTERM
-    once the calibration is complete stops it (status interrupted, exit 143); --resume finishes it without
-    redoing the calibration; metrics.json has the drives table, study.json every run with its status."""
+    once the calibration is complete stops it (status interrupted, exit 143, a last line with the command that
+    continues it, no traceback); --resume finishes it without redoing the calibration; metrics.json has the
+    drives table, study.json every run with its status, the last line points at the report."""
     from distributed import LocalCluster
 
     out = tmp_path / "study"
@@ -196,10 +197,17 @@ def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
         os.kill(proc.pid, signal.SIGTERM)
         _, err = proc.communicate(timeout=120)
     assert proc.returncode == 143, err
+    assert "Traceback" not in err and "CancelledError" not in err, err
+    assert err.splitlines()[-1] == ("study: interrupted (SIGTERM); continue with: granstokes study --resume --out "
+                                    f"{out} --scheduler {cluster.scheduler_address}"), err
     record = json.loads((out / "study.json").read_text())
     assert record["status"] == "interrupted" and "--resume" in record["message"]
     calibrated = json.loads(state.read_text())
+    capsys.readouterr()
     assert granstokes_main(["study", "--resume", "--out", str(out), "--quiet"]) == 0
+    last = capsys.readouterr().err.splitlines()[-1]
+    assert last.startswith("study: complete: ") and last.endswith(f"(report: {out / 'index.html'}; record: "
+                                                                  f"{out / 'study.json'})")
     assert json.loads(state.read_text())["points"] == calibrated["points"]  # not redone
     record = json.loads((out / "study.json").read_text())
     assert record["status"] == "complete" and record["runs"]["p10"]["status"] == "complete"
@@ -215,6 +223,43 @@ def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path):
     assert drive["p_w"] == 10.0 and drive["kind"] == "speed" and drive["seeds"] == 1
     assert drive["t_s"] > 0 and drive["duration"] == pytest.approx(4 * drive["t_s"], rel=0.05)
     assert (out / "index.html").exists() and (out / "runs" / "p10" / "run.json").exists()
+
+
+def test_ctrl_c_stops_a_study_quietly_and_says_how_to_continue(tmp_path):
+    """Ctrl-C (SIGINT to the study's process group, LAMMPS included) while its beds run on the local cluster:
+    exit 130, study.json interrupted, no traceback or Dask warning on stderr, and the last line is the command
+    that continues it."""
+    out = tmp_path / "study"
+    given = ["pressures=[20.0]", "seeds=[1, 2, 3]", "width_check=false",  # the committed calibration's grains
+             f'calibration={{file = "{CALIBRATION}"}}']
+    proc = subprocess.Popen([sys.executable, "-m", "granstokes.cli", "study", "--preset", "smoke", "--out", str(out),
+                             "--quiet", *[x for s in given for x in ("--set", s)]],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None and not list(out.glob("runs/p20/seed-*/prepare")):
+        time.sleep(0.05)
+    time.sleep(0.5)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert json.loads((out / "study.json").read_text())["status"] == "interrupted"
+    for noise in ("Traceback", "CancelledError", "WARNING", "KeyboardInterrupt"):
+        assert noise not in err, err
+    assert err.splitlines()[-1] == f"study: interrupted (SIGINT); continue with: granstokes study --resume --out {out}"
+
+
+def test_the_last_line_points_at_the_report_as_given():
+    """Complete: the report and the record under --out as the user wrote it; failed: why and the record."""
+    from argparse import Namespace
+
+    from granstokes.study.cli import final_line
+
+    args = Namespace(out="my-study", scheduler=None, jobs=2)
+    assert final_line({"status": "complete", "message": "verdict"}, args) == \
+        "study: complete: verdict (report: my-study/index.html; record: my-study/study.json)"
+    assert final_line({"status": "failed", "message": "why"}, args) == "study: failed: why (see my-study/study.json)"
+    assert final_line({"status": "interrupted", "signal": 15}, Namespace(out="a b", scheduler="tcp://h:1", jobs=2)) \
+        == "study: interrupted (SIGTERM); continue with: granstokes study --resume --out 'a b' --scheduler tcp://h:1"
 
 
 def test_the_readme_cluster_script_builds_its_slurm_job():
