@@ -1,5 +1,6 @@
 """The executor (granstokes.lib.executor): order, retry, failure records, interrupts (a quiet shutdown), rank
-slots, a scheduler (its address's form, one that does not answer)."""
+slots, a scheduler (its address's form, one that does not answer, a dask-jobqueue cluster's)."""
+import os
 import signal
 import socket
 import subprocess
@@ -166,6 +167,36 @@ def test_an_address_where_no_scheduler_answers_is_refused_within_the_timeout():
                                                  rf"got 'tcp://127.0.0.1:{port}' \(.+\)$"):
                 check_scheduler(f"tcp://127.0.0.1:{port}", timeout=1.0)
             assert time.monotonic() - start < 5
+
+
+def _square(path: str, x: int) -> Outcome:
+    """Write x squared and this process's id to ``path``; the worker's ranks in the outcome."""
+    from distributed import get_worker
+
+    Path(path).write_text(f"{x * x} {os.getpid()}")
+    return Outcome("complete", str(x), {"ranks": get_worker().state.total_resources.get("ranks")})
+
+
+def test_the_tasks_through_a_dask_jobqueue_cluster(tmp_path):
+    """--scheduler with dask-jobqueue's own cluster class whose jobs are local processes (the SLURMCluster's
+    machinery without a queue): its workers offer ranks=1 (worker_extra_args), the check accepts them, and every
+    task runs in a worker process and writes its result; a failed task is retried there."""
+    from dask_jobqueue.local import LocalCluster
+
+    with LocalCluster(cores=1, processes=1, memory="1GB", worker_extra_args=["--resources", "ranks=1"],
+                      scheduler_options={"dashboard_address": "127.0.0.1:0"}) as cluster:
+        assert "--resources ranks=1" in cluster.job_script()
+        cluster.scale(jobs=2)
+        cluster.wait_for_workers(2, timeout=60)
+        check_scheduler(cluster.scheduler_address)
+        outcomes = Executor(scheduler=cluster.scheduler_address).run(
+            [Task(f"x{x}", _square, (str(tmp_path / f"x{x}"), x)) for x in range(5)]
+            + [Task("f", _flaky, (str(tmp_path / "m"), "f"))])
+    assert all(outcomes[f"x{x}"].status == "complete" and outcomes[f"x{x}"].info == {"ranks": 1} for x in range(5))
+    assert outcomes["f"].status == "complete" and outcomes["f"].attempts == 2
+    written = [(tmp_path / f"x{x}").read_text().split() for x in range(5)]
+    assert [int(square) for square, _ in written] == [x * x for x in range(5)]
+    assert all(int(pid) != os.getpid() for _, pid in written)
 
 
 #: a run of sleeping tasks on the local cluster that reports its interrupt and prints nothing else

@@ -176,15 +176,18 @@ SMALL = ["pressures=[10.0]", "seeds=[1]", 'drive=[{kind = "speed", mu_w_tilde = 
 
 @pytest.mark.slow
 def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path, capsys):
-    """The study runs its beds on a LocalCluster of 2 worker processes the test starts (--scheduler); SIGTERM
-    once the calibration is complete stops it (status interrupted, exit 143, a last line with the command that
-    continues it, no traceback); --resume finishes it without redoing the calibration; metrics.json has the
-    drives table, study.json every run with its status, the last line points at the report."""
-    from distributed import LocalCluster
+    """The study runs its beds on a dask-jobqueue cluster whose 2 jobs are local worker processes offering
+    ranks=1 (--scheduler; SLURMCluster's machinery without a queue); SIGTERM once the calibration is complete
+    stops it (status interrupted, exit 143, a last line with the command that continues it, no traceback);
+    --resume finishes it without redoing the calibration; metrics.json has the drives table, study.json every
+    run with its status, the last line points at the report."""
+    from dask_jobqueue.local import LocalCluster
 
     out = tmp_path / "study"
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, resources={"ranks": 1},
-                      dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
+    with LocalCluster(cores=1, processes=1, memory="2GB", worker_extra_args=["--resources", "ranks=1"],
+                      scheduler_options={"dashboard_address": "127.0.0.1:0"}) as cluster:
+        cluster.scale(jobs=2)
+        cluster.wait_for_workers(2, timeout=60)
         args = [sys.executable, "-m", "granstokes.cli", "study", "--preset", "smoke", "--out", str(out), "--quiet",
                 "--scheduler", cluster.scheduler_address, *[x for s in SMALL for x in ("--set", s)]]
         proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
