@@ -6,6 +6,7 @@ independent calibration) on Dask, and ``granstokes preset``: print a DEM or stud
 """
 from __future__ import annotations
 
+import json
 import shlex
 import signal
 import sys
@@ -16,6 +17,14 @@ from granstokes.dem.lammps_env import DEFAULT_JOBS
 from granstokes.lib.validate import require
 
 from . import config
+
+
+def _complete(folder: Path) -> bool:
+    """Whether the calibration folder of a study holds a complete calibration."""
+    from granstokes.dem.layout import CALIBRATION_STATE
+
+    state = folder / CALIBRATION_STATE
+    return state.is_file() and json.loads(state.read_text()).get("status") == "complete"
 
 
 def final_line(record: dict, args) -> str:
@@ -35,9 +44,11 @@ def final_line(record: dict, args) -> str:
 
 def _cmd_study(args) -> int:
     from granstokes.dem import config as dem_config
-    from granstokes.dem.calibrate import grains_difference, material_table, plan_calibration
+    from granstokes.dem.calibrate import completed_points, grains_difference, material_table, plan_calibration
+    from granstokes.dem.estimate import Estimate
+    from granstokes.dem.layout import CALIBRATION_JSON, CALIBRATION_STATE
 
-    from .plan import calibration_text, plan_study
+    from .plan import calibration_folder, calibration_text, plan_study
     from .runner import STUDY_TOML, check_folder, run_study
 
     require(args.scheduler is None or args.jobs is None, "--jobs / --scheduler", "one of them (a scheduler's "
@@ -63,18 +74,32 @@ def _cmd_study(args) -> int:
     from granstokes.dem.throughput import measured
 
     measured(announce=lambda line: print(f"study: {line}", file=sys.stderr))
+    out = Path(args.out)
+    calibration = Estimate()
+    if study.calibration_file is None:  # the stage's cost: the pressures not yet calibrated, what is left of them
+        seconds = disk = 0.0
+        for p_w in study.calibration_pressures:
+            folder = calibration_folder(out, p_w)
+            if args.resume and _complete(folder):
+                continue
+            cp = plan_calibration(dem_config.parse(calibration_text(study, p_w)))
+            done = completed_points(folder, cp)[0] if args.resume and (folder / CALIBRATION_STATE).is_file() else ()
+            print(f"study: calibration at p = {p_w:g}: {cp.cost_estimate(args.jobs, done=done)}", file=sys.stderr)
+            part = cp.estimate(args.jobs, done=done)
+            seconds, disk = seconds + part.seconds, disk + part.disk
+        calibration = calibration.plus("calibration", seconds, disk)
+    reference = calibration_folder(out, study.reference_pressure)
     if study.calibration_file is not None:
         material, source = material_table(study.calibration_file)[0], study.calibration_file
+    elif args.resume and _complete(reference):  # a resume past the calibration sizes from it, as the runs were
+        material, source = material_table(reference / CALIBRATION_JSON)[0], str(reference.relative_to(out))
     else:  # the calibration runs first: the dry run sizes from the DEM preset's nominal material
         material = dem_config.preset(study.dem)[0].material
         material = {k: getattr(material, k) for k in dem_config.MATERIAL_KEYS}
         source = f"(not yet run: sized here from the {study.dem} preset's nominal material)"
-        for p_w in study.calibration_pressures:
-            cp = plan_calibration(dem_config.parse(calibration_text(study, p_w)))
-            print(f"study: calibration at p = {p_w:g}: {cp.cost_estimate(args.jobs)}", file=sys.stderr)
     sp = plan_study(study, material, source)
     if args.resume:
-        sp = sp.as_begun(Path(args.out))
+        sp = sp.as_begun(out)
     if study.calibration_file is not None:  # a calibration of other grains is refused before any work
         _, grains, p_cal = material_table(study.calibration_file)
         for label, r in sp.runs.items():
@@ -83,8 +108,9 @@ def _cmd_study(args) -> int:
                     + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
     print(f"study '{study.name}': {len(study.pressures)} pressure(s) x {len(study.drives)} drive(s) x "
           f"{len(study.seeds)} seed(s), sized from {source} -> {args.out}", file=sys.stderr)
-    for line in sp.lines(args.jobs, Path(args.out) if args.resume else None):
+    for line in sp.lines(args.jobs, out if args.resume else None):
         print(line, file=sys.stderr)
+    print(f"  {sp.estimate(args.jobs, out if args.resume else None, calibration).line()}", file=sys.stderr)
     if args.dry_run:
         from granstokes.compare import noise
 
