@@ -136,9 +136,10 @@ class Executor:
         return cluster, Client(cluster)
 
     def run(self, tasks, on_done: Callable[[Task, Outcome], None] | None = None, stop: Callable[[], None] | None = None,
-            progress: bool = False, desc: str = "runs") -> dict[str, Outcome]:
+            progress: bool = False, desc: str = "runs", expected: float | None = None) -> dict[str, Outcome]:
         """Run ``tasks``; ``on_done(task, outcome)`` in this thread as each finishes (for the records); returns
-        each task's last outcome by key."""
+        each task's last outcome by key.  The progress bar counts ``expected`` seconds of wall time (the plan's
+        estimate; default: the tasks' costs summed), each finished task its share of them."""
         from distributed import as_completed
 
         tasks = sorted(tasks, key=lambda t: -t.cost)
@@ -150,8 +151,10 @@ class Executor:
         if not tasks:
             return outcomes
         cluster, client = self._client()
-        bar = tqdm(total=round(sum(t.cost for t in tasks)), desc=desc, unit="s est.", disable=not progress,
-                   file=sys.stderr, dynamic_ncols=True)
+        work = sum(t.cost for t in tasks)
+        share = (expected / work) if expected and work > 0 else 1.0
+        bar = tqdm(total=round(work * share), desc=desc, unit="s est.", disable=not progress, file=sys.stderr,
+                   dynamic_ncols=True, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} s of the estimate [{elapsed}]")
         attempts = dict.fromkeys(by_key, 1)
 
         run_id = uuid.uuid4().hex[:8]  # Dask keys are shared by every client of a scheduler
@@ -178,7 +181,7 @@ class Executor:
                         pending.add(submit(task))
                         continue
                     outcomes[task.key] = outcome
-                    bar.update(round(task.cost))
+                    bar.update(task.cost * share)
                     if on_done is not None:
                         on_done(task, outcome)
             except BaseException:

@@ -121,7 +121,8 @@ class StudyRunner:
         t0 = time.monotonic()
         try:
             outcomes = self.executor().run(tasks, on_done=done, stop=stop_all_lammps, progress=self.progress,
-                                           desc=f"study {self.study.name}: beds")
+                                           desc=f"study {self.study.name}: beds",
+                                           expected=sp.cost_seconds(self.jobs, self.out))
         except (Interrupted, KeyboardInterrupt) as exc:
             stopped = Outcome("interrupted", str(exc) or "interrupted by SIGINT")
             for label, (runner, meta) in runners.items():

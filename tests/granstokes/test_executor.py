@@ -229,3 +229,31 @@ def test_an_interrupt_shuts_the_local_cluster_down_quietly(tmp_path):
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert err == "interrupted\n", err
+
+
+def test_the_progress_bar_counts_the_plans_wall_estimate(tmp_path, monkeypatch):
+    """The bar's total is the expected wall time the plan printed (not the tasks' summed costs), and the finished
+    tasks fill it exactly, each by its share of the work."""
+    from granstokes.lib import executor
+
+    bars = []
+
+    class Bar:
+        def __init__(self, total, **kwargs):
+            self.total, self.n = total, 0.0
+            bars.append(self)
+
+        def update(self, n):
+            self.n += n
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(executor, "tqdm", Bar)
+    log = str(tmp_path / "order")
+    tasks = [Task(f"t{c}", _log, (log, f"t{c}"), cost=c) for c in (1.0, 3.0, 6.0)]
+    Executor(jobs=2).run(tasks, progress=True, expected=7.0)
+    (bar,) = bars
+    assert bar.total == 7 and bar.n == pytest.approx(7.0)
+    Executor(jobs=2).run(tasks, progress=True)  # no estimate given: the summed costs
+    assert bars[1].total == 10 and bars[1].n == pytest.approx(10.0)
