@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing as mp
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -25,6 +25,7 @@ from granstokes.dem.calibrate import grains_difference
 from granstokes.dem.layout import RUN_JSON
 from tqdm import tqdm
 
+from granstokes.lib.executor import forked_pool
 from granstokes.lib.validate import require
 
 from . import calibrate
@@ -282,7 +283,7 @@ def model_drives(drives: list[DriveAnalysis], side: ModelSide, jobs: int = 1, pr
         return [_model_drive(a, side) for a in tqdm(drives, **bar)]
     _SHARED.update(drives=drives, side=side)
     try:
-        with ProcessPoolExecutor(jobs, mp_context=mp.get_context("fork")) as pool:
+        with forked_pool(jobs) as pool:
             futures = [pool.submit(_model_drive_at, i) for i in range(len(drives))]
             for _ in tqdm(as_completed(futures), **bar):
                 pass

@@ -23,7 +23,6 @@ Conventions: DEM units (d, rho_p, g); mu > 0 where the bed resists a plate movin
 from __future__ import annotations
 
 import json
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -36,6 +35,7 @@ from granstokes.continuum.rules import YieldRule
 from granstokes.continuum.scales import Material
 from granstokes.dem import layout
 
+from granstokes.lib.executor import forked_pool
 from granstokes.lib.validate import require
 
 from . import phase
@@ -476,7 +476,7 @@ def compare_oscillations(dem, calibration: str | Path, ngf_from: str | Path | No
     dems = [analyse_dem(d, records, material.mu_s) for d, records in dem]
     tasks = [(d, setup, m) for d in dems for m in setup.models]
     if jobs > 1:
-        with ProcessPoolExecutor(jobs) as pool:
+        with forked_pool(jobs) as pool:
             predictions = dict(pool.map(_predict_one, tasks))
     else:
         predictions = dict(map(_predict_one, tasks))

@@ -14,6 +14,7 @@ running task).
 from __future__ import annotations
 
 import logging
+import signal
 import sys
 import uuid
 from collections.abc import Callable
@@ -100,6 +101,33 @@ def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
     if not offering:
         raise ValueError(f"--scheduler must have workers offering the '{RANKS}' resource (dask worker --resources "
                          f"{RANKS}=N), got {len(workers)} worker(s) without it at {address}")
+
+
+def _pool_child() -> None:
+    """A forked pool process leaves interrupts to its parent: SIGINT ignored (a terminal's Ctrl-C reaches the
+    whole process group), SIGTERM its default (a handler copied from the parent would raise in here)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+@contextmanager
+def forked_pool(jobs: int):
+    """``jobs`` forked processes (a ProcessPoolExecutor) for work that stays on this machine: a child that dies
+    breaks the pool (BrokenProcessPool) rather than hanging it, and leaving the block by an exception (an
+    interrupt) ends the children at once, without their tracebacks, and runs nothing still queued."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    pool = ProcessPoolExecutor(jobs, mp_context=mp.get_context("fork"), initializer=_pool_child)
+    try:
+        yield pool
+    except BaseException:
+        children = list((pool._processes or {}).values())  # no public handle before Python 3.14's terminate_workers
+        pool.shutdown(wait=False, cancel_futures=True)
+        for child in children:
+            child.terminate()
+        raise
+    pool.shutdown()
 
 
 @contextmanager

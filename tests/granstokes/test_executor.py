@@ -1,5 +1,6 @@
 """The executor (granstokes.lib.executor): order, retry, failure records, interrupts (a quiet shutdown), rank
-slots, a scheduler (its address's form, one that does not answer, a dask-jobqueue cluster's)."""
+slots, a scheduler (its address's form, one that does not answer, a dask-jobqueue cluster's); the forked pool
+(interrupted at once and quietly, a dead child an error)."""
 import os
 import signal
 import socket
@@ -11,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from granstokes.lib.executor import Executor, Outcome, Task, check_scheduler, scheduler_address
+from granstokes.lib.executor import Executor, Outcome, Task, check_scheduler, forked_pool, scheduler_address
 
 _LOCK = threading.Lock()
 
@@ -257,3 +258,56 @@ def test_the_progress_bar_counts_the_plans_wall_estimate(tmp_path, monkeypatch):
     assert bar.total == 7 and bar.n == pytest.approx(7.0)
     Executor(jobs=2).run(tasks, progress=True)  # no estimate given: the summed costs
     assert bars[1].total == 10 and bars[1].n == pytest.approx(10.0)
+
+
+#: a forked pool of 2 busy children and queued work, its group interrupted by the test: SIGTERM raises in the
+#: parent (as granstokes.dem.runner.sigterm_interrupts does), SIGINT by Python's default
+POOL = """
+import signal, sys, time
+from pathlib import Path
+from granstokes.lib.executor import forked_pool
+
+def busy(i):
+    Path(sys.argv[1], str(i)).touch()
+    time.sleep(30)
+
+def stop(signum, frame):
+    raise KeyboardInterrupt
+
+signal.signal(signal.SIGTERM, stop)
+try:
+    with forked_pool(2) as pool:
+        list(pool.map(busy, range(6)))
+except KeyboardInterrupt:
+    print("interrupted", file=sys.stderr)
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupted_pool_ends_its_children_at_once_and_quietly(tmp_path, signum):
+    """The signal to the whole process group (a terminal's Ctrl-C, a batch system's SIGTERM) while both children
+    are busy: the parent stops within seconds, not after their work or the queue's, and no child prints a
+    traceback."""
+    proc = subprocess.Popen([sys.executable, "-c", POOL, str(tmp_path)], stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    deadline = time.monotonic() + 60
+    while len(list(tmp_path.iterdir())) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    start = time.monotonic()
+    os.killpg(proc.pid, signum)
+    _, err = proc.communicate(timeout=60)
+    assert time.monotonic() - start < 10 and err == "interrupted\n", err
+    assert len(list(tmp_path.iterdir())) == 2  # nothing queued started
+
+
+def _die(i: int) -> int:
+    if i == 1:
+        os._exit(9)  # as the kernel's OOM killer would end it
+    return i
+
+
+def test_a_child_that_dies_breaks_the_pool_instead_of_hanging_it():
+    from concurrent.futures.process import BrokenProcessPool
+
+    with pytest.raises(BrokenProcessPool), forked_pool(2) as pool:
+        list(pool.map(_die, range(4)))
