@@ -99,8 +99,10 @@ def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
                          f"{address!r} ({why})") from None
     offering = [w for w in workers if RANKS in (w.get("resources") or {})]
     if not offering:
+        got = (f"{len(workers)} worker(s) without it" if workers else
+               "no worker yet (a cluster's first job may still wait in the queue: start the study once it runs)")
         raise ValueError(f"--scheduler must have workers offering the '{RANKS}' resource (dask worker --resources "
-                         f"{RANKS}=N), got {len(workers)} worker(s) without it at {address}")
+                         f"{RANKS}=N), got {got} at {address}")
 
 
 def _pool_child() -> None:

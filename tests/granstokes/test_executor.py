@@ -170,6 +170,15 @@ def test_an_address_where_no_scheduler_answers_is_refused_within_the_timeout():
             assert time.monotonic() - start < 5
 
 
+def test_a_scheduler_without_workers_yet_is_refused_saying_so():
+    """An adaptive cluster whose first job has not started: the study is refused, and the line says why."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp", dashboard_address=None,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
+        with pytest.raises(ValueError, match="'ranks' resource .*, got no worker yet "):
+            check_scheduler(cluster.scheduler_address)
+
 def _square(path: str, x: int) -> Outcome:
     """Write x squared and this process's id to ``path``; the worker's ranks in the outcome."""
     from distributed import get_worker
