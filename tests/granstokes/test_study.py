@@ -265,16 +265,23 @@ def test_the_last_line_points_at_the_report_as_given():
         == "study: interrupted (SIGTERM); continue with: granstokes study --resume --out 'a b' --scheduler tcp://h:1"
 
 
-def test_the_readme_cluster_script_builds_its_slurm_job():
-    """README's dask-jobqueue script, up to the submission: the installed SLURMCluster accepts its arguments and
-    writes a job whose workers offer the ``ranks`` resource the study's beds hold."""
+def _cluster_recipe(page: str = "docs/cluster.md") -> str:
+    """The Python block of ``page`` that builds the SLURMCluster (docs/cluster.md's: the driver)."""
     import re
 
-    from dask_jobqueue import SLURMCluster  # noqa: F401 (the script's import)
+    return next(b for b in re.findall(r"```python\n(.*?)```", (ROOT / page).read_text(), re.S) if "SLURMCluster(" in b)
 
-    block = next(b for b in re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
-                 if "SLURMCluster" in b)
-    setup = block.split("cluster.scale")[0]
+
+@pytest.mark.parametrize("page, lines", [
+    ("docs/cluster.md", ["#SBATCH -A my-account", "#SBATCH -p compute", "#SBATCH --cpus-per-task=32",
+                         "#SBATCH --mem=60G", "#SBATCH -t 04:00:00", "source /shared/granstokes/.venv/bin/activate"]),
+    ("README.md", ["#SBATCH -A me", "#SBATCH -p compute", "#SBATCH --cpus-per-task=32", "#SBATCH -t 04:00:00"])])
+def test_the_cluster_recipe_builds_its_slurm_job(tmp_path, page, lines):
+    """The SLURMCluster of docs/cluster.md and of README, up to the submission: the installed dask-jobqueue accepts
+    its arguments and writes a job of the account, partition, cores, memory and walltime given (and the shared
+    environment), whose workers run one thread each, offer the ``ranks`` resource the beds hold and leave before
+    the walltime."""
+    setup = _cluster_recipe(page).split("cluster.adapt")[0].replace("/shared/dask-logs", str(tmp_path / "logs"))
     scope = {}
     exec(setup, scope)
     cluster = scope["cluster"]
@@ -282,7 +289,46 @@ def test_the_readme_cluster_script_builds_its_slurm_job():
         script = cluster.job_script()
     finally:
         cluster.close()
-    assert "--resources ranks=1" in script and "#SBATCH" in script and "--nworkers 8" in script
+    for line in lines:
+        assert f"\n{line}\n" in script, script
+    for arg in ("--nthreads 1", "--nworkers 32", "--resources ranks=1", "--lifetime 230m", "--lifetime-stagger 5m"):
+        assert arg in script, script
+    assert 230 + 5 < 4 * 60  # the latest departure, in minutes, before the walltime
+
+
+def test_the_cluster_driver_runs_the_study_on_its_scheduler(tmp_path, monkeypatch, capfd):
+    """docs/cluster.md's driver with dask-jobqueue's local jobs in place of Slurm's (its Slurm entries and
+    prologue dropped, one worker per job): it starts the cluster, waits for a worker, runs granstokes study with
+    the scheduler's address added (a dry run, then a refused study) and exits with the study's status."""
+    import types
+
+    from dask_jobqueue.local import LocalCluster
+
+    class Local(LocalCluster):
+        def __init__(self, **given):
+            given = {k: v for k, v in given.items() if k in ("worker_extra_args",)}
+            super().__init__(cores=1, processes=1, memory="1GB", scheduler_options={"dashboard_address": ":0"},
+                             **given)
+
+    monkeypatch.setitem(sys.modules, "dask_jobqueue", types.SimpleNamespace(SLURMCluster=Local))
+    monkeypatch.setenv("PATH", f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    out = tmp_path / "s"
+    try:
+        for args, code in ((["--dry-run"], 0), (["--set", "colour=1"], 2)):
+            monkeypatch.setattr(sys, "argv", ["slurm_study.py", "--preset", "smoke", "--out", str(out), *args])
+            with pytest.raises(SystemExit) as stop:
+                exec(compile(_cluster_recipe(), "slurm_study.py", "exec"), {"__name__": "__main__"})
+            assert stop.value.code == code
+            err = capfd.readouterr().err
+            if code == 0:
+                assert "study: on the scheduler tcp://" in err and "the study's beds" in err
+            else:
+                assert "granstokes: error: study keys must be" in err
+    finally:
+        for s, handler in handlers.items():
+            signal.signal(s, handler)
+    assert not out.exists()
 
 
 def test_the_demo_runs_its_study_once_then_renders_again(tmp_path, monkeypatch):
