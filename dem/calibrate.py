@@ -81,9 +81,10 @@ DENSE_CRITERION = f"kinetic part of P_yy <= {KINETIC_MAX:g} P_yy"
 #: I = 0.46: the dilation from the compressed packing overshoots to phi = 0.39-0.45 and phi settles after a strain of
 #: 4-6 in the doubled cell, ~1 in the normal one; at I = 0.1 neither overshoots)
 FINITE_SIZE_START = 5.0
-#: bytes a cell's folder holds (its LAMMPS log, series, profile and blocks: 1.4-2.2e5 in the smoke study's 2D cells;
-#: bench/estimates.py measures a calibration's folder against the estimate)
-CELL_BYTES = 2e5
+#: bytes a cell's folder holds (its LAMMPS log, series, profile and blocks): a fixed part and one per step (its log
+#: and series grow with the steps), from the smoke calibration's cells (2.1e5 at 3.4e5 steps) and the quick
+#: preset's (3.2e5 at 7.7e5 steps); bench/dem_costs.py measures a calibration's folder against the estimate
+CELL_BYTES, CELL_BYTES_PER_STEP = 1.2e5, 0.26
 #: seconds of the fit and its bootstrap after the cells (1-2 s for 7-14 points x 1-3 seeds, measured)
 FIT_SECONDS = 2.0
 
@@ -165,10 +166,10 @@ class CalibrationPlan:
     def estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
                  speed: Throughput | None = None) -> Estimate:
         """The calibration's wall time (``cost_seconds`` and its fit) and the bytes of its cells left (CELL_BYTES
-        each)."""
-        cells = sum(1 for cell in self.cells() if self.key(*cell) not in done)
-        return Estimate().plus("calibration", self.cost_seconds(jobs, np_, done, speed) + FIT_SECONDS,
-                               cells * CELL_BYTES)
+        each and CELL_BYTES_PER_STEP)."""
+        left = [(k, dbl) for k, seed, dbl in self.cells() if self.key(k, seed, dbl) not in done]
+        disk = sum(CELL_BYTES + CELL_BYTES_PER_STEP * (self.steps(k, dbl) + self.compress_steps) for k, dbl in left)
+        return Estimate().plus("calibration", self.cost_seconds(jobs, np_, done, speed) + FIT_SECONDS, disk)
 
     def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
                       speed: Throughput | None = None) -> str:

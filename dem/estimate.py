@@ -3,17 +3,18 @@
 Each stage's seconds come from its plan (dem.sizing, dem.calibrate, granstokes.study.plan) at the probed speed
 (dem.throughput); ``Estimate`` adds them and the disk, and prints one line.  The estimate is for this machine as
 probed; SHARED_STRETCH says how much longer the same command took beside other work: one more busy process per
-core, measured by bench/estimates.py (bench/RESULTS.md, "Estimates against measured wall time").
+core, measured by bench/dem_costs.py (bench/RESULTS.md, "DEM cost estimates").
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-#: wall time of a command beside one other busy process per core over its wall time on an idle machine, over the
-#: presets and studies of bench/estimates.py (the smallest and largest measured: bench/RESULTS.md)
-SHARED_STRETCH = (1.6, 2.4)
+#: wall time of a command beside one other busy process per core over its wall time on an idle machine: the
+#: smallest and largest over the presets, the quick calibration and the smoke studies (1.63-2.16 on 2 cores;
+#: bench/dem_costs.py --shared, bench/RESULTS.md "DEM cost estimates")
+SHARED_STRETCH = (1.6, 2.2)
 #: a command's own wall time in seconds beyond its stages: Python's start and imports, reading the inputs (a study
-#: adds its Dask cluster's start and its report's page; bench/estimates.py)
+#: adds its Dask cluster's start and its report's page; bench/dem_costs.py)
 STARTUP = {"dem": 0.5, "study": 5.0}
 #: durations up to this many seconds are printed in s, up to this many minutes in min, beyond in h
 SECONDS_SHOWN, MINUTES_SHOWN = 90, 90

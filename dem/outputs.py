@@ -32,11 +32,11 @@ import pandas as pd
 from .layout import ATOMS, CONTACTS, LOG, PLATE_CSV, PROFILE_BIN, PROFILES_CSV, dump_snapshots, snapshot_table
 
 #: bytes of one row of each output as written, by dimension where it differs (measured on the presets' runs by
-#: bench/estimates.py, bench/RESULTS.md "Estimates against measured wall time"): an atoms.dump row (a grain), a
+#: bench/dem_costs.py, bench/RESULTS.md "DEM cost estimates"): an atoms.dump row (a grain), a
 #: contacts.dump row (a contact), a profiles.csv row (a 1 d bin at one time), a plate.csv row, a restart's bytes per
-#: grain, a log.lammps thermo line
+#: grain, a log.lammps thermo line, a grains.csv row
 ROW_BYTES = {"atom": {2: 64, 3: 82}, "contact": {2: 79, 3: 97}, "profile": {2: 146, 3: 168}, "plate": 117,
-             "restart": 270, "thermo": 230}
+             "restart": 270, "thermo": 230, "grain": 24}
 #: contacts per grain in a loaded bed's contacts.dump frame (base and plate contacts included), same runs
 CONTACTS_PER_GRAIN = {2: 1.13, 3: 1.58}
 #: profile bins beyond the bed's depth (the base, the plate, the box's headroom), and a preparation's log

@@ -157,7 +157,7 @@ class Plan:
         dim, n, iv, row = self.dimension, self.n_grains, self.intervals, ROW_BYTES
         drive = key.partition("/")[2]
         if not drive:
-            return 2 * n * row["restart"] + PREPARE_LOG_BYTES  # prepared.restart and grains.csv
+            return n * (row["restart"] + row["grain"]) + PREPARE_LOG_BYTES  # prepared.restart, grains.csv, its log
         d = next(d for d in self.drives if d.drive.name == drive)
         return (self.atom_frames(d) * n * row["atom"][dim]
                 + (d.steps // iv["contacts"] + 1) * n * CONTACTS_PER_GRAIN[dim] * row["contact"][dim]

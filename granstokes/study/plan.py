@@ -35,7 +35,7 @@ CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
 #: 4 drives (bench/dem_costs.py; checked on a subset of the disks study)
 REPORT_DRIVE_STEPS = 5.9e7
 #: bytes of the report per scored drive: its figures, tables and predictions (the smoke study's report, 10 MB over 4
-#: drives; bench/estimates.py)
+#: drives; bench/dem_costs.py)
 REPORT_BYTES_PER_DRIVE = 2.5e6
 #: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
 MODELS = 3

@@ -159,6 +159,30 @@ def test_the_estimate_counts_the_steps_lammps_runs(smoke_run):
     drive = p.drives[0]
     driven = meta["stages"][f"seed-1/{drive.drive.name}"]["info"]["last_step"]
     assert abs(driven / drive.steps - 1) <= DRIVE_TOLERANCE, (driven, drive.steps)
+    # the disk each stage writes, from the rows of its outputs (dem.outputs.ROW_BYTES): the drive's folder within
+    # DISK_TOLERANCE (its dumps are 98 % of it), the preparation's (a restart and a log) the right size
+    for key, folder in ((f"seed-1/{drive.drive.name}", drive.drive.name), ("seed-1", "prepare")):
+        written = sum(f.stat().st_size for f in (smoke_run / "seed-1" / folder).rglob("*") if f.is_file())
+        assert abs(p.stage_bytes(key) / written - 1) <= DISK_TOLERANCE[folder], (key, p.stage_bytes(key), written)
+
+
+#: a stage's estimated bytes hold its folder within these fractions (a drive's rows are counted exactly; a bed's
+#: preparation log varies with its settling)
+DISK_TOLERANCE = {"prepare": 0.3, "speed": 0.15}
+
+
+def test_the_total_sums_the_stages_and_quotes_the_shared_stretch():
+    """One line: the stages' seconds added (each shown), the disk in MB, the measured stretch on shared cores."""
+    from granstokes.dem.estimate import SHARED_STRETCH, Estimate, disk_text
+
+    e = Estimate().plus("calibration", 30.0, 1.5e6).plus("beds", 80.0, 2.0e8).plus("start-up", 5.0)
+    assert e.seconds == 115.0 and e.disk == pytest.approx(2.015e8)
+    low, high = SHARED_STRETCH
+    assert e.line() == (f"total: about {duration_text(115.0)} on this machine (calibration 30 s + beds 80 s + "
+                        f"start-up 5 s) and 202 MB of disk; {low:g}-{high:g}x as long if another busy process "
+                        "shares each core")
+    assert [disk_text(x) for x in (512, 1.5e6, 2.5e9)] == ["512 B", "1.5 MB", "2.5 GB"]
+    assert 1 < low <= high
 
 
 #: the estimate from this machine's probed speed holds a measured run within this fraction of its wall time
