@@ -184,7 +184,8 @@ class Executor:
         work = sum(t.cost for t in tasks)
         share = (expected / work) if expected and work > 0 else 1.0
         bar = tqdm(total=round(work * share), desc=desc, unit="s est.", disable=not progress, file=sys.stderr,
-                   dynamic_ncols=True, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} s of the estimate [{elapsed}]")
+                   dynamic_ncols=True)
+        finished = 0.0  # the finished tasks' cost: the bar shows its share of the estimate, in whole seconds
         attempts = dict.fromkeys(by_key, 1)
 
         run_id = uuid.uuid4().hex[:8]  # Dask keys are shared by every client of a scheduler
@@ -211,7 +212,8 @@ class Executor:
                         pending.add(submit(task))
                         continue
                     outcomes[task.key] = outcome
-                    bar.update(task.cost * share)
+                    finished += task.cost
+                    bar.update(round(finished * share) - bar.n)
                     if on_done is not None:
                         on_done(task, outcome)
             except BaseException:

@@ -1,7 +1,9 @@
 """The oscillating plate end to end: ``granstokes study --preset oscillating-smoke`` (cut to one bed and one
-frequency) runs its calibration, beds and the oscillation comparison; the plate of the speed drive follows the
-imposed u_w(t) within 1 %; metrics.json's rows and drives carry omega, amplitude and the phase lag."""
+frequency, predicted from the committed calibration of its grains: the calibration stage is the Stokes study's
+test's) runs its beds and the oscillation comparison; the plate of the speed drive follows the imposed u_w(t)
+within 1 %; metrics.json's rows and drives carry omega, amplitude and the phase lag."""
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -11,7 +13,10 @@ from granstokes.cli import main as granstokes_main
 
 pytestmark = pytest.mark.slow
 
-SMALL = ["seeds=[1]", "omega_ts=[2.0]", "cycles=3", "calibration.I=[0.01, 0.03, 0.08, 0.2, 0.4, 0.6]"]
+#: the smoke grains' plane-shear calibration (the quick preset's grains)
+CALIBRATION = Path(__file__).resolve().parents[2] / "results" / "quick-calibration" / "calibration.json"
+OMEGA_TS = 4.0
+SMALL = ["seeds=[1]", f"omega_ts=[{OMEGA_TS}]", "cycles=3", f'calibration={{file = "{CALIBRATION}"}}']
 #: the plate's x speed within this fraction of the imposed amplitude
 TRACKING = 0.01
 
@@ -25,7 +30,7 @@ def study(tmp_path_factory):
 
 
 def test_the_plate_follows_the_imposed_speed(study):
-    run = study / "runs" / "p20-w2"
+    run = study / "runs" / f"p20-w{OMEGA_TS:g}"
     meta = json.loads((run / "run.json").read_text())
     (drive,) = [d for d in meta["sizing"]["drives"] if d["kind"] == "speed"]
     dt, every, sample = meta["sizing"]["dt"], *(meta["sizing"]["intervals_steps"][k] for k in ("plate", "sample"))
@@ -55,7 +60,7 @@ def test_rows_and_drives_carry_the_frequency_amplitude_and_lag(study):
                 "amplitude", "phase_lag"} <= set(row)
         assert row["omega"] > 0 and row["amplitude"] > 0
     for drive in metrics["drives"].values():
-        assert drive["omega"] > 0 and drive["amplitude"] > 0 and drive["omega_ts"] == pytest.approx(2.0, rel=1e-6)
+        assert drive["omega"] > 0 and drive["amplitude"] > 0 and drive["omega_ts"] == pytest.approx(OMEGA_TS, rel=1e-6)
     record = json.loads((study / "study.json").read_text())
     assert record["status"] == "complete"
     assert (study / "index.html").exists() and (study / "map.png").exists()

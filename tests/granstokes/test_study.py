@@ -146,6 +146,7 @@ def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_sp
     assert not (tmp_path / "s").exists()
 
 
+@pytest.mark.slow
 def test_a_scheduler_address_is_checked_and_a_dry_run_needs_no_scheduler(tmp_path, capsys):
     """--scheduler: a malformed address is one line naming the option (exit 2), an address where nothing answers
     too, within seconds; a dry run checks the form only, prints the plan and says the workers set the
@@ -296,6 +297,7 @@ def test_the_cluster_recipe_builds_its_slurm_job(tmp_path, page, lines):
     assert 230 + 5 < 4 * 60  # the latest departure, in minutes, before the walltime
 
 
+@pytest.mark.slow
 def test_the_cluster_driver_runs_the_study_on_its_scheduler(tmp_path, monkeypatch, capfd):
     """docs/cluster.md's driver with dask-jobqueue's local jobs in place of Slurm's (its Slurm entries and
     prologue dropped, one worker per job): it starts the cluster, waits for a worker, runs granstokes study with
