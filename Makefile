@@ -18,8 +18,9 @@ $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m granstokes.continuum.warmup
 	touch $@
 
+# the suite on every core (pytest-xdist), each test file on one worker: its module fixtures built once
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist loadfile
 
 demo: $(STAMP)
 	$(BIN)/granstokes demo --out $(DEMO)
