@@ -56,7 +56,7 @@ Numerics
   Newton iterations land on a spurious branch (g far above the capped g_loc); Radau's do not, and its
   transient is the same for g_rest = 1e-8 and 1e-4.  The mesh has a face at the steady yield depth
   (``aligned_mesh``), which makes the O(h^2) error smooth in h (measured ratios 3.9-4.1 per halving);
-  the error estimate of u_w is Richardson's, |u_N - u_N/2|/3.
+  the error estimates of u_w and mu_w are Richardson's, |u_N - u_N/2|/3 (continuum.richardson).
 
 What is known of A (check at the sources):
 * 3D glass beads: A = 0.48 (Henann & Kamrin, PNAS 2013, with mu_s = 0.3819, b = 0.9377).
@@ -82,6 +82,7 @@ from granstokes.lib.validate import finite, require
 
 from .mesh import Mesh
 from .rheology import convert_I
+from .richardson import REFINEMENT, richardson
 from .scales import UNITS, Material
 from .solver import check_times
 from .velocity import BedScene
@@ -475,9 +476,9 @@ def solve_transient(scene: BedScene, fluidity: NonlocalFluidity, times, *, mu_w=
     u_err, mu_err = np.zeros(len(t)), np.zeros(len(t))
     if error_estimate:
         from dataclasses import replace
-        coarse = replace(numerics, n_cells=max(8, numerics.n_cells // 2))
+        coarse = replace(numerics, n_cells=max(8, numerics.n_cells // REFINEMENT))
         _, u_c, _, _, mw_c, nf = _run(scene, fluidity, coarse, t, tau_w, u_w, y_kink)
-        u_err, mu_err = np.abs(u[:, 0] - u_c[:, 0]) / 3, np.abs(mw - mw_c) / 3
+        u_err, mu_err = richardson(u[:, 0], u_c[:, 0]), richardson(mw, mw_c)
         nfev += nf
     return TransientNGF(scene, fluidity, "stress" if tau_w is not None else "speed", pb.y, pb.yc, t, u, g, mu,
                         mw, u_err, mu_err, nfev)

@@ -6,7 +6,8 @@ NGF (continuum.ngf), both with the wall value of the load at time t and integrat
 default).  ``solve_oscillating`` samples given times; ``periodic_state`` marches cycle by cycle to the periodic
 state.  Signs: sigma_xy < 0 under a plate moving in +x; ``mu`` = sigma_xy/p (signed); ``mu_w`` is the plate's
 friction, positive while the bed resists a +x motion (an imposed speed), or the imposed mu_w sin(omega t).
-Error estimates: Richardson's from n_cells/2 on the same graded mesh (|fine - coarse|/3, second order in space).
+Error estimates: Richardson's from n_cells/2 on the same graded mesh (continuum.richardson, second order in
+space).
 """
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from granstokes.lib.validate import finite, require
 from .load import Load
 from .mesh import Mesh
 from .ngf import NonlocalFluidity, TransientNumerics, _Transient
+from .richardson import REFINEMENT, richardson, richardson_on_nodes
 from .rules import YieldRule
 from .solver import check_times
 from .velocity import BedScene, VelocityProblem
@@ -227,10 +229,9 @@ def _cycles(pb, numerics, phases, tol, max_cycles):
 
 
 def _estimate(pb, fine, coarse_pb, coarse):
-    """Richardson's |fine - coarse|/3 of u (coarse nodes interpolated onto the fine ones) and of mu_w."""
-    u_err = np.array([np.interp(pb.y, coarse_pb.y, np.abs(np.interp(coarse_pb.y, pb.y, f) - c) / 3)
-                      for f, c in zip(fine[0], coarse[0])])
-    return u_err, np.abs(fine[2] - coarse[2]) / 3
+    """Richardson's estimates (continuum.richardson, second order) of u at the fine nodes and of mu_w."""
+    u_err = np.array([richardson_on_nodes(pb.y, f, coarse_pb.y, c) for f, c in zip(fine[0], coarse[0])])
+    return u_err, richardson(fine[2], coarse[2])
 
 
 def solve_oscillating(scene: BedScene, load: Load, times, *, model: str = "local", rule: YieldRule = YieldRule(),
@@ -245,7 +246,7 @@ def solve_oscillating(scene: BedScene, load: Load, times, *, model: str = "local
     fine, nfev = _samples(pb, t, sol.y.T), sol.nfev
     u_err, mu_w_err = np.zeros_like(fine[0]), np.zeros(len(t))
     if error_estimate:
-        half = replace(numerics, n_cells=numerics.n_cells // 2)
+        half = replace(numerics, n_cells=numerics.n_cells // REFINEMENT)
         coarse_pb = _problem(scene, load, model, rule, fluidity, law, half)
         coarse = _ivp(coarse_pb, half, *coarse_pb.start(half), 0.0, t)
         u_err, mu_w_err = _estimate(pb, fine, coarse_pb, _samples(coarse_pb, t, coarse.y.T))
@@ -272,7 +273,7 @@ def periodic_state(scene: BedScene, load: Load, *, model: str = "local", rule: Y
     cycles = len(changes) + 1
     u_err, mu_w_err = np.zeros_like(fine[0]), np.zeros(len(t))
     if error_estimate:
-        half = replace(numerics, n_cells=numerics.n_cells // 2)
+        half = replace(numerics, n_cells=numerics.n_cells // REFINEMENT)
         coarse_pb = _problem(scene, load, model, rule, fluidity, law, half)
         _, coarse, _, coarse_nfev = _cycles(coarse_pb, half, phases, 0.0, cycles)
         u_err, mu_w_err = _estimate(pb, fine, coarse_pb, coarse)

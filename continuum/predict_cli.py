@@ -8,7 +8,8 @@ DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rh
   exact up to rounding.
 * ``--model local --times``: the velocity form (continuum.velocity.solve_velocity) from a bed at rest,
   regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/models.py); errors
-  |x_N - x_N/2|/3 (second order in space; the regularisation's own creep is not in it).
+  Richardson's |x_N - x_N/2|/3 (continuum.richardson, second order in space; the regularisation's own creep
+  is not in it).
 * ``--model ngf``: continuum.ngf (steady: Chebyshev, errors the change from n/2 points; transient:
   from rest, errors Richardson from N/2 cells).  g is given at the nodes y (for the transient,
   ln g interpolated linearly from the cell centres).
@@ -32,10 +33,10 @@ import numpy as np
 
 from granstokes.lib.validate import finite, require
 
+from .richardson import REFINEMENT, richardson
+
 MODELS = ("local", "ngf")
 BOUNDARIES = ("neumann", "dirichlet")
-#: second order in space: the error of the N-cell solution is |x_N - x_N/2| / (2^2 - 1)
-RICHARDSON = 3
 STEADY_LAYER = "delta_s [d]: the steady yield depth, where tau/p falls to mu_s"
 
 
@@ -110,11 +111,11 @@ def _delta_u(y, u) -> np.ndarray:
 
 def _fine_and_coarse(solve, numerics) -> tuple[tuple, dict]:
     """``solve(numerics)`` -> (y, u, mu_w) on N and N/2 cells: the fine solution and the errors of u_w, mu_w
-    and delta_u (Richardson)."""
-    fine, coarse = (solve(n) for n in (numerics, replace(numerics, n_cells=numerics.n_cells // 2)))
+    and delta_u (continuum.richardson, second order in space)."""
+    fine, coarse = (solve(n) for n in (numerics, replace(numerics, n_cells=numerics.n_cells // REFINEMENT)))
     (y, u, mw), (yc, uc, mwc) = fine, coarse
-    err = {"u_w_err": np.abs(u[:, 0] - uc[:, 0]) / RICHARDSON, "mu_w_err": np.abs(mw - mwc) / RICHARDSON,
-           "delta_u_err": np.abs(_delta_u(y, u) - _delta_u(yc, uc)) / RICHARDSON}
+    err = {"u_w_err": richardson(u[:, 0], uc[:, 0]), "mu_w_err": richardson(mw, mwc),
+           "delta_u_err": richardson(_delta_u(y, u), _delta_u(yc, uc))}
     return fine, err
 
 

@@ -17,6 +17,7 @@ from .integrators import integrate
 from .mesh import MAX_STRETCH, ORDERS, Mesh
 from .problems import ImposedSpeed, ImposedStress
 from .rheology import Friction, finite, require
+from .richardson import REFINEMENT, richardson
 from .scales import UNITS
 from .steady import SELF_SIMILAR_DELTA, mu_w_for_speed, steady_delta, steady_wall_speed
 from .stepper import TABLEAUX, StepStats
@@ -82,9 +83,9 @@ COMPANION_MAX_RTOL = {**MAX_RTOL, "bdf": 4e-9}
 ATOL_PER_RTOL = 1e-2
 #: the first time step, as a fraction of the first output time
 INITIAL_STEP = 1e-5
-#: the two solves of an error estimate: the coarse one has half the cells and gain(drive) times the
-#: tolerance (every error gain times larger: of the drive's order in space, tolerance-proportional in time)
-REFINEMENT = 2
+#: the two solves of an error estimate: the coarse one has 1/REFINEMENT of the cells (continuum.richardson) and
+#: gain(drive) times the tolerance (every error gain times larger: of the drive's order in space,
+#: tolerance-proportional in time)
 ORDER_GAIN = REFINEMENT ** CONVERGENCE_ORDER["stress"]
 
 
@@ -99,8 +100,8 @@ def gain(imposed: str, numerics: Numerics) -> int:
     """The factor by which every error grows from a solve to its coarser companion."""
     return REFINEMENT ** convergence_order(imposed, numerics)
 
-#: the Richardson estimate times this bounds the true error (measured: the bare estimate is within a
-#: factor 2 of it either way, tests/continuum/test_accuracy.py)
+#: the Richardson estimate (continuum.richardson) times this bounds the true error (measured: the bare estimate
+#: is within a factor 2 of it either way, tests/continuum/test_accuracy.py)
 SAFETY = 3.0
 
 
@@ -400,15 +401,15 @@ TIME_ERROR_PER_RTOL = {**dict.fromkeys(TABLEAUX, 1.0), "bdf": 30.0}
 
 
 def _estimate(fine: Solution, coarse: Solution) -> dict:
-    """Absolute error estimates of ``fine`` from its companion: SAFETY |fine - coarse|/(gain - 1), plus a
-    floor at the time error,
+    """Absolute error estimates of ``fine`` from its companion: Richardson's at the drive's order with SAFETY
+    (continuum.richardson: SAFETY |fine - coarse|/(gain - 1)), plus a floor at the time error,
     TIME_ERROR_PER_RTOL rtol |fine| (below it the two solves' difference no longer measures the error;
     measured against the independent reference, u~_w at t~ = 0.1 for mu~_w = 0.5 on 128 cells, error
     1.6e-8 relative where rtol = 1.6e-7: without the floor the estimate falls 1.2x short); the imposed quantity
     (IMPOSED) is exact (a speed's constraint holds to round-off)."""
-    g = gain(fine.imposed, fine.numerics)
+    order = convergence_order(fine.imposed, fine.numerics)
     floor = TIME_ERROR_PER_RTOL[fine.numerics.method] * fine.numerics.rtol
-    out = {q: SAFETY * np.abs(getattr(fine, q) - getattr(coarse, q)) / (g - 1) + floor * np.abs(getattr(fine, q))
+    out = {q: richardson(getattr(fine, q), getattr(coarse, q), order, SAFETY) + floor * np.abs(getattr(fine, q))
            for q in QUANTITIES}
     out[IMPOSED[fine.imposed]] = np.zeros(len(fine.t))
     return out

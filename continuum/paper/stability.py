@@ -36,9 +36,10 @@ from ..mesh import Mesh
 from ..mol import solve_stress_mol
 from ..problems import ImposedSpeed, ImposedStress
 from ..rheology import Friction
+from ..richardson import REFINEMENT, richardson
 from ..rules import YieldRule, wellposedness
 from ..scales import Material, Scales
-from ..solver import ORDER_GAIN, REFINEMENT, SAFETY, Numerics, map_for, solve_speed, solve_stress
+from ..solver import CONVERGENCE_ORDER, ORDER_GAIN, SAFETY, Numerics, map_for, solve_speed, solve_stress
 from ..steady import mu_w_for_speed, steady_mu
 from ..stepper import explicit_euler
 from ..velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
@@ -81,11 +82,12 @@ class Outcome:
     estimate: float = 0.0  # a reference's estimated relative error of u_w
 
 
-def _estimated(run: Callable, setting, companion, gain: float) -> Outcome:
-    """``run(setting)`` as a reference, with the solver's error estimate SAFETY |ref - other|/(gain - 1)
-    (relative), ``other = run(companion)`` having every error that counts ``gain`` times larger."""
+def _estimated(run: Callable, setting, companion, order: int) -> Outcome:
+    """``run(setting)`` as a reference, with the solver's error estimate of u_w (relative): Richardson's with
+    SAFETY (continuum.richardson), ``other = run(companion)`` having every error that counts REFINEMENT^order
+    times larger."""
     out, other = run(setting), run(companion)
-    out.estimate = SAFETY * abs(other.u_w / out.u_w - 1) / (gain - 1)
+    out.estimate = float(richardson(other.u_w / out.u_w, 1.0, order, SAFETY))
     return out
 
 
@@ -172,7 +174,7 @@ def _same_mesh_reference(numerics: Numerics):
     from ORDER_GAIN times the tolerances (the time error is proportional to them)."""
     loose = replace(numerics, rtol=numerics.rtol * ORDER_GAIN, atol=numerics.atol * ORDER_GAIN)
     return lambda fr, mu_w: _estimated(lambda num: _stress_outcome(solve_stress(fr, mu_w, [T_END], num)),
-                                       numerics, loose, ORDER_GAIN)
+                                       numerics, loose, CONVERGENCE_ORDER["stress"])
 
 
 def _speed_reference(fr, u_w):
@@ -203,7 +205,7 @@ def _regularised_reference(fr, mu_w):
     own space error (EPS_CELLS cells at the finest eps, from half the cells), which no eps removes."""
     ref = _stress_reference(REFERENCE_CELLS, VELOCITY_T_TILDE)(fr, mu_w)
     space = _estimated(lambda n: _regularised(fr, mu_w, EPS[-1] / REFINEMENT, n), EPS_CELLS,
-                       EPS_CELLS // REFINEMENT, REFINEMENT**VELOCITY_ORDER)
+                       EPS_CELLS // REFINEMENT, VELOCITY_ORDER)
     ref.estimate = max(ref.estimate, space.estimate)
     return ref
 
@@ -253,7 +255,7 @@ METHODS = (
     MethodMap("velocity form, Barker-Gray", "mu_w_tilde", MU_W_TILDE[1::2], "n_cells", (50, 100, 200),
               (100, 200, 400), _barker_gray,
               lambda fr, mu_w: _estimated(lambda n: _barker_gray(fr, mu_w, n), REFINEMENT * REFERENCE_CELLS,
-                                          REFERENCE_CELLS, REFINEMENT**VELOCITY_ORDER),
+                                          REFERENCE_CELLS, VELOCITY_ORDER),
               design_order=VELOCITY_ORDER, bounded=False),
 )
 
