@@ -170,3 +170,43 @@ def metrics(c: Comparison) -> dict:
         "runs": [str(r) for r in c.runs],
         "provenance": provenance(runs=[str(r) for r in c.runs], calibration=c.calibration_source),
     })
+
+
+#: the fields that name a row of each section of metrics.json (the rest are its numbers and words)
+ROW_IDENTITY = {"scorecard": ("drive", "observable", "model"), "laws": ("law", "quantity", "kind", "amplitude",
+                                                                       "model")}
+
+
+def row_differences(committed: dict, regenerated: dict) -> dict:
+    """The scorecard and law rows of two metrics.json documents, matched by ROW_IDENTITY: per section, the rows
+    only one side has, the largest relative difference of a number (|a - b| / max(|a|, |b|), lists element-wise),
+    and the fields whose words differ."""
+    def numbers(v):
+        """A field's numbers (None as NaN), or [] for words."""
+        items = v if isinstance(v, list) else [v]
+        if not items or any(isinstance(x, bool | str) for x in items) or all(x is None for x in items):
+            return []
+        return [np.nan if x is None else float(x) for x in items]
+
+    out = {}
+    for section, keys in ROW_IDENTITY.items():
+        index = [{tuple(r.get(k) for k in keys): r for r in doc.get(section, [])} for doc in (committed, regenerated)]
+        common = index[0].keys() & index[1].keys()
+        worst, words = 0.0, set()
+        for key in common:
+            a, b = index[0][key], index[1][key]
+            for field in a.keys() | b.keys():
+                x, y = a.get(field), b.get(field)
+                xs, ys = numbers(x), numbers(y)
+                if xs and ys and len(xs) == len(ys):
+                    for p, q in zip(xs, ys):
+                        if p != q and np.isfinite(p) and np.isfinite(q):
+                            worst = max(worst, abs(p - q) / max(abs(p), abs(q)))
+                        elif p != q and not (np.isnan(p) and np.isnan(q)):
+                            worst = np.inf
+                elif x != y:
+                    words.add(field)
+        out[section] = {"rows": len(common), "only_committed": len(index[0].keys() - common),
+                        "only_regenerated": len(index[1].keys() - common), "max_relative": worst,
+                        "words_differ": sorted(words)}
+    return out
