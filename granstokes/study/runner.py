@@ -21,8 +21,8 @@ from pathlib import Path
 from granstokes.dem import config as dem_config
 from granstokes.dem import layout
 from granstokes.dem.calibrate import calibrate, material_table
+from granstokes.dem.estimate import duration_text
 from granstokes.dem.runner import Interrupted, allow_lammps, begin, sigterm_interrupts, stop_all_lammps
-from granstokes.dem.sizing import duration_text
 from granstokes.lib import staging
 from granstokes.lib.executor import Executor, Outcome
 from granstokes.lib.provenance import provenance
@@ -30,7 +30,7 @@ from granstokes.lib.toml_text import with_entries
 from granstokes.lib.validate import require
 
 from .config import Study, parse
-from .plan import WIDE, StudyPlan, calibration_text, plan_study, pressure_label
+from .plan import WIDE, StudyPlan, calibration_folder, calibration_text, plan_study
 
 COMMAND = "study"
 STUDY_TOML, STUDY_JSON = "study.toml", "study.json"
@@ -82,7 +82,7 @@ class StudyRunner:
             return Path(s.calibration_file)
         results = {}
         for p_w in s.calibration_pressures:
-            folder = self.out / f"calibration-{pressure_label(p_w)}"
+            folder = calibration_folder(self.out, p_w)
             state = folder / layout.CALIBRATION_STATE
             status = json.loads(state.read_text()).get("status") if state.exists() else None
             if status != "complete":

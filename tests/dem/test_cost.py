@@ -8,7 +8,8 @@ import re
 import pytest
 from granstokes.dem import config, scene, sizing
 from granstokes.dem.calibrate import plan_calibration
-from granstokes.dem.sizing import OVERHEAD, duration_text, makespan, plan, ranks_per_bed, slowdown, speedup
+from granstokes.dem.estimate import duration_text
+from granstokes.dem.sizing import OVERHEAD, makespan, plan, ranks_per_bed, slowdown, speedup
 from granstokes.dem.throughput import Throughput
 
 from granstokes.lib.toml_text import with_entries

@@ -128,7 +128,8 @@ def test_at_least_forty_cases_over_every_subcommand():
 
 def test_dry_run_prints_the_cost_and_writes_nothing(tmp_path, capsys):
     from granstokes.dem import config
-    from granstokes.dem.sizing import duration_text, plan
+    from granstokes.dem.estimate import duration_text
+    from granstokes.dem.sizing import plan
 
     assert main(["dem", "run", "--preset", "quick", "--out", str(tmp_path / "r"), "--dry-run", "--np", "64"]) == 0
     err = capsys.readouterr().err
