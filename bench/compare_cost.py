@@ -1,6 +1,6 @@
 """The model side of a study's comparison, timed: every drive x model (the prediction, the calibration's
 replicates through each steady state, the linearised bands), in one process and in forked processes
-(compare.comparison.model_drives), on the committed disks study.
+(compare.comparison.model_drive over compare.experiment.map_drives), on the committed disks study.
 
 The DEM side is not recomputed (the study's dumps are not committed): each drive is rebuilt from the study's
 committed tables (its series, its steady profile, its scene from the study's plan at the committed
@@ -20,9 +20,11 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from granstokes.compare.analysis import DriveAnalysis, DriveSpec, snapshot_times
+from granstokes.compare.analysis import DriveAnalysis, snapshot_times
 from granstokes.compare.calibrate import load as load_calibration
-from granstokes.compare.comparison import REPLICATES, ModelSide, model_drives, replicates_of
+from granstokes.compare.comparison import REPLICATES, ModelSide, model_drive, replicates_of
+from granstokes.compare.drive import DriveSpec
+from granstokes.compare.experiment import map_drives
 from granstokes.compare.models import LOCAL, PAPER, ngf_model
 from granstokes.compare.nonlocal_fit import A_RANGE
 from granstokes.compare.report import display_label, slug
@@ -107,7 +109,7 @@ def main() -> None:
     for _ in range(args.repeats):
         for n in (1, jobs):
             t0 = time.perf_counter()
-            out = model_drives(drives, side, jobs=n, progress=False)
+            out = map_drives(lambda a: model_drive(a, side), drives, jobs=n, progress=False)
             times[n].append(time.perf_counter() - t0)
             rows[n] = pd.concat([r[1] for r in out if len(r[1])], ignore_index=True)
             print(f"{n} process(es): {times[n][-1]:.1f} s", flush=True)

@@ -290,7 +290,8 @@ def forward_rows(sp, out: Path) -> pd.DataFrame:
     seed-mean record, as on the committed study) and for groups of fewer beds."""
     from dataclasses import replace
 
-    from granstokes.compare.analysis import _ensemble_series, drive_specs
+    from granstokes.compare.analysis import _ensemble_series
+    from granstokes.compare.drive import drive_specs
     from granstokes.compare.plate import PlateRecord, window_values
     from granstokes.compare.scorecard import t90
 
@@ -300,7 +301,7 @@ def forward_rows(sp, out: Path) -> pd.DataFrame:
         for spec in drive_specs(out / label):
             d = plans[spec.name]
             size = noise.drive_size(r.plan, d, r.p_w)
-            plates = [PlateRecord.read(f.path) for f in spec.folders]
+            plates = [PlateRecord.read(f.path) for f in spec.beds]
             resp = "u_w" if d.load.kind == "stress" else "mu_w"
             obs, n = f"{resp}_inf", len(plates)
             law = table[(obs, d.load.kind)]

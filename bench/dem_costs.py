@@ -13,7 +13,7 @@ same subset: one bed with its drives shortened; one seed of every run with a com
 calibration at one pressure with three inertial numbers and one seed.  A study's comparison stage is also timed
 on its own (from the line announcing it to the exit) against the total's comparison stage.
 
-``--constants`` measures the comparison's two constants (granstokes/study/plan.py) instead: the
+``--constants`` measures the comparison's two constants (compare/stokes_experiment.py) instead: the
 coarse-graining rate (bench/cg_rate.py) and the model side of the disks study on one process
 (bench/compare_cost.py), each between two probes, under one lock.
 Writes bench/dem_costs.json (merged: rows not rerun are kept; shared rows under "shared") and prints the tables
@@ -192,7 +192,7 @@ def constants() -> dict:
 
 
 def relative(cg_rate: float, cg_probe: float, model_seconds: float, model_probe: float) -> dict:
-    """The constants as granstokes/study/plan.py holds them: per grain-step/s of a 2D drive at the probe's speed."""
+    """The constants as compare/stokes_experiment.py holds them: per grain-step/s of a 2D drive at the probe's speed."""
     from granstokes.dem.throughput import PHASE_RATIO
 
     drive = PHASE_RATIO[2]["drive"]

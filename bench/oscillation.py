@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 from granstokes.compare import calibrate
 from granstokes.compare import oscillation as osc
+from granstokes.compare.drive import DriveSpec
 from granstokes.continuum.load import Load
 from granstokes.continuum.oscillation import OscillationNumerics
 
@@ -30,7 +31,7 @@ CANDIDATES = {"verification (200 cells, rtol 1e-6; baseline)": OscillationNumeri
 OBSERVED = ("response_amplitude", "phase_lag", "yielded_depth", "dissipation")
 
 
-def drive(kind: str, material) -> osc.OscillatingDrive:
+def drive(kind: str, material) -> DriveSpec:
     fr = material.friction
     mu_w = fr.mu_w_from_tilde(MU_TILDE)
     held = Load("stress", P_W, mu_w=mu_w)
@@ -40,8 +41,9 @@ def drive(kind: str, material) -> osc.OscillatingDrive:
         held = Load("speed", P_W, u_w=sc.U * steady_wall_speed(fr, mu_w))
     t_s = held.scales(material).t_s
     load = replace(held, omega=OMEGA_TS / t_s)
-    return osc.OscillatingDrive(Path("bench"), f"{kind}-w{OMEGA_TS:g}", load, DEPTH, PLATE_MASS, 0.0, t_s,
-                                CYCLES * load.period, ())
+    return DriveSpec(Path("bench"), f"{kind}-w{OMEGA_TS:g}", load, DEPTH, plate_mass=PLATE_MASS, surface_offset=0.0,
+                     steps=0, transit_time=np.nan, seeds=1, grains=0, dimension=2, t_s=t_s,
+                     duration=CYCLES * load.period)
 
 
 def measure(d, material, model, A, numerics):

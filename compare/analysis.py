@@ -11,19 +11,16 @@ calibration: compare.comparison adds that.
 """
 from __future__ import annotations
 
-import json
 import warnings
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import depth_at_fraction, layer_measures
-from granstokes.continuum.load import Load
 from granstokes.dem import layout
 
 from .calibrate import WALL_EXCLUSION
-from .models import Drive
+from .drive import DriveSpec
 from .plate import (
     STEADY_LAST,
     STEADY_WINDOW_LATEST,
@@ -37,73 +34,6 @@ from .plate import (
     window_values,
 )
 from .profiles import CGSettings, DepthProfiles, derive, ensemble
-from .reader import DriveFolder
-
-
-@dataclass(frozen=True, eq=False)
-class DriveSpec:
-    """One drive of one run, as run.json describes it: what was imposed on which scene, and its
-    folders (one per seed)."""
-
-    run: Path
-    name: str
-    load: Load                   # what the plate imposed, at which pressure
-    depth: float                 # bed depth below the plate
-    plate_mass: float            # per unit plate area
-    surface_offset: float        # plate centre of mass above its contact plane
-    steps: int                   # drive steps (per seed)
-    transit_time: float          # shear-wave transit time over the bed depth (the elastic start)
-    seeds: int                   # beds (one folder each)
-    grains: int                  # grains of a bed (with base and plate)
-    dimension: int               # 2 (disks) or 3 (spheres)
-    folders: tuple[DriveFolder, ...] = ()  # the seeds' drive folders (empty when read from tables)
-
-    @property
-    def kind(self) -> str:
-        return self.load.kind
-
-    @property
-    def p_w(self) -> float:
-        return self.load.p_w
-
-    @property
-    def drive(self) -> Drive:
-        """What the continuum models need of this drive (compare.models)."""
-        return Drive(self.load, self.depth, self.plate_mass)
-
-    @property
-    def compared_from(self) -> float:
-        """Transients are compared from this time on (TRANSITS_BEFORE_COMPARISON wave transits)."""
-        return TRANSITS_BEFORE_COMPARISON * self.transit_time
-
-    @property
-    def label(self) -> str:
-        """Unique within a comparison: the run's path as given, then the drive (compare.comparison)."""
-        return f"{self.run}/{self.name}"
-
-    @property
-    def cost(self) -> float:
-        """grains x steps of the drive summed over seeds (the DEM's work)."""
-        return float(self.seeds * self.grains * self.steps)
-
-
-def drive_specs(run_dir: Path) -> list[DriveSpec]:
-    """The drives of a complete run folder; ``ValueError`` if a stage is not complete."""
-    run_dir = Path(run_dir)
-    meta = json.loads((run_dir / layout.RUN_JSON).read_text())
-    unfinished = [k for k, s in meta.get("stages", {}).items() if s.get("status") != "complete"]
-    if unfinished:
-        raise ValueError(f"{run_dir}: run not complete ({', '.join(unfinished)}); resume it first")
-    plate = meta["plate"]
-    specs = []
-    for d in meta["sizing"]["drives"]:
-        folders = tuple(DriveFolder(layout.drive_dir(run_dir, s, d["name"])) for s in meta["seeds"])
-        load = Load.from_record(d, float(meta["config"]["p_w"]))
-        specs.append(DriveSpec(run_dir, d["name"], load, float(meta["sizing"]["depth"]), float(plate["mass_per_area"]),
-                               float(plate["surface_offset"]), int(d["steps"]),
-                               float(meta["sizing"].get("elastic_start", {}).get("transit_time", np.nan)),
-                               len(folders), len(folders[0].grains), folders[0].dimension, folders))
-    return specs
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,11 +74,6 @@ class DriveAnalysis:
         """Height of the plate's contact plane at times ``t`` (first seed's plate record)."""
         p = self.plates[0]
         return layout.plate_surface(np.interp(t, p.t, p.y), self.spec.surface_offset)
-
-
-#: transients are compared with the rigid continuum from this many shear-wave transits over the bed
-#: on: before, the load is still carried down by an elastic wave that the continuum does not have
-TRANSITS_BEFORE_COMPARISON = 3.0
 
 
 def _ensemble_series(plates: tuple[PlateRecord, ...]) -> pd.DataFrame:
@@ -219,11 +144,11 @@ def plate_estimates(plates: tuple[PlateRecord, ...], kind: str) -> tuple[pd.Data
 
 
 def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> DriveAnalysis:
-    plates = tuple(PlateRecord.read(f.path) for f in spec.folders)
+    plates = tuple(PlateRecord.read(f.path) for f in spec.beds)
     series, steady, slips = plate_estimates(plates, spec.kind)
-    first = spec.folders[0]
+    first = spec.beds[0]
     grid = settings.grid_for(next(first.frames([0])))
-    profiles = tuple(DepthProfiles(f, settings, grid).run() for f in spec.folders)
+    profiles = tuple(DepthProfiles(f, settings, grid).run() for f in spec.beds)
     surface = lambda t: layout.plate_surface(np.interp(t, plates[0].t, plates[0].y), spec.surface_offset)  # noqa: E731
     # the record ends with the plate's, or earlier where a truncated dump lost its last frames
     t_end = min(float(series.t.iloc[-1]), *(float(p.results.t[-1]) for p in profiles))
@@ -248,7 +173,7 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
     check = bulk_tau(plates, profiles, surface, spec.depth, STEADY_WINDOW_LATEST * t_end, t_end)
     samples, how = steady_samples(profiles, surface, t0, t_end)
     shown = inst[np.isin(inst.t, snapshots)].reset_index(drop=True)
-    dropped = sum(f.atoms.dropped + f.contacts.dropped for f in spec.folders)
+    dropped = sum(f.atoms.dropped + f.contacts.dropped for f in spec.beds)
     layers = pd.concat([layer_series(prof, plate, spec.surface_offset, u_scale).assign(seed=i)
                         for i, (prof, plate) in enumerate(zip(profiles, plates))], ignore_index=True)
     return DriveAnalysis(spec, plates, profiles, series, steady, t0, t_end, slips, check, steady_profile,
@@ -307,7 +232,7 @@ def snapshot_times(times, n: int = 5) -> np.ndarray:
 def mass_error(a: DriveAnalysis) -> float:
     """Relative error of the integral of the coarse-grained phi over y against the bed grains'
     volume per unit area (first frame of the first seed; 2D: disk areas per unit length)."""
-    drive, res = a.spec.folders[0], a.profiles[0].results
+    drive, res = a.spec.beds[0], a.profiles[0].results
     frame = next(drive.frames([0]))
     r = frame.radius[frame.types == layout.BED]
     volume = np.pi * r**2 if drive.dimension == 2 else 4 / 3 * np.pi * r**3

@@ -1,6 +1,7 @@
 """``granstokes compare (RUN_DIR... | --tables REPORT_DIR/tables) --out REPORT_DIR [--calibration
-DIR/calibration.json] [--ngf-from METRICS.json] [--jobs N] [--json]``: Stokes drives (compare.comparison) or, when the
-runs' drives oscillate, the oscillating plate (compare.oscillation)."""
+DIR/calibration.json] [--fit-on-drives] [--ngf-from METRICS.json] [--jobs N] [--json]``: the experiment of the runs'
+drives (compare.experiment's registry: Stokes' first problem or the oscillating plate) from the runs or from an
+earlier report's tables, written as a report."""
 from __future__ import annotations
 
 import json
@@ -16,95 +17,32 @@ COMMAND = "compare"
 def run_compare(args) -> int:
     from granstokes.dem.layout import RUN_JSON
 
+    from .experiment import experiment_for_runs, experiment_for_tables
+
     require(args.jobs >= 1, "--jobs", "an integer >= 1 (processes predicting the drives)", args.jobs)
-    require(bool(args.runs) != (args.tables is not None), "RUN_DIR / --tables",
+    require(bool(args.runs) != (args.tables is not None), "--tables or RUN_DIR",
             "either run folders or one tables folder of an earlier report", "both" if args.runs else "neither")
     for run in args.runs:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
-    if args.tables is not None:
-        from .oscillation_tables import DRIVES_JSON
-        from .tables import DEM_JSON
-        require((args.tables / DEM_JSON).is_file() or (args.tables / DRIVES_JSON).is_file(), "--tables",
-                f"the tables folder of a report (with {DEM_JSON} or {DRIVES_JSON})",
-                str(args.tables))
-    oscillating = _oscillating(args.runs, args.tables)
-    require(args.ngf_from is None or oscillating, "--ngf-from", "only for oscillating drives (a Stokes comparison "
-            "fits NGF's A on its own drives)", str(args.ngf_from))
-    if args.ngf_from is not None:
-        require(args.ngf_from.is_file(), "--ngf-from", "a Stokes report's metrics.json", str(args.ngf_from))
+    kind = experiment_for_tables(args.tables) if args.tables is not None else experiment_for_runs(args.runs)
     sources = args.runs or [args.tables]
     inputs = [*sources, *([args.calibration] if args.calibration is not None else [])]
     claim(args.out, "--out", COMMAND, inputs)
-    if oscillating:
-        return _compare_oscillations(args, inputs)
-    from .calibrate import load
-    from .comparison import analyse, check_grains, compare, run_grains
-    from .tables import read
-
-    tabled = read(args.tables) if args.tables is not None else None
-    if args.calibration is None and not args.fit_on_drives:
-        raise ValueError("--calibration is required: a calibration.json of granstokes dem calibrate (an independent "
-                         "plane-shear calibration of the same grains); or pass --fit-on-drives for a fit on the "
-                         "drives that is never scored as support")
-    if args.calibration is not None:  # bad calibrations fail before any coarse-graining
-        require(not args.fit_on_drives, "--fit-on-drives", "left out when --calibration is given", True)
-        check_grains(load(args.calibration), tabled.grains if tabled else run_grains(args.runs))
-    from .report import write_report
-    from .scorecard import tally
-
-    dem = tabled or analyse(args.runs)
-    comparison = compare(dem, calibration=args.calibration, fit_on_drives=args.fit_on_drives, jobs=args.jobs)
+    options = {k: v for k, v in (("fit_on_drives", args.fit_on_drives), ("ngf_from", args.ngf_from)) if v}
+    experiment = kind.create(args.calibration, jobs=args.jobs, **options)  # every option checked before any work
+    dem = experiment.read_tables(args.tables) if args.tables is not None else experiment.analyse(args.runs)
+    result = experiment.run(dem)
     with staged(args.out, COMMAND, inputs) as work:
-        m = write_report(comparison, work)
-    if args.json:
-        print(json.dumps(m, default=float))
-        return 0
-    print(comparison.verdict)
-    shared = tally(comparison.scorecard.rows)
-    if len(shared):
-        print(shared[["model", "n", "consistent", "median_abs_sigma"]].to_string(index=False, float_format="%.2f"))
-    print(f"report: {(args.out / 'index.html').resolve()}")
-    return 0
-
-
-def _oscillating(runs, tables) -> bool:
-    """Whether the runs' (or the tables') drives are oscillating plates: all of them or none (ValueError)."""
-    from granstokes.continuum.load import Load
-    from granstokes.dem.layout import RUN_JSON
-
-    from .oscillation_tables import DRIVES_JSON
-    if tables is not None:
-        return (tables / DRIVES_JSON).is_file()
-    kinds = set()
-    for run in runs:
-        meta = json.loads((run / RUN_JSON).read_text())
-        drives = meta.get("sizing", {}).get("drives", [])  # a run not yet sized has none: its own error follows
-        kinds |= {Load.from_record(d, meta["config"]["p_w"]).oscillating for d in drives}
-    require(len(kinds) <= 1, "RUN_DIR", "runs whose drives all oscillate or all are held (Stokes' first problem)",
-            "both kinds")
-    return kinds == {True}
-
-
-def _compare_oscillations(args, inputs) -> int:
-    from .oscillation import compare_oscillations, dem_side
-    from .oscillation_report import write_report
-    from .oscillation_tables import read
-
-    require(args.calibration is not None and not args.fit_on_drives, "--calibration",
-            "a calibration.json (the oscillating drives are predicted blind; no fit on them)", args.calibration)
-    if args.runs:  # a calibration of other grains is refused before any work
-        from .calibrate import load
-        from .comparison import check_grains, run_grains
-        check_grains(load(args.calibration), run_grains(args.runs))
-    dem = read(args.tables) if args.tables is not None else dem_side(args.runs)
-    comparison = compare_oscillations(dem, args.calibration, args.ngf_from, jobs=args.jobs)
-    with staged(args.out, COMMAND, inputs) as work:
-        m = write_report(comparison, work)
+        m = experiment.write(result, work)
     if args.json:
         print(json.dumps(m, default=float))
         return 0
     print(m["verdict"])
+    shared = m["tally"]
+    if shared:
+        print("\n".join(f"{t['model']}: consistent on {t['consistent']} of {t['n']} shared rows (median |sigma| "
+                        f"{t['median_abs_sigma']:.2f})" for t in shared))
     print(f"report: {(args.out / 'index.html').resolve()}")
     return 0
 

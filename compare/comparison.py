@@ -12,8 +12,6 @@ compare.metrics and compare.report only render it.  DEM units throughout; I in t
 from __future__ import annotations
 
 import json
-import multiprocessing as mp
-from concurrent.futures import as_completed
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -25,18 +23,19 @@ from granstokes.dem.calibrate import grains_difference
 from granstokes.dem.layout import RUN_JSON
 from tqdm import tqdm
 
-from granstokes.lib.executor import forked_pool
 from granstokes.lib.validate import require
 
 from . import calibrate
-from .analysis import DriveAnalysis, analyse_drive, drive_specs, mass_error
+from .analysis import DriveAnalysis, analyse_drive, mass_error
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
+from .drive import drive_specs
 from .laws import laws as paper_laws
 from .models import LOCAL, PAPER, Prediction, ngf_model
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings
-from .scorecard import Z95, Scorecard, base_reach, headline, scene_checks, score
+from .rows import Z95
+from .scorecard import Scorecard, base_reach, headline, scene_checks, score
 
 #: continuum output times per drive (log-spaced from t_end/PREDICTION_SPAN to t_end, plus the snapshots)
 PREDICTION_TIMES, PREDICTION_SPAN = 60, 300
@@ -119,6 +118,11 @@ class Comparison:
     @property
     def runs(self) -> tuple[Path, ...]:
         return self.dem.runs
+
+    @property
+    def rows(self) -> pd.DataFrame:
+        """The scorecard's rows (compare.rows)."""
+        return self.scorecard.rows
 
     @property
     def mass_error(self) -> float:
@@ -213,7 +217,7 @@ def early_exponents(a: DriveAnalysis) -> dict:
 
 
 def _checks(a: DriveAnalysis) -> Checks:
-    widths = width_check(a.spec.folders[0], STEADY_WINDOW_LATEST * a.t_end, a.t_end)
+    widths = width_check(a.spec.beds[0], STEADY_WINDOW_LATEST * a.t_end, a.t_end)
     return Checks.of(a.label, widths, lammps_crosscheck(a.profiles[0]), a.steady_profile.y)
 
 
@@ -253,43 +257,6 @@ class ModelSide:
     replicates: pd.DataFrame
     fitted_on: dict
     independent: bool
-
-
-def _model_drive(a: DriveAnalysis, side: ModelSide) -> tuple:
-    """One drive's model side: (scales, predictions, note, base, sensitivities by model), its scorecard rows, the
-    band edges' largest relative change and its bands (compare.scorecard.score)."""
-    scales, preds, note, base = _predict(a, side.material, side.models, side.failure)
-    if not preds:
-        return (scales, preds, note, base, {}), pd.DataFrame(), np.nan, {}
-    predictions = {(a.label, p.model): p for p in preds}
-    rows, edges, bands, sens = score([a], list(side.models), predictions, side.material, side.replicates,
-                                     {a.label: preds[0].steady.delta_s}, side.fitted_on, False, side.independent)
-    return (scales, preds, note, base, {key: v for (_, key), v in sens.items()}), rows, edges, bands
-
-
-#: the drives a forked worker reads (set by model_drives before the pool starts: nothing large is pickled)
-_SHARED: dict = {}
-
-
-def _model_drive_at(i: int) -> tuple:
-    return _model_drive(_SHARED["drives"][i], _SHARED["side"])
-
-
-def model_drives(drives: list[DriveAnalysis], side: ModelSide, jobs: int = 1, progress: bool = True) -> list:
-    """``_model_drive`` of every drive, in ``jobs`` forked processes (the drives are independent), in order."""
-    jobs = max(1, min(jobs, len(drives)))
-    bar = dict(total=len(drives), desc="continuum predictions", disable=not progress or None)
-    if jobs == 1 or "fork" not in mp.get_all_start_methods():
-        return [_model_drive(a, side) for a in tqdm(drives, **bar)]
-    _SHARED.update(drives=drives, side=side)
-    try:
-        with forked_pool(jobs) as pool:
-            futures = [pool.submit(_model_drive_at, i) for i in range(len(drives))]
-            for _ in tqdm(as_completed(futures), **bar):
-                pass
-            return [f.result() for f in futures]
-    finally:
-        _SHARED.clear()
 
 
 def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.DataFrame:
@@ -339,25 +306,10 @@ def analyse(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True
     return DemSide(runs, grains, drives, checks, mass_error(drives[0]))
 
 
-def build(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True,
-          calibration: str | Path | None = None, fit_on_drives: bool = False, jobs: int = 1,
-          root: Path | None = None) -> Comparison:
-    """``compare`` the drives of ``run_dirs`` (``analyse``; ``root``: name the runs relative to it)."""
-    return compare(analyse(run_dirs, settings, progress, root), settings, progress, calibration, fit_on_drives, jobs)
-
-
-def compare(dem: DemSide, settings: CGSettings = CGSettings(), progress: bool = True,
-            calibration: str | Path | None = None, fit_on_drives: bool = False, jobs: int = 1) -> Comparison:
-    """Take mu(I) and phi from ``calibration`` (calibration.json, refused if its grains differ from the runs') or,
-    only with ``fit_on_drives``, fit them on the drives' steady windows; predict and score each drive of ``dem``
-    (``jobs`` processes: model_drives)."""
-    if (calibration is None) != fit_on_drives:
-        raise ValueError("--calibration or --fit-on-drives: exactly one of them (an independent calibration.json of "
-                         "granstokes dem calibrate, or a fit on the drives that is never scored as support)")
-    independent = None
-    if calibration is not None:
-        independent = calibrate.load(calibration)
-        check_grains(independent, dem.grains)
+def prepare(dem: DemSide, independent: Calibration | None) -> tuple[ModelSide, dict]:
+    """What every drive's prediction shares: mu(I) and phi from the ``independent`` calibration (calibration.json,
+    refused if its grains differ from the runs') or, without one, fitted on the drives' steady windows; the models
+    (NGF when its amplitude fits within its search range).  Returns the ModelSide and what the Comparison keeps."""
     drives = list(dem.drives)
     pairs = steady_pairs(drives)
     phi = float(pairs.phi.mean())
@@ -368,6 +320,7 @@ def compare(dem: DemSide, settings: CGSettings = CGSettings(), progress: bool = 
         replicates = replicates_of(cal, cal.replicates["phi_bulk"])
     else:
         # the continuum's constant phi is the calibration's phi(I -> 0) = phi_max: the bed below the layer is at rest
+        check_grains(independent, dem.grains)
         cal = independent
         source = f"blind: independent plane-shear calibration {cal.source}"
         material = cal.material()
@@ -380,16 +333,35 @@ def compare(dem: DemSide, settings: CGSettings = CGSettings(), progress: bool = 
         replicates = replicates.assign(A=_amplitude_samples(fluidity, len(replicates)))
     side = ModelSide(material, tuple(models), failure, replicates, {"ngf": fluidity.drive} if ngf else {},
                      independent is not None)
-    results = model_drives(drives, side, jobs, progress)
+    return side, {"pairs": pairs, "calibration": cal, "calibration_source": source, "phi_bulk": phi,
+                  "fluidity": fluidity}
+
+
+def model_drive(a: DriveAnalysis, side: ModelSide) -> tuple:
+    """One drive's model side: (scales, predictions, note, base, sensitivities by model), its scorecard rows, the
+    band edges' largest relative change and its bands (compare.scorecard.score)."""
+    scales, preds, note, base = _predict(a, side.material, side.models, side.failure)
+    if not preds:
+        return (scales, preds, note, base, {}), pd.DataFrame(), np.nan, {}
+    predictions = {(a.label, p.model): p for p in preds}
+    rows, edges, bands, sens = score([a], list(side.models), predictions, side.material, side.replicates,
+                                     {a.label: preds[0].steady.delta_s}, side.fitted_on, False, side.independent)
+    return (scales, preds, note, base, {key: v for (_, key), v in sens.items()}), rows, edges, bands
+
+
+def conclude(dem: DemSide, side: ModelSide, kept: dict, results: list, settings: CGSettings) -> Comparison:
+    """The Comparison of ``dem`` from every drive's ``model_drive`` result (in the drives' order)."""
+    drives = list(dem.drives)
     compared = tuple(DriveComparison(a, *model_side) for a, (model_side, *_) in zip(drives, results))
     rows = pd.concat([r[1] for r in results if len(r[1])], ignore_index=True) if any(len(r[1]) for r in results) \
         else pd.DataFrame()
     edges = [r[2] for r in results if np.isfinite(r[2])]
     bands = {k: v for r in results for k, v in r[3].items()}
-    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a)], len(replicates),
+    card = Scorecard.of(rows, [r for a in drives for r in scene_checks(a)], len(side.replicates),
                         float(np.max(edges)) if edges else np.nan, bands)
-    return Comparison(dem, compared, pairs, cal, source, replicates, material, phi, card, fluidity, settings,
-                      law_test(pairs, cal), paper_laws(compared))
+    return Comparison(dem, compared, kept["pairs"], kept["calibration"], kept["calibration_source"], side.replicates,
+                      side.material, kept["phi_bulk"], card, kept["fluidity"], settings,
+                      law_test(kept["pairs"], kept["calibration"]), paper_laws(compared))
 
 
 def _fit_fluidity(drives: list[DriveAnalysis], material: Material) -> FluidityFit | None:

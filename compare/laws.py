@@ -23,7 +23,7 @@ and across drives:
 
 Errors: dem_err is the standard deviation of the DEM's estimate over SEED_RESAMPLES bootstrap resamples of each
 drive's seeds (independent samples); the model's standard deviation s_cal propagates the calibration's replicates
-linearly (compare.scorecard.Sensitivity: the same estimate on the predictions re-solved with each parameter
+linearly (compare.band.Sensitivity: the same estimate on the predictions re-solved with each parameter
 shifted), band = predicted -+ 1.96 s_cal, and sigma = (dem - predicted)/sqrt(dem_err^2 + s_cal^2).  A law the
 data cannot decide (a window the elastic start covers, too few points or drives, a model without the quantity)
 is ``not measurable`` with the reason, never a number fitted on noise.
@@ -41,8 +41,10 @@ from granstokes.continuum.paper.equations import eq
 from granstokes.continuum.steady import steady_wall_speed
 from scipy import stats
 
+from .band import STEP
 from .plate import STEADY_LAST
-from .scorecard import FD_STEP, SIGMA_CONSISTENT, Z95, creep_length, t90
+from .rows import LAW_KEYS, law_row, sigma
+from .scorecard import creep_length, t90
 
 #: the growth window ends at this many t_s (the paper's self-similar regime holds to t~ of order 1)
 GROWTH_END = 0.5
@@ -55,8 +57,6 @@ MUD_LEVEL = 0.5
 #: fewest points of a fit, fewest drives of a law across drives
 MIN_POINTS, MIN_DRIVES = 4, 3
 SEED_RESAMPLES = 200
-KEYS = ("law", "quantity", "unit", "dem", "dem_err", "model", "predicted", "band", "sigma", "verdict", "n_drives",
-        "window", "note")
 
 
 @dataclass(frozen=True)
@@ -336,12 +336,11 @@ def _calibration_sd(estimate, drives, key: str, predicted: float, shifted_tracks
     if not all((dc.label, key) in shifted_tracks for dc in drives):
         return 0.0
     sens = drives[0].sensitivity[key]
-    return sens.sd(sens.derivatives(
-        lambda j: estimate([shifted_tracks[(dc.label, key)][j] for dc in drives], drives)[0], predicted))
+    return sens.sd_of(lambda j: estimate([shifted_tracks[(dc.label, key)][j] for dc in drives], drives)[0], predicted)
 
 
 def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFrame:
-    """Every law x model row (KEYS) over the drives ``compared`` (compare.comparison.DriveComparison)."""
+    """Every law x model row (compare.rows.LAW_KEYS) over the drives ``compared`` (comparison.DriveComparison)."""
     rng = np.random.default_rng(seed)
     usable = _drives(compared, None)
     seeds = {dc.label: Seeds.of(dc) for dc in usable}
@@ -382,12 +381,9 @@ def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFra
             s_cal = 0.0 if note else _calibration_sd(estimate, drives, key, predicted, shifted_tracks)
             if not np.isfinite(s_cal):
                 note, s_cal = ("not predicted: the law is undefined for a calibration parameter shifted by "
-                               f"{FD_STEP:g} of its value, so its calibration band is unknown"), 0.0
-            sigma = (dem - predicted) / np.hypot(dem_err, s_cal) if not note else np.nan
-            rows.append({"law": law.name, "quantity": law.quantity, "unit": law.unit, "dem": dem, "dem_err": dem_err,
-                         "model": key, "predicted": predicted, "band": [predicted - Z95 * s_cal,
-                                                                        predicted + Z95 * s_cal], "sigma": sigma,
-                         "verdict": ("not measurable" if note.startswith("not measurable") else "not predicted"
-                                     if note else "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees"),
-                         "n_drives": len(drives), "window": window if np.isfinite(dem) else "", "note": note})
-    return pd.DataFrame(rows, columns=list(KEYS))
+                               f"{STEP:g} of its value, so its calibration band is unknown"), 0.0
+            rows.append(law_row(law=law.name, quantity=law.quantity, unit=law.unit, model=key, dem=dem,
+                                dem_err=dem_err, predicted=predicted, predicted_err=s_cal,
+                                sigma=np.nan if note else sigma(dem - predicted, dem_err, s_cal),
+                                n_drives=len(drives), window=window if np.isfinite(dem) else "", note=note))
+    return pd.DataFrame(rows, columns=list(LAW_KEYS))

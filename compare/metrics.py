@@ -6,14 +6,14 @@ import numpy as np
 from granstokes.continuum.scales import UNITS
 from scipy import stats
 
-from granstokes.lib.provenance import provenance
-
-from .analysis import BLOCKS, TRANSITS_BEFORE_COMPARISON
+from .analysis import BLOCKS
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
+from .drive import TRANSITS_BEFORE_COMPARISON
 from .laws import SEED_RESAMPLES
 from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_WINDOW, TREND_SIGMA
-from .scorecard import OBSERVABLES, SIGMA_CONSISTENT, T90_WINDOW, bulk, creep_length, tally
+from .rows import SIGMA_CONSISTENT
+from .scorecard import OBSERVABLES, T90_WINDOW, bulk, creep_length
 
 #: name -> (unit, definition)
 DEFINITIONS = {
@@ -33,7 +33,8 @@ DEFINITIONS = {
                          "series are interpolated onto the DEM's output times and treated alike"),
     "creep_length": ("d", "e-folding length of u below the calibrated delta_s, from a least-squares fit of ln u "
                           f"down to {WALL_EXCLUSION:g} d above the base; local mu(I) is rigid there (0)"),
-    "sigma": ("1", "(DEM - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical_err^2), band_sd = band width / 3.92; "
+    "sigma": ("1", "(DEM - predicted) / sqrt(dem_err^2 + calibration_sd^2 + numerical_err^2), calibration_sd = "
+                   "band width / 3.92; "
                    f"'consistent' when |sigma| <= {SIGMA_CONSISTENT:g}"),
     "scored": ("-", "False where the scene cannot support the row (the flow reaches the base: the layer rows, and "
                     "every row of the half-space model; a model not steady within the record: its steady rows); "
@@ -126,50 +127,27 @@ def drive_metrics(dc: DriveComparison) -> dict:
     return out
 
 
-def _clean(v):
-    """JSON-ready: numpy scalars to float, non-finite numbers to None (valid JSON, pandas-readable)."""
-    if isinstance(v, dict):
-        return {k: _clean(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple, np.ndarray)):
-        return [_clean(x) for x in v]
-    if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
-        return int(v)
-    if isinstance(v, (float, np.floating)):
-        return float(v) if np.isfinite(v) else None
-    return v
-
-
-SCORECARD_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted",
-                  "band", "numerical_err", "sigma", "verdict", "scored", "note", "blind", "asymptote")
-
-
 def metrics(c: Comparison) -> dict:
-    """metrics.json: scorecard, scene checks, calibration, per-drive numbers, definitions, provenance."""
+    """The Stokes drives' entries of metrics.json beyond the shared ones (compare.experiment): scene checks,
+    uncertainty, calibration and its test, the NGF fit, per-drive numbers."""
     cal = c.calibration
     rows = c.scorecard.rows
     short = {label: sorted(g.model.unique()) for label, g in rows[rows.note.str.contains("record is shorter")]
              .groupby("drive")} if len(rows) else {}
     drives = {dc.label: {**drive_metrics(dc), "record_short_for": short.get(dc.label, [])} for dc in c.drives}
-    return _clean({
-        "verdict": c.verdict, "calibration_failure": c.failure,
-        "tally": tally(rows).to_dict("records"),
-        "scorecard": [{k: r[k] for k in SCORECARD_KEYS} for r in rows.to_dict("records")],
+    return {
+        "calibration_failure": c.failure,
         "scene_checks": c.scorecard.scene.to_dict("records"),
         "uncertainty": {"replicates": c.scorecard.replicates, "band_edge_stability": c.scorecard.edge_stability},
         "calibration": {**cal.as_dict(), "source": c.calibration_source},
         "blind": c.blind, "calibration_test": c.law_test,
-        "laws": c.laws.to_dict("records"),
         "mu_s": cal.mu_s, "mu_d": cal.mu_d, "I0": cal.I0_dem, "I0_convention": "dem", "I0_paper": cal.I0_paper,
         "phi_bulk": c.phi_bulk, "mass_error": c.mass_error,
         "ngf": None if c.fluidity is None else {"A": c.fluidity.A, "A_err": c.fluidity.err, "ci95": c.fluidity.ci95,
                                                 "fitted_on": c.fluidity.drive, "how": c.fluidity.how,
                                                 "points": c.fluidity.points, "at_search_bound": c.fluidity.at_bound},
         "drives": drives,
-        "definitions": {k: {"unit": u, "definition": d} for k, (u, d) in DEFINITIONS.items()},
-        "units": UNITS["dem_units"], "I_convention": UNITS["inertial_number"],
-        "runs": [str(r) for r in c.runs],
-        "provenance": provenance(runs=[str(r) for r in c.runs], calibration=c.calibration_source),
-    })
+    }
 
 
 #: the fields that name a row of each section of metrics.json (the rest are its numbers and words)

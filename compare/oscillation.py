@@ -17,29 +17,31 @@ Observables of a drive (``OBSERVABLES``; the imposed wall value is A sin(omega t
   regains RESPONSE_FRACTION of its half-cycle peak, over the DEM's yielded depth (both sides: a displacement).
 DEM values are the mean over the beds with their spread / sqrt(n) (one bed: the cycles as blocks).  A model's band
 is its numerical error (Richardson, n_cells/2) and the calibration's, sqrt(J C J^T) with J from solves at each
-calibrated parameter shifted by SHIFT and C the calibration's replicates' covariance (NGF: A's variance too).
+calibrated parameter shifted (compare.band) and C the calibration's replicates' covariance (NGF: A's variance too).
 Conventions: DEM units (d, rho_p, g); mu > 0 where the bed resists a plate moving in +x.
 """
 from __future__ import annotations
 
 import json
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from granstokes.continuum import oscillation as osc
-from granstokes.continuum.load import Load
 from granstokes.continuum.ngf import NonlocalFluidity
+from granstokes.continuum.richardson import richardson
 from granstokes.continuum.rules import YieldRule
 from granstokes.continuum.scales import Material
 from granstokes.dem import layout
 
-from granstokes.lib.executor import forked_pool
 from granstokes.lib.validate import require
 
 from . import phase
-from .scorecard import SIGMA_CONSISTENT, Z95
+from .band import Sensitivity
+from .drive import DriveSpec, drive_specs
+from .rows import band, law_row, score_row, sigma
 
 OBSERVABLES = {"response_amplitude": None, "phase_lag": "rad", "yielded_depth": "d",
                "dissipation": "rho_p g d^2 per plate area", "remobilization_strain": "1"}
@@ -49,8 +51,6 @@ SKIP = 1
 RESPONSE_FRACTION = 0.9
 #: model samples per period (the DEM's plate record has about as many, compare's study plan)
 SAMPLES_PER_PERIOD = 96
-#: relative shift of each calibrated parameter for the calibration band's derivatives
-SHIFT = 0.01
 #: the comparison's numerics: percent-level DEM errors need no more (the rows' numerical_err says what it costs;
 #: continuum.oscillation's defaults verify the solver to 1e-4)
 NUMERICS = osc.OscillationNumerics(n_cells=80, rtol=1e-4, atol=1e-7)
@@ -61,56 +61,11 @@ PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
 MIN_BEDS = 2
 
 
-@dataclass(frozen=True)
-class OscillatingDrive:
-    """A DEM drive of an oscillating load: its run, name, load, scene (depth, plate mass per area, the plate's
-    contact-plane offset), t_s of its amplitude and its beds' folders."""
-
-    run: Path
-    name: str
-    load: Load
-    depth: float
-    plate_mass: float
-    surface_offset: float
-    t_s: float
-    duration: float
-    folders: tuple[Path, ...]
-
-    @property
-    def label(self) -> str:
-        return f"{self.run}/{self.name}"
-
-    @property
-    def omega_ts(self) -> float:
-        return self.load.omega * self.t_s
-
-    @property
-    def response(self) -> str:
-        """The free response: u_w under an imposed stress, mu_w under an imposed speed."""
-        return "u_w" if self.load.kind == "stress" else "mu_w"
-
-    def unit(self, observable: str) -> str:
-        if observable == "response_amplitude":
-            return "sqrt(g d)" if self.response == "u_w" else "1"
-        return OBSERVABLES[observable]
-
-
-def oscillating_drives(run_dir: Path, root: Path | None = None) -> list[OscillatingDrive]:
-    """The oscillating drives of a complete run folder (``root``: name the run relative to it)."""
-    run_dir = Path(run_dir)
-    meta = json.loads((run_dir / layout.RUN_JSON).read_text())
-    unfinished = [k for k, s in meta.get("stages", {}).items() if s.get("status") != "complete"]
-    require(not unfinished, str(run_dir), "a complete run (resume it first)", unfinished)
-    name = run_dir.relative_to(root) if root is not None else run_dir
-    out = []
-    for d in meta["sizing"]["drives"]:
-        load = Load.from_record(d, float(meta["config"]["p_w"]))
-        if load.oscillating:
-            out.append(OscillatingDrive(name, d["name"], load, float(meta["sizing"]["depth"]),
-                                        float(meta["plate"]["mass_per_area"]), float(meta["plate"]["surface_offset"]),
-                                        float(d["expected"]["t_s"]), float(d["duration"]),
-                                        tuple(layout.drive_dir(run_dir, s, d["name"]) for s in meta["seeds"])))
-    return out
+def unit(drive: DriveSpec, observable: str) -> str:
+    """An observable's unit on ``drive`` (the response amplitude's is its response's)."""
+    if observable == "response_amplitude":
+        return "sqrt(g d)" if drive.response == "u_w" else "1"
+    return OBSERVABLES[observable]
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,7 +79,7 @@ class Record:
     interval: float = 0.0
 
 
-def dem_record(folder: Path, drive: OscillatingDrive) -> Record:
+def dem_record(folder: Path, drive: DriveSpec) -> Record:
     """A bed's plate.csv and profiles.csv as a Record: the plate's rows averaged in blocks of about a period over
     SAMPLES_PER_PERIOD (x_w at each block's end: the record's ``interval`` grows to the block's), mu = tau_mop/p_mop
     at the planes between the plate's mean contact plane and the base, u_x at the bins' centres; the profiles dated
@@ -152,7 +107,7 @@ def dem_record(folder: Path, drive: OscillatingDrive) -> Record:
                   n * step)
 
 
-def observables(rec: Record, drive: OscillatingDrive, mu_s: float, depth_scale: float | None = None) -> dict:
+def observables(rec: Record, drive: DriveSpec, mu_s: float, depth_scale: float | None = None) -> dict:
     """Every observable of one record (value, stderr over its cycles), the phase-averaged zones and the plate's
     loop; ``depth_scale``: the remobilization strain's length (default: this record's yielded depth)."""
     p, w = rec.plate, drive.load.omega
@@ -183,7 +138,7 @@ class DemOscillation:
     profiles (mean over the beds and its error, their spread / sqrt(n)), the slip (``_slip``, mean over the beds);
     the periodic-state check per bed."""
 
-    drive: OscillatingDrive
+    drive: DriveSpec
     records: tuple[Record, ...]
     values: dict
     zones: pd.DataFrame
@@ -196,7 +151,7 @@ class DemOscillation:
     n_cycles: int
 
 
-def analyse_dem(drive: OscillatingDrive, records: list[Record], mu_s: float) -> DemOscillation:
+def analyse_dem(drive: DriveSpec, records: list[Record], mu_s: float) -> DemOscillation:
     """The DEM side of ``drive`` from its beds' ``records`` (dem_record, or a report's tables)."""
     first = [observables(r, drive, mu_s) for r in records]
     scale = float(np.nanmean([o["values"]["yielded_depth"][0] for o in first]))
@@ -256,7 +211,7 @@ class ModelSetup:
         return ("local", "ngf") if self.ngf_A is not None else ("local",)
 
 
-def model_record(drive: OscillatingDrive, material: Material, model: str, A: float | None, depths,
+def model_record(drive: DriveSpec, material: Material, model: str, A: float | None, depths,
                  numerics: osc.OscillationNumerics, velocity_depths=None) -> Record:
     """A model's solution of ``drive`` as a Record: sampled SAMPLES_PER_PERIOD times a period over the DEM's
     duration, mu (sign as the DEM's) at the DEM's profile depths, u at ``velocity_depths`` (default: those)."""
@@ -281,7 +236,7 @@ def model_record(drive: OscillatingDrive, material: Material, model: str, A: flo
     return Record(plate, profiles, velocity)
 
 
-def _rule(drive: OscillatingDrive, material: Material) -> YieldRule:
+def _rule(drive: DriveSpec, material: Material) -> YieldRule:
     """The regularised local rule of the DEM-scene predictions, at the amplitude's steady layer."""
     return YieldRule.for_layer(drive.load.scales(material))
 
@@ -301,8 +256,8 @@ class OscPrediction:
 
 def predict(dem: DemOscillation, setup: ModelSetup, model: str) -> OscPrediction:
     """The model's observables on the DEM's rows and depths: central (``setup.numerics``), on n_cells/2 (the
-    numerical error, |fine - coarse|/3) and at each calibrated parameter shifted by SHIFT (coarse: the bias
-    cancels in the derivative) for s_cal = sqrt(J C J^T)."""
+    numerical error, |fine - coarse|/3) and the calibration's sd by compare.band (the shifted solves on n_cells/2,
+    like the coarse central one: the discretisation's bias cancels in the differences)."""
     drive, depths = dem.drive, dem.zones.columns.to_numpy(float)
     scale = dem.values["yielded_depth"][0]
     coarse_numerics = replace(setup.numerics, n_cells=setup.numerics.n_cells // 2)
@@ -313,24 +268,19 @@ def predict(dem: DemOscillation, setup: ModelSetup, model: str) -> OscPrediction
 
     A = setup.ngf_A if model == "ngf" else None
     fine = run(setup.material, A, setup.numerics)
-    coarse = run(setup.material, A, coarse_numerics)
-    names = list(PARAMETERS) + (["A"] if model == "ngf" else [])
-    central = {"A": A, **{k: getattr(setup.material, k) for k in PARAMETERS}}
-    jac = {}
-    for k in names:
-        step = central[k] * SHIFT
-        shifted = (replace(setup.material, **{k: central[k] + step}) if k != "A" else setup.material)
-        out = run(shifted, A + step if k == "A" else A, coarse_numerics)
-        jac[k] = {o: _difference(o, out["values"][o][0], coarse["values"][o][0]) / step for o in OBSERVABLES}
-    cov = setup.covariance.reindex(index=names, columns=names).fillna(0.0).to_numpy(copy=True)
+    coarse = run(setup.material, A, coarse_numerics)["values"]
+    central = {**{k: getattr(setup.material, k) for k in PARAMETERS}, **({"A": A} if model == "ngf" else {})}
+    cov = setup.covariance.copy()
     if model == "ngf":
-        cov[-1, -1] = setup.ngf_A_err ** 2
+        cov.loc["A", "A"] = setup.ngf_A_err ** 2
+    sens = Sensitivity.of(lambda q: run(replace(setup.material, **{k: q[k] for k in PARAMETERS}), q.get("A"),
+                                        coarse_numerics)["values"], central, cov)
     values = {}
     for o in OBSERVABLES:
-        J = np.array([jac[k][o] for k in names])
-        s_cal = float(np.sqrt(max(J @ cov @ J, 0.0))) if np.all(np.isfinite(J)) else np.nan
-        num = abs(_difference(o, fine["values"][o][0], coarse["values"][o][0])) / 3
-        values[o] = (fine["values"][o][0], num, s_cal)
+        difference = partial(_difference, o)
+        s_cal = sens.sd_of(lambda j, o=o: sens.shifted[j][o][0], coarse[o][0], difference=difference)
+        values[o] = (fine["values"][o][0], float(richardson(0.0, difference(fine["values"][o][0], coarse[o][0]))),
+                     s_cal)
     return OscPrediction(model, values, fine["zones"], fine["yielded"], fine["loop"], fine["velocity"])
 
 
@@ -342,34 +292,28 @@ def _difference(observable: str, a: float, b: float) -> float:
 def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model: str, note: str = "") -> dict:
     drive = dem.drive
     v, err, how = dem.values[observable]
-    lag = dem.values["phase_lag"][0]
-    row = {"drive": drive.label, "observable": observable, "unit": drive.unit(observable), "dem": v,
-           "dem_err": err, "dem_how": how, "model": model, "model_label": LABELS[model], "predicted": np.nan,
-           "band": [np.nan, np.nan], "numerical_err": np.nan, "calibration_sd": np.nan, "sigma": np.nan,
-           "verdict": "not predicted", "scored": False, "note": note, "blind": True, "kind": drive.load.kind,
-           "omega": drive.load.omega, "omega_ts": drive.omega_ts, "amplitude": drive.load.amplitude,
-           "phase_lag": lag, "phase_lag_predicted": np.nan}
-    if pred is None:
-        return row
-    p, num, s_cal = pred.values[observable]
-    half = Z95 * float(np.hypot(num, s_cal))
-    row.update(predicted=float(p), band=[float(p - half), float(p + half)], numerical_err=num, calibration_sd=s_cal,
-               phase_lag_predicted=pred.values["phase_lag"][0])
-    why = _unmeasurable(dem, observable)
-    if why:
-        row.update(verdict="not measurable", note=why)
-        return row
-    sigma = _difference(observable, v, p) / float(np.sqrt(err ** 2 + num ** 2 + s_cal ** 2))
-    row.update(sigma=sigma, scored=True, verdict="consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees")
-    return row
+    p, num, s_cal = pred.values[observable] if pred is not None else (np.nan, np.nan, np.nan)
+    if pred is not None:
+        note = _unmeasurable(dem, observable)
+    elif not note.startswith("not predicted"):
+        note = f"not predicted: {note}"
+    scored = not note
+    return score_row(
+        drive=drive.label, observable=observable, unit=unit(drive, observable), dem=v, dem_err=err, dem_how=how,
+        model=model, model_label=LABELS[model], predicted=float(p), band=band(p, float(np.hypot(num, s_cal))),
+        numerical_err=num, calibration_sd=s_cal, sigma=sigma(_difference(observable, v, p), err, num, s_cal)
+        if scored else np.nan, note=note, blind=True, kind=drive.load.kind, omega=drive.load.omega,
+        omega_ts=drive.omega_ts, amplitude=drive.load.amplitude, phase_lag=dem.values["phase_lag"][0],
+        phase_lag_predicted=pred.values["phase_lag"][0] if pred is not None else np.nan)
 
 
 def _unmeasurable(dem: DemOscillation, observable: str) -> str:
     v, err, _ = dem.values[observable]
     if not (np.isfinite(v) and np.isfinite(err) and err > 0):
-        return "no error: fewer than two beds or whole cycles after the start-up"
+        return "not measurable: no error (fewer than two beds or whole cycles after the start-up)"
     if observable in ("yielded_depth", "remobilization_strain") and np.nanmax(dem.yielded) >= dem.zones.columns.max():
-        return "at some phase the bed yields down to its deepest plane: the edge is censored by the base"
+        return ("not measurable: at some phase the bed yields down to its deepest plane (the edge is censored by the "
+                "base)")
     return ""
 
 
@@ -395,13 +339,14 @@ def laws(rows: pd.DataFrame) -> pd.DataFrame:
                                  ("phase_lag_slope", "phase_lag", np.log, lambda v: v)):
             s = g[(g.observable == obs) & (g.dem > 0 if obs == "yielded_depth" else g.dem.notna())]
             s = s[s.predicted > 0] if obs == "yielded_depth" else s
-            base = {"law": law, "kind": kind, "amplitude": amp, "model": model, "n_drives": len(s),
+            base = {"law": law, "kind": kind, "amplitude": amp, "model": model, "n_drives": len(s), "unit": "1",
+                    "window": f"omega t_s in [{s.omega_ts.min():.3g}, {s.omega_ts.max():.3g}]" if len(s) else "",
                     "quantity": "n in yielded_depth ~ (omega t_s)^n" if obs == "yielded_depth"
                     else "s in phase_lag = a + s ln(omega t_s) [rad]"}
             if len(s) < 3:
-                out.append({**base, "dem": np.nan, "dem_err": np.nan, "predicted": np.nan, "predicted_err": np.nan,
-                            "sigma": np.nan, "verdict": "not measurable",
-                            "note": f"{len(s)} measurable drive(s): a slope and its error need 3"})
+                out.append(law_row(**base, dem=np.nan, dem_err=np.nan, predicted=np.nan, predicted_err=np.nan,
+                                   sigma=np.nan, note=f"not measurable: {len(s)} measurable drive(s), a slope and "
+                                                      "its error need 3"))
                 continue
             x = fx(s.omega_ts.to_numpy())
             scale = s.dem.to_numpy() if obs == "yielded_depth" else 1.0
@@ -411,10 +356,8 @@ def laws(rows: pd.DataFrame) -> pd.DataFrame:
             w = 1 / dem_sd ** 2
             dem_slope, dem_err = _weighted_slope(x, fy(s.dem.to_numpy()), w, dem_sd)
             pred_slope, pred_err = _weighted_slope(x, fy(s.predicted.to_numpy()), w, model_sd)
-            sigma = (dem_slope - pred_slope) / np.hypot(dem_err, pred_err)
-            out.append({**base, "dem": dem_slope, "dem_err": dem_err, "predicted": pred_slope,
-                        "predicted_err": pred_err, "sigma": sigma,
-                        "verdict": "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees", "note": ""})
+            out.append(law_row(**base, dem=dem_slope, dem_err=dem_err, predicted=pred_slope, predicted_err=pred_err,
+                               sigma=sigma(dem_slope - pred_slope, dem_err, pred_err), note=""))
     return pd.DataFrame(out)
 
 
@@ -427,7 +370,7 @@ def _weighted_slope(x, y, w, sd) -> tuple[float, float]:
 
 @dataclass(frozen=True, eq=False)
 class OscillationComparison:
-    """Everything the oscillation report renders."""
+    """Everything the oscillation report renders (``verdict``: compare.oscillation_report's words)."""
 
     runs: tuple[str, ...]
     setup: ModelSetup
@@ -439,48 +382,43 @@ class OscillationComparison:
     laws: pd.DataFrame
 
 
-def _predict_one(args):
+def predict_unit(dem: DemOscillation, setup: ModelSetup, model: str):
     """(drive label, model) -> its OscPrediction, or the solver's failure as a string (the rows say why)."""
-    dem, setup, model = args
     try:
         return (dem.drive.label, model), predict(dem, setup, model)
-    except RuntimeError as exc:  # solve_ivp gave up (continuum.oscillation raises it with scipy's message)
+    except RuntimeError as exc:  # the solver gave up (continuum.oscillation raises it with its message)
         return (dem.drive.label, model), f"the {model} solver failed on this drive: {exc}"
 
 
-def dem_side(run_dirs, root: Path | None = None) -> list[tuple[OscillatingDrive, list[Record]]]:
-    """Every oscillating drive of ``run_dirs`` with its beds' records."""
-    drives = [d for run in run_dirs for d in oscillating_drives(Path(run), root)]
+def dem_side(run_dirs, root: Path | None = None) -> list[tuple[DriveSpec, list[Record]]]:
+    """Every drive of ``run_dirs`` with its beds' records."""
+    drives = [d for run in run_dirs for d in drive_specs(Path(run), root)]
     require(drives, "RUN_DIR", "run folders with oscillating drives", [str(r) for r in run_dirs])
     return [(d, [dem_record(f, d) for f in d.folders]) for d in drives]
 
 
-def compare_oscillations(dem, calibration: str | Path, ngf_from: str | Path | None = None,
-                         jobs: int = 1) -> OscillationComparison:
-    """Predict each drive of ``dem`` (dem_side, or compare.oscillation_tables.read) with every model from the
-    independent ``calibration`` (calibration.json); NGF's A from ``ngf_from``, a Stokes report's metrics.json (A
-    fitted on a Stokes drive's creep profile), else no NGF rows."""
-    from . import calibrate
+def setup_of(cal, ngf_from: str | Path | None) -> tuple[ModelSetup, str]:
+    """What every prediction shares, from an independent calibration (compare.calibrate.load) and NGF's A from
+    ``ngf_from``, a Stokes report's metrics.json (A fitted on a Stokes drive's creep profile), else no NGF rows;
+    with the note the NGF rows carry when there are none."""
     from .comparison import replicates_of
 
-    cal = calibrate.load(calibration)
     require(not cal.failure, "--calibration", "a calibration that determines mu(I)", cal.failure)
-    material = cal.material()
     reps = replicates_of(cal, cal.replicates["phi_max"])
     ngf_A, ngf_err, ngf_note = None, 0.0, "no NGF amplitude: give a Stokes report's metrics.json (--ngf-from)"
     if ngf_from is not None:
         ngf = json.loads(Path(ngf_from).read_text()).get("ngf") or {}
         require("A" in ngf, "--ngf-from", "a Stokes report's metrics.json with an NGF fit", str(ngf_from))
         ngf_A, ngf_err, ngf_note = float(ngf["A"]), float(ngf.get("A_err", 0.0)), ""
-    setup = ModelSetup(material, reps.cov(), ngf_A, ngf_err)
-    dems = [analyse_dem(d, records, material.mu_s) for d, records in dem]
-    tasks = [(d, setup, m) for d in dems for m in setup.models]
-    if jobs > 1:
-        with forked_pool(jobs) as pool:
-            predictions = dict(pool.map(_predict_one, tasks))
-    else:
-        predictions = dict(map(_predict_one, tasks))
+    return ModelSetup(cal.material(), reps.cov(), ngf_A, ngf_err), ngf_note
+
+
+def conclude(dem, dems: list[DemOscillation], setup: ModelSetup, ngf_note: str, predicted: list, calibration: str,
+             ngf_from) -> OscillationComparison:
+    """The OscillationComparison from every (drive, model)'s ``predict_unit``."""
+    predictions = dict(predicted)
     rows = scorecard(dems, predictions, setup, ngf_note)
-    source = f"NGF's A = {ngf_A:.3g} +- {ngf_err:.2g} from {ngf_from}" if ngf_A is not None else ngf_note
-    return OscillationComparison(tuple(sorted({str(d.run) for d, _ in dem})), setup, cal.source, source,
+    source = (f"NGF's A = {setup.ngf_A:.3g} +- {setup.ngf_A_err:.2g} from {ngf_from}" if setup.ngf_A is not None
+              else ngf_note)
+    return OscillationComparison(tuple(sorted({str(d.run) for d, _ in dem})), setup, calibration, source,
                                  tuple(dems), predictions, rows, laws(rows))

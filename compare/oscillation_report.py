@@ -3,7 +3,6 @@ PNG figures and index.html (nothing is computed here but the words of the verdic
 from __future__ import annotations
 
 import html
-import json
 from pathlib import Path
 
 import matplotlib
@@ -11,26 +10,27 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from granstokes.continuum.scales import UNITS  # noqa: E402
 
-from granstokes.lib.page import page  # noqa: E402
-
-from . import oscillation_tables  # noqa: E402
+from .experiment import CSV_FLOAT, FigureFile, table  # noqa: E402
 from .oscillation import LABELS, RESPONSE_FRACTION, SKIP, OscillationComparison, OscPrediction  # noqa: E402
-from .report import CSV_FLOAT, TABLES, _table, fmt, fmt_band, slug  # noqa: E402
+from .report import fmt, fmt_band, slug  # noqa: E402
+from .rows import SIGMA_CONSISTENT  # noqa: E402
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, plain_log, suptitle  # noqa: E402
 
 DEFINITIONS = {
-    "response_amplitude": "the fundamental's amplitude of the free response: u_w [sqrt(g d)] under an imposed "
-                          "stress, mu_w under an imposed speed",
-    "phase_lag": "the response's lag behind the imposed sine A sin(omega t), in (-pi, pi] rad (> 0: it peaks later)",
-    "yielded_depth": "the edge of the dynamic zone [d], the deepest depth where the phase-averaged |mu| = "
-                     "|tau_xy|/p reaches the calibrated mu_s, averaged over the cycle",
-    "dissipation": "energy per cycle and plate area, the integral of tau_w u_w dt [rho_p g d^2]",
-    "remobilization_strain": f"the plate's displacement from a reversal until the response regains "
-                             f"{RESPONSE_FRACTION:g} of its half-cycle peak, over the DEM's yielded depth",
-    "sigma": "(DEM - predicted)/sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2) (phase differences wrapped)",
-    "cycles": f"estimates on the whole cycles after the first {SKIP} (the start-up); DEM errors: the beds' spread",
+    "response_amplitude": ("sqrt(g d) or 1", "the fundamental's amplitude of the free response: u_w [sqrt(g d)] "
+                                             "under an imposed stress, mu_w under an imposed speed"),
+    "phase_lag": ("rad", "the response's lag behind the imposed sine A sin(omega t), in (-pi, pi] (> 0: it peaks "
+                         "later)"),
+    "yielded_depth": ("d", "the edge of the dynamic zone, the deepest depth where the phase-averaged |mu| = "
+                           "|tau_xy|/p reaches the calibrated mu_s, averaged over the cycle"),
+    "dissipation": ("rho_p g d^2", "energy per cycle and plate area, the integral of tau_w u_w dt"),
+    "remobilization_strain": ("1", f"the plate's displacement from a reversal until the response regains "
+                                   f"{RESPONSE_FRACTION:g} of its half-cycle peak, over the DEM's yielded depth"),
+    "sigma": ("1", "(DEM - predicted)/sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2) (phase differences "
+                   "wrapped); consistent when |sigma| <= " f"{SIGMA_CONSISTENT:g}"),
+    "cycles": ("-", f"estimates on the whole cycles after the first {SKIP} (the start-up); DEM errors: the beds' "
+                    "spread"),
 }
 TITLES = {"map": "The oscillating plate across frequencies", "zones": "Static and dynamic zones over a cycle",
           "profiles": "Velocity profiles at fixed phase", "loops": "The plate's loops"}
@@ -50,7 +50,7 @@ HOW_TO_READ = {
 
 
 def metrics(c: OscillationComparison) -> dict:
-    rows = c.rows.replace({np.nan: None})
+    """The oscillating plate's entries of metrics.json beyond the shared ones (compare.experiment)."""
     drives = {}
     for d in c.drives:
         dr = d.drive
@@ -60,14 +60,9 @@ def metrics(c: OscillationComparison) -> dict:
                             "depth": dr.depth, "seeds": len(d.records), "whole_cycles": d.n_cycles, "slip": d.slip,
                             "periodic": d.stationary,
                             **{k: {"dem": v[0], "dem_err": v[1]} for k, v in d.values.items()}}
-    tally = {m: c.rows[c.rows.model == m].verdict.value_counts().to_dict() for m in LABELS}
-    return {"verdict": verdict(c), "problem": "oscillating plate (Stokes' second problem)",
-            "scorecard": json.loads(rows.to_json(orient="records")), "laws": json.loads(c.laws.to_json(
-                orient="records")), "drives": drives, "tally": tally,
+    return {"drives": drives, "ngf": c.ngf_source,
             "calibration": {"source": c.calibration_source, "mu_s": c.setup.material.mu_s,
-                            "mu_d": c.setup.material.mu_d, "I0_dem": c.setup.material.I0, "phi": c.setup.material.phi},
-            "ngf": c.ngf_source, "definitions": DEFINITIONS, "units": UNITS["dem_units"],
-            "I_convention": UNITS["inertial_number"], "runs": list(c.runs)}
+                            "mu_d": c.setup.material.mu_d, "I0_dem": c.setup.material.I0, "phi": c.setup.material.phi}}
 
 
 def verdict(c: OscillationComparison) -> str:
@@ -270,15 +265,8 @@ def loops_figure(c: OscillationComparison, out: Path) -> str:
     return path.name
 
 
-def write_report(c: OscillationComparison, out_dir) -> dict:
-    """Render ``c`` into ``out_dir``: metrics.json, scorecard.csv, laws.csv, the phase-averaged tables, figures and
-    index.html; returns the metrics."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    m = metrics(c)
-    (out / "metrics.json").write_text(json.dumps(m, indent=2))
-    c.rows.to_csv(out / "scorecard.csv", index=False, float_format=CSV_FLOAT)
-    c.laws.to_csv(out / "laws.csv", index=False, float_format=CSV_FLOAT)
+def files(c: OscillationComparison, out: Path) -> list[FigureFile]:
+    """Write the phase-averaged tables (zones, loops: the DEM's and each model's) and the figures into ``out``."""
     for d in c.drives:
         stem = slug(d.drive.label)
         d.zones.to_csv(out / f"zones_{stem}_dem.csv", float_format=CSV_FLOAT)
@@ -288,49 +276,39 @@ def write_report(c: OscillationComparison, out_dir) -> dict:
                 continue
             p.zones.to_csv(out / f"zones_{stem}_{model}.csv", float_format=CSV_FLOAT)
             p.loop.to_csv(out / f"loop_{stem}_{model}.csv", index=False, float_format=CSV_FLOAT)
-    oscillation_tables.write([(d.drive, list(d.records)) for d in c.drives], out / TABLES)
-    figures = [("map", map_figure(c, out))]
-    figures += [("zones", zones_figure(c, out, k)) for k in sorted(c.rows.kind.unique())]
-    figures += [("profiles", profiles_figure(c, out)), ("loops", loops_figure(c, out))]
-    (out / "index.html").write_text(page("granstokes: the oscillating plate", _body(c, m, figures)))
-    return m
+    figures = [FigureFile("map", map_figure(c, out))]
+    figures += [FigureFile("zones", zones_figure(c, out, k), f"imposed {k}") for k in sorted(c.rows.kind.unique())]
+    return figures + [FigureFile("profiles", profiles_figure(c, out)), FigureFile("loops", loops_figure(c, out))]
 
 
 def _sigma(value: float) -> str:
     return f"{value:+.1f}" if np.isfinite(value) else "–"
 
 
-def _body(c: OscillationComparison, m: dict, figures) -> str:
+def sections(c: OscillationComparison, m: dict) -> list[str]:
+    """The report's sections before its figures: verdict, calibration, laws in omega, scorecard, drives."""
     rows = [[html.escape(r.drive), html.escape(r.observable), fmt(r.dem, r.dem_err), html.escape(r.model),
              fmt(r.predicted, np.hypot(r.numerical_err, r.calibration_sd)) if np.isfinite(r.predicted) else "–",
              fmt_band(r.band, r.dem_err) if np.isfinite(r.predicted) else "–",
-             _sigma(r.sigma), html.escape(r.verdict), html.escape(r.note)]
+             _sigma(r.sigma), html.escape(r.verdict), html.escape(r.note.removeprefix(r.verdict + ": "))]
             for r in c.rows.itertuples()]
     laws = [[html.escape(r.law), html.escape(r.kind), fmt(r.amplitude), html.escape(r.model),
              fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err), _sigma(r.sigma),
-             html.escape(r.verdict), html.escape(r.note)] for r in c.laws.itertuples()]
+             html.escape(r.verdict), html.escape(r.note.removeprefix(r.verdict + ": "))] for r in c.laws.itertuples()]
     drives = [[html.escape(label), d["kind"], fmt(d["amplitude"]), fmt(d["omega"]), fmt(d["omega_ts"]),
                str(d["seeds"]), str(d["whole_cycles"]), f"{100 * d['slip']:.1f} %",
                ", ".join({True: "yes", False: "no", None: "untested"}[s] for s in d["periodic"])]
               for label, d in m["drives"].items()]
-    figs = "".join(f"<h3>{html.escape(TITLES[k])}</h3><p class='how'>{html.escape(HOW_TO_READ[k])}</p>"
-                   f"<img src='{f}' alt='{html.escape(TITLES[k])}'>" for k, f in figures)
-    defs = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in DEFINITIONS.items())
-    return ("<h1>The oscillating plate (Stokes' second problem): DEM against the models</h1>"
-            "<h2>Verdict</h2><ul>" + "".join(f"<li>{html.escape(p)}</li>" for p in verdict_parts(c)) + "</ul>"
-            f"<p>Calibration: {html.escape(c.calibration_source)} (mu_s = {fmt(m['calibration']['mu_s'])}, mu_d = "
-            f"{fmt(m['calibration']['mu_d'])}, I0 = {fmt(m['calibration']['I0_dem'])} in the DEM convention, phi = "
-            f"{fmt(m['calibration']['phi'])}); {html.escape(c.ngf_source)}. Units: {html.escape(m['units'])}; "
-            f"{html.escape(m['I_convention'])}.</p>"
-            f"<img src='{figures[0][1]}' alt='map'>"
-            f"<h2 id='laws'>Laws in omega</h2>"
-            + _table(["law", "kind", "amplitude", "model", "DEM", "predicted", "sigma", "verdict", "note"], laws)
-            + "<h2 id='scorecard'>Scorecard</h2>"
-            + _table(["drive", "observable", "DEM", "model", "predicted", "95 % band", "sigma", "verdict", "note"],
-                     rows)
-            + "<h2>Drives</h2>"
-            + _table(["drive", "kind", "amplitude", "omega", "omega t_s", "beds", "whole cycles",
-                      "slip rms(u_c - u_w)/rms(u_w)",
-                      "periodic (per bed: no trend of the cycles' amplitudes; untested below 3 cycles)"], drives)
-            + f"<h2>Figures</h2>{figs}<h2>Definitions</h2><ul>{defs}</ul>")
-
+    cal = m["calibration"]
+    return ["<h2>Verdict</h2><ul>" + "".join(f"<li>{html.escape(p)}</li>" for p in verdict_parts(c)) + "</ul>",
+            f"<p>Calibration: {html.escape(c.calibration_source)} (mu_s = {fmt(cal['mu_s'])}, mu_d = "
+            f"{fmt(cal['mu_d'])}, I0 = {fmt(cal['I0_dem'])} in the DEM convention, phi = {fmt(cal['phi'])}); "
+            f"{html.escape(c.ngf_source)}. Units: {html.escape(m['units'])}; {html.escape(m['I_convention'])}.</p>",
+            "<h2 id='laws'>Laws in omega</h2>",
+            table(["law", "kind", "amplitude", "model", "DEM", "predicted", "sigma", "verdict", "note"], laws),
+            "<h2 id='scorecard'>Scorecard</h2>",
+            table(["drive", "observable", "DEM", "model", "predicted", "95 % band", "sigma", "verdict", "note"], rows),
+            "<h2>Drives</h2>",
+            table(["drive", "kind", "amplitude", "omega", "omega t_s", "beds", "whole cycles",
+                   "slip rms(u_c - u_w)/rms(u_w)",
+                   "periodic (per bed: no trend of the cycles' amplitudes; untested below 3 cycles)"], drives)]

@@ -4,7 +4,6 @@ scorecard and the conclusions."""
 from __future__ import annotations
 
 import html
-import json
 import math
 import re
 from pathlib import Path, PurePath
@@ -21,17 +20,14 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import LogLocator
 
-from granstokes.lib.page import page
-
 from . import law_figures
 from .analysis import nearest_frame
 from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
-from .metrics import DEFINITIONS, metrics
-from .scorecard import MODEL_UNSTEADY, SIGMA_CONSISTENT, T90_WINDOW, tally
+from .experiment import CSV_FLOAT, FigureFile, table
+from .rows import SIGMA_CONSISTENT, UNSCORED, tally
+from .scorecard import MODEL_UNSTEADY, T90_WINDOW
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, figure_legend, plain_log, suptitle
-from .tables import CSV_FLOAT
-from .tables import write as write_tables
 
 PUBLISHED_COLOURS = ("C6", "C8", "C9")  # published laws beside the calibration
 SIGMA_CLIP = 20.0                   # the scorecard figure's bars stop here (the value is written on the bar)
@@ -360,7 +356,7 @@ def calibration_section(c: Comparison) -> str:
             "<p><b>In-drive fit</b>: mu(I) is fitted on the drives' own steady windows, so the steady predictions "
             "are close to a restatement of the fit; pass <code>--calibration DIR/calibration.json</code> "
             "(<code>granstokes dem calibrate</code>) for a blind test.</p>")
-    return ("<h2>Calibration</h2>" + head + _table(["parameter", "value", "95 % interval (bootstrap)"], rows)
+    return ("<h2>Calibration</h2>" + head + table(["parameter", "value", "95 % interval (bootstrap)"], rows)
             + f"<p>{len(cal.points)} points, rms residual of the Jop law {cal.rms_mu:.3f}.</p>"
             f"<p>Test of the law by the drives: {html.escape(c.law_test['verdict'])}.</p>"
             "<p>Published values (plane shear or rheometry; differences: friction mu_p, restitution and "
@@ -379,7 +375,8 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
     ax.barh(y, np.where(scored, np.clip(sigma, -SIGMA_CLIP, SIGMA_CLIP), 0.0),
             color=[MODEL_STYLE[m]["color"] for m in rows.model])
     for k in np.flatnonzero(~scored):
-        ax.text(0, k, " not scored (see the row's note)", va="center", fontsize=7, color=VERDICT_COLOUR["not scored"])
+        ax.text(0, k, f" {rows.verdict.iloc[k]} (see the row's note)", va="center", fontsize=7,
+                color=VERDICT_COLOUR[rows.verdict.iloc[k]])
     for k in np.flatnonzero(scored & (np.abs(sigma) > SIGMA_CLIP)):
         ax.text(np.sign(sigma[k]) * SIGMA_CLIP, k, f" {sigma[k]:+.0f} ", va="center", fontsize=7,
                 ha="left" if sigma[k] < 0 else "right", color="w")
@@ -394,7 +391,9 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
     handles = [Patch(color=MODEL_STYLE[m]["color"], label=label)
                for m, label in dict(zip(rows.model, rows.model_label, strict=True)).items()]
     handles += [Patch(color="0.88", label=f"|sigma| <= {SIGMA_CONSISTENT:g}: consistent")]
-    handles += [Patch(color=colour, label=f"row label: {verdict}") for verdict, colour in VERDICT_COLOUR.items()]
+    shown = {VERDICT_COLOUR[v]: v for v in ("consistent", "disagrees")} | {VERDICT_COLOUR[UNSCORED[0]]: "not scored, "
+                                                                          "predicted or measurable"}
+    handles += [Patch(color=colour, label=f"row label: {verdict}") for colour, verdict in shown.items()]
     fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=7, frameon=False)
     path = out / "scorecard.png"
     fig.savefig(path, dpi=100)
@@ -482,13 +481,7 @@ def cost_figure(c: Comparison, out: Path) -> Path:
 
 # --- the page ------------------------------------------------------------------------------------------
 
-def _table(header, rows) -> str:
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
-
-
-VERDICT_COLOUR = {"consistent": "#2a7", "disagrees": "#c33", "not scored": "#777"}
+VERDICT_COLOUR = {"consistent": "#2a7", "disagrees": "#c33", **dict.fromkeys(UNSCORED, "#777")}
 
 
 def verdict_html(c: Comparison) -> str:
@@ -501,7 +494,7 @@ def scorecard_html(c: Comparison) -> str:
     for r in c.scorecard.rows.itertuples():
         verdict = f"<b style='color:{VERDICT_COLOUR[r.verdict]}'>{html.escape(r.verdict)}</b>"
         if r.note:
-            verdict += f"<br><small>{html.escape(r.note.removeprefix('not scored: '))}</small>"
+            verdict += f"<br><small>{html.escape(r.note.removeprefix(r.verdict + ': '))}</small>"
         model = html.escape(r.model_label) + ("" if r.blind else " (not blind: fitted on the drives)"
                                               if not c.blind else " (not blind: fitted on this drive)")
         rows.append([html.escape(names.get(r.drive, r.drive)), f"{html.escape(r.observable)} [{html.escape(r.unit)}]",
@@ -509,7 +502,7 @@ def scorecard_html(c: Comparison) -> str:
                      verdict])
     if not rows:
         return f"<p>No scorecard rows: {html.escape(c.failure or 'no drive has a continuum prediction')}.</p>"
-    return _table(["drive", "observable [unit]", "DEM ± error", "model", "predicted", "95 % band", "sigma",
+    return table(["drive", "observable [unit]", "DEM ± error", "model", "predicted", "95 % band", "sigma",
                    "verdict"], rows)
 
 
@@ -557,13 +550,13 @@ def laws_verdict_html(c: Comparison) -> str:
 
 def laws_html(c: Comparison) -> str:
     """The laws' rows (compare.laws) as a table, after one summary sentence."""
-    grey = VERDICT_COLOUR["not scored"]
+    grey = VERDICT_COLOUR[UNSCORED[0]]
     rows = [[html.escape(r.law), html.escape(r.quantity), html.escape(r.model), fmt(r.dem, r.dem_err),
              fmt(r.predicted), fmt_cell(r.sigma) if np.isfinite(r.sigma) else "",
              f"<span style='color:{VERDICT_COLOUR.get(r.verdict, grey)}'>{html.escape(r.verdict)}</span>",
              str(r.n_drives), html.escape(r.note or r.window)] for r in c.laws.itertuples()]
     return (f"<p>{html.escape(laws_summary(c))}</p>"
-            + _table(["law", "quantity", "model", "DEM", "predicted", "sigma", "verdict", "drives",
+            + table(["law", "quantity", "model", "DEM", "predicted", "sigma", "verdict", "drives",
                       "window or why not"], rows))
 
 
@@ -572,7 +565,7 @@ def scene_html(c: Comparison) -> str:
     rows = [[html.escape(names.get(r.drive, r.drive)), f"{html.escape(r.check)} [{html.escape(r.unit)}]",
              fmt(r.value, r.err), html.escape(r.target), html.escape(r.verdict), html.escape(r.how)]
             for r in c.scorecard.scene.itertuples()]
-    return _table(["drive", "check [unit]", "value ± error", "target", "verdict", "error from"], rows)
+    return table(["drive", "check [unit]", "value ± error", "target", "verdict", "error from"], rows)
 
 
 def conclusions(c: Comparison) -> list[str]:
@@ -676,23 +669,15 @@ FIGURE_TITLES = {"scorecard": "Scorecard", "calibration": "mu(I) calibration", "
                  "transient": "Transient profiles", "fluidity": "Steady fluidity", **law_figures.TITLES}
 
 
-#: the DEM side's tables in a report folder (compare.tables: a comparison again without the dumps)
-TABLES = "tables"
-
-
-def write_report(c: Comparison, out_dir) -> dict:
-    """Render ``c`` into ``out_dir``: metrics.json, CSV tables, figures, index.html; returns the metrics."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    m = metrics(c)
-    (out / "metrics.json").write_text(json.dumps(m, indent=2))
+def files(c: Comparison, out: Path) -> list[FigureFile]:
+    """Write the Stokes drives' CSV files (calibration pairs, each drive's series, profiles, layer depths and
+    predictions, the coarse-graining checks) and figures into ``out``; the figures in the report's order."""
     c.pairs.to_csv(out / "calibration_pairs.csv", index=False, float_format=CSV_FLOAT)
-    c.scorecard.rows.to_csv(out / "scorecard.csv", index=False, float_format=CSV_FLOAT)
     names = display_labels(c)
-    figs = [("scorecard", sigma_figure(c, out), "")] if len(c.scorecard.rows) else []
-    figs += [("calibration", calibration_figure(c, out), ""), ("cost_noise", cost_figure(c, out), "")]
+    figs = [FigureFile("scorecard", sigma_figure(c, out))] if len(c.scorecard.rows) else []
+    figs += [FigureFile("calibration", calibration_figure(c, out)), FigureFile("cost_noise", cost_figure(c, out))]
     if any(dc.predictions and dc.scales is not None for dc in c.drives):
-        figs += [(kind, draw(c, out), "") for kind, draw in law_figures.FIGURES.items()]
+        figs += [FigureFile(kind, draw(c, out)) for kind, draw in law_figures.FIGURES.items()]
     for dc in c.drives:
         g, name = dc.dem, names[dc.label]
         stem = slug(name)
@@ -703,58 +688,55 @@ def write_report(c: Comparison, out_dir) -> dict:
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{p.model}.csv", index=False,
                                                   float_format=CSV_FLOAT)
         if dc.predictions:
-            figs += [("drive", drive_figure(dc, c.scorecard.bands, out, name), name),
-                     ("profiles", profiles_figure(dc, c.material, out, name), name),
-                     ("transient", transient_figure(dc, c.material, out, name), name),
-                     ("fluidity", fluidity_figure(dc, c.material, out, name), name)]
-    write_tables(c.dem, out / TABLES)
-    ch = c.checks
-    ch.width.to_csv(out / "width_check.csv", index=False, float_format=CSV_FLOAT)
-    ch.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False, float_format=CSV_FLOAT)
-    drive_rows = [[html.escape(names.get(label, label)), d["kind"], fmt(d["imposed"]), html.escape(d["imposed_unit"]),
-                   fmt_cell(d["seeds"]), fmt(d["u_w_inf"]["dem"], d["u_w_inf"]["dem_err"]),
-                   fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]), fmt(d["t_steady"]), fmt_cell(d["frames"]),
-                   fmt_cell(d["dropped_frames"]), "yes" if d["base_confined"] else "no"]
-                  for label, d in m["drives"].items()]
-    cross_rows = [[html.escape(q), f"{v * 100:.1f} %"] for q, v in ch.crosscheck_bulk.items()]
-    plateau = ch.plateau
-    plateau_rows = [[html.escape(f)] + [f"{v * 100:.0f} %" for v in plateau.loc[f]] for f in plateau.index]
-    figures = "".join(f"<h3>{html.escape(FIGURE_TITLES[kind] + (f': {name}' if name else ''))}</h3>"
-                      f"<p class='how'>{html.escape(HOW_TO_READ[kind])}</p>"
-                      f"<p><img src='{path.name}' alt='{html.escape(FIGURE_TITLES[kind])} figure"
-                      f"{html.escape(f' of {name}' if name else '')}'></p>"
-                      for kind, path, name in figs)
-    prov = m["provenance"]
-    body = [
-        "<h1>granstokes: continuum vs DEM</h1>", verdict_html(c),
-        laws_verdict_html(c),
+            figs += [FigureFile("drive", drive_figure(dc, c.scorecard.bands, out, name), name),
+                     FigureFile("profiles", profiles_figure(dc, c.material, out, name), name),
+                     FigureFile("transient", transient_figure(dc, c.material, out, name), name),
+                     FigureFile("fluidity", fluidity_figure(dc, c.material, out, name), name)]
+    c.checks.width.to_csv(out / "width_check.csv", index=False, float_format=CSV_FLOAT)
+    c.checks.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False, float_format=CSV_FLOAT)
+    return figs
+
+
+def sections(c: Comparison, m: dict) -> list[str]:
+    """The report's sections before its figures: verdict, scorecard, conclusions, laws, the scene's checks; and
+    after them (the shell puts the figures first): calibration, drives, the coarse-graining's checks."""
+    names = display_labels(c)
+    return [
+        verdict_html(c), laws_verdict_html(c),
         f"<p>Runs: {html.escape(', '.join(m['runs']))}. Calibration: {html.escape(c.calibration_source)}. "
         f"DEM units: {html.escape(UNITS['dem_units'])}. Inertial number: {html.escape(UNITS['inertial_number'])}.</p>",
         "<h2>Scorecard</h2>", scorecard_html(c),
         f"<p>Bands: {c.scorecard.replicates} calibration replicates per steady prediction (band edges change by at "
         f"most {c.scorecard.edge_stability:.0%} of the band width from half to all replicates); t90 by linearised "
-        "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; 2.</p>",
+        "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; "
+        f"{SIGMA_CONSISTENT:g}.</p>",
         "<h2>Conclusions</h2><ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>",
         "<h2 id='laws'>The paper's laws</h2>", laws_html(c),
         "<h2>The scene's own checks</h2>", scene_html(c),
-        "<h2>Figures</h2>", figures,
-        calibration_section(c),
-        "<h2>Drives</h2>", _table(["drive", "kind", "imposed", "unit", "seeds", "u_w_inf [sqrt(g d)]", "mu_w_inf",
-                                   "t_steady [sqrt(d/g)]", "frames", "dropped frames", "flow reaches the base"],
-                                  drive_rows),
-        "<h2>Definitions</h2>", _table(["name", "unit", "definition"],
-                                       [[html.escape(k), html.escape(u), html.escape(d)]
-                                        for k, (u, d) in DEFINITIONS.items()]),
-        f"<h2>Checks of the coarse-graining ({html.escape(names.get(ch.drive, ch.drive))})</h2>",
-        "<p>Width check: fraction of heights where a field plateaus (relative change within 5 %) going from the next "
-        "smaller kernel width to this one, over the last 30 % of the run (width_check.csv):</p>",
-        _table(["field"] + [f"w = {w:g} d" for w in plateau.columns], plateau_rows),
-        "<p>Against LAMMPS's own 1 d chunk averages (profiles.csv): mean |CG - LAMMPS| / mean |LAMMPS| in the bulk "
-        "(lammps_crosscheck.csv). They differ because LAMMPS bins grain centres (no kernel), puts the virial at grain "
-        "centres (no stress line) and has no wall term; p_mop and tau_mop are method-of-planes values.</p>",
-        _table(["quantity", "relative difference"], cross_rows),
-        "<h2>Provenance</h2>", _table(["item", "value"], [[html.escape(k), fmt_cell(v)]
-                                                         for k, v in prov.items() if k != "inputs"]),
-    ]
-    (out / "index.html").write_text(page("granstokes compare", "".join(body)))
-    return m
+        calibration_section(c), "<h2>Drives</h2>", drives_html(m, names), checks_html(c, names)]
+
+
+def drives_html(m: dict, names: dict) -> str:
+    rows = [[html.escape(names.get(label, label)), d["kind"], fmt(d["imposed"]), html.escape(d["imposed_unit"]),
+             fmt_cell(d["seeds"]), fmt(d["u_w_inf"]["dem"], d["u_w_inf"]["dem_err"]),
+             fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]), fmt(d["t_steady"]), fmt_cell(d["frames"]),
+             fmt_cell(d["dropped_frames"]), "yes" if d["base_confined"] else "no"]
+            for label, d in m["drives"].items()]
+    return table(["drive", "kind", "imposed", "unit", "seeds", "u_w_inf [sqrt(g d)]", "mu_w_inf",
+                  "t_steady [sqrt(d/g)]", "frames", "dropped frames", "flow reaches the base"], rows)
+
+
+def checks_html(c: Comparison, names: dict) -> str:
+    """The coarse-graining's checks on the first drive: the kernel width's plateau and LAMMPS's chunk averages."""
+    ch = c.checks
+    plateau = ch.plateau
+    plateau_rows = [[html.escape(f)] + [f"{v * 100:.0f} %" for v in plateau.loc[f]] for f in plateau.index]
+    cross_rows = [[html.escape(q), f"{v * 100:.1f} %"] for q, v in ch.crosscheck_bulk.items()]
+    return (f"<h2>Checks of the coarse-graining ({html.escape(names.get(ch.drive, ch.drive))})</h2>"
+            "<p>Width check: fraction of heights where a field plateaus (relative change within 5 %) going from the "
+            "next smaller kernel width to this one, over the last 30 % of the run (width_check.csv):</p>"
+            + table(["field"] + [f"w = {w:g} d" for w in plateau.columns], plateau_rows)
+            + "<p>Against LAMMPS's own 1 d chunk averages (profiles.csv): mean |CG - LAMMPS| / mean |LAMMPS| in the "
+            "bulk (lammps_crosscheck.csv). They differ because LAMMPS bins grain centres (no kernel), puts the virial "
+            "at grain centres (no stress line) and has no wall term; p_mop and tau_mop are method-of-planes "
+            "values.</p>" + table(["quantity", "relative difference"], cross_rows))

@@ -42,9 +42,11 @@ from scipy import stats
 from tqdm import tqdm
 
 from .analysis import DriveAnalysis
+from .band import Sensitivity
 from .calibrate import WALL_EXCLUSION
 from .models import Drive, Prediction, SceneModel, Steady
 from .plate import STEADY_LAST
+from .rows import SIGMA_CONSISTENT, Z95, score_row, sigma, tally
 
 OBSERVABLES = {
     "u_w_inf": ("sqrt(g d)", "steady plate speed"),
@@ -53,8 +55,6 @@ OBSERVABLES = {
     "t90": ("sqrt(d/g)", "time to 90 % of the change of the free response"),
     "creep_length": ("d", "e-folding length of u below delta_s"),
 }
-SIGMA_CONSISTENT = 2.0
-Z95 = stats.norm.ppf(0.975)
 #: t90: the running mean over this fraction of the record reaches this fraction of the change
 T90_WINDOW, T90_LEVEL = 0.05, 0.9
 #: a model whose free response over the DEM's final quarter is this far from its steady value is not steady
@@ -64,9 +64,6 @@ MODEL_UNSTEADY = 0.05
 STEADY_OBSERVABLES = ("u_w_inf", "mu_w_inf", "delta_u", "creep_length")
 LAYER_OBSERVABLES = ("delta_u", "creep_length")
 TRANSIENT_OBSERVABLES = ("t90",)
-#: relative step of the central differences of the linearised t90 propagation
-FD_STEP = 1e-3
-PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
 
 
 def t90(t, y) -> float:
@@ -197,41 +194,13 @@ def _material(base: Material, row) -> Material:
                    I_convention="dem", phi=float(row["phi"]))
 
 
-@dataclass(frozen=True)
-class Sensitivity:
-    """A prediction's linear response to the calibration: each parameter ``names[j]`` (the material's, then the
-    model's own) shifted by ``steps[j]`` gives ``shifted[j]`` (a whole Prediction); ``cov`` is the replicates'
-    covariance of those parameters.  A scalar estimate F of a prediction propagates as sqrt(J C J^T), J from
-    ``derivatives`` (F on each shifted prediction) and ``sd`` (nan when a derivative is not finite)."""
-
-    names: tuple[str, ...]
-    steps: tuple[float, ...]
-    cov: np.ndarray
-    shifted: tuple[Prediction, ...]
-
-    def sd(self, derivatives) -> float:
-        """Standard deviation from the derivatives dF/dparameter (one per name, in order)."""
-        j = np.asarray(derivatives, dtype=float)
-        return float(np.sqrt(max(j @ self.cov @ j, 0.0))) if np.all(np.isfinite(j)) else np.nan
-
-    def derivatives(self, estimate, central: float) -> list[float]:
-        """One-sided differences of ``estimate(j)`` (the estimate with parameter j shifted) from ``central``."""
-        return [(estimate(j) - central) / h for j, h in enumerate(self.steps)]
-
-
 def sensitivity(model: SceneModel, material: Material, drive: Drive, times, replicates: pd.DataFrame) -> Sensitivity:
-    """The prediction of ``model`` re-solved with each parameter shifted by FD_STEP of its value (one transient and
-    one steady solve per parameter)."""
-    names = (*PARAMETERS, *([model.parameter] if model.parameter else ()))
-    base = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
-            **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
-    steps = tuple(FD_STEP * abs(base[name]) for name in names)
-    shifted = []
-    for name, h in zip(names, steps):
-        params = {**base, name: base[name] + h}
-        shifted.append(model.at(params).predict(_material(material, params), drive, times))
-    cov = np.atleast_2d(np.cov(replicates[list(names)].to_numpy(), rowvar=False))
-    return Sensitivity(names, steps, cov, tuple(shifted))
+    """The prediction of ``model`` re-solved with each calibrated parameter (the material's, then the model's own)
+    shifted (compare.band: one transient and one steady solve per parameter)."""
+    central = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
+               **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
+    return Sensitivity.of(lambda params: model.at(params).predict(_material(material, params), drive, times),
+                          central, replicates[list(central)].cov())
 
 
 def _linearised(sens: Sensitivity, a: DriveAnalysis, central_series: pd.DataFrame) -> tuple[float, pd.DataFrame]:
@@ -243,10 +212,9 @@ def _linearised(sens: Sensitivity, a: DriveAnalysis, central_series: pd.DataFram
         return np.interp(t, pred.series.t, pred.series[a.response])
 
     central = np.interp(t, central_series.t, central_series[a.response])
-    js = np.array([(response(p) - central) / h for p, h in zip(sens.shifted, sens.steps)])
-    sd = np.sqrt(np.maximum(np.einsum("it,ij,jt->t", js, sens.cov, js), 0.0))
+    sd = sens.series_sd(lambda j: response(sens.shifted[j]), central)
     band = pd.DataFrame({"t": t, "lo": central - Z95 * sd, "hi": central + Z95 * sd})
-    t90_sd = sens.sd(sens.derivatives(lambda j: t90(t, response(sens.shifted[j])), t90(t, central)))
+    t90_sd = sens.sd_of(lambda j: t90(t, response(sens.shifted[j])), t90(t, central))
     return t90_sd, band
 
 
@@ -311,7 +279,7 @@ def _not_scored(obs: str, model: SceneModel, base: str, end_value: float, steady
 def _unmeasurable(measured: Measured, lo: float, hi: float, combined: float) -> str:
     """Why a row's sigma cannot be formed, or "": no DEM error, no band, or no error at all."""
     if not np.isfinite(measured.err):
-        return f"not scored: the DEM's error is not measurable ({measured.how} gives none)"
+        return f"not measurable: no DEM error ({measured.how} gives none)"
     if not (np.isfinite(lo) and np.isfinite(hi)):
         return "not scored: no calibration replicate sustains this drive, so the prediction has no band"
     if not (np.isfinite(combined) and combined > 0):
@@ -378,33 +346,14 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
                 note = ((_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
                          else _not_scored("", model, base, end_value, asymptote))
                         or _unmeasurable(measured, lo, hi, combined))
-                sigma = (measured.value - value) / combined if combined > 0 else np.nan
-                rows.append({"drive": a.label, "observable": obs, "unit": OBSERVABLES[obs][0],
-                             "dem": measured.value, "dem_err": measured.err, "dem_how": measured.how,
-                             "model": model.key, "model_label": model.label, "predicted": value,
-                             "band": [float(lo), float(hi)], "numerical_err": numerical, "sigma": float(sigma),
-                             "verdict": "not scored" if note else
-                             "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees",
-                             "scored": not note, "note": note,
-                             "blind": independent and fitted_on.get(model.key) != a.label,
-                             "asymptote": asymptote if windowed else np.nan})
+                rows.append(score_row(
+                    drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,
+                    dem_how=measured.how, model=model.key, model_label=model.label, predicted=value,
+                    band=[float(lo), float(hi)], numerical_err=numerical, calibration_sd=float(band_sd),
+                    sigma=sigma(measured.value - value, measured.err, band_sd, numerical), note=note,
+                    blind=independent and fitted_on.get(model.key) != a.label,
+                    asymptote=asymptote if windowed else np.nan))
     return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands, sensitivities
-
-
-def tally(rows: pd.DataFrame) -> pd.DataFrame:
-    """Per model, over the scored blind rows that every such model has (same drive and observable): rows,
-    consistent rows, their share and the median |sigma|, best first; empty when no row is shared."""
-    use = rows[rows.scored & rows.blind] if len(rows) else rows
-    if use.empty:
-        return pd.DataFrame(columns=["model", "label", "n", "consistent", "share", "median_abs_sigma"])
-    keys = set.intersection(*(set(zip(g.drive, g.observable)) for _, g in use.groupby("model")))
-    shared = use[[k in keys for k in zip(use.drive, use.observable)]]
-    out = shared.groupby("model", sort=False).agg(
-        label=("model_label", "first"), n=("sigma", "size"),
-        consistent=("verdict", lambda v: int((v == "consistent").sum())),
-        median_abs_sigma=("sigma", lambda v: float(np.median(np.abs(v))))).reset_index()
-    out["share"] = out.consistent / out.n
-    return out.sort_values(["share", "median_abs_sigma"], ascending=[False, True], ignore_index=True)
 
 
 def headline(rows: pd.DataFrame, blind: bool, failure: str, n_drives: int) -> str:

@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from granstokes.continuum.load import Load
 
-from .analysis import DriveAnalysis, DriveSpec, plate_estimates
+from .analysis import DriveAnalysis, plate_estimates
 from .comparison import Checks, DemSide
+from .drive import DriveSpec
 from .plate import PlateRecord
 
 #: floats in every table: six significant digits (far below the DEM's errors)
@@ -35,19 +35,6 @@ UNITS = "DEM units: d = rho_p = g = 1; p, tau in rho_p g d, u in sqrt(g d), t in
 
 def _csv(table: pd.DataFrame, path: Path) -> None:
     table.to_csv(path, index=False, float_format=CSV_FLOAT)
-
-
-def _spec_record(spec: DriveSpec) -> dict:
-    return {"run": str(spec.run), "name": spec.name, "p_w": spec.p_w, "load": spec.load.as_record(),
-            "depth": spec.depth, "plate_mass": spec.plate_mass, "surface_offset": spec.surface_offset,
-            "steps": spec.steps, "transit_time": spec.transit_time, "seeds": spec.seeds, "grains": spec.grains,
-            "dimension": spec.dimension}
-
-
-def _spec(record: dict) -> DriveSpec:
-    return DriveSpec(Path(record["run"]), record["name"], Load.from_record(record["load"], record["p_w"]),
-                     record["depth"], record["plate_mass"], record["surface_offset"], record["steps"],
-                     _number(record["transit_time"]), record["seeds"], record["grains"], record["dimension"])
 
 
 def _number(v) -> float:
@@ -71,7 +58,7 @@ def _json(v):
 
 def write_drive(a: DriveAnalysis, folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
-    record = {"units": UNITS, "spec": _spec_record(a.spec), "t_window": a.t_window, "t_end": a.t_end,
+    record = {"units": UNITS, "spec": a.spec.as_record(), "t_window": a.t_window, "t_end": a.t_end,
               "snapshots": a.snapshots, "samples_how": a.samples_how, "frames": a.frames,
               "dropped_frames": a.dropped_frames, "bulk_tau": a.bulk_tau}
     (folder / "drive.json").write_text(json.dumps(_json(record), indent=1))
@@ -87,7 +74,7 @@ def write_drive(a: DriveAnalysis, folder: Path) -> None:
 
 def read_drive(folder: Path) -> DriveAnalysis:
     record = json.loads((folder / "drive.json").read_text())
-    spec = _spec(record["spec"])
+    spec = DriveSpec.from_record(record["spec"])
     table = pd.read_csv(folder / "plates.csv.gz")
     plates = tuple(PlateRecord(*(g[k].to_numpy() for k in PLATE_COLUMNS)) for _, g in table.groupby("seed"))
     series, steady, slips = plate_estimates(plates, spec.kind)

@@ -10,7 +10,7 @@ from pathlib import Path
 from granstokes.dem import config as dem_config
 from granstokes.dem.estimate import STARTUP, Estimate, duration_text
 from granstokes.dem.layout import CONFIG_TOML, RUN_JSON
-from granstokes.dem.sizing import Plan, count, makespan, plan, ranks_per_bed, speedup
+from granstokes.dem.sizing import Plan, makespan, plan, ranks_per_bed, speedup
 from granstokes.dem.throughput import Throughput, measured
 from granstokes.lib.toml_text import with_entries
 
@@ -24,26 +24,9 @@ FRAMES_PER_TS = 20
 #: atom snapshots per t_s over the first t_s of the fastest drive: the growth window (compare.laws, from three
 #: shear-wave transits to half a t_s) holds tens of frames
 EARLY_FRAMES_PER_TS = 100
-#: the comparison's cost per 2D drive grain-step/s of this machine (dem.throughput: it scales with the probe),
-#: measured beside probes by bench/dem_costs.py --constants (bench/RESULTS.md, "DEM cost estimates"): the
-#: grain-frames coarse-grained per grain-step of a 2D drive (bench/cg_rate.py), and the grain-steps of a 2D drive
-#: worth one drive and model of the model side (its prediction, replicates and bands; bench/compare_cost.py on the
-#: disks study, one process)
-CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
-#: the rest of the comparison per scored drive (its figures and tables, the NGF fit, the analysis beyond the
-#: coarse-graining), in grain-steps of a 2D drive: the smoke study's comparison less the two terms above, over its
-#: 4 drives (bench/dem_costs.py; checked on a subset of the disks study)
-REPORT_DRIVE_STEPS = 5.9e7
 #: bytes of the report per scored drive: its figures, tables and predictions (the smoke study's report, 10 MB over 4
 #: drives; bench/dem_costs.py)
 REPORT_BYTES_PER_DRIVE = 2.5e6
-#: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
-MODELS = 3
-#: an oscillating study's comparison per drive, in grain-steps of a 2D drive: its models' solves (central, coarse and
-#: at each shifted calibrated parameter, local and NGF) and its share of the report, no dump read; the
-#: oscillating-disks study's comparison, 4.0 min on 2 processes for 20 drives (7.2 CPU min) beside probes of 10 M
-#: grain-steps/s, through the same contention model as the beds
-OSCILLATION_DRIVE_STEPS = 1.6e8
 #: an oscillating plate's run: LAMMPS's depth profiles this many times per period (the phase-resolved profiles
 #: of compare.oscillation), the plate's record PLATE_PER_PROFILE times as often, atom snapshots once a period
 PROFILES_PER_PERIOD, PLATE_PER_PROFILE = 24, 4
@@ -181,20 +164,20 @@ class StudyPlan:
         return sum(r.plan.n_grains * len(r.plan.config.seeds) * r.plan.atom_frames(d)
                    for r in self.runs.values() for d in r.plan.drives)
 
+    def experiment(self):
+        """The comparison's experiment (compare.experiment's registry, by the drives' loads)."""
+        from granstokes.compare.experiment import experiment_for
+
+        return experiment_for(d.load for r in self.runs.values() for d in r.plan.drives)
+
     def scored_drives(self) -> int:
         """The drives compared with the models (the width check's are analysed only)."""
         return sum(len(r.plan.drives) for label, r in self.runs.items() if not label.endswith(WIDE))
 
     def comparison_seconds(self, jobs: int, speed: Throughput | None = None) -> float:
-        """The comparison stage: the coarse-graining of every snapshot (one process), each scored drive's model
-        side (MODELS models) as a unit of work over ``jobs`` processes (compare.comparison.model_drives), then its
-        report (one process)."""
-        speed = speed or measured()
-        rate, drives = speed.rate(2, "drive"), self.scored_drives()
-        if self.study.oscillating:
-            return makespan([OSCILLATION_DRIVE_STEPS / rate] * drives, jobs, contention=speed.contention)
-        model = makespan([MODELS * MODEL_DRIVE_STEPS / rate] * drives, jobs, contention=speed.contention)
-        return (self.grain_frames() / CG_PER_DRIVE_STEP + drives * REPORT_DRIVE_STEPS) / rate + model
+        """The comparison stage on this machine, as the study's experiment estimates it (compare.experiment)."""
+        return self.experiment().comparison_seconds(self.scored_drives(), self.grain_frames(), jobs,
+                                                    speed or measured())
 
     def lines(self, jobs: int, out: Path | None = None) -> list[str]:
         """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole (what is left of it in
@@ -213,9 +196,7 @@ class StudyPlan:
         left = " (what is left)" if self.done(out) else ""
         beds, comparison = self.cost_seconds(jobs, out), self.comparison_seconds(jobs)
         lines.append(f"  the study's beds{left}: about {duration_text(beds)} with {jobs} job(s)")
-        what = (f"{self.scored_drives()} drive(s), each model's solves; no dump is read" if self.study.oscillating else
-                f"{count(self.grain_frames())} grain-frames coarse-grained, {self.scored_drives()} drive(s) x {MODELS} "
-                "models")
+        what = self.experiment().comparison_work(self.scored_drives(), self.grain_frames())
         lines.append(f"  the comparison: about {duration_text(comparison)} ({what})")
         return lines
 

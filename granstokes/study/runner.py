@@ -141,24 +141,16 @@ class StudyRunner:
 
     # --- stage 3: the comparison -----------------------------------------------------------------------
     def compare(self, sp: StudyPlan, calibration: Path) -> dict:
-        scored = [label for label in sp.runs if not label.endswith(WIDE)]
-        if self.study.oscillating:
-            from granstokes.compare.oscillation import compare_oscillations, dem_side
-            from granstokes.compare.oscillation_report import write_report as write_oscillation
+        from granstokes.compare.experiment import experiment_for_runs
 
-            dem = dem_side([sp.folder(self.out, label) for label in scored], root=self.out)
-            ngf_from = None if self.study.ngf_from is None else as_given(self.study.ngf_from)
-            comparison = compare_oscillations(dem, as_given(calibration), ngf_from, jobs=self.jobs)
-            with staging.staged(self.out, COMMAND, keep=True) as work:
-                return write_oscillation(comparison, work)
-        from granstokes.compare.comparison import build
-        from granstokes.compare.report import write_report
-
-        comparison = build([sp.folder(self.out, label) for label in scored], calibration=as_given(calibration),
-                           progress=self.progress, jobs=self.jobs, root=self.out)
+        folders = [sp.folder(self.out, label) for label in sp.runs if not label.endswith(WIDE)]
+        options = {"ngf_from": as_given(self.study.ngf_from)} if self.study.ngf_from is not None else {}
+        experiment = experiment_for_runs(folders).create(as_given(calibration), jobs=self.jobs, progress=self.progress,
+                                                          **options)
+        result = experiment.run(experiment.analyse(folders, root=self.out))
         with staging.staged(self.out, COMMAND, keep=True) as work:
-            metrics = write_report(comparison, work)
-        checks = [width_check(sp.folder(self.out, label), sp.folder(self.out, label[:-len(WIDE)]), comparison,
+            metrics = experiment.write(result, work)
+        checks = [width_check(sp.folder(self.out, label), sp.folder(self.out, label[:-len(WIDE)]), result,
                               self.out)
                   for label in sp.runs if label.endswith(WIDE)]
         self.record(lambda d: d.update(width_check=[row for rows in checks for row in rows]))
@@ -215,7 +207,8 @@ def width_check(wide: Path, normal: Path, comparison, root: Path) -> list[dict]:
     ``comparison`` (its runs named relative to ``root``): the free response's steady value in both and their
     difference in units of the combined error (|z| > 2: the box's width changes the answer).  The wide drives are
     analysed, never scored."""
-    from granstokes.compare.analysis import analyse_drive, drive_specs
+    from granstokes.compare.analysis import analyse_drive
+    from granstokes.compare.drive import drive_specs
 
     normal_by_name = {dc.dem.spec.name: dc.dem for dc in comparison.drives
                       if (Path(root) / dc.dem.spec.run).resolve() == Path(normal).resolve()}

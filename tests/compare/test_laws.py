@@ -6,11 +6,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from granstokes.compare.analysis import DriveAnalysis, DriveSpec
+from granstokes.compare.analysis import DriveAnalysis
 from granstokes.compare.comparison import DriveComparison
-from granstokes.compare.laws import GROWTH_END, KEYS, LAWS, laws
+from granstokes.compare.drive import DriveSpec
+from granstokes.compare.laws import GROWTH_END, LAWS, laws
 from granstokes.compare.models import Prediction, Steady
 from granstokes.compare.plate import PlateRecord
+from granstokes.compare.rows import LAW_KEYS
 from granstokes.continuum.crossing import layer_measures
 from granstokes.continuum.load import Load
 from granstokes.continuum.scales import Material, Scales
@@ -69,7 +71,7 @@ def row(table: pd.DataFrame, law: str, quantity_starts: str = "") -> pd.Series:
 
 def test_every_law_has_a_row_with_every_key():
     table = laws([drive()], resamples=20)
-    assert list(table.columns) == list(KEYS)
+    assert list(table.columns) == list(LAW_KEYS)
     assert {(law.name, law.quantity) for law in LAWS} == set(zip(table.law, table.quantity))
     for r in table.itertuples():
         assert r.verdict in ("consistent", "disagrees", "not measurable", "not predicted")
@@ -148,7 +150,8 @@ def test_the_calibration_spread_propagates_into_a_law_s_band_and_sigma():
     """Two calibration parameters that scale the model's layer by (1 + c_j theta_j): the prefactor's standard
     deviation is P sqrt(c C c^T) for the replicates' covariance C, the band is predicted -+ 1.96 of it, and sigma
     divides by the DEM's and the calibration's errors in quadrature."""
-    from granstokes.compare.scorecard import Z95, Sensitivity
+    from granstokes.compare.band import Sensitivity
+    from granstokes.compare.rows import Z95
 
     c, steps = np.array([0.5, -2.0]), (0.01, 0.02)
     cov = np.array([[0.04, 0.01], [0.01, 0.02]])
@@ -169,7 +172,7 @@ def test_the_calibration_spread_propagates_into_a_law_s_band_and_sigma():
 def test_a_law_undefined_at_a_shifted_parameter_has_no_band_and_says_so():
     """A shifted prediction whose layer never grows (u = 0) leaves the prefactor undefined there: the row is
     not predicted with the reason, never a sigma over an unknown band."""
-    from granstokes.compare.scorecard import Sensitivity
+    from granstokes.compare.band import Sensitivity
 
     base = drive(k=1.0, noise=0.1, rng=np.random.default_rng(3))
     still = base.predictions[0]

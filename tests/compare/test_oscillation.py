@@ -8,7 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 from granstokes.compare import oscillation as osc
-from granstokes.compare import oscillation_report, oscillation_tables
+from granstokes.compare import oscillation_tables
+from granstokes.compare.drive import DriveSpec
+from granstokes.compare.oscillation_experiment import OscillatingPlate
 from granstokes.continuum.load import Load
 from granstokes.continuum.scales import Material
 
@@ -18,15 +20,15 @@ NUMERICS = replace(osc.NUMERICS, n_cells=40)  # the test's: percent-level, a few
 NOISE = 0.01  # relative noise of a bed's plate record
 
 
-def _drive(kind: str) -> osc.OscillatingDrive:
+def _drive(kind: str) -> DriveSpec:
     held = Load(kind, P_W, mu_w=0.45) if kind == "stress" else Load(kind, P_W, u_w=2.0)
     t_s = held.scales(MATERIAL).t_s
     load = replace(held, omega=1.0 / t_s)
-    return osc.OscillatingDrive(Path("runs/p20"), f"{kind}-wave", load, DEPTH, 1.0, 0.0, t_s,
-                                CYCLES * load.period, ())
+    return DriveSpec(Path("runs/p20"), f"{kind}-wave", load, DEPTH, plate_mass=1.0, surface_offset=0.0, steps=0,
+                     transit_time=np.nan, seeds=BEDS, grains=0, dimension=2, t_s=t_s, duration=CYCLES * load.period)
 
 
-def _beds(drive: osc.OscillatingDrive, material: Material) -> list[osc.Record]:
+def _beds(drive: DriveSpec, material: Material) -> list[osc.Record]:
     """BEDS noisy copies of the local model's solution (its profiles at 1 d planes), as dem_record gives them."""
     rec = osc.model_record(drive, material, "local", None, np.arange(0.5, DEPTH, 1.0), NUMERICS)
     rng = np.random.default_rng(7)
@@ -81,7 +83,7 @@ def test_rows_and_drives_carry_the_frequency_amplitude_and_lag(scored, tmp_path)
     rows = osc.scorecard([dem], {(label, "local"): same}, setup, "no NGF amplitude given")
     comparison = osc.OscillationComparison(("runs/p20",), setup, "test", "no NGF", (dem,),
                                            {(label, "local"): same}, rows, osc.laws(rows))
-    m = oscillation_report.write_report(comparison, tmp_path)
+    m = OscillatingPlate.write(comparison, tmp_path)
     keys = {"drive", "observable", "unit", "dem", "dem_err", "model", "predicted", "band", "sigma", "verdict",
             "scored", "note", "omega", "amplitude", "phase_lag"}
     for row in m["scorecard"]:

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from granstokes.compare.comparison import build
-from granstokes.compare.report import display_label, fmt, fmt_band, nearest_frame, suptitle, write_report
+from granstokes.compare.report import display_label, fmt, fmt_band, nearest_frame, suptitle
+from granstokes.compare.stokes_experiment import StokesDrives
 from granstokes.continuum.paper.report import write_continuum_report
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -121,8 +121,9 @@ def check_page(path: Path) -> Page:
 @pytest.fixture(scope="module")
 def report(smoke_run, smoke_calibration, tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
-    comparison = build([smoke_run], progress=False, calibration=smoke_calibration)
-    m = write_report(comparison, out / "compare")
+    experiment = StokesDrives(smoke_calibration, progress=False)
+    comparison = experiment.run(experiment.analyse([smoke_run]))
+    m = StokesDrives.write(comparison, out / "compare")
     return comparison, m, out
 
 
@@ -142,11 +143,12 @@ def test_scorecard_contract(report):
     response = "u_w_inf" if next(iter(m["drives"].values()))["kind"] == "stress" else "mu_w_inf"
     assert {(response, "local"), ("delta_u", "local"), ("t90", "local"), (response, "paper")} <= observables
     assert {"slip", "slip_err", "tau_bulk", "elastic_start"} <= set(next(iter(m["drives"].values())))
-    from granstokes.compare.laws import KEYS, LAWS
+    from granstokes.compare.laws import LAWS
+    from granstokes.compare.rows import LAW_KEYS
 
     assert {(law.name, law.quantity) for law in LAWS} == {(r["law"], r["quantity"]) for r in m["laws"]}
     for r in m["laws"]:
-        assert set(KEYS) <= set(r)
+        assert set(LAW_KEYS) <= set(r)
         assert (r["verdict"] in ("consistent", "disagrees")) == (r["note"] == "")
         if r["note"] == "":
             assert all(isinstance(r[k], float) and math.isfinite(r[k]) for k in ("dem", "dem_err", "predicted"))
@@ -206,14 +208,15 @@ def test_numbers_labels_and_frames_a_reader_trusts():
 def test_drives_modelled_in_forked_processes_match_one_process(report):
     """The model side of every drive (predictions, replicates, bands, rows) is the same whether the drives run
     in one process or in two forked ones, in the drives' order."""
-    from granstokes.compare.comparison import ModelSide, model_drives
+    from granstokes.compare.comparison import ModelSide, model_drive
+    from granstokes.compare.experiment import map_drives
     from granstokes.compare.models import LOCAL, PAPER
 
     c, _, _ = report
     a = c.drives[0].dem
     side = ModelSide(c.material, (LOCAL, PAPER), "", c.replicates.head(12), {}, True)
-    one = model_drives([a, a], side, jobs=1, progress=False)
-    two = model_drives([a, a], side, jobs=2, progress=False)
+    one = map_drives(lambda d: model_drive(d, side), [a, a], jobs=1, progress=False)
+    two = map_drives(lambda d: model_drive(d, side), [a, a], jobs=2, progress=False)
     for (head1, rows1, edge1, _), (head2, rows2, edge2, _) in zip(one, two):
         assert [p.model for p in head1[1]] == [p.model for p in head2[1]] == ["local", "paper"]
         assert len(rows1) >= 4
@@ -226,14 +229,13 @@ def test_a_comparison_from_the_reports_tables_matches_the_one_from_the_dumps(rep
     """The report's tables/ hold the DEM side: compared again from them (no dumps), every scorecard row has the
     same DEM value, error and prediction as from the dumps (to the tables' six significant digits), and the
     tables are small."""
-    from granstokes.compare.comparison import compare
-    from granstokes.compare.tables import read
 
     c, _, out = report
     folder = out / "compare" / "tables"
     size = sum(f.stat().st_size for f in folder.rglob("*") if f.is_file())
     assert 0 < size < 2_000_000
-    again = compare(read(folder), progress=False, calibration=smoke_calibration)
+    experiment = StokesDrives(smoke_calibration, progress=False)
+    again = experiment.run(experiment.read_tables(folder))
     a, b = c.scorecard.rows, again.scorecard.rows
     assert len(a) == len(b) >= 4
     assert list(a.observable) == list(b.observable) and list(a.model) == list(b.model)

@@ -112,10 +112,9 @@ def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_sp
     """The smoke study's dry run prints the comparison (every snapshot of every bed coarse-grained, the width
     check's too; each scored drive's models a unit of work over the jobs, its report) and one total: the
     calibrations, the beds, the comparison and the start-up, with the disk."""
+    from granstokes.compare.stokes_experiment import CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS, MODELS, REPORT_DRIVE_STEPS
     from granstokes.dem.calibrate import plan_calibration
     from granstokes.dem.estimate import STARTUP, duration_text
-
-    from granstokes.study.plan import CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS, MODELS, REPORT_DRIVE_STEPS
 
     assert granstokes_main(["study", "--preset", "smoke", "--out", str(tmp_path / "s"), "--jobs", "2",
                             "--dry-run"]) == 0

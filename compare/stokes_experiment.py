@@ -1,0 +1,103 @@
+"""Stokes' first problem as an experiment (compare.experiment): plates set in motion by a held stress or a held
+speed, coarse-grained from the beds' dumps (compare.comparison.analyse), predicted by local mu(I), the paper's
+model and NGF from the calibration (compare.comparison.prepare, model_drive, conclude), scored drive by drive
+(compare.scorecard) and law by law (compare.laws), rendered by compare.report and compare.metrics."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from granstokes.dem.sizing import count, makespan
+
+from . import calibrate, metrics, report, tables
+from .comparison import DemSide, analyse, check_grains, conclude, model_drive, prepare, run_grains
+from .experiment import Experiment
+from .profiles import CGSettings
+
+#: the comparison's cost per 2D drive grain-step/s of this machine (dem.throughput: it scales with the probe),
+#: measured beside probes by bench/dem_costs.py --constants (bench/RESULTS.md, "DEM cost estimates"): the
+#: grain-frames coarse-grained per grain-step of a 2D drive (bench/cg_rate.py), and the grain-steps of a 2D drive
+#: worth one drive and model of the model side (its prediction, replicates and bands; bench/compare_cost.py on the
+#: disks study, one process)
+CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
+#: the rest of the comparison per scored drive (its figures and tables, the NGF fit, the analysis beyond the
+#: coarse-graining), in grain-steps of a 2D drive: the smoke study's comparison less the two terms above, over its
+#: 4 drives (bench/dem_costs.py; checked on a subset of the disks study)
+REPORT_DRIVE_STEPS = 5.9e7
+#: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
+MODELS = 3
+
+
+class StokesDrives(Experiment):
+    """Held loads: ``fit_on_drives`` fits mu(I) on the drives' steady windows instead of a calibration (a
+    restatement, never scored as support); ``settings`` the coarse-graining's."""
+
+    name = "stokes"
+    title = "continuum vs DEM: Stokes' first problem"
+    problem = "Stokes' first problem: a plate set in motion by a held stress or a held speed"
+    tables_marker = tables.DEM_JSON
+    titles = report.FIGURE_TITLES
+    how_to_read = report.HOW_TO_READ
+    definitions = metrics.DEFINITIONS
+
+    def __init__(self, calibration: str | Path | None = None, *, fit_on_drives: bool = False,
+                 settings: CGSettings = CGSettings(), jobs: int = 1, progress: bool = True):
+        super().__init__(calibration, jobs=jobs, progress=progress)
+        if (calibration is None) != fit_on_drives:
+            raise ValueError("--calibration is required: a calibration.json of granstokes dem calibrate (an "
+                             "independent plane-shear calibration of the same grains); or pass --fit-on-drives for a "
+                             "fit on the drives that is never scored as support (not both)")
+        self.settings = settings
+        self.independent = calibrate.load(calibration) if calibration is not None else None
+
+    @classmethod
+    def accepts(cls, load) -> bool:
+        return not load.oscillating
+
+    @classmethod
+    def comparison_seconds(cls, drives: int, grain_frames: float, jobs: int, speed) -> float:
+        """The coarse-graining of every snapshot (one process), each drive's model side (MODELS models) as a unit
+        of work over ``jobs`` processes, then its report (one process)."""
+        rate = speed.rate(2, "drive")
+        model = makespan([MODELS * MODEL_DRIVE_STEPS / rate] * drives, jobs, contention=speed.contention)
+        return (grain_frames / CG_PER_DRIVE_STEP + drives * REPORT_DRIVE_STEPS) / rate + model
+
+    @classmethod
+    def comparison_work(cls, drives: int, grain_frames: float) -> str:
+        return f"{count(grain_frames)} grain-frames coarse-grained, {drives} drive(s) x {MODELS} models"
+
+    def analyse(self, runs, root: Path | None = None) -> DemSide:
+        if self.independent is not None:  # a calibration of other grains is refused before any coarse-graining
+            check_grains(self.independent, run_grains(runs))
+        return analyse(runs, self.settings, self.progress, root)
+
+    def read_tables(self, folder: Path) -> DemSide:
+        return tables.read(folder)
+
+    @classmethod
+    def write_tables(cls, result, folder: Path) -> None:
+        tables.write(result.dem, folder)
+
+    def _prepare(self, dem: DemSide):
+        return dem, *prepare(dem, self.independent)
+
+    def _units(self, dem, setup) -> list:
+        return list(dem.drives)
+
+    def _predict(self, drive, setup):
+        return model_drive(drive, setup[1])
+
+    def _conclude(self, dem, setup, predicted):
+        _, side, kept = setup
+        return conclude(dem, side, kept, predicted, self.settings)
+
+    @classmethod
+    def metrics(cls, result) -> dict:
+        return metrics.metrics(result)
+
+    @classmethod
+    def files(cls, result, out: Path):
+        return report.files(result, out)
+
+    @classmethod
+    def sections(cls, result, m: dict) -> list[str]:
+        return report.sections(result, m)
