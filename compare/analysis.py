@@ -21,6 +21,7 @@ import pandas as pd
 from granstokes.continuum.crossing import depth_at_fraction, layer_measures
 from granstokes.continuum.load import Load
 from granstokes.dem import layout
+from granstokes.dem.sizing import sized_drives
 
 from .calibrate import WALL_EXCLUSION
 from .models import Drive
@@ -96,11 +97,10 @@ def drive_specs(run_dir: Path) -> list[DriveSpec]:
         raise ValueError(f"{run_dir}: run not complete ({', '.join(unfinished)}); resume it first")
     plate = meta["plate"]
     specs = []
-    for d in meta["sizing"]["drives"]:
-        folders = tuple(DriveFolder(layout.drive_dir(run_dir, s, d["name"])) for s in meta["seeds"])
-        load = Load.from_record(d, float(meta["config"]["p_w"]))
-        specs.append(DriveSpec(run_dir, d["name"], load, float(meta["sizing"]["depth"]), float(plate["mass_per_area"]),
-                               float(plate["surface_offset"]), int(d["steps"]),
+    for d in sized_drives(meta):
+        folders = tuple(DriveFolder(layout.drive_dir(run_dir, s, d.drive.name)) for s in meta["seeds"])
+        specs.append(DriveSpec(run_dir, d.drive.name, d.load, float(meta["sizing"]["depth"]),
+                               float(plate["mass_per_area"]), float(plate["surface_offset"]), d.steps,
                                float(meta["sizing"].get("elastic_start", {}).get("transit_time", np.nan)),
                                len(folders), len(folders[0].grains), folders[0].dimension, folders))
     return specs

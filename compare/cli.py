@@ -70,17 +70,16 @@ def run_compare(args) -> int:
 
 def _oscillating(runs, tables) -> bool:
     """Whether the runs' (or the tables') drives are oscillating plates: all of them or none (ValueError)."""
-    from granstokes.continuum.load import Load
     from granstokes.dem.layout import RUN_JSON
+    from granstokes.dem.sizing import sized_drives
 
     from .oscillation_tables import DRIVES_JSON
     if tables is not None:
         return (tables / DRIVES_JSON).is_file()
     kinds = set()
     for run in runs:
-        meta = json.loads((run / RUN_JSON).read_text())
-        drives = meta.get("sizing", {}).get("drives", [])  # a run not yet sized has none: its own error follows
-        kinds |= {Load.from_record(d, meta["config"]["p_w"]).oscillating for d in drives}
+        # a run not yet sized has no drives: its own error follows
+        kinds |= {d.load.oscillating for d in sized_drives(json.loads((run / RUN_JSON).read_text()))}
     require(len(kinds) <= 1, "RUN_DIR", "runs whose drives all oscillate or all are held (Stokes' first problem)",
             "both kinds")
     return kinds == {True}

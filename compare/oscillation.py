@@ -34,6 +34,7 @@ from granstokes.continuum.ngf import NonlocalFluidity
 from granstokes.continuum.rules import YieldRule
 from granstokes.continuum.scales import Material
 from granstokes.dem import layout
+from granstokes.dem.sizing import sized_drives
 
 from granstokes.lib.executor import forked_pool
 from granstokes.lib.validate import require
@@ -103,13 +104,12 @@ def oscillating_drives(run_dir: Path, root: Path | None = None) -> list[Oscillat
     require(not unfinished, str(run_dir), "a complete run (resume it first)", unfinished)
     name = run_dir.relative_to(root) if root is not None else run_dir
     out = []
-    for d in meta["sizing"]["drives"]:
-        load = Load.from_record(d, float(meta["config"]["p_w"]))
-        if load.oscillating:
-            out.append(OscillatingDrive(name, d["name"], load, float(meta["sizing"]["depth"]),
+    for d in sized_drives(meta):
+        if d.load.oscillating:
+            out.append(OscillatingDrive(name, d.drive.name, d.load, float(meta["sizing"]["depth"]),
                                         float(meta["plate"]["mass_per_area"]), float(meta["plate"]["surface_offset"]),
-                                        float(d["expected"]["t_s"]), float(d["duration"]),
-                                        tuple(layout.drive_dir(run_dir, s, d["name"]) for s in meta["seeds"])))
+                                        d.scales.t_s, d.duration,
+                                        tuple(layout.drive_dir(run_dir, s, d.drive.name) for s in meta["seeds"])))
     return out
 
 

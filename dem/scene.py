@@ -40,7 +40,7 @@ from .layout import (
     PROFILE_BIN,
     RESTART_DIR,
 )
-from .sizing import DrivePlan, Plan
+from .sizing import DriveSizing, Plan
 
 SKIN = 0.3  # neighbor skin in d
 PLATE_DIAMETER = 1.0  # d: the plate's glued grains, bed-like (measured slip: bench/RESULTS.md)
@@ -294,7 +294,7 @@ read_restart {restart}
 TRACKING_STEPS = 100
 
 
-def _drive_forces(plan: Plan, drive: DrivePlan, fresh: bool) -> tuple[str, str]:
+def _drive_forces(plan: Plan, drive: DriveSizing, fresh: bool) -> tuple[str, str]:
     """(description, integration block) of a drive.  The plate's x force: tau_w A (an imposed stress, times
     sin(omega t) when it oscillates); none with the x motion held at u_w (a held speed); for an oscillating speed
     the tracking force M du_w/dt minus the bed's pull on the plate (compute plate_pull, summed before the load is
@@ -375,7 +375,7 @@ fix plate_out all print {every} "{fmt}" file {PLATE_CSV} screen no title "{",".j
 """
 
 
-def _dumps(plan: Plan, drive: DrivePlan, fresh: bool) -> str:
+def _dumps(plan: Plan, drive: DriveSizing, fresh: bool) -> str:
     iv = plan.intervals
     names = " ".join(f"colname {i + 1} {n}" for i, n in enumerate(CONTACT_COLUMNS))
     early = "" if not iv["early"] else f"""
@@ -411,7 +411,7 @@ fix profiles bed ave/chunk {iv["plate"]} {nrep} {iv["profiles"]} bins density/nu
 """)
 
 
-def drive_script(plan: Plan, drive: DrivePlan, restart: str, fresh: bool, outputs: bool = True) -> str:
+def drive_script(plan: Plan, drive: DriveSizing, restart: str, fresh: bool, outputs: bool = True) -> str:
     """Drive phase from ``restart``; ``fresh`` sets the plate speed of a speed drive (not when resuming);
     ``outputs=False`` gives the bare run used to measure the harness overhead."""
     iv = plan.intervals
