@@ -191,10 +191,3 @@ def load(config: str | None, preset: str | None, sets=()) -> tuple[Study, str]:
     return parse(text, Path(config).resolve().parent if config is not None else PRESET_BASE), text
 
 
-def rigidity(kappa: float, contact: str, p_max: float, p_w: float) -> float:
-    """kappa at p_w of grains whose kappa is ``kappa`` at p_max (one stiffness k_n: Hooke k_n = kappa p,
-    Hertz k_n = 2 kappa^1.5 p)."""
-    ratio = p_max / p_w
-    return kappa * (ratio if contact == "hooke" else ratio ** (2 / 3))
-
-

@@ -10,13 +10,14 @@ from pathlib import Path
 
 from granstokes.continuum.scales import Material
 from granstokes.dem import config as dem_config
+from granstokes.dem.contact import rigidity
 from granstokes.dem.estimate import STARTUP, Estimate, duration_text
 from granstokes.dem.layout import CONFIG_TOML, RUN_JSON
 from granstokes.dem.sizing import Plan, count, makespan, plan, ranks_per_bed, size_drive, speedup
 from granstokes.dem.throughput import Throughput, measured
 from granstokes.lib.toml_text import with_entries
 
-from .config import Study, rigidity, wave_label
+from .config import Study, wave_label
 
 RUNS = "runs"
 WIDE = "-wide"  # the width check's run: label and name suffix
