@@ -19,6 +19,7 @@ from pathlib import Path
 
 from granstokes.dem import config
 from granstokes.dem.runner import run
+from granstokes.dem.sizing import plan
 
 HERE = Path(__file__).resolve().parent
 REPEATS = 1  # each configuration costs ~2 min of both cores: one interleaved pass
@@ -32,7 +33,7 @@ def demo_dem(root: Path, jobs: int, np_: int) -> float:
     t0 = time.monotonic()
     for name in DEMO:
         cfg, text = config.preset(name)
-        result = run(cfg, text, root / name, np=np_, jobs=jobs, progress=False)
+        result = run(plan(cfg), text, root / name, np=np_, jobs=jobs, progress=False)
         assert result.ok, result.message
     return time.monotonic() - t0
 

@@ -274,7 +274,7 @@ def run_forward(out: Path, jobs: int = 2):
         meta = folder / RUN_JSON
         stages = json.loads(meta.read_text()).get("stages", {}) if meta.exists() else {}
         if not stages or any(st.get("status") != "complete" for st in stages.values()):
-            result = run(dem_config.parse(r.text), r.text, folder, resume=meta.exists(), progress=False, jobs=jobs)
+            result = run(r.plan, r.text, folder, resume=meta.exists(), progress=False, jobs=jobs)
             if result.status != "complete":
                 raise RuntimeError(f"{label}: {result.status} {result.message}")
     return sp

@@ -51,13 +51,13 @@ def _sets(*entries: str) -> list[str]:
 
 
 def _calibration_config(study: str, p_w: float) -> Path:
-    """The study's calibration config at p_w (granstokes.study.plan.calibration_text), written for dem calibrate."""
+    """The study's calibration config at p_w (granstokes.study.plan.calibration_config), written for dem calibrate."""
     from granstokes.study.config import parse, preset_text
-    from granstokes.study.plan import calibration_text
+    from granstokes.study.plan import calibration_config
 
     path = SCRATCH / f"calibration-{study}-p{p_w:g}.toml"
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(calibration_text(parse(preset_text(study)), p_w))
+    path.write_text(calibration_config(parse(preset_text(study)), p_w)[1])
     return path
 
 

@@ -40,11 +40,10 @@ def main() -> None:
     ap.add_argument("--run", type=Path, help="existing quick run folder")
     args = ap.parse_args()
     cfg, text = config.preset("quick")
-    out = args.run
+    out, p = args.run, plan(cfg)
     if out is None:
         out = Path(tempfile.mkdtemp(prefix="dem-quick-")) / "quick"
-        assert run(cfg, text, out).ok
-    p = plan(cfg)
+        assert run(p, text, out).ok
     fig, ax = plt.subplots(2, 2, figsize=(11, 8))
     for dp, colour in zip(p.drives, ("C0", "C1")):
         d = out / "seed-1" / dp.drive.name

@@ -74,7 +74,7 @@ def scaling(root: Path) -> dict:
         walls, steps, runs = {}, {}, []
         for rep in range(REPEATS):
             for np_ in (1, 2):
-                result = run(cfg, text, root / f"{name}-np{np_}-{rep}", np=np_, jobs=1, progress=False)
+                result = run(p, text, root / f"{name}-np{np_}-{rep}", np=np_, jobs=1, progress=False)
                 assert result.ok, result.message
                 runs.append({"np": np_, "wall": bed_seconds(result), "steps": stage_steps(result)})
                 if bed_seconds(result) < walls.get(np_, math.inf):
@@ -100,7 +100,7 @@ def study_beds(root: Path, seeds: list[int], jobs: int, reverse: bool):
     sp = plan_study(study, material, "the smoke preset's nominal material")
     runners, tasks = {}, []
     for label, r in sp.runs.items():
-        runner, meta = begin(r.plan.config, r.text, root / label, np=1, progress=False, jobs=jobs)
+        runner, meta = begin(r.plan, r.text, root / label, np=1, progress=False, jobs=jobs)
         runners[label] = runner
         tasks += runner.bed_tasks(meta, prefix=f"{label}/")
     costs = sorted((t.cost for t in tasks), reverse=not reverse)

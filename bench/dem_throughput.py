@@ -25,7 +25,7 @@ from pathlib import Path
 
 from granstokes.dem import config, lammps_env, scene
 from granstokes.dem.runner import Runner, _Lammps, run
-from granstokes.dem.sizing import plan
+from granstokes.dem.sizing import plan, sized_drives
 
 HERE = Path(__file__).resolve().parent
 REPEATS = 3  # best of: the 2 cores may be shared
@@ -67,7 +67,7 @@ def harness_drive(cfg, text: str, prepared: Path, work: Path, repeats: int = REP
     """Wall time of the harness's drive stage (all outputs, progress parsing, merge) from ``prepared``."""
     walls = []
     for k in range(repeats):
-        runner = Runner(cfg, text, work / f"h{k}", 2, None, False)
+        runner = Runner(plan(cfg), text, work / f"h{k}", 2, None, False)
         runner.out.mkdir(parents=True)
         meta = runner.new_metadata()
         t0 = time.monotonic()
@@ -78,7 +78,7 @@ def harness_drive(cfg, text: str, prepared: Path, work: Path, repeats: int = REP
 
 def prepared_bed(text: str, out: Path) -> tuple:
     cfg = config.parse(text)
-    result = run(cfg, text, out, np=2, progress=False)
+    result = run(plan(cfg), text, out, np=2, progress=False)
     assert result.ok, result.message
     return cfg, result
 
@@ -94,7 +94,7 @@ def main() -> dict:
     # quick scene, stress drive shortened to 4 time units; harness run with every output
     quick = config.preset_text("quick").replace("duration_ts = 10.0", "duration = 4.0")
     cfg, harness = prepared_bed(quick, root / "quick")
-    steps = harness.metadata["sizing"]["drives"][0]["steps"]
+    steps = sized_drives(harness.metadata)[0].steps
     prepared = root / "quick" / "seed-1" / "prepare" / "prepared.restart"
     serial = bare_run(cfg, prepared, root / "bare1", 1, steps)
     mpi2 = bare_run(cfg, prepared, root / "bare2", 2, steps)

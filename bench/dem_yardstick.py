@@ -96,7 +96,7 @@ def preset_text(name: str, pair_style: str) -> str:
 def prepared(text: str, out: Path) -> Path:
     """A bed of the config ``text`` (its first seed) prepared by the harness in ``out``."""
     cfg = config.parse(text)
-    runner = Runner(cfg, text, out, 1, None, False)
+    runner = Runner(plan(cfg), text, out, 1, None, False)
     runner.out.mkdir(parents=True)
     return runner.prepare(cfg.seeds[0], runner.new_metadata())
 

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 from granstokes.continuum.load import Load
 from granstokes.dem import layout
+from granstokes.dem.sizing import sized_drives
 
 from .models import Drive
 from .reader import ATOMS, DriveFolder
@@ -122,18 +123,16 @@ def drive_specs(run_dir: Path, root: Path | None = None) -> list[DriveSpec]:
     name = run_dir.resolve().relative_to(Path(root).resolve()) if root is not None else run_dir
     sizing, plate = meta["sizing"], meta["plate"]
     specs = []
-    for d in sizing["drives"]:
-        folders = tuple(layout.drive_dir(run_dir, s, d["name"]) for s in meta["seeds"])
+    for d in sized_drives(meta):
+        folders = tuple(layout.drive_dir(run_dir, s, d.drive.name) for s in meta["seeds"])
         specs.append(DriveSpec(
-            name, d["name"], Load.from_record(d, float(meta["config"]["p_w"])), float(sizing["depth"]),
-            float(plate["mass_per_area"]), float(plate["surface_offset"]), int(d["steps"]),
-            float(sizing.get("elastic_start", {}).get("transit_time", np.nan)), len(folders),
-            len(layout.grains_table(folders[0])), int(meta["config"]["grains"]["dimension"]),
-            float(d["expected"]["t_s"]), float(d["duration"]), folders))
+            name, d.drive.name, d.load, float(sizing["depth"]), float(plate["mass_per_area"]),
+            float(plate["surface_offset"]), d.steps, float(sizing.get("elastic_start", {}).get("transit_time", np.nan)),
+            len(folders), len(layout.grains_table(folders[0])), int(meta["config"]["grains"]["dimension"]),
+            d.scales.t_s, d.duration, folders))
     return specs
 
 
 def run_loads(run_dir: Path) -> list[Load]:
     """The loads of a run folder's drives (none for a run not yet sized: its own error follows)."""
-    meta = json.loads((Path(run_dir) / layout.RUN_JSON).read_text())
-    return [Load.from_record(d, float(meta["config"]["p_w"])) for d in meta.get("sizing", {}).get("drives", [])]
+    return [d.load for d in sized_drives(json.loads((Path(run_dir) / layout.RUN_JSON).read_text()))]

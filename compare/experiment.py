@@ -135,6 +135,12 @@ class Experiment:
         return []
 
     @classmethod
+    def outputs(cls, drives, output) -> dict:
+        """A run's output intervals (dem.config's [output] entries) that resolve its ``drives`` (dem.sizing's
+        DriveSizing) for this experiment's estimators; ``output`` the DEM preset's intervals."""
+        raise NotImplementedError
+
+    @classmethod
     def comparison_seconds(cls, drives: int, grain_frames: float, jobs: int, speed) -> float:
         """The comparison's wall time for ``drives`` scored drives whose snapshots hold ``grain_frames``, over
         ``jobs`` processes at ``speed`` (dem.throughput.Throughput: its cost constants are in 2D drive grain-steps)."""

@@ -155,6 +155,14 @@ ROW_IDENTITY = {"scorecard": ("drive", "observable", "model"), "laws": ("law", "
                                                                        "model")}
 
 
+#: a number that names a row (a drive's amplitude) is matched to this many significant digits (JSON writers differ)
+IDENTITY_DIGITS = 9
+
+
+def _identity(v):
+    return float(f"{v:.{IDENTITY_DIGITS}g}") if isinstance(v, float) else v
+
+
 def row_differences(committed: dict, regenerated: dict) -> dict:
     """The scorecard and law rows of two metrics.json documents, matched by ROW_IDENTITY: per section, the rows
     only one side has, the largest relative difference of a number (|a - b| / max(|a|, |b|), lists element-wise),
@@ -168,7 +176,8 @@ def row_differences(committed: dict, regenerated: dict) -> dict:
 
     out = {}
     for section, keys in ROW_IDENTITY.items():
-        index = [{tuple(r.get(k) for k in keys): r for r in doc.get(section, [])} for doc in (committed, regenerated)]
+        index = [{tuple(_identity(r.get(k)) for k in keys): r for r in doc.get(section, [])}
+                 for doc in (committed, regenerated)]
         common = index[0].keys() & index[1].keys()
         worst, words = 0.0, set()
         for key in common:

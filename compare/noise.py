@@ -93,7 +93,7 @@ def laws(path: Path = NOISE_CSV) -> dict[tuple[str, str], NoiseLaw]:
 
 
 def drive_size(plan, drive_plan, p_w: float) -> DriveSize:
-    """A planned drive (dem.sizing.Plan and one of its DrivePlans) as a DriveSize, its scales those of the
+    """A planned drive (dem.sizing.Plan and one of its DriveSizings) as a DriveSize, its scales those of the
     plan's material."""
     s = drive_plan.scales
     u_w = (drive_plan.load.u_w if drive_plan.load.kind == "speed"

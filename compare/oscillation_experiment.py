@@ -21,6 +21,9 @@ from .oscillation import analyse_dem, conclude, dem_side, predict_unit, setup_of
 #: oscillating-disks study's comparison, 4.0 min on 2 processes for 20 drives (7.2 CPU min) beside probes of 10 M
 #: grain-steps/s, through the same contention model as the beds
 OSCILLATION_DRIVE_STEPS = 1.6e8
+#: LAMMPS's depth profiles this many times per period (the phase-resolved profiles of compare.oscillation), the
+#: plate's record PLATE_PER_PROFILE times as often, atom snapshots once a period
+PROFILES_PER_PERIOD, PLATE_PER_PROFILE = 24, 4
 
 
 class OscillatingPlate(Experiment):
@@ -49,6 +52,15 @@ class OscillatingPlate(Experiment):
     @classmethod
     def accepts(cls, load) -> bool:
         return load.oscillating
+
+    @classmethod
+    def outputs(cls, drives, output) -> dict:
+        """Profiles PROFILES_PER_PERIOD times a period of the fastest drive, the plate PLATE_PER_PROFILE times as
+        often, snapshots once a period (the phase-resolved analysis reads the plate and the profiles)."""
+        period = min(d.duration / d.drive.cycles for d in drives)
+        profile = period / PROFILES_PER_PERIOD
+        return {"atoms": period, "contacts": period, "plate": min(output.plate, profile / PLATE_PER_PROFILE),
+                "profiles": profile, "restart": max(output.restart, period)}
 
     @classmethod
     def comparison_seconds(cls, drives: int, grain_frames: float, jobs: int, speed) -> float:

@@ -23,6 +23,12 @@ CG_PER_DRIVE_STEP, MODEL_DRIVE_STEPS = 0.0121, 1.76e7
 #: coarse-graining), in grain-steps of a 2D drive: the smoke study's comparison less the two terms above, over its
 #: 4 drives (bench/dem_costs.py; checked on a subset of the disks study)
 REPORT_DRIVE_STEPS = 5.9e7
+#: atom and contact snapshots per t_s of the fastest drive of a run: the layer's growth over the first t_s is
+#: resolved by this many frames, and a drive of 10 t_s has 10 times as many (coarse-graining's cost)
+FRAMES_PER_TS = 20
+#: atom snapshots per t_s over the first t_s of the fastest drive: the growth window (compare.laws, from three
+#: shear-wave transits to half a t_s) holds tens of frames
+EARLY_FRAMES_PER_TS = 100
 #: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
 MODELS = 3
 
@@ -52,6 +58,15 @@ class StokesDrives(Experiment):
     @classmethod
     def accepts(cls, load) -> bool:
         return not load.oscillating
+
+    @classmethod
+    def outputs(cls, drives, output) -> dict:
+        """Snapshots every t_s/FRAMES_PER_TS of the fastest drive (the plate's and the profiles' intervals no
+        longer), every t_s/EARLY_FRAMES_PER_TS over its first t_s."""
+        t_s = min(d.scales.t_s for d in drives)
+        frame = t_s / FRAMES_PER_TS
+        return {"atoms": frame, "contacts": frame, "plate": min(output.plate, frame),
+                "profiles": min(output.profiles, frame), "early": t_s, "atoms_early": t_s / EARLY_FRAMES_PER_TS}
 
     @classmethod
     def comparison_seconds(cls, drives: int, grain_frames: float, jobs: int, speed) -> float:

@@ -91,9 +91,11 @@ def _oversubscribed(np_: int, jobs: int) -> None:
 
 def _cmd_run(args) -> int:
     from .runner import check_request, completed_stages, run
+    from .sizing import plan
 
     cfg, text = _config(args, "run")  # bad input raises, before any work (granstokes.cli's error policy)
-    runner = check_request(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
+    sized = plan(cfg)  # a load outside mu(I)'s range raises too
+    runner = check_request(sized, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
                            jobs=args.jobs)
     print(f"dem: scene '{cfg.name}' -> {args.out}", file=sys.stderr)
     for reason in runner.plan.reasons:
@@ -109,7 +111,7 @@ def _cmd_run(args) -> int:
     _oversubscribed(runner.lmp.np, runner.jobs)
     if args.dry_run:
         return 0
-    result = run(cfg, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
+    result = run(sized, text, args.out, np=args.np, resume=args.resume, launcher=args.launcher,
                  progress=not args.quiet, jobs=args.jobs)
     if result.status == "interrupted":
         signum = int(result.metadata.get("signal", signal.SIGINT))

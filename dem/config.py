@@ -109,6 +109,10 @@ class Box:
                 "in [0.5, 5] (d)", self.base_thickness)
 
 
+#: a drive's load keys: one of them gives it
+LOADS = ("mu_w_tilde", "mu_w", "tau_w", "u_w")
+
+
 @dataclass(frozen=True)
 class Drive:
     """One drive of the prepared bed: imposed stress (tau_w = mu_w p_w) or imposed plate speed u_w, held from t = 0
@@ -133,7 +137,7 @@ class Drive:
                 "drive.name", "a non-empty name of letters, digits, '_', '-', '.'", self.name)
         p = f"drive[{self.name}]"
         require(self.kind in ("stress", "speed"), f"{p}.kind", "'stress' or 'speed'", self.kind)
-        given = [k for k in ("mu_w_tilde", "mu_w", "tau_w", "u_w") if getattr(self, k) is not None]
+        given = [k for k in LOADS if getattr(self, k) is not None]
         valid = {"stress": ("mu_w_tilde", "mu_w", "tau_w"), "speed": ("u_w", "mu_w_tilde")}[self.kind]
         require(len(given) == 1 and given[0] in valid, f"{p} load",
                 f"exactly one of {' / '.join(valid)} for a {self.kind} drive", given)
@@ -161,6 +165,16 @@ class Drive:
     @property
     def oscillating(self) -> bool:
         return self.omega is not None or self.omega_ts is not None
+
+    def table(self) -> dict:
+        """The [[drive]] table that gives this drive: its name, kind and load; its duration, or what sizes it
+        (duration_ts, min_duration); an oscillating drive's omega (or omega_ts) and cycles."""
+        load = next(k for k in LOADS if getattr(self, k) is not None)
+        length = ({"duration": self.duration} if self.duration is not None
+                  else {"duration_ts": self.duration_ts, "min_duration": self.min_duration})
+        frequency = {k: v for k, v in (("omega", self.omega), ("omega_ts", self.omega_ts)) if v is not None}
+        wave = {**dict(list(frequency.items())[:1]), "cycles": self.cycles} if frequency else {}
+        return {"name": self.name, "kind": self.kind, load: getattr(self, load), **length, **wave}
 
 
 @dataclass(frozen=True)

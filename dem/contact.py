@@ -46,6 +46,13 @@ def mean_grain_volume(polydispersity: float, dimension: int) -> float:
     return moment * grain_volume(1.0, dim)
 
 
+def rigidity(kappa: float, model: str, p_from: float, p_to: float) -> float:
+    """kappa at p_to of grains whose kappa is ``kappa`` at p_from: one stiffness k_n (``Contact.k_n``: Hooke
+    k_n = kappa p, Hertz k_n = 2 kappa^1.5 p)."""
+    ratio = p_from / p_to
+    return kappa * (ratio if model == "hooke" else ratio ** (2 / 3))
+
+
 @dataclass(frozen=True)
 class Contact:
     """Stiffness, damping and time step of a scene; ``as_dict`` is written into run.json."""

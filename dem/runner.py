@@ -39,9 +39,9 @@ from granstokes.lib.provenance import provenance
 from granstokes.lib.validate import require
 
 from . import lammps_env, layout, outputs, scene
-from .config import Config, parse
+from .config import parse
 from .lammps_env import DEFAULT_JOBS, PLAIN_FRACTION, PLAIN_SECONDS
-from .sizing import DrivePlan, Plan, plan, speedup
+from .sizing import DriveSizing, Plan, plan, speedup
 
 #: the command whose manifest marks a folder as this module's output (granstokes.staging)
 COMMAND = "dem run"
@@ -293,10 +293,9 @@ def _restarts(drive_dir: Path) -> list[tuple[int, Path]]:
 class Runner:
     """Holds the state of one run folder; ``execute`` runs whatever is not complete yet."""
 
-    def __init__(self, cfg: Config, text: str, out: Path, np_: int | None, launcher: str | None, progress: bool,
+    def __init__(self, sized: Plan, text: str, out: Path, np_: int | None, launcher: str | None, progress: bool,
                  jobs: int = 1):
-        self.plan = plan(cfg)
-        self.cfg, self.text, self.out = cfg, text, Path(out)
+        self.plan, self.cfg, self.text, self.out = sized, sized.config, text, Path(out)
         self.lmp = _Lammps(self.plan.ranks(jobs, np_), launcher, progress)
         self.jobs = jobs
         self.meta_path = self.out / layout.RUN_JSON
@@ -360,7 +359,7 @@ class Runner:
         self.record(meta, key, st)
         return restart
 
-    def drive(self, seed: int, dp: DrivePlan, prepared: Path, meta: dict) -> None:
+    def drive(self, seed: int, dp: DriveSizing, prepared: Path, meta: dict) -> None:
         key = layout.stage_key(seed, dp.drive.name)
         d = layout.drive_dir(self.out, seed, dp.drive.name)
         old = meta["stages"].get(key, {})
@@ -483,7 +482,7 @@ def run_bed(out: str, seed: int, np_: int, launcher: str | None, progress: bool,
     dies at its next screen output once its worker is gone, before a resume runs it again)."""
     out = Path(out)
     text = (out / layout.CONFIG_TOML).read_text()
-    runner = Runner(parse(text), text, out, np_, launcher, progress, jobs)
+    runner = Runner(plan(parse(text)), text, out, np_, launcher, progress, jobs)
     bed = layout.seed_dir(out, seed)
     bed.mkdir(exist_ok=True)
     try:
@@ -500,26 +499,25 @@ def _now() -> str:
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
-def check_request(cfg: Config, text: str, out: str | Path, np: int | None = None, resume: bool = False,
+def check_request(sized: Plan, text: str, out: str | Path, np: int | None = None, resume: bool = False,
                   launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> Runner:
-    """Everything ``run`` checks before it touches the folder (ValueError / LammpsNotFound naming the
-    parameter): ranks (``None``: the sizing's rule), jobs, the launcher, the sizing, the wheels, the folder and a
-    resume's config."""
+    """Everything ``run`` checks before it touches the folder of the scene ``sized`` (dem.sizing.plan; ValueError /
+    LammpsNotFound naming the parameter): ranks (``None``: the sizing's rule), jobs, the launcher, the wheels, the
+    folder and a resume's config."""
     require(np is None or isinstance(np, int) and np >= 1, "--np", "an integer >= 1 (MPI ranks per LAMMPS process)",
             np)
     require(isinstance(jobs, int) and jobs >= 1, "--jobs", "an integer >= 1 (beds run side by side)", jobs)
     require(launcher is None or "{np}" in launcher, "--launcher", "a command template containing {np}", launcher)
     out = Path(out)
     require(not out.exists() or out.is_dir(), "--out", "a folder (this path is an existing file)", str(out))
-    # the sizing raises on loads outside mu(I)
-    runner = Runner(cfg, text, out, np, launcher, progress, min(jobs, len(cfg.seeds)))
+    runner = Runner(sized, text, out, np, launcher, progress, min(jobs, len(sized.config.seeds)))
     lammps_env.lmp_binary(), lammps_env.mpirun()
     meta_path = out / layout.RUN_JSON
     if resume:
         require(meta_path.exists() and (out / layout.CONFIG_TOML).is_file(), "--resume",
                 f"given with an existing run folder (with {layout.RUN_JSON} and {layout.CONFIG_TOML})", str(out))
         stored = parse((out / layout.CONFIG_TOML).read_text())
-        require(stored.as_dict() == cfg.as_dict(), "--resume",
+        require(stored.as_dict() == sized.config.as_dict(), "--resume",
                 f"given with the config stored in {out / layout.CONFIG_TOML}", "a different config")
         staging.require_unchanged(out, "--out")
     else:
@@ -541,11 +539,11 @@ def completed_stages(out: str | Path, plan_: Plan) -> tuple[list[str], list[str]
     return done, left
 
 
-def begin(cfg: Config, text: str, out: str | Path, np: int | None = None, resume: bool = False,
+def begin(sized: Plan, text: str, out: str | Path, np: int | None = None, resume: bool = False,
           launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> tuple[Runner, dict]:
     """Check the request (``check_request``), then create the run folder (or reopen it with ``resume``): the
     runner and run.json's record, ready for ``Runner.execute`` or a study's executor."""
-    runner = check_request(cfg, text, out, np, resume, launcher, progress, jobs)
+    runner = check_request(sized, text, out, np, resume, launcher, progress, jobs)
     out = Path(out)
     if resume:
         meta = json.loads((out / layout.RUN_JSON).read_text())
@@ -560,17 +558,17 @@ def begin(cfg: Config, text: str, out: str | Path, np: int | None = None, resume
     return runner, meta
 
 
-def run(cfg: Config, text: str, out: str | Path, np: int | None = None, resume: bool = False,
+def run(sized: Plan, text: str, out: str | Path, np: int | None = None, resume: bool = False,
         launcher: str | None = None, progress: bool = True, jobs: int = DEFAULT_JOBS) -> RunResult:
-    """Run (or with ``resume`` continue) the scene ``cfg`` (TOML ``text``) in folder ``out``, the seeds'
-    beds ``jobs`` at a time (at most one per seed), each LAMMPS process on ``np`` ranks (default: the sizing's
-    rule, dem.sizing.ranks_per_bed).
+    """Run (or with ``resume`` continue) the scene ``sized`` (dem.sizing.plan of its config, TOML ``text``) in
+    folder ``out``, the seeds' beds ``jobs`` at a time (at most one per seed), each LAMMPS process on ``np`` ranks
+    (default: the sizing's rule, dem.sizing.ranks_per_bed).
 
-    Everything is validated before the folder is touched: a bad config, a missing LAMMPS/MPICH
-    wheel, a folder that already holds another run, or a resume whose config differs raise
+    Everything is validated before the folder is touched (the config and its sizing, before the call): a missing
+    LAMMPS/MPICH wheel, a folder that already holds another run, or a resume whose config differs raise
     ValueError / LammpsNotFound and write nothing.
     """
-    runner, meta = begin(cfg, text, out, np, resume, launcher, progress, jobs)
+    runner, meta = begin(sized, text, out, np, resume, launcher, progress, jobs)
     allow_lammps()
     with sigterm_interrupts():
         return runner.execute(meta)

@@ -21,6 +21,9 @@ velocity u_w (imposed speed: rigid-body x force switched off).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+
+from granstokes.continuum.load import Load
 
 from .contact import grain_mass
 from .layout import (
@@ -40,7 +43,7 @@ from .layout import (
     PROFILE_BIN,
     RESTART_DIR,
 )
-from .sizing import DrivePlan, Plan
+from .sizing import DriveSizing, Plan
 
 SKIN = 0.3  # neighbor skin in d
 PLATE_DIAMETER = 1.0  # d: the plate's glued grains, bed-like (measured slip: bench/RESULTS.md)
@@ -294,39 +297,65 @@ read_restart {restart}
 TRACKING_STEPS = 100
 
 
-def _drive_forces(plan: Plan, drive: DrivePlan, fresh: bool) -> tuple[str, str]:
-    """(description, integration block) of a drive.  The plate's x force: tau_w A (an imposed stress, times
-    sin(omega t) when it oscillates); none with the x motion held at u_w (a held speed); for an oscillating speed
-    the tracking force M du_w/dt minus the bed's pull on the plate (compute plate_pull, summed before the load is
-    added) plus a feedback over TRACKING_STEPS steps, so the rigid plate moves at u_w(t) = u_w sin(omega t)."""
-    area, n_plate, load, dt = plan.area, plate_grains(plan), drive.load, plan.dt
-    fy = f"{-plan.config.p_w * area / n_plate:.10g}"
-    arg = f"{load.omega:.10g}*step*{dt:.10g}"
-    set_speed, tracking = "", ""
-    if load.kind == "stress":
-        flags, fx = "force * on on off", load.tau_w * area / n_plate
-        if load.oscillating:
-            what = (f"oscillating stress: x force tau_w A sin(omega t), tau_w = {load.tau_w:.6g}, "
-                    f"omega = {load.omega:.6g}")
-            tracking = f"variable fx_plate equal {fx:.10g}*sin({arg})"
-            fx = "v_fx_plate"
-        else:
-            what = f"imposed stress: x force tau_w A = {load.tau_w * area:.6g} (tau_w = {load.tau_w:.6g})"
-    elif load.oscillating:
-        mass = plate_geometry(plan)["mass"]
-        flags = "force * on on off"
-        what = (f"oscillating speed: plate x velocity u_w sin(omega t), u_w = {load.u_w:.6g}, omega = "
-                f"{load.omega:.6g} (tracking force)")
-        half = f"{load.omega:.10g}*(step-0.5)*{dt:.10g}"
-        tracking = f"""compute plate_pull plate reduce sum fx
-variable fx_plate equal ({mass * load.u_w * load.omega:.10g}*cos({arg})-c_plate_pull-{mass:.10g}*(f_plate[1][4]-\
-{load.u_w:.10g}*sin({half}))/{TRACKING_STEPS * dt:.10g})/{n_plate}"""
-        fx = "v_fx_plate"
-    else:
-        flags, fx = "force * off on off", 0.0
-        what = f"imposed speed: plate x velocity held at u_w = {load.u_w:.6g} (rigid-body x force off)"
-        set_speed = f"velocity plate set {load.u_w:.10g} NULL NULL units box" if fresh else ""
-    fx = fx if isinstance(fx, str) else f"{fx:.10g}"
+@dataclass(frozen=True)
+class PlateForce:
+    """How the plate is driven in LAMMPS: the description, fix rigid's force flags, fix addforce's x force per plate
+    grain (a number or a variable), the variables it needs and the x velocity set at the drive's start."""
+
+    what: str
+    flags: str
+    fx: str
+    tracking: str = ""
+    set_speed: str = ""
+
+
+def _held_stress(plan: Plan, load: Load, fresh: bool) -> PlateForce:
+    """An imposed stress: x force tau_w A spread over the plate's grains."""
+    return PlateForce(f"imposed stress: x force tau_w A = {load.tau_w * plan.area:.6g} (tau_w = {load.tau_w:.6g})",
+                      "force * on on off", f"{load.tau_w * plan.area / plate_grains(plan):.10g}")
+
+
+def _sine_stress(plan: Plan, load: Load, fresh: bool) -> PlateForce:
+    """An oscillating stress: x force tau_w A sin(omega t)."""
+    fx = load.tau_w * plan.area / plate_grains(plan)
+    return PlateForce(f"oscillating stress: x force tau_w A sin(omega t), tau_w = {load.tau_w:.6g}, "
+                      f"omega = {load.omega:.6g}", "force * on on off", "v_fx_plate",
+                      f"variable fx_plate equal {fx:.10g}*sin({load.omega:.10g}*step*{plan.dt:.10g})")
+
+
+def _held_speed(plan: Plan, load: Load, fresh: bool) -> PlateForce:
+    """A held speed: the rigid body's x force off, its x velocity set to u_w once (a fresh drive)."""
+    return PlateForce(f"imposed speed: plate x velocity held at u_w = {load.u_w:.6g} (rigid-body x force off)",
+                      "force * off on off", f"{0.0:.10g}",
+                      set_speed=f"velocity plate set {load.u_w:.10g} NULL NULL units box" if fresh else "")
+
+
+def _sine_speed(plan: Plan, load: Load, fresh: bool) -> PlateForce:
+    """An oscillating speed: the tracking force M du_w/dt minus the bed's pull on the plate (compute plate_pull,
+    summed before the load is added) plus a feedback over TRACKING_STEPS steps, so that the rigid plate moves at
+    u_w(t) = u_w sin(omega t)."""
+    mass, dt, w = plate_geometry(plan)["mass"], plan.dt, load.omega
+    arg, half = f"{w:.10g}*step*{dt:.10g}", f"{w:.10g}*(step-0.5)*{dt:.10g}"
+    tracking = f"""compute plate_pull plate reduce sum fx
+variable fx_plate equal ({mass * load.u_w * w:.10g}*cos({arg})-c_plate_pull-{mass:.10g}*(f_plate[1][4]-\
+{load.u_w:.10g}*sin({half}))/{TRACKING_STEPS * dt:.10g})/{plate_grains(plan)}"""
+    return PlateForce(f"oscillating speed: plate x velocity u_w sin(omega t), u_w = {load.u_w:.6g}, omega = "
+                      f"{w:.6g} (tracking force)", "force * on on off", "v_fx_plate", tracking)
+
+
+#: the plate's drive by (load kind, whether it oscillates)
+PLATE_FORCES = {("stress", False): _held_stress, ("stress", True): _sine_stress, ("speed", False): _held_speed,
+                ("speed", True): _sine_speed}
+
+
+def _drive_forces(plan: Plan, drive: DriveSizing, fresh: bool) -> tuple[str, str]:
+    """(description, integration block) of a drive: the plate's force (PLATE_FORCES), its weight p_w A, gravity on
+    the bed, the base frozen."""
+    load = drive.load
+    force = PLATE_FORCES[(load.kind, load.oscillating)](plan, load, fresh)
+    fy = f"{-plan.config.p_w * plan.area / plate_grains(plan):.10g}"
+    what, flags, fx, tracking, set_speed = force.what, force.flags, force.fx, force.tracking, force.set_speed
+    dt = plan.dt
     block = f"""
 # --- integration: bed grains free, base frozen, plate rigid without rotation ---
 variable t equal step*{dt:.10g}
@@ -375,7 +404,7 @@ fix plate_out all print {every} "{fmt}" file {PLATE_CSV} screen no title "{",".j
 """
 
 
-def _dumps(plan: Plan, drive: DrivePlan, fresh: bool) -> str:
+def _dumps(plan: Plan, drive: DriveSizing, fresh: bool) -> str:
     iv = plan.intervals
     names = " ".join(f"colname {i + 1} {n}" for i, n in enumerate(CONTACT_COLUMNS))
     early = "" if not iv["early"] else f"""
@@ -411,7 +440,7 @@ fix profiles bed ave/chunk {iv["plate"]} {nrep} {iv["profiles"]} bins density/nu
 """)
 
 
-def drive_script(plan: Plan, drive: DrivePlan, restart: str, fresh: bool, outputs: bool = True) -> str:
+def drive_script(plan: Plan, drive: DriveSizing, restart: str, fresh: bool, outputs: bool = True) -> str:
     """Drive phase from ``restart``; ``fresh`` sets the plate speed of a speed drive (not when resuming);
     ``outputs=False`` gives the bare run used to measure the harness overhead."""
     iv = plan.intervals

@@ -18,7 +18,7 @@ import os
 from dataclasses import dataclass
 
 from granstokes.continuum.load import Load
-from granstokes.continuum.scales import Scales
+from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.steady import steady_wall_speed
 
 from granstokes.lib.validate import require
@@ -65,20 +65,79 @@ CREEP_LENGTH, CREEP_LENGTHS = 2.5, 5
 INSERT_FRACTION = {2: 0.30, 3: 0.20}
 
 
+def _omega(drive: Drive, s: Scales) -> float:
+    """A drive's angular frequency: its omega, or its omega_ts over t_s of its load's scales ``s`` (0: held)."""
+    if drive.omega is not None:
+        return drive.omega
+    return drive.omega_ts / s.t_s if drive.omega_ts is not None else 0.0
+
+
+def _duration(drive: Drive, s: Scales) -> tuple[float, str]:
+    """A drive's length and why: given, ``cycles`` periods of its sine, or ``duration_ts`` t_s of its load's scales
+    ``s`` (each at least ``min_duration``)."""
+    omega = _omega(drive, s)
+    if drive.duration is not None:
+        return drive.duration, "given"
+    if omega:
+        return (max(drive.cycles * 2 * math.pi / omega, drive.min_duration),
+                f"max({drive.cycles:g} periods of omega = {omega:.4g}, min_duration {drive.min_duration:g})")
+    return (max(drive.duration_ts * s.t_s, drive.min_duration),
+            f"max({drive.duration_ts:g} t_s, min_duration {drive.min_duration:g}), t_s = {s.t_s:.4g}")
+
+
 @dataclass(frozen=True)
-class DrivePlan:
-    """One drive as run: its config entry, the paper's scales, duration and steps, and what the plate imposes."""
+class DriveSizing:
+    """One drive as sized: the configured drive, the paper's scales of its load, its duration and steps; what the
+    plate imposes (``load``) and why (``reason``) follow from them.  run.json records it (``as_record``) and
+    ``sized_drives`` reads it back."""
 
     drive: Drive
     scales: Scales
     duration: float
     steps: int
-    load: Load
-    reason: str
 
-    def as_dict(self) -> dict:
+    @property
+    def load(self) -> Load:
+        """What the plate imposes: the drive's own tau_w or u_w if it gives one, else the stress mu_w of its scales or
+        the steady speed of that mu_w (the paper's u~_w); a sine at the drive's omega if it oscillates."""
+        d, s, omega = self.drive, self.scales, _omega(self.drive, self.scales)
+        if d.kind == "stress":
+            return Load("stress", s.p_w, mu_w=d.tau_w / s.p_w if d.tau_w is not None else s.mu_w, omega=omega)
+        u_w = d.u_w if d.u_w is not None else s.U * steady_wall_speed(s.material.friction, s.mu_w)
+        return Load("speed", s.p_w, u_w=u_w, omega=omega)
+
+    @property
+    def reason(self) -> str:
+        """The sizing's line for the drive: its scales, its duration and why, what the plate imposes."""
+        d, s, load = self.drive, self.scales, self.load
+        return (f"drive {d.name}: mu_w = {s.mu_w:.4g} (mu~_w = {s.mu_w_tilde:.3g}), delta_s = {s.delta_s:.3g} d, "
+                f"t_s = {s.t_s:.3g}, U = {s.U:.3g}; duration {self.duration:.4g} ({_duration(d, s)[1]}); "
+                + (f"tau_w = {load.tau_w:.4g}" if d.kind == "stress" else f"u_w = {load.u_w:.4g}")
+                + (f" x sin(omega t), omega = {load.omega:.4g} (omega t_s = {load.omega * s.t_s:.3g})"
+                   if load.omega else ""))
+
+    def as_record(self) -> dict:
+        """run.json's record of the drive: its name, load (continuum.load.Load.as_record), duration, steps, the
+        paper's scales expected of it and the reason."""
         return {"name": self.drive.name, **self.load.as_record(), "duration": self.duration, "steps": self.steps,
                 "expected": self.scales.as_dict(), "reason": self.reason}
+
+    @classmethod
+    def from_record(cls, record: dict, material: Material, p_w: float) -> DriveSizing:
+        """The drive of a run.json record (``as_record``) of a scene of ``material`` at ``p_w``, as it ran: its load
+        in DEM units (tau_w or u_w, omega) and its duration given."""
+        omega = float(record.get("omega", 0.0))
+        drive = Drive(record["name"], record["kind"], tau_w=record.get("tau_w"), u_w=record.get("u_w"),
+                      duration=float(record["duration"]), omega=omega or None)
+        return cls(drive, Scales(material, p_w, float(record["expected"]["mu_w"])), drive.duration,
+                   int(record["steps"]))
+
+
+def sized_drives(meta: dict) -> tuple[DriveSizing, ...]:
+    """The drives of a run folder's run.json record ``meta`` as sized (none before the run is sized)."""
+    config = meta.get("config", {})
+    return tuple(DriveSizing.from_record(d, Material(**config["material"]), float(config["p_w"]))
+                 for d in meta.get("sizing", {}).get("drives", []))
 
 
 @dataclass(frozen=True)
@@ -90,7 +149,7 @@ class Plan:
     n_grains: int
     dt: float
     intervals: dict  # output name -> steps
-    drives: tuple[DrivePlan, ...]
+    drives: tuple[DriveSizing, ...]
     reasons: tuple[str, ...]
 
     @property
@@ -134,7 +193,7 @@ class Plan:
         expected = fall + round(min(SETTLE_RELAX_EXPECTED, c.settle_max + c.relax_max) / self.dt)
         return expected, self.settle_steps_max + round(c.relax_max / self.dt)
 
-    def atom_frames(self, drive: DrivePlan) -> int:
+    def atom_frames(self, drive: DriveSizing) -> int:
         """Atom snapshots of ``drive``: every ``atoms`` steps from step 0, and every ``atoms_early`` over the
         first ``early`` steps."""
         iv = self.intervals
@@ -211,8 +270,22 @@ class Plan:
                                                 "time the shear load takes to reach the base through the elastic "
                                                 "deposited bed"},
                 "width_z": self.config.width_z, "plate_area": self.area, "dt": self.dt,
-                "intervals_steps": self.intervals, "drives": [d.as_dict() for d in self.drives],
+                "intervals_steps": self.intervals, "drives": [d.as_record() for d in self.drives],
                 "reasons": list(self.reasons)}
+
+
+def size_drive(cfg: Config, drive: Drive) -> DriveSizing:
+    """One drive of ``cfg`` sized: its scales (ValueError naming the drive when its load is outside mu(I)'s range),
+    its duration and steps."""
+    try:
+        s = drive_scales(cfg, drive)
+    except ValueError as exc:
+        raise ValueError(f"drive[{drive.name}]: {exc}") from None
+    duration, dt = _duration(drive, s)[0], cfg.time_step
+    steps = max(1, round(duration / dt))
+    require(steps <= MAX_STEPS, f"drive[{drive.name}] duration", f"at most {MAX_STEPS * dt:.4g} time units "
+            f"({MAX_STEPS} steps of dt = {dt:.4g}, LAMMPS's limit)", duration)
+    return DriveSizing(drive, s, duration, steps)
 
 
 def plan(cfg: Config) -> Plan:
@@ -221,35 +294,8 @@ def plan(cfg: Config) -> Plan:
     c = cfg.contact
     reasons = [*cfg.describe(), f"dt = {dt:.4g} ({'given' if cfg.dt else 'default'}; bound t_c/20 = {c.dt_max:.4g}, "
                f"t_c = {c.t_c:.4g}, k_n = {c.k_n:.4g} from kappa = {c.kappa:g})"]
-    drives = []
-    for d in cfg.drives:
-        try:
-            s = drive_scales(cfg, d)
-        except ValueError as exc:
-            raise ValueError(f"drive[{d.name}]: {exc}") from None
-        omega = (0.0 if not d.oscillating else d.omega if d.omega is not None else d.omega_ts / s.t_s)
-        if d.duration is not None:
-            duration, why = d.duration, "given"
-        elif omega:
-            duration = max(d.cycles * 2 * math.pi / omega, d.min_duration)
-            why = f"max({d.cycles:g} periods of omega = {omega:.4g}, min_duration {d.min_duration:g})"
-        else:
-            duration = max(d.duration_ts * s.t_s, d.min_duration)
-            why = f"max({d.duration_ts:g} t_s, min_duration {d.min_duration:g}), t_s = {s.t_s:.4g}"
-        if d.kind == "stress":
-            load = Load("stress", cfg.p_w, mu_w=s.mu_w, omega=omega)
-        else:
-            u_w = d.u_w if d.u_w is not None else s.U * steady_wall_speed(cfg.material.friction, s.mu_w)
-            load = Load("speed", cfg.p_w, u_w=u_w, omega=omega)
-        steps = max(1, round(duration / dt))
-        require(steps <= MAX_STEPS, f"drive[{d.name}] duration", f"at most {MAX_STEPS * dt:.4g} time units "
-                f"({MAX_STEPS} steps of dt = {dt:.4g}, LAMMPS's limit)", duration)
-        reason = (f"drive {d.name}: mu_w = {s.mu_w:.4g} (mu~_w = {s.mu_w_tilde:.3g}), delta_s = {s.delta_s:.3g} d, "
-                  f"t_s = {s.t_s:.3g}, U = {s.U:.3g}; duration {duration:.4g} ({why}); "
-                  + (f"tau_w = {load.tau_w:.4g}" if d.kind == "stress" else f"u_w = {load.u_w:.4g}")
-                  + (f" x sin(omega t), omega = {omega:.4g} (omega t_s = {omega * s.t_s:.3g})" if omega else ""))
-        drives.append(DrivePlan(d, s, duration, steps, load, reason))
-        reasons.append(reason)
+    drives = tuple(size_drive(cfg, d) for d in cfg.drives)
+    reasons += [d.reason for d in drives]
     delta_max = max(p.scales.delta_s for p in drives)
     if cfg.box.depth is not None:
         depth = cfg.box.depth
@@ -278,7 +324,7 @@ def plan(cfg: Config) -> Plan:
     intervals["restart"] = max(1, round(cfg.output.restart / dt / intervals["profiles"])) * intervals["profiles"]
     intervals["check"] = max(1, round(cfg.prepare.check_every / dt))
     intervals["sample"] = sample
-    return Plan(cfg, float(depth), n_grains, dt, intervals, tuple(drives), tuple(reasons))
+    return Plan(cfg, float(depth), n_grains, dt, intervals, drives, tuple(reasons))
 
 
 def _early(out, dt: float, atoms: int, plate_steps: int) -> dict:

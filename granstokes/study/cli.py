@@ -48,7 +48,7 @@ def _cmd_study(args) -> int:
     from granstokes.dem.estimate import Estimate
     from granstokes.dem.layout import CALIBRATION_JSON, CALIBRATION_STATE
 
-    from .plan import calibration_folder, calibration_text, plan_study
+    from .plan import calibration_config, calibration_folder, plan_study
     from .runner import STUDY_TOML, check_folder, run_study
 
     require(args.scheduler is None or args.jobs is None, "--jobs / --scheduler", "one of them (a scheduler's "
@@ -82,7 +82,7 @@ def _cmd_study(args) -> int:
             folder = calibration_folder(out, p_w)
             if args.resume and _complete(folder):
                 continue
-            cp = plan_calibration(dem_config.parse(calibration_text(study, p_w)))
+            cp = plan_calibration(calibration_config(study, p_w)[0])
             done = completed_points(folder, cp)[0] if args.resume and (folder / CALIBRATION_STATE).is_file() else ()
             print(f"study: calibration at p = {p_w:g}: {cp.cost_estimate(args.jobs, done=done)}", file=sys.stderr)
             part = cp.estimate(args.jobs, done=done)

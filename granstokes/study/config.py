@@ -37,31 +37,16 @@ PRESET_DIR = Path(__file__).parent / "presets"
 #: its root (the folder holding the package's source), whatever the working directory
 PRESET_BASE = PRESET_DIR.resolve().parents[2]
 PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
-DRIVE_KEYS = ("kind", "mu_w_tilde", "mu_w", "tau_w", "u_w")
+DRIVE_KEYS = ("kind", *dem_config.LOADS)
 SHORT = {"mu_w_tilde": "mutilde", "mu_w": "mu", "tau_w": "tau", "u_w": "u"}  # drive names: stress-mutilde0.5
 TOP = {"name", "dem", "seeds", "pressures", "calibration", "drive", "duration_ts", "min_duration", "width",
        "width_check", "omega_ts", "cycles", "ngf_from"}
 
 
-@dataclass(frozen=True)
-class StudyDrive:
-    """One drive of the grid, run at every pressure: its DEM [[drive]] table without name and duration."""
-
-    kind: str
-    load_key: str
-    value: float
-    omega_ts: float | None = None  # an oscillating drive: omega t_s of its amplitude
-    cycles: float = 4.0
-
-    @property
-    def name(self) -> str:
-        wave = "" if self.omega_ts is None else f"-w{self.omega_ts:g}"
-        return f"{self.kind}-{SHORT[self.load_key]}{self.value:g}{wave}"
-
-    def table(self, duration_ts: float, min_duration: float) -> dict:
-        wave = {} if self.omega_ts is None else {"omega_ts": self.omega_ts, "cycles": self.cycles}
-        return {"name": self.name, "kind": self.kind, self.load_key: self.value, "duration_ts": duration_ts,
-                "min_duration": min_duration, **wave}
+def wave_label(omega_ts: float | None) -> str:
+    """What names an oscillating drive's frequency (a held drive: nothing): -w0.5 in stress-mutilde0.5-w0.5 and in
+    the run p20-w0.5 of its frequency."""
+    return "" if omega_ts is None else f"-w{omega_ts:g}"
 
 
 @dataclass(frozen=True)
@@ -70,11 +55,9 @@ class Study:
     dem: str
     seeds: tuple[int, ...]
     pressures: tuple[float, ...]
-    drives: tuple[StudyDrive, ...]
+    drives: tuple[dem_config.Drive, ...]  # run at every pressure, named by kind, load and frequency
     calibration_file: str | None
     calibration_table: tuple = ()  # (key, value) entries of the DEM [calibration] table when the study runs it
-    duration_ts: float = 10.0
-    min_duration: float = 0.0
     width: float | None = None
     width_check: bool = True
     ngf_from: str | None = None  # an oscillating study's NGF amplitude: a Stokes report's metrics.json
@@ -82,7 +65,12 @@ class Study:
     @property
     def oscillating(self) -> bool:
         """A study of the oscillating plate (every drive a sine)."""
-        return any(d.omega_ts is not None for d in self.drives)
+        return any(d.oscillating for d in self.drives)
+
+    @property
+    def frequencies(self) -> tuple[float | None, ...]:
+        """The drives' distinct omega t_s, increasing (held drives: None): a run each at every pressure."""
+        return tuple(sorted({d.omega_ts for d in self.drives}))
 
     @property
     def calibration_pressures(self) -> tuple[float, ...]:
@@ -95,7 +83,9 @@ class Study:
         return max(self.pressures)
 
 
-def _drive(table, k: int) -> StudyDrive:
+def _drive(table, k: int, duration_ts: float, min_duration: float) -> dem_config.Drive:
+    """The [[drive]] table ``k`` as a DEM drive (its own checks too) of ``duration_ts`` t_s, named by its kind and
+    load: stress-mutilde0.5."""
     where = f"drive[{k}]"
     require(isinstance(table, dict) and set(table) <= set(DRIVE_KEYS), f"{where} keys", f"among {list(DRIVE_KEYS)}",
             table)
@@ -104,9 +94,14 @@ def _drive(table, k: int) -> StudyDrive:
             "(speed)", loads)
     value = table[loads[0]]
     require(finite(value) and value > 0, f"{where}.{loads[0]}", "a finite number > 0", value)
-    drive = StudyDrive(table.get("kind"), loads[0], float(value))
-    dem_config.Drive(drive.name, drive.kind, **{drive.load_key: drive.value})  # the DEM's own checks
-    return drive
+    kind, value = table.get("kind"), float(value)
+    return dem_config.Drive(f"{kind}-{SHORT[loads[0]]}{value:g}", kind, **{loads[0]: value}, duration_ts=duration_ts,
+                            min_duration=min_duration)
+
+
+def _oscillating(drive: dem_config.Drive, omega_ts: float, cycles: float) -> dem_config.Drive:
+    """``drive`` as the amplitude of a sine at ``omega_ts``, run ``cycles`` periods: stress-mutilde0.5-w1."""
+    return dataclasses.replace(drive, name=drive.name + wave_label(omega_ts), omega_ts=omega_ts, cycles=cycles)
 
 
 def from_dict(doc: dict, base: Path | None = None) -> Study:
@@ -138,9 +133,13 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
         require(doc.get("omega_ts") is not None, "ngf_from", "only with omega_ts (an oscillating "
                 "study; a Stokes study fits NGF's A on its own drives)", ngf_from)
         ngf_from = _existing(ngf_from, base, "ngf_from", "a Stokes report's metrics.json")
+    duration_ts = doc.get("duration_ts", dem_config.Drive.duration_ts)
+    min_duration = doc.get("min_duration", dem_config.Drive.min_duration)
+    require(finite(duration_ts) and duration_ts > 0, "duration_ts", "a finite number > 0", duration_ts)
+    require(finite(min_duration) and min_duration >= 0, "min_duration", "a finite number >= 0", min_duration)
     drives = doc.get("drive")
     require(isinstance(drives, list) and drives, "drive", "an array of at least one [[drive]] table", drives)
-    built = tuple(_drive(t, k) for k, t in enumerate(drives))
+    built = tuple(_drive(t, k, float(duration_ts), float(min_duration)) for k, t in enumerate(drives))
     omegas, cycles = doc.get("omega_ts"), doc.get("cycles", dem_config.Drive.cycles)
     require(omegas is None or (isinstance(omegas, list) and omegas and all(finite(w) and w > 0 for w in omegas)
                                and len(set(omegas)) == len(omegas)), "omega_ts",
@@ -148,11 +147,8 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     require(finite(cycles) and cycles >= dem_config.MIN_CYCLES, "cycles",
             f"a number of periods >= {dem_config.MIN_CYCLES}", cycles)
     if omegas is not None:
-        built = tuple(dataclasses.replace(d, omega_ts=float(w), cycles=float(cycles)) for d in built for w in omegas)
+        built = tuple(_oscillating(d, float(w), float(cycles)) for d in built for w in omegas)
     require(len({d.name for d in built}) == len(built), "drive", "distinct drives", [d.name for d in built])
-    duration_ts, min_duration = doc.get("duration_ts", 10.0), doc.get("min_duration", 0.0)
-    require(finite(duration_ts) and duration_ts > 0, "duration_ts", "a finite number > 0", duration_ts)
-    require(finite(min_duration) and min_duration >= 0, "min_duration", "a finite number >= 0", min_duration)
     width = doc.get("width")
     require(width is None or (finite(width) and width >= dem_config.MIN_WIDTH), "width",
             f"a number >= {dem_config.MIN_WIDTH:g} d", width)
@@ -163,8 +159,7 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     require(isinstance(name, str) and name.replace("-", "").replace("_", "").isalnum(), "name",
             "letters, digits, '-' and '_'", name)
     return Study(name, doc["dem"], tuple(seeds), tuple(float(p) for p in pressures), built, file,
-                 table if file is None else (), float(duration_ts), float(min_duration),
-                 None if width is None else float(width), width_check, ngf_from)
+                 table if file is None else (), None if width is None else float(width), width_check, ngf_from)
 
 
 def _existing(file: str, base: Path | None, name: str, what: str) -> str:
@@ -194,12 +189,5 @@ def load(config: str | None, preset: str | None, sets=()) -> tuple[Study, str]:
     text = with_entries(text, [parse_assignment(a) for a in sets],
                         header=f"{config or preset} with --set " + " ".join(sets))
     return parse(text, Path(config).resolve().parent if config is not None else PRESET_BASE), text
-
-
-def rigidity(kappa: float, contact: str, p_max: float, p_w: float) -> float:
-    """kappa at p_w of grains whose kappa is ``kappa`` at p_max (one stiffness k_n: Hooke k_n = kappa p,
-    Hertz k_n = 2 kappa^1.5 p)."""
-    ratio = p_max / p_w
-    return kappa * (ratio if contact == "hooke" else ratio ** (2 / 3))
 
 

@@ -1,35 +1,31 @@
-"""A study's runs as DEM configs: one run folder per pressure (every drive, every seed), sized from the
-calibration (dem.sizing with the calibrated material), and the calibration stage's configs."""
+"""A study's runs as DEM configs, built from its DEM preset's and recorded as TOML: one run folder per pressure and
+frequency of the drives (every seed), each sized once from the calibration (dem.sizing with the calibrated material),
+and the calibration stage's configs."""
 from __future__ import annotations
 
+import dataclasses
 import json
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from granstokes.continuum.scales import Material
 from granstokes.dem import config as dem_config
+from granstokes.dem.contact import rigidity
 from granstokes.dem.estimate import STARTUP, Estimate, duration_text
 from granstokes.dem.layout import CONFIG_TOML, RUN_JSON
-from granstokes.dem.sizing import Plan, makespan, plan, ranks_per_bed, speedup
+from granstokes.dem.sizing import Plan, makespan, plan, ranks_per_bed, size_drive, speedup
 from granstokes.dem.throughput import Throughput, measured
 from granstokes.lib.toml_text import with_entries
 
-from .config import Study, rigidity
+from .config import Study, wave_label
 
 RUNS = "runs"
 WIDE = "-wide"  # the width check's run: label and name suffix
-#: atom and contact snapshots per t_s of the fastest drive at a pressure: the layer's growth over the first t_s
-#: is resolved by this many frames, and a drive of 10 t_s has 10 times as many (coarse-graining's cost)
-FRAMES_PER_TS = 20
-#: atom snapshots per t_s over the first t_s of the fastest drive: the growth window (compare.laws, from three
-#: shear-wave transits to half a t_s) holds tens of frames
-EARLY_FRAMES_PER_TS = 100
 #: bytes of the report per scored drive: its figures, tables and predictions (the smoke study's report, 10 MB over 4
 #: drives; bench/dem_costs.py)
 REPORT_BYTES_PER_DRIVE = 2.5e6
-#: an oscillating plate's run: LAMMPS's depth profiles this many times per period (the phase-resolved profiles
-#: of compare.oscillation), the plate's record PLATE_PER_PROFILE times as often, atom snapshots once a period
-PROFILES_PER_PERIOD, PLATE_PER_PROFILE = 24, 4
+#: the [calibration] entries that set its inertial numbers: a study's replace the DEM preset's
+INERTIAL = ("I", "I_min", "I_max", "points")
 
 
 def pressure_label(p_w: float) -> str:
@@ -41,72 +37,84 @@ def calibration_folder(out: Path, p_w: float) -> Path:
     return out / f"calibration-{pressure_label(p_w)}"
 
 
-def _grains(study: Study, p_w: float) -> list[tuple[str, object]]:
-    """The entries that make the DEM preset's grains one material at p_w: k_n of the highest pressure's kappa."""
-    doc = tomllib.loads(dem_config.preset_text(study.dem))
-    grains = doc.get("grains", {})
-    defaults = dem_config.Grains()
-    kappa = grains.get("kappa", defaults.kappa)
-    return [("load.p_w", p_w), ("grains.kappa", rigidity(kappa, grains.get("contact", defaults.contact),
-                                                           max(study.pressures), p_w))]
+def _grains(study: Study, grains: dem_config.Grains, p_w: float) -> dem_config.Grains:
+    """The DEM preset's ``grains`` as one material at p_w: k_n of the highest pressure's kappa."""
+    return dataclasses.replace(grains, kappa=rigidity(grains.kappa, grains.contact, max(study.pressures), p_w))
 
 
-def calibration_text(study: Study, p_w: float) -> str:
-    """The DEM preset with its grains at p_w: ``granstokes dem calibrate`` runs its [calibration] table there."""
-    table = [(f"calibration.{k}", list(v) if isinstance(v, tuple) else v) for k, v in study.calibration_table]
-    if any(k in dict(study.calibration_table) for k in ("I", "I_min", "I_max", "points")):
-        table += [(f"calibration.{k}", None) for k in ("I", "I_min", "I_max", "points")
-                  if k not in dict(study.calibration_table)]  # the study's inertial numbers replace the preset's
-    return with_entries(dem_config.preset_text(study.dem), [*_grains(study, p_w), *table],
-                        header=f"study {study.name}: the calibration of the {study.dem} grains at p_w = {p_w:g}")
+def _recorded(study: Study, cfg: dem_config.Config, entries: list, header: str) -> tuple[dem_config.Config, str]:
+    """``cfg``, the DEM preset changed as ``entries`` (dotted keys, granstokes.lib.toml_text) change its text, and its
+    TOML for the record: the preset's text with the entries (the tables they give no longer absent from ``cfg``)."""
+    given = {key.partition(".")[0] for key, value in entries if value is not None}
+    return (dataclasses.replace(cfg, absent=tuple(k for k in cfg.absent if k not in given)),
+            with_entries(dem_config.preset_text(study.dem), entries, header=header))
 
 
-def run_text(study: Study, p_w: float, material: dict, source: str, wide_of: Plan | None = None,
-             omega_ts: float | None = None) -> str:
-    """The DEM config of the run at p_w: the preset's grains (one material), the study's seeds and drives, the
-    depth and durations sized from ``material`` (the calibration at ``source``), snapshots every t_s/FRAMES_PER_TS
-    of its fastest drive (the plate's and the profiles' intervals no longer), every t_s/EARLY_FRAMES_PER_TS
-    over its first t_s.  ``wide_of``: the width check of
-    that run, its first drive alone in a box twice as wide and as deep.  ``omega_ts``: the oscillating drives at that
-    frequency, their profiles PROFILES_PER_PERIOD times a period of the fastest, the plate PLATE_PER_PROFILE times as
-    often, snapshots once a period (the phase-resolved analysis reads the plate and the profiles)."""
-    drives = study.drives[:1] if wide_of else study.drives
-    if omega_ts is not None:
-        drives = tuple(d for d in drives if d.omega_ts == omega_ts)
-    width = study.width or dem_config.preset(study.dem)[0].box.width
-    entries = [("name", f"{study.name}-{pressure_label(p_w)}{WIDE if wide_of else ''}"), ("seeds", list(study.seeds)),
-               *_grains(study, p_w), ("material", material), ("box.margin", None),
-               ("box.depth", wide_of.depth if wide_of else None), ("box.width", width * (2 if wide_of else 1)),
-               ("drive", [d.table(study.duration_ts, study.min_duration) for d in drives])]
-    header = f"study {study.name} at p_w = {p_w:g}, sized from the calibration {source}"
-    text = with_entries(dem_config.preset_text(study.dem), entries, header=header)
-    cfg = dem_config.parse(text)
-    if omega_ts is not None:
-        period = min(d.duration / d.drive.cycles for d in plan(cfg).drives)
-        profile = period / PROFILES_PER_PERIOD
-        return with_entries(text, [("output.atoms", period), ("output.contacts", period),
-                                   ("output.plate", min(cfg.output.plate, profile / PLATE_PER_PROFILE)),
-                                   ("output.profiles", profile), ("output.restart", max(cfg.output.restart, period))],
-                            header=header)
-    t_s = min(d.scales.t_s for d in plan(cfg).drives)
-    frame, out = t_s / FRAMES_PER_TS, cfg.output
-    return with_entries(text, [("output.atoms", frame), ("output.contacts", frame), ("output.plate",
-                                                                                      min(out.plate, frame)),
-                               ("output.profiles", min(out.profiles, frame)), ("output.early", t_s),
-                               ("output.atoms_early", t_s / EARLY_FRAMES_PER_TS)], header=header)
+def _pressure_entries(cfg: dem_config.Config) -> list[tuple[str, object]]:
+    """The entries of ``cfg``'s pressure and its grains' stiffness there."""
+    return [("load.p_w", cfg.p_w), ("grains.kappa", cfg.grains.kappa)]
+
+
+def calibration_config(study: Study, p_w: float) -> tuple[dem_config.Config, str]:
+    """The DEM preset with its grains at p_w and the study's [calibration] entries (its inertial numbers, if it gives
+    any, replace the preset's), and its TOML: ``granstokes dem calibrate`` runs its [calibration] table there."""
+    base, table = dem_config.preset(study.dem)[0], dict(study.calibration_table)
+    defaults = {f.name: f.default for f in dataclasses.fields(dem_config.Calibration)}
+    inertial = {k: defaults[k] for k in INERTIAL if k not in table} if any(k in table for k in INERTIAL) else {}
+    cfg = dataclasses.replace(base, p_w=p_w, grains=_grains(study, base.grains, p_w),
+                              calibration=dataclasses.replace(base.calibration, **inertial, **table))
+    entries = [*_pressure_entries(cfg),
+               *((f"calibration.{k}", list(v) if isinstance(v, tuple) else v) for k, v in table.items()),
+               *((f"calibration.{k}", None) for k in inertial)]
+    return _recorded(study, cfg, entries,
+                     f"study {study.name}: the calibration of the {study.dem} grains at p_w = {p_w:g}")
+
+
+def _outputs(cfg: dem_config.Config) -> dict:
+    """The output intervals that resolve the drives of ``cfg`` (as sized there) for the comparison that will read
+    them (its experiment's ``outputs``)."""
+    from granstokes.compare.experiment import experiment_for
+
+    drives = [size_drive(cfg, d) for d in cfg.drives]
+    return experiment_for(d.load for d in drives).outputs(drives, cfg.output)
+
+
+def run_config(study: Study, base: dem_config.Config, p_w: float, drives: tuple[dem_config.Drive, ...],
+               material: dict, source: str, wide_of: Plan | None = None) -> tuple[dem_config.Config, str]:
+    """The DEM config of a run at p_w and its TOML: the DEM preset ``base`` with its grains as one material, the
+    study's seeds, ``drives``, the depth and durations sized from ``material`` (the calibration at ``source``) and
+    the outputs that resolve the drives.  ``wide_of``: the width check of that run, in a box twice as wide and as
+    deep."""
+    width = (study.width or base.box.width) * (2 if wide_of else 1)
+    cfg = dataclasses.replace(base, name=f"{study.name}-{pressure_label(p_w)}{WIDE if wide_of else ''}",
+                              seeds=study.seeds, p_w=p_w, grains=_grains(study, base.grains, p_w),
+                              material=Material(**material), drives=drives,
+                              box=dataclasses.replace(base.box, margin=None, depth=wide_of.depth if wide_of else None,
+                                                      width=width))
+    out = _outputs(cfg)
+    cfg = dataclasses.replace(cfg, output=dataclasses.replace(cfg.output, **out))
+    entries = [("name", cfg.name), ("seeds", list(cfg.seeds)), *_pressure_entries(cfg), ("material", material),
+               ("box.margin", None), ("box.depth", cfg.box.depth), ("box.width", cfg.box.width),
+               ("drive", [d.table() for d in drives]), *((f"output.{k}", v) for k, v in out.items())]
+    return _recorded(study, cfg, entries, f"study {study.name} at p_w = {p_w:g}, sized from the calibration {source}")
 
 
 @dataclass(frozen=True)
 class StudyRun:
-    p_w: float
+    """A run: its config's TOML as its folder records it, and the config's sizing, which the run runs."""
+
     text: str
     plan: Plan
+
+    @property
+    def p_w(self) -> float:
+        return self.plan.config.p_w
 
 
 @dataclass(frozen=True)
 class StudyPlan:
     study: Study
-    runs: dict[str, StudyRun]  # label (pP, pP-wide) -> the run
+    runs: dict[str, StudyRun]  # label (pP, pP-wW, pP-wide) -> the run
 
     @staticmethod
     def folder(out: Path, label: str) -> Path:
@@ -119,7 +127,7 @@ class StudyPlan:
         for label, r in self.runs.items():
             stored = self.folder(out, label) / CONFIG_TOML
             text = stored.read_text() if (self.folder(out, label) / RUN_JSON).is_file() else r.text
-            runs[label] = r if text == r.text else StudyRun(r.p_w, text, plan(dem_config.parse(text)))
+            runs[label] = r if text == r.text else StudyRun(text, plan(dem_config.parse(text)))
         return StudyPlan(self.study, runs)
 
     def done(self, out: Path | None) -> set[str]:
@@ -202,19 +210,18 @@ class StudyPlan:
 
 
 def plan_study(study: Study, material: dict, source: str) -> StudyPlan:
-    """Every run's config and plan (ValueError naming the drive if a load is outside the calibrated law), and
-    with ``study.width_check`` the first drive at the reference pressure in a box twice as wide."""
-    runs = {}
-    for p_w in study.pressures:
-        if study.oscillating:  # one run per frequency: its outputs resolve its period
-            for w in sorted({d.omega_ts for d in study.drives}):
-                text = run_text(study, p_w, material, source, omega_ts=w)
-                runs[f"{pressure_label(p_w)}-w{w:g}"] = StudyRun(p_w, text, plan(dem_config.parse(text)))
-            continue
-        text = run_text(study, p_w, material, source)
-        runs[pressure_label(p_w)] = StudyRun(p_w, text, plan(dem_config.parse(text)))
+    """Every run's config and its sizing (ValueError naming the drive if a load is outside the calibrated law): at
+    every pressure one run per frequency of the drives (held drives: one run), its outputs resolving them; with
+    ``study.width_check`` the first drive at the reference pressure in a box twice as wide."""
+    base = dem_config.preset(study.dem)[0]
+
+    def run(p_w: float, drives: tuple[dem_config.Drive, ...], wide_of: Plan | None = None) -> StudyRun:
+        cfg, text = run_config(study, base, p_w, drives, material, source, wide_of)
+        return StudyRun(text, plan(cfg))
+
+    runs = {pressure_label(p_w) + wave_label(w): run(p_w, tuple(d for d in study.drives if d.omega_ts == w))
+            for p_w in study.pressures for w in study.frequencies}
     if study.width_check:
-        p_w = study.reference_pressure
-        text = run_text(study, p_w, material, source, wide_of=runs[pressure_label(p_w)].plan)
-        runs[pressure_label(p_w) + WIDE] = StudyRun(p_w, text, plan(dem_config.parse(text)))
+        label = pressure_label(study.reference_pressure)
+        runs[label + WIDE] = run(study.reference_pressure, study.drives[:1], runs[label].plan)
     return StudyPlan(study, runs)

@@ -18,7 +18,6 @@ import sys
 import time
 from pathlib import Path
 
-from granstokes.dem import config as dem_config
 from granstokes.dem import layout
 from granstokes.dem.calibrate import calibrate, material_table
 from granstokes.dem.estimate import duration_text
@@ -30,7 +29,7 @@ from granstokes.lib.toml_text import with_entries
 from granstokes.lib.validate import require
 
 from .config import Study, parse
-from .plan import WIDE, StudyPlan, calibration_folder, calibration_text, plan_study
+from .plan import WIDE, StudyPlan, calibration_config, calibration_folder, plan_study
 
 COMMAND = "study"
 STUDY_TOML, STUDY_JSON = "study.toml", "study.json"
@@ -86,10 +85,10 @@ class StudyRunner:
             state = folder / layout.CALIBRATION_STATE
             status = json.loads(state.read_text()).get("status") if state.exists() else None
             if status != "complete":
-                text = calibration_text(s, p_w)
+                cfg, text = calibration_config(s, p_w)
                 self.announce(f"study: calibrating the {s.dem} grains at p = {p_w:g} -> {folder}")
-                result = calibrate(dem_config.parse(text), text, folder, jobs=self.jobs, resume=status is not None,
-                                   progress=False, executor=self.executor())
+                result = calibrate(cfg, text, folder, jobs=self.jobs, resume=status is not None, progress=False,
+                                   executor=self.executor())
                 if result.status != "complete":
                     raise StudyStopped(result.status, f"calibration at p = {p_w:g}: {result.message}", result.signal)
             results[p_w] = str(folder / layout.CALIBRATION_JSON)
@@ -109,7 +108,7 @@ class StudyRunner:
         for label, r in sp.runs.items():
             folder = sp.folder(self.out, label)
             resume = (folder / layout.RUN_JSON).exists()
-            runner, meta = begin(r.plan.config, r.text, folder, np=1 if self.scheduler else ranks[label],
+            runner, meta = begin(r.plan, r.text, folder, np=1 if self.scheduler else ranks[label],
                                  resume=resume, progress=False, jobs=self.jobs)
             runners[label] = (runner, meta)
             tasks += runner.bed_tasks(meta, prefix=f"{label}/")
@@ -268,7 +267,7 @@ def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None
         runner.record(lambda d: d.update(
             name=study.name, status="running", message="", started=_now(), runs={},
             grid={"dem": study.dem, "pressures": list(study.pressures), "seeds": list(study.seeds),
-                  "drives": [d.name for d in study.drives], "duration_ts": study.duration_ts},
+                  "drives": [d.name for d in study.drives], "duration_ts": study.drives[0].duration_ts},
             units="DEM units: d = rho_p = g = 1; p_w in rho_p g d, times in sqrt(d/g)",
             provenance={**provenance(), "jobs": jobs, "scheduler": scheduler or "local"}))
     else:

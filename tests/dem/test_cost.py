@@ -88,13 +88,13 @@ def test_a_run_takes_the_rules_ranks_unless_given(tmp_path):
 
     one = with_entries(config.preset_text("quick"), [("seeds", [1])])
     two = 2 if os.cpu_count() >= 2 else 1
-    assert check_request(config.parse(one), one, tmp_path / "a", jobs=2).lmp.np == two
-    assert check_request(config.parse(one), one, tmp_path / "b", np=3, jobs=2).lmp.np == 3
+    assert check_request(plan(config.parse(one)), one, tmp_path / "a", jobs=2).lmp.np == two
+    assert check_request(plan(config.parse(one)), one, tmp_path / "b", np=3, jobs=2).lmp.np == 3
     three = config.preset_text("quick")
-    assert check_request(config.parse(three), three, tmp_path / "c", jobs=2).lmp.np == 1
-    assert check_request(config.parse(three), three, tmp_path / "d", jobs=1).lmp.np == two  # one at a time
+    assert check_request(plan(config.parse(three)), three, tmp_path / "c", jobs=2).lmp.np == 1
+    assert check_request(plan(config.parse(three)), three, tmp_path / "d", jobs=1).lmp.np == two  # one at a time
     smoke = config.preset_text("smoke")
-    assert check_request(config.parse(smoke), smoke, tmp_path / "e", jobs=2).lmp.np == 1
+    assert check_request(plan(config.parse(smoke)), smoke, tmp_path / "e", jobs=2).lmp.np == 1
 
 
 @pytest.mark.parametrize("seconds, text", [(9.44, "9.4 s"), (89, "89 s"), (150, "2.5 min"), (5300, "88 min"),
@@ -201,12 +201,12 @@ def test_the_estimate_from_the_probe_holds_a_smoke_run(tmp_path):
     from granstokes.dem.throughput import Throughput, probe
 
     text = config.preset_text("smoke").replace("duration = 7.0", "duration = 3.0")
+    p = plan(config.parse(text))
     before = probe((2,), together=False)
-    result = run(config.parse(text), text, tmp_path / "run", progress=False, jobs=1)
+    result = run(p, text, tmp_path / "run", progress=False, jobs=1)
     after = probe((2,), together=False)
     rates = {"2": {k: statistics.mean([before.rate(2, k), after.rate(2, k)]) for k in ("prepare", "drive")}}
     speed = Throughput(rates, 1.0, {}, "test", "test")
-    p = plan(config.parse(text))
     wall = sum(st["wall_time"] for st in result.stages.values())
     estimate = sum(p.stage_seconds(k, speed) for k in p.stage_keys(1))
     assert result.ok and abs(estimate / wall - 1) <= ESTIMATE_TOLERANCE, (estimate, wall, before.probe, after.probe)

@@ -1,11 +1,15 @@
-"""The preparation's settings as the config validates them and the prepare script carries them."""
+"""The preparation's settings as the config validates them and the prepare script carries them; a drive's table and
+its run.json record."""
+import dataclasses
+import json
 import re
 import tomllib
 
 import pytest
+from granstokes.continuum.load import Load
 from granstokes.dem import config, scene
 from granstokes.dem.contact import grain_mass
-from granstokes.dem.sizing import plan
+from granstokes.dem.sizing import plan, sized_drives
 
 from granstokes.cli import main
 
@@ -62,3 +66,20 @@ def test_a_bad_settling_threshold_is_one_line_and_exit_2(value, valid, tmp_path,
     assert code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
     assert f"prepare.settle_ke_per_grain must be {valid}" in err, err
     assert not (tmp_path / "r").exists()
+
+
+def test_a_drive_is_its_table_and_its_record_reads_back_as_sized():
+    """A drive's [[drive]] table gives it back; run.json's records of a scene's drives (DriveSizing.as_record) read
+    back through sized_drives as sized: name, scales, duration, steps, and the load the record states."""
+    for name in config.PRESETS:
+        cfg = config.preset(name)[0]
+        wave = dataclasses.replace(cfg.drives[0], name="wave", duration=None, omega_ts=2.0, cycles=3.0)
+        cfg = dataclasses.replace(cfg, drives=(*cfg.drives, wave))
+        assert tuple(config.Drive(**d.table()) for d in cfg.drives) == cfg.drives
+        p = plan(cfg)
+        meta = json.loads(json.dumps({"config": cfg.as_dict(), "sizing": p.as_dict()}))
+        for record, sized, back in zip(meta["sizing"]["drives"], p.drives, sized_drives(meta), strict=True):
+            assert (back.drive.name, back.scales, back.duration, back.steps) == (sized.drive.name, sized.scales,
+                                                                                 sized.duration, sized.steps)
+            assert back.load == Load.from_record(record, cfg.p_w) and back.load.omega == sized.load.omega
+            assert back.load.amplitude == pytest.approx(sized.load.amplitude, rel=1e-15)

@@ -8,8 +8,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 #: folder -> installed package (pyproject.toml's package-dir)
-PACKAGES = {"granstokes": "granstokes", "continuum": "granstokes.continuum", "dem": "granstokes.dem",
-            "compare": "granstokes.compare"}
+PACKAGES = {"granstokes": "granstokes", "lib": "granstokes.lib", "continuum": "granstokes.continuum",
+            "dem": "granstokes.dem", "compare": "granstokes.compare"}
 COMMANDS = {"granstokes.cli", "granstokes.demo"}
 #: the ground floor: granstokes.lib and the root package's __init__ (its version, nothing else)
 GROUND = ("granstokes.lib",)

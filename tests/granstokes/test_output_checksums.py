@@ -10,6 +10,7 @@ import stat
 import pytest
 from granstokes.dem import config, layout
 from granstokes.dem.runner import Runner
+from granstokes.dem.sizing import plan
 
 from granstokes.cli import main
 from granstokes.lib import staging
@@ -133,7 +134,7 @@ def _stopped_run(folder):
     (prepare / layout.GRAINS_CSV).write_text("id,type,radius,mass\n")
     (drive / layout.SEGMENTS / "000").mkdir(parents=True)
     (drive / layout.SEGMENTS / "000" / layout.PLATE_CSV).write_text("step,t\n0,0\n")
-    runner = Runner(config.parse(text), text, folder, 1, None, False)
+    runner = Runner(plan(config.parse(text)), text, folder, 1, None, False)
     runner.finish({"status": "running", "message": "", "timings": {}}, [Outcome("interrupted", "SIGINT")], 0.0)
     return folder
 
@@ -175,7 +176,7 @@ def test_a_resume_accepts_its_own_partial_files(tmp_path, capsys):
 def test_a_complete_run_records_every_file(tmp_path):
     run = _stopped_run(tmp_path / "run")
     text = (run / layout.CONFIG_TOML).read_text()
-    Runner(config.parse(text), text, run, 1, None, False).finish(
+    Runner(plan(config.parse(text)), text, run, 1, None, False).finish(
         {"status": "running", "message": "", "timings": {}}, [Outcome("complete")], 0.0)
     manifest = staging.read_manifest(run)
     assert set(manifest["checksums"]) == set(manifest["files"]) == {p for p in _snapshot(run) if p != staging.MANIFEST}

@@ -17,7 +17,8 @@ from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS
 
 from granstokes.cli import main as granstokes_main
 from granstokes.study import config
-from granstokes.study.plan import EARLY_FRAMES_PER_TS, FRAMES_PER_TS, calibration_text, plan_study
+from granstokes.compare.stokes_experiment import EARLY_FRAMES_PER_TS, FRAMES_PER_TS
+from granstokes.study.plan import calibration_config, plan_study
 
 ROOT = Path(__file__).resolve().parents[2]
 CALIBRATION = ROOT / "results" / "quick-calibration" / "calibration.json"
@@ -53,7 +54,8 @@ def test_bad_studies_are_refused_naming_the_parameter(change, message):
 def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
     """Every run is sized from the calibrated material: depth >= delta_s + 5 creep lengths, duration >= 10
     calibrated t_s, frames every t_s/FRAMES_PER_TS of the fastest drive; the grains' k_n is one at every pressure
-    (kappa scales as 1/p), the calibration stage's too; tau_w gives mu_w = tau_w/p_w."""
+    (kappa scales as 1/p), the calibration stage's too; tau_w gives mu_w = tau_w/p_w.  Each run's and calibration's
+    TOML is the config it runs."""
     study = config.parse(_study())
     material, _, _ = material_table(CALIBRATION)
     sp = plan_study(study, material, "test")
@@ -62,6 +64,7 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
     for label, run in sp.runs.items():
         p_w, text, p = run.p_w, run.text, run.plan
         cfg = p.config
+        assert dem_config.parse(text) == cfg
         assert cfg.p_w == p_w and cfg.seeds == (1, 2) and cfg.material.mu_s == pytest.approx(material["mu_s"])
         assert cfg.material.phi == pytest.approx(material["phi"]) and cfg.material.I0 == pytest.approx(material["I0"])
         k_n.add(round(cfg.contact.k_n, 6))
@@ -84,10 +87,9 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
             continue
         tau = next(d for d in p.drives if d.drive.tau_w is not None)
         assert tau.scales.mu_w == pytest.approx(6.0 / p_w)
-        assert dem_config.parse(text) == cfg
     assert len(k_n) == 1
-    cal = dem_config.parse(calibration_text(study, 10.0))
-    assert round(cal.contact.k_n, 6) in k_n and cal.p_w == 10.0
+    cal, text = calibration_config(study, 10.0)
+    assert round(cal.contact.k_n, 6) in k_n and cal.p_w == 10.0 and dem_config.parse(text) == cal
     # the same sizing through dem run --calibration: the preset's nominal material replaced
     out = tmp_path / "dry"
     assert granstokes_main(["dem", "run", "--preset", "quick", "--calibration", str(CALIBRATION), "--out", str(out),
@@ -97,7 +99,7 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
 
 def test_set_overrides_and_presets_print(capsys):
     study, text = config.load(None, "smoke", ["seeds=[3, 4, 5]", "pressures=[4.0]", "drive.0.mu_w_tilde=0.3"])
-    assert study.seeds == (3, 4, 5) and study.pressures == (4.0,) and study.drives[0].value == 0.3
+    assert study.seeds == (3, 4, 5) and study.pressures == (4.0,) and study.drives[0].mu_w_tilde == 0.3
     assert tomllib.loads(text)["seeds"] == [3, 4, 5] and text.startswith("# smoke with --set")
     with pytest.raises(ValueError, match="--set"):
         config.load(None, "smoke", ["seeds"])
@@ -137,7 +139,7 @@ def test_the_dry_run_adds_the_comparison_to_the_beds(tmp_path, capsys, canned_sp
     beds = sp.cost_seconds(2)
     assert f"the study's beds: about {duration_text(beds)} with 2 job(s)" in printed
     assert f"the comparison: about {duration_text(sp.comparison_seconds(2))} (" in printed
-    calibration = sum(plan_calibration(dem_config.parse(calibration_text(config.load(None, "smoke")[0], p))).estimate(2)
+    calibration = sum(plan_calibration(calibration_config(config.load(None, "smoke")[0], p)[0]).estimate(2)
                       .seconds for p in (5.0, 10.0))
     total = calibration + beds + sp.comparison_seconds(2) + STARTUP["study"]
     assert re.search(rf"total: about {re.escape(duration_text(total))} on this machine \(calibration "
@@ -358,6 +360,19 @@ def test_the_demo_runs_its_study_once_then_renders_again(tmp_path, monkeypatch):
     demo.run_demo(other)
     (other / "study" / "study.json").write_text(json.dumps({"status": "running"}))
     assert granstokes_main(["demo", "--out", str(other)]) == 1 and calls == [False, False, True]
+
+
+def test_the_runs_are_one_per_pressure_and_frequency():
+    """An oscillating study runs each frequency of its drives at each pressure in a run of its own (a held study: one
+    run per pressure), every run's TOML the config it runs."""
+    study = config.load(None, "oscillating-smoke", ["pressures=[10.0, 20.0]", "omega_ts=[5.0, 0.5]"])[0]
+    nominal = dem_config.preset(study.dem)[0].material
+    sp = plan_study(study, {k: getattr(nominal, k) for k in dem_config.MATERIAL_KEYS}, "")
+    assert list(sp.runs) == ["p10-w0.5", "p10-w5", "p20-w0.5", "p20-w5"]
+    for label, r in sp.runs.items():
+        wave = label.partition("-")[2]
+        assert [d.drive.name for d in r.plan.drives] == [f"stress-mutilde0.5-{wave}", f"speed-mutilde0.5-{wave}"]
+        assert dem_config.parse(r.text) == r.plan.config
 
 
 def test_a_resume_plans_a_begun_run_as_its_stored_config(tmp_path):

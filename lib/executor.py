@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 from tqdm import tqdm
 
-from granstokes.lib.validate import require
+from .validate import require
 
 RANKS = "ranks"  # the worker resource a task's MPI ranks hold
 DEFAULT_RETRIES = 1
