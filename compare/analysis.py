@@ -20,10 +20,10 @@ import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import depth_at_fraction, layer_measures
 from granstokes.continuum.load import Load
+from granstokes.continuum.scene import BedScene
 from granstokes.dem import layout
 
 from .calibrate import WALL_EXCLUSION
-from .models import Drive
 from .plate import (
     STEADY_LAST,
     STEADY_WINDOW_LATEST,
@@ -67,9 +67,9 @@ class DriveSpec:
         return self.load.p_w
 
     @property
-    def drive(self) -> Drive:
-        """What the continuum models need of this drive (compare.models)."""
-        return Drive(self.load, self.depth, self.plate_mass)
+    def scene(self) -> BedScene:
+        """The drive's scene as the continuum models take it (with ``load``: continuum.scene_models)."""
+        return BedScene(self.depth, plate_mass=self.plate_mass)
 
     @property
     def compared_from(self) -> float:

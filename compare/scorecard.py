@@ -37,13 +37,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import crossing_depth, depth_at_fraction
+from granstokes.continuum.load import Load
 from granstokes.continuum.scales import Material
+from granstokes.continuum.scene import BedScene
+from granstokes.continuum.scene_models import Prediction, SceneModel, Steady
 from scipy import stats
 from tqdm import tqdm
 
 from .analysis import DriveAnalysis
 from .calibrate import WALL_EXCLUSION
-from .models import Drive, Prediction, SceneModel, Steady
 from .plate import STEADY_LAST
 
 OBSERVABLES = {
@@ -219,7 +221,8 @@ class Sensitivity:
         return [(estimate(j) - central) / h for j, h in enumerate(self.steps)]
 
 
-def sensitivity(model: SceneModel, material: Material, drive: Drive, times, replicates: pd.DataFrame) -> Sensitivity:
+def sensitivity(model: SceneModel, material: Material, scene: BedScene, load: Load, times,
+                replicates: pd.DataFrame) -> Sensitivity:
     """The prediction of ``model`` re-solved with each parameter shifted by FD_STEP of its value (one transient and
     one steady solve per parameter)."""
     names = (*PARAMETERS, *([model.parameter] if model.parameter else ()))
@@ -229,7 +232,7 @@ def sensitivity(model: SceneModel, material: Material, drive: Drive, times, repl
     shifted = []
     for name, h in zip(names, steps):
         params = {**base, name: base[name] + h}
-        shifted.append(model.at(params).predict(_material(material, params), drive, times))
+        shifted.append(model.at(params).predict(_material(material, params), scene, load, times))
     cov = np.atleast_2d(np.cov(replicates[list(names)].to_numpy(), rowvar=False))
     return Sensitivity(names, steps, cov, tuple(shifted))
 
@@ -342,13 +345,15 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
             for _, r in tqdm(replicates.iterrows(), total=len(replicates), disable=not progress or None, leave=False,
                              desc=f"uncertainty {a.label} {model.key}"):
                 try:
-                    samples.append(model_observables(model.at(r).steady(_material(material, r), a.spec.drive), None,
+                    samples.append(model_observables(model.at(r).steady(_material(material, r), a.spec.scene,
+                                                                        a.spec.load), None,
                                                      a, delta_s[a.label]))
                 except ValueError:  # a replicate that cannot sustain the drive (e.g. mu_d below mu_w)
                     continue
             times = pred.series.t.to_numpy()
             end_value = _final_quarter(pred.series, a)
-            sens = sensitivities[(a.label, model.key)] = sensitivity(model, material, a.spec.drive, times, replicates)
+            sens = sensitivities[(a.label, model.key)] = sensitivity(model, material, a.spec.scene, a.spec.load, times,
+                                                                     replicates)
             t90_sd, bands[(a.label, model.key)] = _linearised(sens, a, pred.series)
             for obs, measured in dem.items():
                 value = central.get(obs)

@@ -3,7 +3,8 @@ friction mu_w (an imposed shear stress tau_w = mu_w p_w) or the plate speed u_w,
 problem, ``omega`` = 0) or as the amplitude of a sine, tau_w(t) = mu_w p_w sin(omega t) or u_w(t) = u_w sin(omega t)
 (Stokes' second problem, the oscillating plate, ``omega`` > 0).  DEM units (rho_p g d, sqrt(g d), sqrt(g/d)).  dem's
 sizing builds it, run.json stores it (``as_record``: kind, tau_w, u_w, omega), compare reads it back
-(``from_record``) and the models take it (``imposed``: the solvers' keyword; ``wave``: the factor of time)."""
+(``from_record``) and the models take it: a solver on the scene reads the wall's value at time t (``wall``; ``wave``:
+its factor of time) inside its rate, so a time-dependent wall never changes the problem."""
 from __future__ import annotations
 
 import math
@@ -50,6 +51,12 @@ class Load:
         """The imposed value's factor at time(s) t: sin(omega t), or 1 for a held load."""
         return np.sin(self.omega * np.asarray(t, dtype=float)) if self.oscillating else np.ones_like(t, dtype=float)
 
+    def wall(self, t):
+        """The imposed value in DEM units at time(s) t: value sin(omega t) (tau_w(t) or u_w(t)), or the held value."""
+        if self.oscillating:
+            return self.value * self.wave(t)
+        return self.value if np.ndim(t) == 0 else np.full(np.shape(t), self.value)
+
     @property
     def amplitude(self) -> float:
         """The imposed number of the load's own kind: mu_w (= tau_w/p_w) or u_w; a sine's amplitude."""
@@ -67,7 +74,7 @@ class Load:
 
     @property
     def imposed(self) -> dict:
-        """The solvers' keyword: {"mu_w": ...} or {"u_w": ...}."""
+        """The imposed number by name: {"mu_w": ...} or {"u_w": ...}."""
         return {"mu_w": self.mu_w} if self.kind == "stress" else {"u_w": self.u_w}
 
     def scales(self, material: Material) -> Scales:
