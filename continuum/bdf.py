@@ -83,8 +83,9 @@ class BdfControl(NamedTuple):
 
 
 class BdfWork(NamedTuple):
-    """The loop's workspace: the full state x, F at the interior, the wall's row and column, T^-1 of the wall's column,
-    a Newton update, the prediction and the iterate, the sum of the updates, the error weights and scipy's psi."""
+    """The loop's workspace (``workspace``): the full state x, F at the interior, the wall's row and column, T^-1 of
+    the wall's column, a Newton update, the prediction and the iterate, the sum of the updates, the error weights and
+    scipy's psi."""
 
     x: np.ndarray
     f: np.ndarray
@@ -100,10 +101,9 @@ class BdfWork(NamedTuple):
 
 
 class BdfSetup(NamedTuple):
-    """What a loop call reads (and the workspace it writes): the controls, the workspace, the kernels' data."""
+    """What a loop call reads: the controls and the kernels' data."""
 
     control: BdfControl
-    work: BdfWork
     data: tuple
 
 
@@ -121,6 +121,13 @@ class BdfState(NamedTuple):
     units: np.ndarray
     record_t: np.ndarray
     record_x: np.ndarray
+
+
+@jitable
+def workspace(m):
+    """The loop's workspace for m interior unknowns (allocated by each call, as local arrays)."""
+    return BdfWork(np.empty(m + 1), np.empty(m), np.empty(m + 1), np.zeros(m), np.empty(m), np.empty(m), np.empty(m),
+                   np.empty(m), np.empty(m), np.empty(m), np.empty(m))
 
 
 @jitable
@@ -180,12 +187,12 @@ def _newton_on(kernels: BdfKernels):
     """``newton`` on these kernels."""
     project, interior_rate, wall = kernels.project, kernels.rate, kernels.wall
 
-    def newton(state, setup, t, t_new, c, order):
+    def newton(state, setup, work, t, t_new, c, order):
         """scipy's solve_bdf_system at the step to t_new (from the prediction work.y): the iterate into work.y_new,
         the sum of the updates into work.dsum.  Each iterate takes x_0 from the constraint (``project``) and solves
         the bordered system with the wall's row and column at that iterate (stepper.NewtonMatrix.refresh_wall,
         .solve).  Returns (converged, iterations)."""
-        control, work, data, counts = setup.control, setup.work, setup.data, state.counts
+        control, data, counts = setup.control, setup.data, state.counts
         x, f, row0, column, zb, dy = work.x, work.f, work.row0, work.column, work.zb, work.dy
         y_new, dsum, scale, psi, units, d = work.y_new, work.dsum, work.scale, work.psi, state.units, state.d
         c_lu, newton_tol, m = state.clock[C_LU], state.clock[NEWTON_TOL], len(f)
@@ -255,8 +262,9 @@ def _advancer(kernels: BdfKernels, newton, sources: str):
         stall_fraction and stall_steps), or fails.  BDF's state between calls: the clock, the counts and the
         differences array d."""
         sources  # noqa: B018 -- the cache key (kernels.source_key): numba hashes a closure's cells
-        control, work, data = setup.control, setup.work, setup.data
+        control, data = setup.control, setup.data
         clock, counts, d = state.clock, state.counts, state.d
+        work = workspace(d.shape[1])
         t, h_abs, c_lu = clock[T], clock[H_ABS], clock[C_LU]
         order, n_equal, lu_valid = counts[ORDER], counts[N_EQUAL], counts[LU_VALID] == 1
         counts[RECORDED] = 0
@@ -291,7 +299,7 @@ def _advancer(kernels: BdfKernels, newton, sources: str):
                             return FAILED
                         lu_valid, c_lu = True, c
                         clock[C_LU] = c_lu
-                    converged, n_iter = newton(state, setup, t, t_new, c, order)
+                    converged, n_iter = newton(state, setup, work, t, t_new, c, order)
                     if not converged:
                         if current_jac:
                             break
@@ -360,23 +368,23 @@ def bdf_loop(kernels: BdfKernels, compiled: bool):
 
 def _start(problem, kernels: BdfKernels, data, n_wall: int, h0: float, rtol: float):
     """BDF's state at t = 0 (scipy's BDF.__init__: d from the initial state and its rate, the Jacobian there) and the
-    workspace."""
+    initial state."""
     x0 = problem.initial()
     n = len(x0)
     m, kl, ku = n - 1, problem.kl, problem.ku
-    work = BdfWork(np.empty(n), np.empty(m), np.empty(n), np.zeros(m), *(np.empty(m) for _ in range(7)))
-    kernels.project(x0[1:].copy(), work.x, data)
-    kernels.rate(work.x, 0.0, work.f, data)
+    x, f = np.empty(n), np.empty(m)
+    kernels.project(x0[1:].copy(), x, data)
+    kernels.rate(x, 0.0, f, data)
     d = np.zeros((MAX_ORDER + 3, m))
-    d[0], d[1] = work.x[1:], work.f * h0
+    d[0], d[1] = x[1:], f * h0
     jband = np.zeros((kl + ku + 1, m), order="F")  # columns contiguous, as the band solves walk them
-    kernels.jacobian(work.x, 0.0, jband, data)
+    kernels.jacobian(x, 0.0, jband, data)
     newton_tol = max(10 * EPS / rtol, min(0.03, rtol**0.5))  # scipy's BDF.__init__
     clock = np.array([0.0, h0, newton_tol, 0.0, 0.0])
     counts = np.array([1, 0, 0, 1, 0, 1, 0, 0, 0, 0], dtype=np.int64)
     state = BdfState(clock, counts, d, jband, np.zeros((2 * kl + ku + 1, m), order="F"), np.zeros(m, dtype=np.int64),
                      np.zeros((n_wall, m)), np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n)))
-    return state, work
+    return state, x
 
 
 def integrate(problem, t_out, *, compiled=True, rtol=1e-6, atol=1e-8, h0=FIRST_STEP, observer=None,
@@ -396,11 +404,10 @@ def integrate(problem, t_out, *, compiled=True, rtol=1e-6, atol=1e-8, h0=FIRST_S
     stats = StepStats(rejected=None)
     kernels, data, n_wall = problem.bdf_kernels()
     advance = bdf_loop(kernels, compiled)
-    state, work = _start(problem, kernels, data, n_wall, h0, rtol)
+    state, x = _start(problem, kernels, data, n_wall, h0, rtol)
     control = BdfControl(float(rtol), float(atol), int(max_steps), float(getattr(problem, "lift_off_end", 0.0)),
                          float(stall[0]), int(stall[1]), problem.kl, problem.ku)
-    setup = BdfSetup(control, work, data)
-    x = work.x.copy()
+    setup = BdfSetup(control, data)
     if observer is not None:
         observer(0.0, x.copy())
     states = np.empty((len(t_out), len(x)))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -52,10 +53,9 @@ class Load:
         return np.sin(self.omega * np.asarray(t, dtype=float)) if self.oscillating else np.ones_like(t, dtype=float)
 
     def wall(self, t):
-        """The imposed value in DEM units at time(s) t: value sin(omega t) (tau_w(t) or u_w(t)), or the held value."""
-        if self.oscillating:
-            return self.value * self.wave(t)
-        return self.value if np.ndim(t) == 0 else np.full(np.shape(t), self.value)
+        """The imposed value in DEM units at time(s) t: value sin(omega t) (tau_w(t) or u_w(t); an array for an array
+        t), or the held value (one number, whatever t: it is read at every rate evaluation)."""
+        return self.value * self.wave(t) if self.omega > 0 else self.value
 
     @property
     def amplitude(self) -> float:
@@ -67,9 +67,9 @@ class Load:
         """The imposed wall shear stress (an imposed stress), else None."""
         return self.mu_w * self.p_w if self.kind == "stress" else None
 
-    @property
+    @cached_property
     def value(self) -> float:
-        """The imposed number in DEM units: tau_w or u_w."""
+        """The imposed number in DEM units: tau_w or u_w (kept: the wall reads it at every rate evaluation)."""
         return self.tau_w if self.kind == "stress" else self.u_w
 
     @property

@@ -422,16 +422,32 @@ class NewtonRules(NamedTuple):
     eta_decay: float
 
 
+class StageNewton(NamedTuple):
+    """What a stage's Newton works with besides its iterate, right-hand side and rate (``solve_stage``): the update's
+    workspace, the error weights, the mass, the counters, the factors (the step's, the full Newton's), its rules and
+    tolerance and the kernels' data.  A few arrays only, not the whole setup: the loop calls it at every stage."""
+
+    dx: np.ndarray
+    weights: np.ndarray
+    mass: np.ndarray
+    counters: np.ndarray
+    lu: object
+    full_lu: object
+    rules: NewtonRules
+    tol: float
+    data: object
+
+
 class DirkSetup(NamedTuple):
-    """What a loop call reads (and the workspace it writes): the tableau, the controls, the rows, the fixed step ends
-    (empty: adaptive) and the kernels' data."""
+    """What a loop call reads (and the workspace it writes): the tableau, the controls, the rows, the workspace, the
+    fixed step ends (empty: adaptive), the stages' Newton and the kernels' data."""
 
     tableau: StageTableau
     control: Control
-    rules: NewtonRules
     rows: Rows
     work: Work
     fixed: np.ndarray
+    newton: StageNewton
     data: object
 
 
@@ -455,17 +471,15 @@ def _stage_solver(kernels: DirkKernels, ops: VectorOps):
     rate, factor, refresh, solve, project, fraction = kernels
     norm, residual = ops.norm, ops.residual
 
-    def solve_stage(f, t, dh, eta, full, setup, state):
-        """Solve M X - dh F(X, t) = rhs (work.rhs) by simplified Newton from the guess X = work.guess (in place; f
-        gets F(X, t)).
+    def solve_stage(x, f, rhs, t, dh, eta, full, newton):
+        """Solve M X - dh F(X, t) = rhs by simplified Newton from the guess X = x (in place; f gets F(X, t)).
 
         Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta); at the first
         iterate the given ``eta``, carried from the previous stage) is below the Newton tolerance (Hairer & Wanner
         1996, IV.8), then projects onto the algebraic constraints.  ``full``: refactorise at every iterate (full
         Newton, the fallback when the frozen matrix does not contract).  Returns (converged, eta)."""
-        work, rules, data, counters = setup.work, setup.rules, setup.data, state.counters
-        x, dx, tol = work.guess, work.dx, setup.control.newton_tol
-        lu = state.full_lu if full else state.lu
+        rules, data, counters, dx, tol = newton.rules, newton.data, newton.counters, newton.dx, newton.tol
+        lu = newton.full_lu if full else newton.lu
         rate(x, t, f, data)
         previous = -1.0
         for _ in range(rules.full_iterations if full else rules.iterations):
@@ -475,9 +489,9 @@ def _stage_solver(kernels: DirkKernels, ops: VectorOps):
                     return False, eta
             else:
                 refresh(lu, x, t, data)
-            residual(work.rhs, setup.rows.mass, x, dh, f, dx)
+            residual(rhs, newton.mass, x, dh, f, dx)
             solve(lu, dx, data)
-            size = norm(dx, work.weights)
+            size = norm(dx, newton.weights)
             if not math.isfinite(size):
                 break
             share = fraction(x, dx, data)
@@ -512,7 +526,8 @@ def _stepper(kernels: DirkKernels, ops: VectorOps, solve_stage):
         ``stage``, its rate in rates[-1]), stage i at t + c_i h, the local error estimate filtered through
         (M - h a_ss J)^-1 (Hosea & Shampine 1996) in ``est``.  Returns (ok, eta): ok False if a stage's Newton
         failed."""
-        tab, rows, work, rules, data = setup.tableau, setup.rows, setup.work, setup.rules, setup.data
+        tab, rows, work, newton, data = setup.tableau, setup.rows, setup.work, setup.newton, setup.data
+        rules = newton.rules
         x, f, rates, guess = state.x, state.f, work.rates, work.guess
         s = tab.a.shape[0]
         dh = h * tab.a[s - 1, s - 1]
@@ -534,10 +549,10 @@ def _stepper(kernels: DirkKernels, ops: VectorOps, solve_stage):
             work.start[:] = guess  # the full-Newton fallback's guess
             t_stage = t + tab.nodes[i] * h
             carried = max(eta, rules.eta_floor) ** rules.eta_decay if rules.carry else 1.0
-            ok, eta = solve_stage(rates[i + 1], t_stage, dh, carried, False, setup, state)
+            ok, eta = solve_stage(guess, rates[i + 1], work.rhs, t_stage, dh, carried, False, newton)
             if not ok:
                 guess[:] = work.start
-                ok, eta = solve_stage(rates[i + 1], t_stage, dh, 1.0, True, setup, state)
+                ok, eta = solve_stage(guess, rates[i + 1], work.rhs, t_stage, dh, 1.0, True, newton)
                 if not ok:
                     return False, eta
             work.stage[:] = guess
@@ -640,16 +655,19 @@ def _rules(problem, full_newton=FULL_NEWTON_ITERATIONS) -> NewtonRules:
                        NEWTON_ITERATIONS, full_newton, ETA_FLOOR, ETA_DECAY)
 
 
-def _setup(problem, tab: Tableau, control: Control, fixed, data) -> DirkSetup:
-    """The loop's setup of ``problem`` under the tableau ``tab`` (its workspace allocated)."""
+def _setup(problem, tab: Tableau, control: Control, fixed, state: DirkState, data) -> DirkSetup:
+    """The loop's setup of ``problem`` under the tableau ``tab`` (its workspace allocated; the stages' Newton on the
+    state's counters and factors)."""
     mass = np.asarray(problem.mass, dtype=float)
     algebraic, inverse_mass = mass_rows(mass)
     s, n = len(tab.A), len(mass)
     tableau = StageTableau(tab.matrix, tab.stage_weights, tab.error_weights if tab.err is not None else np.zeros(s),
                            tab.nodes, tab.explicit_first, int(tab.err_order), tab.err is not None)
     work = Work(np.empty((s + 1, n)), *(np.empty(n) for _ in range(8)))
-    return DirkSetup(tableau, control, _rules(problem), Rows(mass, inverse_mass, algebraic, np.flatnonzero(mass > 0)),
-                     work, fixed, data)
+    newton = StageNewton(work.dx, work.weights, mass, state.counters, state.lu, state.full_lu, _rules(problem),
+                         control.newton_tol, data)
+    return DirkSetup(tableau, control, Rows(mass, inverse_mass, algebraic, np.flatnonzero(mass > 0)), work, fixed,
+                     newton, data)
 
 
 def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol=1e-8, h0=FIRST_STEP,
@@ -684,9 +702,9 @@ def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol
     if fixed.size and (fixed[0] <= t0 or np.any(np.diff(fixed) <= 0)
                        or fixed[-1] < t_out[-1] * (1 - OUTPUT_RTOL)):
         raise ValueError("fixed_times must increase from the start time and reach the last output time")
-    setup = _setup(problem, tab, control, fixed, data)
     state = DirkState(x, f, np.array([t0, h0, 1.0, math.inf, math.inf, 0.0]), np.zeros(5, dtype=np.int64), factors(),
                       factors(), np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n)))
+    setup = _setup(problem, tab, control, fixed, state, data)
     if observer is not None and resume is None:
         observer(t0, x.copy())
     states = np.empty((len(t_out), n))
