@@ -77,17 +77,17 @@ def _euler(problem, t_out, *, fixed_times=None, observer=None, compiled=None, rt
     return stepper.explicit_euler(problem, t_out, fixed_times, observer)
 
 
-def _ivp_jacobian(problem, state, first: int, inverse_mass: np.ndarray) -> dict:
+def _ivp_jacobian(problem, state, first: int, inverse_mass: np.ndarray, unit_mass: bool) -> dict:
     """solve_ivp's Jacobian option: the problem's band at (x, t) over the mass on the differential rows (a sparse
     matrix: BDF and Radau factorise it as sparse), or its pattern ``sparsity()`` for scipy's finite differences."""
     if not hasattr(problem, "jacobian"):
         return {"jac_sparsity": problem.sparsity()}
     import scipy.sparse as sp
 
-    def jac(t, z):
-        return (sp.diags(inverse_mass) @ problem.jacobian(state(z), t).sparse(first)).tocsc()
-
-    return {"jac": jac}
+    if unit_mass:
+        return {"jac": lambda t, z: problem.jacobian(state(z), t).sparse(first).tocsc()}
+    over_mass = sp.diags(inverse_mass)
+    return {"jac": lambda t, z: (over_mass @ problem.jacobian(state(z), t).sparse(first)).tocsc()}
 
 
 def _solve_ivp(method):
@@ -95,9 +95,10 @@ def _solve_ivp(method):
             compiled=None, newton_tol=None, max_steps=None):
         """scipy's solve_ivp(``method``) on the differential rows z, dz/dt = F(x, t)/M, from the problem's initial
         state at t = 0 or from ``resume`` = (t0, x0); the algebraic rows (leading rows only) from ``problem.project``
-        (which must not depend on z: an imposed stress).  ``atol``: a number or one per differential row; ``h0``: the
-        first step (None: scipy's choice); scipy's own step count (``max_steps`` does not apply).  ``steps`` reports
-        the output times, ``newton_iterations`` scipy's evaluations of the rate (its finite differences' included)."""
+        (which must not depend on z: an imposed stress; without algebraic rows x is z).  ``atol``: a number or one
+        per differential row; ``h0``: the first step (None: scipy's choice); scipy's own step count (``max_steps``
+        does not apply).  ``steps`` reports the output times, ``newton_iterations`` scipy's evaluations of the rate
+        (its finite differences' included)."""
         from scipy.integrate import solve_ivp
 
         if observer is not None or fixed_times is not None:
@@ -105,25 +106,28 @@ def _solve_ivp(method):
 
         t_out = np.asarray(t_out, dtype=float)
         mass = np.asarray(problem.mass, dtype=float)
-        differential = np.flatnonzero(mass > 0)
-        first = int(differential[0])
-        if not np.array_equal(differential, np.arange(first, len(mass))):
+        first = int(np.argmax(mass > 0))
+        if not np.all(mass[first:] > 0):
             raise ValueError(f"solve_ivp-{method} takes algebraic rows before the differential ones only")
-        inverse_mass = 1 / mass[differential]
+        inverse_mass = 1 / mass[first:]
+        unit_mass = bool(np.all(inverse_mass == 1.0))
         t0, x0 = resume if resume is not None else (0.0, problem.initial())
         x = problem.project(np.array(x0, dtype=float))
 
         def state(z):
+            if not first:
+                return z
             full = x.copy()
-            full[differential] = z
+            full[first:] = z
             return problem.project(full)
 
         def rhs(t, z):
-            return problem.rate(state(z), t)[differential] * inverse_mass
+            f = problem.rate(state(z), t)[first:]
+            return f if unit_mass else f * inverse_mass
 
         start = time.process_time()
-        sol = solve_ivp(rhs, (t0, t_out[-1]), x[differential], method=method, t_eval=t_out, rtol=rtol, atol=atol,
-                        first_step=h0, **_ivp_jacobian(problem, state, first, inverse_mass))
+        sol = solve_ivp(rhs, (t0, t_out[-1]), x[first:], method=method, t_eval=t_out, rtol=rtol, atol=atol,
+                        first_step=h0, **_ivp_jacobian(problem, state, first, inverse_mass, unit_mass))
         if not sol.success:
             raise stepper.StepperFailure(f"solve_ivp({method}) failed: {sol.message}")
         states = np.array([state(z) for z in sol.y.T])

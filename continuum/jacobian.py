@@ -19,12 +19,11 @@ class Jacobian:
     dissipative: bool = False
 
     def sparse(self, first: int = 0):
-        """The band's rows and columns first..n-1 as a sparse matrix (CSC)."""
+        """The band's rows and columns first..n-1 as a sparse matrix (scipy's DIA)."""
         import scipy.sparse as sp
 
         n = self.bands.shape[1] - first
-        return sp.dia_matrix((self.bands[:, first:], self.ku - np.arange(self.kl + self.ku + 1)),
-                             shape=(n, n)).tocsc()
+        return sp.dia_matrix((self.bands[:, first:], self.ku - np.arange(self.kl + self.ku + 1)), shape=(n, n))
 
     @classmethod
     def tridiagonal(cls, sub, diag, sup, row0=None) -> Jacobian:
