@@ -21,12 +21,13 @@ from granstokes.compare import calibrate
 from granstokes.compare import oscillation as osc
 from granstokes.compare.drive import DriveSpec
 from granstokes.continuum.load import Load
-from granstokes.continuum.oscillation import OscillationNumerics
+from granstokes.continuum.oscillation import OSCILLATION_NUMERICS
+from granstokes.continuum.scene import SceneNumerics
 
 ROOT = Path(__file__).parent.parent
 P_W, DEPTH, PLATE_MASS, CYCLES, OMEGA_TS, MU_TILDE = 20.0, 28.0, 0.471, 4, 1.0, 0.6
-REFERENCE = OscillationNumerics(n_cells=320, rtol=1e-8, atol=1e-11)
-CANDIDATES = {"verification (200 cells, rtol 1e-6; baseline)": OscillationNumerics(),
+REFERENCE = SceneNumerics(n_cells=320, rtol=1e-8, atol=1e-11)
+CANDIDATES = {"verification (200 cells, rtol 1e-6; baseline)": OSCILLATION_NUMERICS,
               "comparison (80 cells, rtol 1e-4)": osc.NUMERICS}
 OBSERVED = ("response_amplitude", "phase_lag", "yielded_depth", "dissipation")
 

@@ -1,5 +1,5 @@
 """Velocity form (continuum.velocity) on the quick preset's two drives, as compare predicts them:
-CPU time and error of u_w(t), mu_w(t), delta_u(t) (compare.models) and the velocity profiles, at the
+CPU time and error of u_w(t), mu_w(t), delta_u(t) (continuum.scene_models) and the velocity profiles, at the
 comparison's output times, against a converged reference.  Writes bench/velocity_form.csv and prints
 the table for bench/RESULTS.md.
 
@@ -20,10 +20,9 @@ import numpy as np
 import pandas as pd
 from granstokes.compare import calibrate
 from granstokes.compare.comparison import PREDICTION_SPAN, PREDICTION_TIMES
-from granstokes.compare.models import Drive, _series
-from granstokes.continuum.rules import YieldRule
-from granstokes.continuum.solver import Numerics
-from granstokes.continuum.velocity import VELOCITY_NUMERICS, solve_velocity
+from granstokes.continuum.scene import BedScene, SceneNumerics
+from granstokes.continuum.scene_models import LOCAL
+from granstokes.continuum.velocity import VELOCITY_NUMERICS
 from granstokes.dem.config import preset
 from granstokes.dem.scene import plate_geometry
 from granstokes.dem.sizing import plan
@@ -32,10 +31,10 @@ HERE = Path(__file__).parent
 ROOT = HERE.parent
 TARGET = 1e-4
 REFINE = (400, 800, 1600)
-REFERENCE_TOL = dict(stretch=2.0, rtol=1e-8, atol=1e-11)
+REFERENCE_TOL = dict(stretch=2.0, rtol=1e-8, atol=1e-11, method="sdirk4")
 #: the baseline (200 cells, stretch 2, SDIRK4; "old default" in the table): the CPU ratios are against it, in the
 #: same run
-OLD_DEFAULT = Numerics(n_cells=200, stretch=2.0, rtol=1e-5, atol=1e-9)
+OLD_DEFAULT = SceneNumerics(n_cells=200, stretch=2.0, rtol=1e-5, atol=1e-9, method="sdirk4")
 CANDIDATES = {"old default (200 cells, stretch 2, sdirk4)": OLD_DEFAULT,
               "default (400 cells, stretch 4, tr-bdf2, atol 1e-8)": VELOCITY_NUMERICS,
               "former default (as above, atol 1e-9)": replace(VELOCITY_NUMERICS, atol=1e-9),
@@ -49,29 +48,27 @@ REPEATS = 3
 
 
 def quick_drives():
-    """(material, [(name, Drive, times)]) of the quick preset."""
+    """(material, scene, [(name, load, times)]) of the quick preset."""
     cfg, _ = preset("quick")
     p = plan(cfg)
     mass = plate_geometry(p)["mass_per_area"]
     material = calibrate.load(ROOT / "results/quick-calibration/calibration.json").material()
-    drives = [(d.drive.name, Drive(d.load, p.depth, mass),
-               np.geomspace(d.duration / PREDICTION_SPAN, d.duration, PREDICTION_TIMES)) for d in p.drives]
-    return material, drives
+    drives = [(d.drive.name, d.load, np.geomspace(d.duration / PREDICTION_SPAN, d.duration, PREDICTION_TIMES))
+              for d in p.drives]
+    return material, BedScene(p.depth, plate_mass=mass), drives
 
 
-def predict(material, drive, times, numerics):
-    """What compare.models' local transient computes: the series (u_w, mu_w, delta_u) and u(y)."""
-    vel = solve_velocity(drive.scene(material), times, rule=YieldRule.for_layer(drive.load.scales(material)),
-                         initial="rest", numerics=numerics, compare_steady=False, **drive.load.imposed)
-    s = _series(times, vel.y, vel.u, vel.mu_w)
-    return {"u_w": s.u_w.to_numpy(), "mu_w": s.mu_w.to_numpy(), "delta_u": s.delta_u.to_numpy(),
-            "y": vel.y, "u": vel.u}
+def predict(material, scene, load, times, numerics):
+    """The scene model LOCAL's transient (continuum.scene_models, as compare predicts): the series (u_w, mu_w,
+    delta_u) and u(y)."""
+    tr = LOCAL.transient(material, scene, load, times, numerics)
+    return {"u_w": tr.u_w, "mu_w": tr.mu_w, "delta_u": tr.delta_u, "y": tr.y, "u": tr.u}
 
 
-def reference(material, drive, times):
+def reference(material, scene, load, times):
     """Richardson extrapolation over REFINE (order p measured per quantity, median over times) and
     the finest profile; returns (reference, orders, estimated error of the finest solve)."""
-    runs = [predict(material, drive, times, Numerics(n_cells=n, **REFERENCE_TOL)) for n in REFINE]
+    runs = [predict(material, scene, load, times, SceneNumerics(n_cells=n, **REFERENCE_TOL)) for n in REFINE]
     ref, orders, err = {"y": runs[-1]["y"], "u": runs[-1]["u"]}, {}, {}
     for q in ("u_w", "mu_w", "delta_u"):
         a, b, c = (r[q] for r in runs)
@@ -101,13 +98,13 @@ def timed(run):
 
 
 def main() -> None:
-    material, drives = quick_drives()
+    material, scene, drives = quick_drives()
     rows = []
-    for name, drive, times in drives:
-        ref, orders, ref_err = reference(material, drive, times)
+    for name, load, times in drives:
+        ref, orders, ref_err = reference(material, scene, load, times)
         print(f"{name}: measured orders {orders}; reference error estimate {ref_err}")
         for label, num in CANDIDATES.items():
-            cpu, run = timed(lambda: predict(material, drive, times, num))
+            cpu, run = timed(lambda: predict(material, scene, load, times, num))
             rows.append({"drive": name, "numerics": label, "n_cells": num.n_cells, "stretch": num.stretch,
                          "rtol": num.rtol, "cpu_ms": 1e3 * cpu, **errors(run, ref)})
     table = pd.DataFrame(rows)

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from granstokes.continuum.calibration import Calibration, mu_law
 from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.scene_models import LOCAL, PAPER, Prediction, ngf_model
 from granstokes.dem.calibrate import grains_difference
 from granstokes.dem.layout import RUN_JSON
 from tqdm import tqdm
@@ -30,7 +31,6 @@ from .analysis import DriveAnalysis, analyse_drive, mass_error
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
 from .drive import drive_specs
 from .laws import laws as paper_laws
-from .models import LOCAL, PAPER, Prediction, ngf_model
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings
@@ -240,7 +240,7 @@ def _predict(a: DriveAnalysis, material: Material, models, failure: str) -> tupl
     preds = []
     for model in models:
         try:
-            preds.append(model.predict(material, a.spec.drive, times))
+            preds.append(model.predict(material, a.spec.scene, a.spec.load, times))
         except RuntimeError as err:  # a solver that gave up (continuum.stepper): said, not hidden
             return None, (), (f"no continuum prediction: the {model.key} model's solver failed ({err}) at this "
                               "calibration"), ""

@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 from granstokes.continuum.load import Load
+from granstokes.continuum.scene import BedScene
 from granstokes.dem import layout
 from granstokes.dem.sizing import sized_drives
 
-from .models import Drive
 from .reader import ATOMS, DriveFolder
 
 #: transients are compared with the rigid continuum from this many shear-wave transits over the bed on: before, the
@@ -57,9 +57,9 @@ class DriveSpec:
         return f"{self.run}/{self.name}"
 
     @property
-    def drive(self) -> Drive:
-        """What the continuum models need of this drive (compare.models)."""
-        return Drive(self.load, self.depth, self.plate_mass)
+    def scene(self) -> BedScene:
+        """The drive's scene as the continuum models take it (with ``load``: continuum.scene_models)."""
+        return BedScene(self.depth, plate_mass=self.plate_mass)
 
     @property
     def compared_from(self) -> float:

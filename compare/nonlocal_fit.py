@@ -49,7 +49,7 @@ class FluidityFit:
 
 
 def _misfit(A: float, material: Material, a: DriveAnalysis, depth, log_u) -> float:
-    st = solve_steady(a.spec.drive.scene(material), NonlocalFluidity(A=A), **a.spec.drive.load.imposed)
+    st = solve_steady(material, a.spec.scene, a.spec.load, fluidity=NonlocalFluidity(A=A))
     model = np.interp(depth, st.y, st.u)
     return float(np.sum((np.log(np.maximum(model, 1e-300) / st.u_w) - log_u) ** 2))
 

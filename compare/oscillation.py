@@ -34,6 +34,7 @@ from granstokes.continuum.ngf import NonlocalFluidity
 from granstokes.continuum.richardson import richardson
 from granstokes.continuum.rules import YieldRule
 from granstokes.continuum.scales import Material
+from granstokes.continuum.scene import BedScene, SceneNumerics
 from granstokes.dem import layout
 
 from granstokes.lib.validate import require
@@ -53,7 +54,7 @@ RESPONSE_FRACTION = 0.9
 SAMPLES_PER_PERIOD = 96
 #: the comparison's numerics: percent-level DEM errors need no more (the rows' numerical_err says what it costs;
 #: continuum.oscillation's defaults verify the solver to 1e-4)
-NUMERICS = osc.OscillationNumerics(n_cells=80, rtol=1e-4, atol=1e-7)
+NUMERICS = SceneNumerics(n_cells=80, rtol=1e-4, atol=1e-7)
 #: the models compared (continuum.oscillation.MODELS) and their labels
 LABELS = {"local": "local mu(I), velocity form on the DEM scene", "ngf": "nonlocal fluidity (NGF)"}
 PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
@@ -204,7 +205,7 @@ class ModelSetup:
     covariance: pd.DataFrame
     ngf_A: float | None = None
     ngf_A_err: float = 0.0
-    numerics: osc.OscillationNumerics = NUMERICS
+    numerics: SceneNumerics = NUMERICS
 
     @property
     def models(self) -> tuple[str, ...]:
@@ -212,14 +213,14 @@ class ModelSetup:
 
 
 def model_record(drive: DriveSpec, material: Material, model: str, A: float | None, depths,
-                 numerics: osc.OscillationNumerics, velocity_depths=None) -> Record:
+                 numerics: SceneNumerics, velocity_depths=None) -> Record:
     """A model's solution of ``drive`` as a Record: sampled SAMPLES_PER_PERIOD times a period over the DEM's
     duration, mu (sign as the DEM's) at the DEM's profile depths, u at ``velocity_depths`` (default: those)."""
     load = drive.load
     n = int(round(SAMPLES_PER_PERIOD * (drive.duration / load.period)))
     t = np.linspace(0.0, drive.duration, n + 1)[1:]
-    scene = osc.BedScene(material, load.p_w, drive.depth, plate_mass=drive.plate_mass)
-    sol = osc.solve_oscillating(scene, load, t, model=model, rule=_rule(drive, material),
+    scene = BedScene(drive.depth, plate_mass=drive.plate_mass)
+    sol = osc.solve_oscillating(material, scene, load, t, model=model, rule=_rule(drive, material),
                                 fluidity=NonlocalFluidity(A=A) if model == "ngf" else None, numerics=numerics,
                                 error_estimate=False)
     u_w = sol.u_w
@@ -227,7 +228,7 @@ def model_record(drive: DriveSpec, material: Material, model: str, A: float | No
     mu = -np.array([np.interp(depths, sol.y_mu, m) for m in sol.mu])
     # tau_w: the stress on the bed's top (as the DEM's plate record measures it; under an imposed stress the plate's
     # inertia makes it differ from the load within the cycle, not over it)
-    top = -sol.mu[:, 0] * (load.p_w + scene.weight_gradient * sol.y_mu[0])
+    top = -sol.mu[:, 0] * (load.p_w + material.weight_gradient * sol.y_mu[0])
     plate = pd.DataFrame({"t": t, "x_w": x_w, "u_w": u_w, "mu_w": sol.mu_w, "tau_w": top, "u_c": u_w})  # no slip
     profiles = pd.DataFrame({"t": np.repeat(t, len(depths)), "depth": np.tile(depths, len(t)), "mu": mu.ravel()})
     vd = depths if velocity_depths is None else np.asarray(velocity_depths, dtype=float)

@@ -521,7 +521,7 @@ def laws_summary(c: Comparison) -> str:
             f"these drives (each row says why); " + "; ".join(parts) + ".")
 
 
-#: the model whose laws are the paper's predictions (compare.models.PAPER)
+#: the model whose laws are the paper's predictions (continuum.scene_models.PAPER)
 PAPER_MODEL = "paper"
 
 

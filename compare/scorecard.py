@@ -37,14 +37,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import crossing_depth, depth_at_fraction
+from granstokes.continuum.load import Load
 from granstokes.continuum.scales import Material
+from granstokes.continuum.scene import BedScene
+from granstokes.continuum.scene_models import Prediction, SceneModel, Steady
 from scipy import stats
 from tqdm import tqdm
 
 from .analysis import DriveAnalysis
 from .band import Sensitivity
 from .calibrate import WALL_EXCLUSION
-from .models import Drive, Prediction, SceneModel, Steady
 from .plate import STEADY_LAST
 from .rows import SIGMA_CONSISTENT, Z95, score_row, sigma, tally
 
@@ -194,12 +196,13 @@ def _material(base: Material, row) -> Material:
                    I_convention="dem", phi=float(row["phi"]))
 
 
-def sensitivity(model: SceneModel, material: Material, drive: Drive, times, replicates: pd.DataFrame) -> Sensitivity:
+def sensitivity(model: SceneModel, material: Material, scene: BedScene, load: Load, times,
+                replicates: pd.DataFrame) -> Sensitivity:
     """The prediction of ``model`` re-solved with each calibrated parameter (the material's, then the model's own)
     shifted (compare.band: one transient and one steady solve per parameter)."""
     central = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
                **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
-    return Sensitivity.of(lambda params: model.at(params).predict(_material(material, params), drive, times),
+    return Sensitivity.of(lambda params: model.at(params).predict(_material(material, params), scene, load, times),
                           central, replicates[list(central)].cov())
 
 
@@ -310,13 +313,15 @@ def score(drives, models: list[SceneModel], predictions: dict, material: Materia
             for _, r in tqdm(replicates.iterrows(), total=len(replicates), disable=not progress or None, leave=False,
                              desc=f"uncertainty {a.label} {model.key}"):
                 try:
-                    samples.append(model_observables(model.at(r).steady(_material(material, r), a.spec.drive), None,
+                    samples.append(model_observables(model.at(r).steady(_material(material, r), a.spec.scene,
+                                                                        a.spec.load), None,
                                                      a, delta_s[a.label]))
                 except ValueError:  # a replicate that cannot sustain the drive (e.g. mu_d below mu_w)
                     continue
             times = pred.series.t.to_numpy()
             end_value = _final_quarter(pred.series, a)
-            sens = sensitivities[(a.label, model.key)] = sensitivity(model, material, a.spec.drive, times, replicates)
+            sens = sensitivities[(a.label, model.key)] = sensitivity(model, material, a.spec.scene, a.spec.load, times,
+                                                                     replicates)
             t90_sd, bands[(a.label, model.key)] = _linearised(sens, a, pred.series)
             for obs, measured in dem.items():
                 value = central.get(obs)

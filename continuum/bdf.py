@@ -11,19 +11,21 @@ lift-off (bench/bdf_wall_newton.py).  One deviation from scipy: after the lift-o
 an update within the wall unknown's round-off is accepted (ROUND_OFF_UPDATES).
 
 The loop is written once (``bdf_loop``) on the problem's kernels (``BdfKernels``, continuum.kernels) and runs as
-Python or compiled by numba (``compiled``).  tests/continuum/bdf_oracle.py keeps scipy's own BDF on the same system
-as the test of its steps.
+Python or compiled by numba (``compiled``); what it carries between calls and what it reads are named tuples
+(``BdfState``, ``BdfSetup``).  The rates are taken at the step's end time (scipy's fun(t_new, y)).
+tests/continuum/bdf_oracle.py keeps scipy's own BDF on the same system as the test of its steps.
 """
 from __future__ import annotations
 
 import functools
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
 from .kernels import BdfKernels, band_lu, band_solve, jitable, rms, source_key
-from .stepper import MAX_STEPS, RECORD_ROWS, NewtonFailure, StepperFailure, StepStats
+from .stepper import FIRST_STEP, MAX_STEPS, RECORD_ROWS, NewtonFailure, StepperFailure, StepStats
 
 #: the stall that hands over to HANDOVER: steps below STALL_FRACTION t for STALL_STEPS in a row after the lift-off,
 #: counted afresh after each output time (the BDF cuts the step that lands on one and keeps that size for order + 1
@@ -59,46 +61,226 @@ def change_d(d, order, factor):
     d[:order + 1] = ru.T @ d[:order + 1].copy()
 
 
-@functools.cache
-def bdf_loop(kernels: BdfKernels, compiled: bool):
-    """The BDF loop on ``kernels``: ``advance(...)`` steps until an output time, a full record, a stall or a failure
-    (its exits).  Written once; ``compiled``: numba compiles it with the kernels (continuum.compiled), else it runs as
-    Python."""
-    project, interior_rate, jacobian, wall = kernels
-    sources = source_key(*kernels, bdf_loop)
+#: clock slots between calls: time, step, Newton tolerance, c of the factors in ab, the last step
+T, H_ABS, NEWTON_TOL, C_LU, H_STEP = range(5)
+#: counts between calls: order, steps of equal size, whether the factors are current, rate evaluations, LU
+#: factorisations, Jacobians, steps, small steps in a row, rows recorded in this call, U's upper bandwidth
+ORDER, N_EQUAL, LU_VALID, NFEV, NLU, NJEV, STEPS, SMALL, RECORDED, UPPER = range(10)
 
-    def advance(state, d, ints, jband, ab, piv, units, t_bound, control, record, kl, ku, data):
-        """Step until t_bound is reached (LANDED), the record is full, BDF stalls after the lift-off (``control``'s
-        stall_fraction and stall_steps), or fails.  BDF's state between calls: d (the differences array),
-        state = [t, h_abs, newton_tol, c of the factors in ab, the last step], ints = [order, n_equal_steps, lu_valid,
-        nfev, nlu, njev, steps, small steps in a row, rows recorded in this call, U's upper bandwidth]."""
+
+class BdfControl(NamedTuple):
+    """The loop's controls: tolerances, most steps, the problem's lift-off end and the stall rule (continuum.bdf's
+    ``integrate``), the band's widths."""
+
+    rtol: float
+    atol: float
+    max_steps: int
+    lift_off_end: float
+    stall_fraction: float
+    stall_steps: int
+    kl: int
+    ku: int
+
+
+class BdfWork(NamedTuple):
+    """The loop's workspace (``workspace``): the full state x, F at the interior, the wall's row and column, T^-1 of
+    the wall's column, a Newton update, the prediction and the iterate, the sum of the updates, the error weights and
+    scipy's psi."""
+
+    x: np.ndarray
+    f: np.ndarray
+    row0: np.ndarray
+    column: np.ndarray
+    zb: np.ndarray
+    dy: np.ndarray
+    y: np.ndarray
+    y_new: np.ndarray
+    dsum: np.ndarray
+    scale: np.ndarray
+    psi: np.ndarray
+
+
+class BdfSetup(NamedTuple):
+    """What a loop call reads: the controls and the kernels' data."""
+
+    control: BdfControl
+    data: tuple
+
+
+class BdfState(NamedTuple):
+    """What the loop carries from call to call: the clock (slots T..H_STEP), the counts (ORDER..UPPER), the
+    differences array d, the Jacobian's band, the factors of I - c J (ab, piv), T^-1 e_w of the wall's column's rows
+    (units) and the record of the accepted steps since the call began."""
+
+    clock: np.ndarray
+    counts: np.ndarray
+    d: np.ndarray
+    jband: np.ndarray
+    ab: np.ndarray
+    piv: np.ndarray
+    units: np.ndarray
+    record_t: np.ndarray
+    record_x: np.ndarray
+
+
+@jitable
+def workspace(m):
+    """The loop's workspace for m interior unknowns (allocated by each call, as local arrays)."""
+    return BdfWork(np.empty(m + 1), np.empty(m), np.empty(m + 1), np.zeros(m), np.empty(m), np.empty(m), np.empty(m),
+                   np.empty(m), np.empty(m), np.empty(m), np.empty(m))
+
+
+@jitable
+def factorise(state, control, c):
+    """The band LU of I - c J into ab and T^-1 e_w of the wall column's rows into units: U's upper bandwidth, or -1
+    if singular."""
+    kl, ku, ab = control.kl, control.ku, state.ab
+    ab[kl:] = -c * state.jband
+    ab[kl + ku] += 1.0
+    ab[:kl] = 0.0
+    upper = band_lu(ab, state.piv, kl, ku)
+    if upper < 0:
+        return upper
+    units = state.units
+    for w in range(units.shape[0]):  # T^-1 e_w: the wall column's share of every solve
+        units[w] = 0.0
+        units[w, w] = 1.0
+        band_solve(ab, state.piv, kl, ku, upper, units[w])
+    return upper
+
+
+@jitable
+def predict(d, order, y, scale, control):
+    """scipy's prediction y = sum of d[0..order] and the error weights atol + rtol |y|."""
+    y[:] = d[0]
+    for k in range(1, order + 1):
+        y += d[k]
+    for i in range(len(y)):
+        scale[i] = control.atol + control.rtol * abs(y[i])
+
+
+@jitable
+def accept(d, dsum, order):
+    """scipy's update of the differences array after an accepted step."""
+    d[order + 2] = dsum - d[order + 1]
+    d[order + 1] = dsum
+    for i in range(order, -1, -1):
+        d[i] += d[i + 1]
+
+
+@jitable
+def next_order(d, order, error_norm, scale, safety):
+    """scipy's choice among order - 1, order, order + 1 after order + 1 equal steps: (the new order, the step
+    factor)."""
+    e_m = ERROR_CONST[order - 1] * rms(d[order], scale) if order > 1 else math.inf
+    e_p = ERROR_CONST[order + 1] * rms(d[order + 2], scale) if order < MAX_ORDER else math.inf
+    norms = (e_m, error_norm, e_p)
+    best, delta_order = -1.0, 0
+    for k in range(3):
+        fk = norms[k] ** (-1 / (order + k)) if norms[k] > 0 else math.inf
+        if fk > best:
+            best, delta_order = fk, k - 1
+    return order + delta_order, min(MAX_FACTOR, safety * best)
+
+
+def _newton_on(kernels: BdfKernels):
+    """``newton`` on these kernels."""
+    project, interior_rate, wall = kernels.project, kernels.rate, kernels.wall
+
+    def newton(state, setup, work, t, t_new, c, order):
+        """scipy's solve_bdf_system at the step to t_new (from the prediction work.y): the iterate into work.y_new,
+        the sum of the updates into work.dsum.  Each iterate takes x_0 from the constraint (``project``) and solves
+        the bordered system with the wall's row and column at that iterate (stepper.NewtonMatrix.refresh_wall,
+        .solve).  Returns (converged, iterations)."""
+        control, data, counts = setup.control, setup.data, state.counts
+        x, f, row0, column, zb, dy = work.x, work.f, work.row0, work.column, work.zb, work.dy
+        y_new, dsum, scale, psi, units, d = work.y_new, work.dsum, work.scale, work.psi, state.units, state.d
+        c_lu, newton_tol, m = state.clock[C_LU], state.clock[NEWTON_TOL], len(f)
+        psi[:] = 0.0
+        for k in range(1, order + 1):
+            psi += d[k] * GAMMA[k]
+        psi /= ALPHA[order]
+        dsum[:] = 0.0
+        y_new[:] = work.y
+        dy_norm_old, n_iter = -1.0, 0
+        for k in range(NEWTON_MAXITER):
+            n_iter = k + 1
+            magnitude = project(y_new, x, data)
+            counts[NFEV] += 1
+            if not math.isfinite(x[0]):
+                break
+            interior_rate(x, t_new, f, data)
+            finite = True
+            for i in range(m):
+                finite = finite and math.isfinite(f[i])
+            if not finite:
+                break
+            wall(x, t_new, row0, column[:units.shape[0]], data)
+            zb[:] = 0.0
+            for w in range(units.shape[0]):
+                zb -= c_lu * column[w] * units[w]
+            for i in range(m):
+                dy[i] = c * f[i] - psi[i] - dsum[i]
+            band_solve(state.ab, state.piv, control.kl, control.ku, counts[UPPER], dy)
+            pivot, top = -c_lu * row0[0], 0.0
+            for i in range(m):
+                pivot += c_lu * row0[i + 1] * zb[i]
+                top += c_lu * row0[i + 1] * dy[i]
+            x0 = top / pivot
+            for i in range(m):
+                dy[i] -= x0 * zb[i]
+            dy_norm = rms(dy, scale)
+            rate = dy_norm / dy_norm_old if dy_norm_old >= 0 else -1.0
+            if rate >= 0 and (rate >= 1 or rate ** (NEWTON_MAXITER - k) / (1 - rate) * dy_norm > newton_tol):
+                # not scipy's: after the lift-off, an iteration that stalls within the wall unknown's round-off (felt
+                # by z through zb) is converged. There q is fixed by u~_w less the interior's share over w_0 ~ 1e-9,
+                # and its noise keeps scipy's Newton from converging at the steady state's tight tolerances: the step
+                # would collapse
+                if t > control.lift_off_end and dy_norm <= ROUND_OFF_UPDATES * EPS * magnitude / abs(
+                        row0[0]) * rms(zb, scale):
+                    y_new += dy
+                    dsum += dy
+                    return True, n_iter
+                return False, n_iter
+            for i in range(m):
+                y_new[i] += dy[i]
+                dsum[i] += dy[i]
+            if dy_norm == 0 or (rate >= 0 and rate / (1 - rate) * dy_norm < newton_tol):
+                return True, n_iter
+            dy_norm_old = dy_norm
+        return False, n_iter
+
+    return newton
+
+
+def _advancer(kernels: BdfKernels, newton, sources: str):
+    """``advance`` on these kernels and ``newton``; ``sources``: the compiled cache's key (kernels.source_key)."""
+    project, jacobian = kernels.project, kernels.jacobian
+
+    def advance(state, setup, t_bound):
+        """Step until t_bound is reached (LANDED), the record is full, BDF stalls after the lift-off (the control's
+        stall_fraction and stall_steps), or fails.  BDF's state between calls: the clock, the counts and the
+        differences array d."""
         sources  # noqa: B018 -- the cache key (kernels.source_key): numba hashes a closure's cells
-        rtol, atol, max_steps, lift_off_end, stall_fraction, stall_steps = control
-        rec_t, rec_x = record
-        m = d.shape[1]
-        x, f, row0, column = np.empty(m + 1), np.empty(m), np.empty(m + 1), np.zeros(m)
-        zb, dy, y, y_new = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
-        dsum, scale, psi = np.empty(m), np.empty(m), np.empty(m)
-        lap_wall_n = units.shape[0]
-        t, h_abs, newton_tol = state[0], state[1], state[2]
-        order, n_equal = ints[0], ints[1]
-        lu_valid = ints[2] == 1
-        ints[8] = 0
-        c_lu = state[3]
+        control, data = setup.control, setup.data
+        clock, counts, d = state.clock, state.counts, state.d
+        work = workspace(d.shape[1])
+        t, h_abs, c_lu = clock[T], clock[H_ABS], clock[C_LU]
+        order, n_equal, lu_valid = counts[ORDER], counts[N_EQUAL], counts[LU_VALID] == 1
+        counts[RECORDED] = 0
         while True:
-            if ints[6] >= max_steps:
-                state[0], state[1], state[3], ints[0], ints[1], ints[2] = t, h_abs, c_lu, order, n_equal, int(lu_valid)
+            if counts[STEPS] >= control.max_steps:
+                clock[T], clock[H_ABS], clock[C_LU] = t, h_abs, c_lu
+                counts[ORDER], counts[N_EQUAL], counts[LU_VALID] = order, n_equal, int(lu_valid)
                 return FAILED
             min_step = 10 * abs(np.nextafter(t, np.inf) - t)
             if h_abs < min_step:
                 change_d(d, order, min_step / h_abs)
                 h_abs, n_equal = min_step, 0
-            current_jac = False
-            accepted = False
-            n_iter = 0
+            current_jac, accepted, n_iter, error_norm, safety, t_new = False, False, 0, 0.0, 0.0, t
             while not accepted:
                 if h_abs < min_step:
-                    state[0], state[1], ints[0] = t, h_abs, order
+                    clock[T], clock[H_ABS], counts[ORDER] = t, h_abs, order
                     return TOO_SMALL
                 t_new = t + h_abs
                 if t_new - t_bound > 0:
@@ -106,90 +288,25 @@ def bdf_loop(kernels: BdfKernels, compiled: bool):
                     change_d(d, order, abs(t_new - t) / h_abs)
                     n_equal, lu_valid = 0, False
                 h_abs = abs(t_new - t)
-                y[:] = d[0]
-                for k in range(1, order + 1):
-                    y += d[k]
-                for i in range(m):
-                    scale[i] = atol + rtol * abs(y[i])
+                predict(d, order, work.y, work.scale, control)
                 converged = False
                 c = h_abs / ALPHA[order]
                 while not converged:
                     if not lu_valid:
-                        ab[kl:] = -c * jband
-                        ab[kl + ku] += 1.0
-                        ab[:kl] = 0.0
-                        ints[4] += 1
-                        ints[9] = band_lu(ab, piv, kl, ku)
-                        if ints[9] < 0:
+                        counts[NLU] += 1
+                        counts[UPPER] = factorise(state, control, c)
+                        if counts[UPPER] < 0:
                             return FAILED
-                        for w in range(lap_wall_n):  # T^-1 e_w: the wall column's share of every solve
-                            units[w] = 0.0
-                            units[w, w] = 1.0
-                            band_solve(ab, piv, kl, ku, ints[9], units[w])
                         lu_valid, c_lu = True, c
-                    # scipy's solve_bdf_system
-                    psi[:] = 0.0
-                    for k in range(1, order + 1):
-                        psi += d[k] * GAMMA[k]
-                    psi /= ALPHA[order]
-                    dsum[:] = 0.0
-                    y_new[:] = y
-                    dy_norm_old, converged = -1.0, False
-                    for k in range(NEWTON_MAXITER):
-                        n_iter = k + 1
-                        magnitude = project(y_new, x, data)
-                        ints[3] += 1
-                        if not math.isfinite(x[0]):
-                            break
-                        interior_rate(x, f, data)
-                        finite = True
-                        for i in range(m):
-                            finite = finite and math.isfinite(f[i])
-                        if not finite:
-                            break
-                        # the bordered system at this iterate (stepper.NewtonMatrix.refresh_wall, .solve)
-                        wall(x, row0, column[:lap_wall_n], data)
-                        zb[:] = 0.0
-                        for w in range(lap_wall_n):
-                            zb -= c_lu * column[w] * units[w]
-                        for i in range(m):
-                            dy[i] = c * f[i] - psi[i] - dsum[i]
-                        band_solve(ab, piv, kl, ku, ints[9], dy)
-                        pivot, top = -c_lu * row0[0], 0.0
-                        for i in range(m):
-                            pivot += c_lu * row0[i + 1] * zb[i]
-                            top += c_lu * row0[i + 1] * dy[i]
-                        x0 = top / pivot
-                        for i in range(m):
-                            dy[i] -= x0 * zb[i]
-                        dy_norm = rms(dy, scale)
-                        rate = dy_norm / dy_norm_old if dy_norm_old >= 0 else -1.0
-                        if rate >= 0 and (rate >= 1
-                                          or rate ** (NEWTON_MAXITER - k) / (1 - rate) * dy_norm > newton_tol):
-                            # not scipy's: after the lift-off, an iteration that stalls within the wall unknown's
-                            # round-off (felt by z through zb) is converged. There q is fixed by u~_w less the
-                            # interior's share over w_0 ~ 1e-9, and its noise keeps scipy's Newton from converging at
-                            # the steady state's tight tolerances: the step would collapse
-                            if t > lift_off_end and dy_norm <= ROUND_OFF_UPDATES * EPS * magnitude / abs(
-                                    row0[0]) * rms(zb, scale):
-                                y_new += dy
-                                dsum += dy
-                                converged = True
-                            break
-                        for i in range(m):
-                            y_new[i] += dy[i]
-                            dsum[i] += dy[i]
-                        if dy_norm == 0 or (rate >= 0 and rate / (1 - rate) * dy_norm < newton_tol):
-                            converged = True
-                            break
-                        dy_norm_old = dy_norm
+                        clock[C_LU] = c_lu
+                    converged, n_iter = newton(state, setup, work, t, t_new, c, order)
                     if not converged:
                         if current_jac:
                             break
-                        project(y, x, data)  # J at the prediction
-                        if math.isfinite(x[0]):
-                            jacobian(x, jband, data)
-                        ints[5] += 1
+                        project(work.y, work.x, data)  # J at the prediction
+                        if math.isfinite(work.x[0]):
+                            jacobian(work.x, t_new, state.jband, data)
+                        counts[NJEV] += 1
                         lu_valid, current_jac = False, True
                 if not converged:
                     h_abs *= 0.5
@@ -197,9 +314,9 @@ def bdf_loop(kernels: BdfKernels, compiled: bool):
                     n_equal, lu_valid = 0, False
                     continue
                 safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
-                for i in range(m):
-                    scale[i] = atol + rtol * abs(y_new[i])
-                error_norm = ERROR_CONST[order] * rms(dsum, scale)
+                for i in range(len(work.scale)):
+                    work.scale[i] = control.atol + control.rtol * abs(work.y_new[i])
+                error_norm = ERROR_CONST[order] * rms(work.dsum, work.scale)
                 if error_norm > 1:
                     factor = max(MIN_FACTOR, safety * error_norm ** (-1 / (order + 1)))
                     h_abs *= factor
@@ -207,52 +324,70 @@ def bdf_loop(kernels: BdfKernels, compiled: bool):
                     n_equal = 0
                 else:
                     accepted = True
-            # accepted: the differences array (scipy's update)
             n_equal += 1
             h_step = t_new - t
             t = t_new
-            d[order + 2] = dsum - d[order + 1]
-            d[order + 1] = dsum
-            for i in range(order, -1, -1):
-                d[i] += d[i + 1]
+            accept(d, work.dsum, order)
             if n_equal >= order + 1:
-                e_m = ERROR_CONST[order - 1] * rms(d[order], scale) if order > 1 else math.inf
-                e_p = ERROR_CONST[order + 1] * rms(d[order + 2], scale) if order < MAX_ORDER else math.inf
-                norms = (e_m, error_norm, e_p)
-                best, delta_order = -1.0, 0
-                for k in range(3):
-                    fk = norms[k] ** (-1 / (order + k)) if norms[k] > 0 else math.inf
-                    if fk > best:
-                        best, delta_order = fk, k - 1
-                order += delta_order
-                factor = min(MAX_FACTOR, safety * best)
+                order, factor = next_order(d, order, error_norm, work.scale, safety)
                 h_abs *= factor
                 change_d(d, order, factor)
                 n_equal, lu_valid = 0, False
-            ints[6] += 1
-            project(y_new, x, data)  # scipy's y (d[0] sums it in another order)
-            rec_t[ints[8]] = t
-            rec_x[ints[8]] = x
-            ints[8] += 1
-            state[0], state[1], state[3], ints[0], ints[1], ints[2] = t, h_abs, c_lu, order, n_equal, int(lu_valid)
-            state[4] = h_step
+            counts[STEPS] += 1
+            project(work.y_new, work.x, data)  # scipy's y (d[0] sums it in another order)
+            state.record_t[counts[RECORDED]] = t
+            state.record_x[counts[RECORDED]] = work.x
+            counts[RECORDED] += 1
+            clock[T], clock[H_ABS], clock[C_LU], clock[H_STEP] = t, h_abs, c_lu, h_step
+            counts[ORDER], counts[N_EQUAL], counts[LU_VALID] = order, n_equal, int(lu_valid)
             if t - t_bound >= 0:
-                ints[7] = 0  # the landing's cut steps are no stall
+                counts[SMALL] = 0  # the landing's cut steps are no stall
                 return LANDED
-            ints[7] = ints[7] + 1 if t > lift_off_end and h_step < stall_fraction * t else 0
-            if ints[7] >= stall_steps:
+            counts[SMALL] = counts[SMALL] + 1 if t > control.lift_off_end and h_step < control.stall_fraction * t else 0
+            if counts[SMALL] >= control.stall_steps:
                 return STALLED
-            if ints[8] == len(rec_t):
+            if counts[RECORDED] == len(state.record_t):
                 return RECORDS_FULL
 
+    return advance
+
+
+@functools.cache
+def bdf_loop(kernels: BdfKernels, compiled: bool):
+    """The BDF loop on ``kernels``: ``advance(state, setup, t_bound)`` steps until an output time, a full record, a
+    stall or a failure (its exits).  Written once; ``compiled``: numba compiles it with the kernels
+    (continuum.compiled), else it runs as Python."""
+    newton = _newton_on(kernels)
+    advance = _advancer(kernels, newton, source_key(*kernels, bdf_loop))
     if not compiled:
         return advance
     from .compiled import compile_loop
 
-    return compile_loop(advance)
+    return compile_loop(advance, newton)
 
 
-def integrate(problem, t_out, *, compiled=True, rtol=1e-6, atol=1e-8, h0=1e-9, observer=None,
+def _start(problem, kernels: BdfKernels, data, n_wall: int, h0: float, rtol: float):
+    """BDF's state at t = 0 (scipy's BDF.__init__: d from the initial state and its rate, the Jacobian there) and the
+    initial state."""
+    x0 = problem.initial()
+    n = len(x0)
+    m, kl, ku = n - 1, problem.kl, problem.ku
+    x, f = np.empty(n), np.empty(m)
+    kernels.project(x0[1:].copy(), x, data)
+    kernels.rate(x, 0.0, f, data)
+    d = np.zeros((MAX_ORDER + 3, m))
+    d[0], d[1] = x[1:], f * h0
+    jband = np.zeros((kl + ku + 1, m), order="F")  # columns contiguous, as the band solves walk them
+    kernels.jacobian(x, 0.0, jband, data)
+    newton_tol = max(10 * EPS / rtol, min(0.03, rtol**0.5))  # scipy's BDF.__init__
+    clock = np.array([0.0, h0, newton_tol, 0.0, 0.0])
+    counts = np.array([1, 0, 0, 1, 0, 1, 0, 0, 0, 0], dtype=np.int64)
+    state = BdfState(clock, counts, d, jband, np.zeros((2 * kl + ku + 1, m), order="F"), np.zeros(m, dtype=np.int64),
+                     np.zeros((n_wall, m)), np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n)))
+    return state, x
+
+
+def integrate(problem, t_out, *, compiled=True, rtol=1e-6, atol=1e-8, h0=FIRST_STEP, observer=None,
               max_steps=MAX_STEPS, stall=(STALL_FRACTION, STALL_STEPS), handover=HANDOVER, repeat_cap=True):
     """Integrate ``problem`` (an algebraic row 0, unit mass elsewhere, and ``bdf_kernels``) by BDF from t = 0,
     landing on every output time of the sorted ``t_out``: (states at t_out, StepStats).
@@ -269,64 +404,48 @@ def integrate(problem, t_out, *, compiled=True, rtol=1e-6, atol=1e-8, h0=1e-9, o
     stats = StepStats(rejected=None)
     kernels, data, n_wall = problem.bdf_kernels()
     advance = bdf_loop(kernels, compiled)
-    x0 = problem.initial()
-    n = len(x0)
-    m = n - 1
-    kl, ku = problem.kl, problem.ku
-    x = np.empty(n)
-    kernels.project(x0[1:].copy(), x, data)
-    f = np.empty(m)
-    kernels.rate(x, f, data)
-    d = np.zeros((MAX_ORDER + 3, m))
-    d[0], d[1] = x[1:], f * h0
-    jband = np.zeros((kl + ku + 1, m), order="F")  # columns contiguous, as the band solves walk them
-    kernels.jacobian(x, jband, data)
-    ab, piv = np.zeros((2 * kl + ku + 1, m), order="F"), np.zeros(m, dtype=np.int64)
-    units = np.zeros((n_wall, m))  # T^-1 e_k of the factors in ab
-    newton_tol = max(10 * EPS / rtol, min(0.03, rtol**0.5))  # scipy's BDF.__init__
-    state = np.array([0.0, h0, newton_tol, 0.0, 0.0])
-    ints = np.array([1, 0, 0, 1, 0, 1, 0, 0, 0, 0], dtype=np.int64)
-    record = (np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n)))
-    rec_t, rec_x = record
-    control = (float(rtol), float(atol), int(max_steps), float(getattr(problem, "lift_off_end", 0.0)),
-               float(stall[0]), int(stall[1]))
+    state, x = _start(problem, kernels, data, n_wall, h0, rtol)
+    control = BdfControl(float(rtol), float(atol), int(max_steps), float(getattr(problem, "lift_off_end", 0.0)),
+                         float(stall[0]), int(stall[1]), problem.kl, problem.ku)
+    setup = BdfSetup(control, data)
     if observer is not None:
         observer(0.0, x.copy())
-    states = np.empty((len(t_out), n))
+    states = np.empty((len(t_out), len(x)))
     k = 0
     while k < len(t_out) and t_out[k] <= 0.0:  # output times at the start: the initial state
         states[k] = x
         k += 1
+    clock, counts = state.clock, state.counts
     while k < len(t_out):
-        if k > 0 and t_out[k] == state[0]:  # a repeated output time: the solver is already there
+        if k > 0 and t_out[k] == clock[T]:  # a repeated output time: the solver is already there
             states[k] = states[k - 1]
             k += 1
             continue
-        exit_ = advance(state, d, ints, jband, ab, piv, units, t_out[k], control, record, kl, ku, data)
+        exit_ = advance(state, setup, t_out[k])
         if observer is not None:
-            for row in range(ints[8]):
-                observer(rec_t[row], rec_x[row].copy())
+            for row in range(counts[RECORDED]):
+                observer(state.record_t[row], state.record_x[row].copy())
         if exit_ == LANDED:
-            states[k] = rec_x[ints[8] - 1]
+            states[k] = state.record_x[counts[RECORDED] - 1]
             k += 1
         elif exit_ == STALLED:
             from .stepper import integrate as integrate_dirk
 
-            t, x = rec_t[ints[8] - 1], rec_x[ints[8] - 1].copy()
+            resume = (state.record_t[counts[RECORDED] - 1], state.record_x[counts[RECORDED] - 1].copy())
             states[k:], rest = integrate_dirk(problem, t_out[k:], method=handover, compiled=compiled, rtol=rtol,
-                                              atol=atol, h0=state[4], observer=observer,
-                                              max_steps=max_steps - int(ints[6]), resume=(t, x),
+                                              atol=atol, h0=clock[H_STEP], observer=observer,
+                                              max_steps=max_steps - int(counts[STEPS]), resume=resume,
                                               repeat_cap=repeat_cap)
             stats = stats.add(rest)
             break
         elif exit_ == TOO_SMALL:
-            raise NewtonFailure(f"BDF failed at t = {state[0]:.3e}: Required step size is less than spacing between "
+            raise NewtonFailure(f"BDF failed at t = {clock[T]:.3e}: Required step size is less than spacing between "
                                 "numbers.")
         elif exit_ == FAILED:
-            if ints[6] >= max_steps:
-                raise StepperFailure(f"max_steps = {max_steps} reached at t = {state[0]:.3e}")
-            raise NewtonFailure(f"BDF failed at t = {state[0]:.3e}: singular Newton matrix")
-    stats.steps += int(ints[6])
-    stats.newton_iterations += int(ints[3])
+            if counts[STEPS] >= max_steps:
+                raise StepperFailure(f"max_steps = {max_steps} reached at t = {clock[T]:.3e}")
+            raise NewtonFailure(f"BDF failed at t = {clock[T]:.3e}: singular Newton matrix")
+    stats.steps += int(counts[STEPS])
+    stats.newton_iterations += int(counts[NFEV])
     stats.cpu_seconds = time.process_time() - start
     return states, stats

@@ -18,12 +18,12 @@ class Jacobian:
     row0: np.ndarray | None = None
     dissipative: bool = False
 
-    def interior(self):
-        """The band's rows and columns 1..n-1 as a sparse matrix (CSC)."""
+    def sparse(self, first: int = 0):
+        """The band's rows and columns first..n-1 as a sparse matrix (scipy's DIA)."""
         import scipy.sparse as sp
 
-        n = self.bands.shape[1] - 1
-        return sp.dia_matrix((self.bands[:, 1:], self.ku - np.arange(self.kl + self.ku + 1)), shape=(n, n)).tocsc()
+        n = self.bands.shape[1] - first
+        return sp.dia_matrix((self.bands[:, first:], self.ku - np.arange(self.kl + self.ku + 1)), shape=(n, n))
 
     @classmethod
     def tridiagonal(cls, sub, diag, sup, row0=None) -> Jacobian:

@@ -48,11 +48,12 @@ class DirkKernels(NamedTuple):
     """A problem's side of the DIRK loop: plain functions on arrays (continuum.kernels), ``data`` their problem's
     arrays and constants (a problem's ``dirk_kernels``; continuum.stepper).
 
-    rate(x, f, data): f = F(x).  factor(x, dh, lu, data) -> bool: ``lu`` (from ``factors``) holds the factors of
-    M - dh J(x); False if singular.  refresh(lu, x, data): the factors' parts that change fastest, at the Newton
-    iterate x (an imposed speed's dense wall row).  solve(lu, r, data): r = (M - dh J)^-1 r in place.
-    project(x, data): x onto the algebraic constraints, in place.  fraction(x, dx, data) -> float: the largest share of
-    a Newton update to take (1: no limit)."""
+    rate(x, t, f, data): f = F(x, t).  factor(x, t, dh, lu, data) -> bool: ``lu`` (from ``factors``) holds the
+    factors of M - dh J(x, t); False if singular.  refresh(lu, x, t, data): the factors' parts that change fastest, at
+    the Newton iterate x (an imposed speed's dense wall row).  solve(lu, r, data): r = (M - dh J)^-1 r in place.
+    project(x, data): x onto the algebraic constraints (which do not depend on t), in place.  fraction(x, dx, data)
+    -> float: the largest share of a Newton update to take (1: no limit).  t is the stage's time (a time-dependent
+    wall: continuum.load.Load); a problem whose rate does not depend on it ignores it."""
 
     rate: Callable
     factor: Callable
@@ -67,9 +68,9 @@ class BdfKernels(NamedTuple):
     and constants (a problem's ``bdf_kernels``; continuum.bdf).
 
     project(z, x, data) -> float: x = (x_0, z) with x_0 from the constraint (NaN where inadmissible); returns the
-    constraint's magnitude (the scale of x_0's round-off).  rate(x, f, data): f = F at the interior.
-    jacobian(x, band, data): band[ku + i - j, j] = dF_i/dz_j.  wall(x, row0, column, data): the constraint's gradient
-    (row0) and dF_i/dx_0 at the first rows (column)."""
+    constraint's magnitude (the scale of x_0's round-off).  rate(x, t, f, data): f = F(x, t) at the interior.
+    jacobian(x, t, band, data): band[ku + i - j, j] = dF_i/dz_j.  wall(x, t, row0, column, data): the constraint's
+    gradient (row0) and dF_i/dx_0 at the first rows (column)."""
 
     project: Callable
     rate: Callable

@@ -3,11 +3,13 @@ friction mu_w (an imposed shear stress tau_w = mu_w p_w) or the plate speed u_w,
 problem, ``omega`` = 0) or as the amplitude of a sine, tau_w(t) = mu_w p_w sin(omega t) or u_w(t) = u_w sin(omega t)
 (Stokes' second problem, the oscillating plate, ``omega`` > 0).  DEM units (rho_p g d, sqrt(g d), sqrt(g/d)).  dem's
 sizing builds it, run.json stores it (``as_record``: kind, tau_w, u_w, omega), compare reads it back
-(``from_record``) and the models take it (``imposed``: the solvers' keyword; ``wave``: the factor of time)."""
+(``from_record``) and the models take it: a solver on the scene reads the wall's value at time t (``wall``; ``wave``:
+its factor of time) inside its rate, so a time-dependent wall never changes the problem."""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -50,6 +52,11 @@ class Load:
         """The imposed value's factor at time(s) t: sin(omega t), or 1 for a held load."""
         return np.sin(self.omega * np.asarray(t, dtype=float)) if self.oscillating else np.ones_like(t, dtype=float)
 
+    def wall(self, t):
+        """The imposed value in DEM units at time(s) t: value sin(omega t) (tau_w(t) or u_w(t); an array for an array
+        t), or the held value (one number, whatever t: it is read at every rate evaluation)."""
+        return self.value * self.wave(t) if self.omega > 0 else self.value
+
     @property
     def amplitude(self) -> float:
         """The imposed number of the load's own kind: mu_w (= tau_w/p_w) or u_w; a sine's amplitude."""
@@ -60,14 +67,14 @@ class Load:
         """The imposed wall shear stress (an imposed stress), else None."""
         return self.mu_w * self.p_w if self.kind == "stress" else None
 
-    @property
+    @cached_property
     def value(self) -> float:
-        """The imposed number in DEM units: tau_w or u_w."""
+        """The imposed number in DEM units: tau_w or u_w (kept: the wall reads it at every rate evaluation)."""
         return self.tau_w if self.kind == "stress" else self.u_w
 
     @property
     def imposed(self) -> dict:
-        """The solvers' keyword: {"mu_w": ...} or {"u_w": ...}."""
+        """The imposed number by name: {"mu_w": ...} or {"u_w": ...}."""
         return {"mu_w": self.mu_w} if self.kind == "stress" else {"u_w": self.u_w}
 
     def scales(self, material: Material) -> Scales:

@@ -1,6 +1,6 @@
 """Nonlocal granular fluidity (NGF) in the DEM's own scene: a bed of depth H on a no-slip base under a
-plate of mass m_p per unit area, pressed with p_w and driven by an imposed shear stress tau_w = mu_w p_w
-or an imposed speed u_w (continuum.velocity.BedScene).
+plate of mass m_p per unit area (continuum.scene.BedScene), pressed with p_w and driven by an imposed shear stress
+tau_w = mu_w p_w or an imposed speed u_w, held or oscillating (continuum.load.Load: its value at time t).
 
 Model (Kamrin & Koval, PRL 108, 178301, 2012; Henann & Kamrin, PNAS 110, 6730, 2013), 1D, y the depth
 below the plate, material units (DEM units d = rho_p = g = 1 by default):
@@ -50,9 +50,10 @@ Numerics
   tau_w is the root (brentq) of u(0; tau_w) = u_w.  The error estimate is the change from n/2 points.
 * Transient (``solve_transient``): finite volumes on a graded mesh, u at the nodes (u_N = 0), ln g at
   the cell centres (g > 0 by construction; the bed "at rest" starts from g = g_rest, tiny), stress and
-  mu at the cells; 2N coupled ODEs integrated with scipy's Radau (solve_ivp, L-stable, order 5) and a
-  sparse Jacobian pattern (the package's DIRK stepper takes tridiagonal systems only; this one is
-  block-banded).  Radau, not BDF: on the impulsive imposed-speed start (mu ~ 1e7 in the first cell) BDF's
+  mu at the cells; 2N coupled ODEs (``FluidityProblem``, M = 1) integrated through the method registry
+  (continuum.integrators) by scipy's Radau (the baseline solve_ivp-Radau, L-stable, order 5) on a sparse Jacobian
+  pattern with finite differences (the problem has no analytic Jacobian, which the package's DIRKs would need; it
+  is block-banded).  Radau, not BDF: on the impulsive imposed-speed start (mu ~ 1e7 in the first cell) BDF's
   Newton iterations land on a spurious branch (g far above the capped g_loc); Radau's do not, and its
   transient is the same for g_rest = 1e-8 and 1e-4.  The mesh has a face at the steady yield depth
   (``aligned_mesh``), which makes the O(h^2) error smooth in h (measured ratios 3.9-4.1 per halving);
@@ -69,25 +70,33 @@ What is known of A (check at the sources):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
 from numpy.polynomial import chebyshev as C
-from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from scipy.sparse import lil_matrix
 
 from granstokes.lib.validate import finite, require
 
-from .mesh import Mesh
+from .integrators import METHODS, integrate
+from .load import Load
 from .rheology import convert_I
 from .richardson import REFINEMENT, richardson
-from .scales import UNITS, Material
+from .scales import UNITS, Material, pressure
+from .scene import BedScene, SceneNumerics
 from .solver import check_times
-from .velocity import BedScene
 
 BOUNDARIES = ("neumann", "dirichlet")
+#: Chebyshev intervals per piece of a steady state (``solve_steady``'s default)
+STEADY_INTERVALS = 64
+#: ... of the steady state that places an imposed speed's mesh face at its yield depth (``solve_transient``)
+KINK_INTERVALS = 32
+#: the transient's first step (the material's time unit): the impulsive start's
+FIRST_STEP = 1e-10
+#: the fewest cells of the transient's error estimate's companion
+MIN_COMPANION_CELLS = 8
 
 
 @dataclass(frozen=True)
@@ -128,9 +137,9 @@ def local_fluidity(material: Material, fluidity: NonlocalFluidity, mu, p):
     return np.sqrt(p / material.rho_p) / material.d * i_loc / np.maximum(m, 1e-300)
 
 
-def yield_depth(scene: BedScene, tau_w: float) -> float:
+def yield_depth(material: Material, p_w: float, tau_w: float) -> float:
     """delta_s = (tau_w/mu_s - p_w)/(phi rho_p g): where tau_w/p = mu_s (may exceed H, or be <= 0)."""
-    return (tau_w / scene.material.mu_s - scene.p_w) / scene.weight_gradient
+    return (tau_w / material.mu_s - p_w) / material.weight_gradient
 
 
 # --- steady state ------------------------------------------------------------------------------------
@@ -161,9 +170,10 @@ class SteadyNGF:
     """Steady NGF state: u, g, mu, g_loc at the nodes y (depth below the plate; the two Chebyshev pieces
     share the node at delta_s, kept once), the wall values and their error estimates, metadata."""
 
+    material: Material
     scene: BedScene
+    load: Load
     fluidity: NonlocalFluidity
-    imposed: str
     y: np.ndarray
     u: np.ndarray
     g: np.ndarray
@@ -177,32 +187,38 @@ class SteadyNGF:
     n: int
 
     @property
+    def imposed(self) -> str:
+        return self.load.kind
+
+    @property
     def mu_w(self) -> float:
-        return self.tau_w / self.scene.p_w
+        return self.tau_w / self.load.p_w
 
     @property
     def p(self) -> np.ndarray:
-        return self.scene.p_w + self.scene.weight_gradient * self.y
+        return pressure(self.material, self.load.p_w, self.y)
 
 
-def _pieces(scene: BedScene, tau_w: float):
+def _pieces(material: Material, scene: BedScene, load: Load):
     H = scene.depth
-    ys = yield_depth(scene, tau_w)
+    ys = yield_depth(material, load.p_w, load.tau_w)
     if 1e-6 * H < ys < (1 - 1e-6) * H:
         return [(0.0, ys), (ys, H)]
     return [(0.0, H)]
 
 
-def steady_profile(scene: BedScene, fluidity: NonlocalFluidity, tau_w: float, n: int = 64):
-    """(y, u, g, mu, g_loc) of the steady state under a uniform stress tau_w, n Chebyshev intervals
-    per piece.  A = 0 gives g = g_loc (the local model) with the same quadrature."""
+def steady_profile(material: Material, scene: BedScene, load: Load, fluidity: NonlocalFluidity,
+                   n: int = STEADY_INTERVALS):
+    """(y, u, g, mu, g_loc) of the steady state under the uniform stress tau_w of an imposed-stress ``load``, n
+    Chebyshev intervals per piece.  A = 0 gives g = g_loc (the local model) with the same quadrature."""
     require(isinstance(n, (int, np.integer)) and n >= 4, "n", "an integer >= 4", n)
-    m = scene.material
+    require(load.kind == "stress", "load", "an imposed stress (tau is uniform in the steady state)", load)
+    m, tau_w = material, load.tau_w
     A2 = (fluidity.A * m.d) ** 2
-    pieces = [(a, b, *_cheb(n, a, b)) for a, b in _pieces(scene, tau_w)]
+    pieces = [(a, b, *_cheb(n, a, b)) for a, b in _pieces(material, scene, load)]
     ys, mus, glocs, cs = [], [], [], []
     for _a, _b, y, _d1, _d2 in pieces:
-        p = scene.p_w + scene.weight_gradient * y
+        p = pressure(material, load.p_w, y)
         mu = tau_w / p
         ys.append(y)
         mus.append(mu)
@@ -251,73 +267,53 @@ def steady_profile(scene: BedScene, fluidity: NonlocalFluidity, tau_w: float, n:
     return cat(ys), cat(us), cat(gs), cat(mus), cat(glocs)
 
 
-def _check_mu_w(scene: BedScene, fluidity: NonlocalFluidity, mu_w: float) -> float:
-    m = scene.material
+def _check_mu_w(material: Material, fluidity: NonlocalFluidity, mu_w: float) -> float:
+    m = material
     top = mu_max(m, fluidity)
     require(finite(mu_w) and m.mu_s < mu_w < top, "mu_w",
             f"in the open interval (mu_s, mu(I_max)) = ({m.mu_s:.6g}, {top:.6g}) (mu_d = {m.mu_d:.6g})", mu_w)
     return float(mu_w)
 
 
-def solve_steady(scene: BedScene, fluidity: NonlocalFluidity, *, mu_w=None, u_w=None, n: int = 64,
-                 rtol: float = 1e-14, error_estimate: bool = True) -> SteadyNGF:
-    """Steady NGF state under an imposed wall friction mu_w = tau_w/p_w or an imposed speed u_w (mu_w to
-    ``rtol``); ``error_estimate``: the free value's error from a solve at half the intervals (else nan)."""
-    require((mu_w is None) != (u_w is None), "mu_w/u_w", "exactly one of them", (mu_w, u_w))
+def solve_steady(material: Material, scene: BedScene, load: Load, *, fluidity: NonlocalFluidity,
+                 n: int = STEADY_INTERVALS, rtol: float = 1e-14, error_estimate: bool = True) -> SteadyNGF:
+    """Steady NGF state under a held load: an imposed wall friction mu_w = tau_w/p_w or an imposed speed u_w
+    (mu_w to ``rtol``); ``error_estimate``: the free value's error from a solve at half the intervals (else nan)."""
+    require(not load.oscillating, "load", "a held load (omega = 0)", load)
     require(isinstance(n, (int, np.integer)) and n >= 8, "n", "an integer >= 8", n)
-    m = scene.material
+    m, p_w = material, load.p_w
     coarse = n // 2
-    if mu_w is not None:
-        tau_w = _check_mu_w(scene, fluidity, mu_w) * scene.p_w
-        y, u, g, mu, gl = steady_profile(scene, fluidity, tau_w, n)
-        u_c = steady_profile(scene, fluidity, tau_w, coarse)[1][0] if error_estimate else np.nan
-        imposed, u_w_err, mu_w_err = "stress", abs(u[0] - u_c), 0.0
+    if load.kind == "stress":
+        _check_mu_w(material, fluidity, load.mu_w)
+        tau_w = load.tau_w
+        y, u, g, mu, gl = steady_profile(material, scene, load, fluidity, n)
+        u_c = steady_profile(material, scene, load, fluidity, coarse)[1][0] if error_estimate else np.nan
+        u_w_err, mu_w_err = abs(u[0] - u_c), 0.0
     else:
-        require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
         lo, hi = m.mu_s * (1 + 1e-12), mu_max(m, fluidity) * (1 - 1e-12)
+        held = lambda mw: Load("stress", p_w, mu_w=mw)
 
         def root(npts):
-            f = lambda mw: steady_profile(scene, fluidity, mw * scene.p_w, npts)[1][0] - u_w
-            require(f(hi) > 0, "u_w", f"a speed reachable with mu_w < mu(I_max) = {hi:.6g}", u_w)
+            f = lambda mw: steady_profile(material, scene, held(mw), fluidity, npts)[1][0] - load.u_w
+            require(f(hi) > 0, "u_w", f"a speed reachable with mu_w < mu(I_max) = {hi:.6g}", load.u_w)
             return brentq(f, lo, hi, xtol=rtol * lo, rtol=rtol)
 
         mw = root(n)
-        tau_w = mw * scene.p_w
-        y, u, g, mu, gl = steady_profile(scene, fluidity, tau_w, n)
-        imposed, u_w_err, mu_w_err = "speed", 0.0, abs(mw - root(coarse)) if error_estimate else np.nan
-    return SteadyNGF(scene, fluidity, imposed, y, u, g, mu, gl, float(tau_w), float(u[0]), float(u_w_err),
-                     float(mu_w_err), float(yield_depth(scene, tau_w)), n)
+        tau_w = held(mw).tau_w
+        y, u, g, mu, gl = steady_profile(material, scene, held(mw), fluidity, n)
+        u_w_err, mu_w_err = 0.0, abs(mw - root(coarse)) if error_estimate else np.nan
+    return SteadyNGF(material, scene, load, fluidity, y, u, g, mu, gl, float(tau_w), float(u[0]), float(u_w_err),
+                     float(mu_w_err), float(yield_depth(material, p_w, tau_w)), n)
 
 
 # --- transient -----------------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class TransientNumerics:
-    """Finite-volume mesh (cells, grading toward the plate) and BDF tolerances; ``g_rest`` is the
-    fluidity of the bed at rest (1/time, the material's units), g > 0 being needed for tau = p gamma/g."""
-
-    n_cells: int = 160
-    stretch: float = 2.0
-    rtol: float = 1e-6
-    atol_u: float = 1e-9
-    atol_lng: float = 1e-6
-    g_rest: float = 1e-8
-    method: str = "Radau"
-
-    def __post_init__(self):
-        require(self.method in ("BDF", "Radau", "LSODA"), "method", "'BDF', 'Radau' or 'LSODA'", self.method)
-        Mesh.graded(self.n_cells, self.stretch)
-        for name in ("rtol", "atol_u", "atol_lng", "g_rest"):
-            v = getattr(self, name)
-            require(finite(v) and v > 0, name, "a finite number > 0", v)
-
-
-def aligned_mesh(numerics: TransientNumerics, depth: float, y_kink=None) -> np.ndarray:
+def aligned_mesh(numerics: SceneNumerics, depth: float, y_kink=None) -> np.ndarray:
     """Graded nodes on [0, depth]; with ``y_kink`` in (0, depth) the nearest node is moved onto it by
     rescaling each side linearly (cell sizes jump by a relative O(1/N) there), so that the kink of
     |mu - mu_s| and g_loc at the steady yield depth lies on a cell face: without it the cell that
     straddles delta_s makes the O(h^2) error constant depend on where delta_s falls in it."""
-    y = Mesh.graded(numerics.n_cells, numerics.stretch).y * depth
+    y = numerics.mesh().y * depth
     if y_kink is None or not 0 < y_kink < depth:
         return y
     k = int(np.clip(np.argmin(np.abs(y - y_kink)), 1, len(y) - 2))
@@ -327,57 +323,78 @@ def aligned_mesh(numerics: TransientNumerics, depth: float, y_kink=None) -> np.n
     return out
 
 
-class _Transient:
-    """State x = [u at the free nodes, ln g at the cells]; rate() is dx/dt."""
+class FluidityProblem:
+    """NGF's transient as M x' = F(x, t) for the method registry (continuum.integrators): x = [u at the free nodes,
+    ln g at the cells], M = 1 (every row differential; the nodes' masses are inside F), the wall's value at time t
+    the load's (continuum.load.Load.wall).  No analytic Jacobian: ``sparsity()`` is its pattern, for a solve_ivp
+    baseline's finite differences.
 
-    def __init__(self, scene: BedScene, fluidity: NonlocalFluidity, numerics: TransientNumerics, tau_w, u_w,
-                 y_kink=None):
-        m = scene.material
-        self.scene, self.fluidity, self.m = scene, fluidity, m
+    Below yield the fluidity relaxes to ``g_floor``: 0 by default (the local law's); the oscillating plate
+    (continuum.oscillation) gives the bed at rest's g_rest, since over a slow cycle's static phase ln g would fall
+    without bound (at |mu - mu_s|/t0) and the stress p gamma/g of any creep blow up (solve_ivp's step collapsed on
+    the oscillating-disks study's slowest stress drive)."""
+
+    def __init__(self, material: Material, scene: BedScene, load: Load, fluidity: NonlocalFluidity,
+                 numerics: SceneNumerics, y_kink=None, g_floor: float = 0.0):
+        require(METHODS[numerics.method].kind == "baseline", "method",
+                "a solve_ivp baseline (NGF has no analytic Jacobian: scipy's finite differences on its pattern)",
+                numerics.method)
+        m = material
+        self.material, self.scene, self.load, self.fluidity = material, scene, load, fluidity
         self.y = aligned_mesh(numerics, scene.depth, y_kink)
         self.h = np.diff(self.y)
         self.yc = self.y[:-1] + self.h / 2
-        self.pc = scene.p_w + scene.weight_gradient * self.yc
+        self.pc = pressure(material, load.p_w, self.yc)
         n = len(self.h)
         self.n = n
         rho_b = m.phi * m.rho_p
-        mass = np.empty(n)
-        mass[1:] = rho_b * (self.h[:-1] + self.h[1:]) / 2
-        mass[0] = scene.plate_mass + rho_b * self.h[0] / 2
-        self.mass = mass
-        self.tau_w, self.u_w = tau_w, u_w
-        self.imposed = "stress" if tau_w is not None else "speed"
-        self.first = 0 if self.imposed == "stress" else 1   # first free velocity node
+        node_mass = np.empty(n)
+        node_mass[1:] = rho_b * (self.h[:-1] + self.h[1:]) / 2
+        node_mass[0] = scene.plate_mass + rho_b * self.h[0] / 2
+        self.node_mass = node_mass
+        self.first = 0 if load.kind == "stress" else 1   # first free velocity node
+        nu = n - self.first
+        self.mass = np.ones(nu + n)
         self.t0 = fluidity.t0_hat * m.d * np.sqrt(m.rho_p / self.pc)
         self.A2 = (fluidity.A * m.d) ** 2
         self.dyc = np.diff(self.yc)
         # boundary distances for the Dirichlet option (wall value at distance h/2 from the cell centre)
-        self.p_wall = (scene.p_w, scene.p_w + scene.weight_gradient * scene.depth)
-        #: the fluidity a static region relaxes to (0: the local law's; an oscillating wall sets the bed at rest's)
-        self.g_floor = 0.0
+        self.p_wall = (load.p_w, pressure(material, load.p_w, scene.depth))
+        self.g_rest = numerics.g_rest
+        self.g_floor = g_floor
+        #: the absolute tolerances: on u, and on ln g
+        self.atol = np.concatenate([np.full(nu, numerics.atol), np.full(n, numerics.atol_lng)])
 
-    def split(self, x):
+    def initial(self) -> np.ndarray:
+        """The bed at rest: u = 0, g = g_rest."""
+        return np.concatenate([np.zeros(self.n - self.first), np.full(self.n, math.log(self.g_rest))])
+
+    def project(self, x):
+        return x
+
+    def split(self, x, t):
+        """u at every node (u_0 = u_w(t) under an imposed speed, u_N = 0) and ln g at the cells."""
         nu = self.n - self.first
         u = np.zeros(self.n + 1)
         u[self.first:self.n] = x[:nu]
-        if self.imposed == "speed":
-            u[0] = self.u_w
+        if self.load.kind == "speed":
+            u[0] = self.load.wall(t)
         return u, x[nu:]
 
-    def cells(self, x):
+    def cells(self, x, t):
         """u at the nodes, g, gamma_dot, tau, mu at the cells."""
-        u, lng = self.split(x)
+        u, lng = self.split(x, t)
         g = np.exp(np.clip(lng, -200.0, 50.0))  # guards trial Newton iterates only; states stay inside
         gamma = (u[:-1] - u[1:]) / self.h
         mu = gamma / g
         return u, g, gamma, self.pc * mu, mu
 
-    def rate(self, t, x):
-        u, g, gamma, tau, mu = self.cells(x)
-        m = self.m
+    def rate(self, x, t):
+        u, g, gamma, tau, mu = self.cells(x, t)
+        m = self.material
         du = np.empty(self.n)
-        du[1:] = (tau[:-1] - tau[1:]) / self.mass[1:]
-        du[0] = (self.tau_w - tau[0]) / self.mass[0] if self.imposed == "stress" else 0.0
+        du[1:] = (tau[:-1] - tau[1:]) / self.node_mass[1:]
+        du[0] = (self.load.wall(t) - tau[0]) / self.node_mass[0] if self.load.kind == "stress" else 0.0
         amu = np.abs(mu)
         gl = np.maximum(local_fluidity(m, self.fluidity, amu, self.pc), self.g_floor)
         flux = np.zeros(self.n + 1)
@@ -420,9 +437,10 @@ class TransientNGF:
     (mu_w = tau at the first cell / p_w for an imposed speed, as continuum.velocity) with the
     spatial error estimate of u_w (Richardson from n_cells/2), solver statistics."""
 
+    material: Material
     scene: BedScene
+    load: Load
     fluidity: NonlocalFluidity
-    imposed: str
     y: np.ndarray
     y_cell: np.ndarray
     t: np.ndarray
@@ -435,54 +453,57 @@ class TransientNGF:
     nfev: int
 
     @property
+    def imposed(self) -> str:
+        return self.load.kind
+
+    @property
     def u_w(self) -> np.ndarray:
         return self.u[:, 0]
 
 
-def _run(scene, fluidity, numerics, times, tau_w, u_w, y_kink):
-    pb = _Transient(scene, fluidity, numerics, tau_w, u_w, y_kink)
-    nu = pb.n - pb.first
-    x0 = np.concatenate([np.zeros(nu), np.full(pb.n, math.log(numerics.g_rest))])
-    atol = np.concatenate([np.full(nu, numerics.atol_u), np.full(pb.n, numerics.atol_lng)])
-    sol = solve_ivp(pb.rate, (0.0, float(times[-1])), x0, method=numerics.method, t_eval=times, rtol=numerics.rtol,
-                    atol=atol, jac_sparsity=pb.sparsity(), first_step=1e-10)
-    if not sol.success:
-        raise RuntimeError(f"NGF transient failed: {sol.message}")
-    cells = [pb.cells(x) for x in sol.y.T]
+def _transient(problem: FluidityProblem, times, numerics: SceneNumerics):
+    """u, g, mu, mu_w at ``times`` (continuum.ngf's held loads) and scipy's evaluations of the rate."""
+    load = problem.load
+    states, stats = integrate(problem, times, method=numerics.method, rtol=numerics.rtol, atol=problem.atol,
+                              h0=FIRST_STEP)
+    nfev = stats.newton_iterations  # a baseline's: scipy's evaluations of the rate
+    cells = [problem.cells(x, t) for t, x in zip(times, states)]
     u = np.array([c[0] for c in cells])
     g = np.array([c[1] for c in cells])
     mu = np.array([c[4] for c in cells])
     tau0 = np.array([c[3][0] for c in cells])
-    mu_w = np.full(len(times), tau_w / scene.p_w) if tau_w is not None else tau0 / scene.p_w
-    return pb, u, g, mu, mu_w, sol.nfev
+    mu_w = np.full(len(times), load.tau_w / load.p_w) if load.kind == "stress" else tau0 / load.p_w
+    return u, g, mu, mu_w, nfev
 
 
-def solve_transient(scene: BedScene, fluidity: NonlocalFluidity, times, *, mu_w=None, u_w=None,
-                    numerics: TransientNumerics = TransientNumerics(), error_estimate: bool = True,
+def solve_transient(material: Material, scene: BedScene, load: Load, times, *, fluidity: NonlocalFluidity,
+                    numerics: SceneNumerics = SceneNumerics(), error_estimate: bool = True,
                     y_kink=None) -> TransientNGF:
-    """NGF transient from a bed at rest (u = 0, g = g_rest) under an imposed mu_w or speed u_w.
+    """NGF transient from a bed at rest (u = 0, g = g_rest) under a held load: an imposed mu_w or speed u_w (an
+    oscillating load: continuum.oscillation).
 
     ``y_kink``: the depth given a mesh face (default: the steady yield depth of the drive; pass the
     same value to compare two drives on the same mesh)."""
-    require((mu_w is None) != (u_w is None), "mu_w/u_w", "exactly one of them", (mu_w, u_w))
+    require(not load.oscillating, "load", "a held load (omega = 0; an oscillating one: continuum.oscillation)", load)
     t = check_times(times)
-    tau_w = None if mu_w is None else _check_mu_w(scene, fluidity, mu_w) * scene.p_w
-    if u_w is not None:
-        require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
+    if load.kind == "stress":
+        _check_mu_w(material, fluidity, load.mu_w)
     # the mesh gets a face at the steady yield depth (for an imposed speed, that of the steady NGF state)
     if y_kink is None:
-        y_kink = yield_depth(scene, tau_w if tau_w is not None else solve_steady(scene, fluidity, u_w=u_w, n=32).tau_w)
-    pb, u, g, mu, mw, nfev = _run(scene, fluidity, numerics, t, tau_w, u_w, y_kink)
+        tau_w = load.tau_w if load.kind == "stress" else solve_steady(
+            material, scene, load, fluidity=fluidity, n=KINK_INTERVALS, error_estimate=False).tau_w
+        y_kink = yield_depth(material, load.p_w, tau_w)
+    problem = FluidityProblem(material, scene, load, fluidity, numerics, y_kink)
+    u, g, mu, mw, nfev = _transient(problem, t, numerics)
     u_err, mu_err = np.zeros(len(t)), np.zeros(len(t))
     if error_estimate:
-        from dataclasses import replace
-        coarse = replace(numerics, n_cells=max(8, numerics.n_cells // REFINEMENT))
-        _, u_c, _, _, mw_c, nf = _run(scene, fluidity, coarse, t, tau_w, u_w, y_kink)
+        coarse = replace(numerics, n_cells=max(MIN_COMPANION_CELLS, numerics.n_cells // REFINEMENT))
+        u_c, _, _, mw_c, nf = _transient(FluidityProblem(material, scene, load, fluidity, coarse, y_kink), t, coarse)
         u_err, mu_err = richardson(u[:, 0], u_c[:, 0]), richardson(mw, mw_c)
         nfev += nf
-    return TransientNGF(scene, fluidity, "stress" if tau_w is not None else "speed", pb.y, pb.yc, t, u, g, mu,
-                        mw, u_err, mu_err, nfev)
+    return TransientNGF(material, scene, load, fluidity, problem.y, problem.yc, t, u, g, mu, mw, u_err, mu_err,
+                        nfev)
 
 
-__all__ = ["NonlocalFluidity", "SteadyNGF", "TransientNGF", "TransientNumerics", "local_fluidity", "mu_max",
+__all__ = ["FluidityProblem", "NonlocalFluidity", "SteadyNGF", "TransientNGF", "local_fluidity", "mu_max",
            "solve_steady", "solve_transient", "steady_profile", "yield_depth", "i0_dem", "UNITS"]

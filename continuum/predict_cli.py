@@ -4,15 +4,18 @@ DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rh
     granstokes predict --model local|ngf --mu-s A --mu-d B --I0 C [--A L] --phi F --p-w P --depth H
                        (--mu-w M | --u-w U) (--steady | --times T1 T2 ...) [--plate-mass m] [--json]
 
-* ``--model local --steady``: the closed-form steady state of the scene (continuum.scene); u_w_err = 0:
+The models are continuum.scene_models' (the ones compare/ scores), on the scene (continuum.scene.BedScene) under
+the load (continuum.load.Load):
+
+* ``--model local --steady``: the closed-form steady state of the scene (scene_models.local_steady); u_w_err = 0:
   exact up to rounding.
 * ``--model local --times``: the velocity form (continuum.velocity.solve_velocity) from a bed at rest,
-  regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s, as compare/models.py); errors
-  Richardson's |x_N - x_N/2|/3 (continuum.richardson, second order in space; the regularisation's own creep
-  is not in it).
+  regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s); errors Richardson's |x_N - x_N/2|/3
+  (SceneModel.estimated, continuum.richardson, second order in space; the regularisation's own creep is not in
+  it).
 * ``--model ngf``: continuum.ngf (steady: Chebyshev, errors the change from n/2 points; transient:
-  from rest, errors Richardson from N/2 cells).  g is given at the nodes y (for the transient,
-  ln g interpolated linearly from the cell centres).
+  from rest on the solver's default numerics, errors Richardson from N/2 cells).  g is given at the nodes y (for
+  the transient, ln g interpolated linearly from the cell centres).
 
 Every output gives the plate's speed and friction with their errors (u_w_err, mu_w_err; the imposed one's
 is 0) and the layer depth in d: the steady state's delta_s (where tau/p falls to mu_s), a transient's
@@ -27,13 +30,10 @@ from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import replace
 
 import numpy as np
 
 from granstokes.lib.validate import finite, require
-
-from .richardson import REFINEMENT, richardson
 
 MODELS = ("local", "ngf")
 BOUNDARIES = ("neumann", "dirichlet")
@@ -73,8 +73,9 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 
 def _scene(args):
+    """The material and the scene (continuum.scene.BedScene) of the arguments."""
     from .scales import Material
-    from .velocity import BedScene
+    from .scene import BedScene
 
     require(args.model in MODELS, "--model", f"one of {MODELS}", args.model)
     for name in ("mu_s", "mu_d", "I0", "phi", "p_w", "depth", "plate_mass"):
@@ -86,8 +87,8 @@ def _scene(args):
     require(args.p_w > 0, "--p-w", "a finite number > 0", args.p_w)
     require(args.depth > 0, "--depth", "a finite number > 0", args.depth)
     require(args.plate_mass >= 0, "--plate-mass", "a finite number >= 0", args.plate_mass)
-    m = Material(mu_s=args.mu_s, mu_d=args.mu_d, I0=args.I0, I_convention="dem", phi=args.phi)
-    return BedScene(m, args.p_w, args.depth, plate_mass=args.plate_mass)
+    material = Material(mu_s=args.mu_s, mu_d=args.mu_d, I0=args.I0, I_convention="dem", phi=args.phi)
+    return material, BedScene(args.depth, plate_mass=args.plate_mass)
 
 
 def _load(args, p_w: float, mu_top: float, top_name: str = "mu_d"):
@@ -102,110 +103,63 @@ def _load(args, p_w: float, mu_top: float, top_name: str = "mu_d"):
     return Load("speed", p_w, u_w=float(args.u_w))
 
 
-def _delta_u(y, u) -> np.ndarray:
-    """delta_u at each time (continuum.crossing.depth_at_fraction of u_w = u[:, 0])."""
-    from .crossing import depth_at_fraction
+def _model(args, material):
+    """The scene model (continuum.scene_models), its load, and the numerics of its transient here."""
+    from .ngf import NonlocalFluidity, mu_max
+    from .scene import SceneNumerics
+    from .scene_models import LOCAL, ngf_model
 
-    return np.array([depth_at_fraction(y, uk, uk[0]) for uk in np.asarray(u)])
-
-
-def _fine_and_coarse(solve, numerics) -> tuple[tuple, dict]:
-    """``solve(numerics)`` -> (y, u, mu_w) on N and N/2 cells: the fine solution and the errors of u_w, mu_w
-    and delta_u (continuum.richardson, second order in space)."""
-    fine, coarse = (solve(n) for n in (numerics, replace(numerics, n_cells=numerics.n_cells // REFINEMENT)))
-    (y, u, mw), (yc, uc, mwc) = fine, coarse
-    err = {"u_w_err": richardson(u[:, 0], uc[:, 0]), "mu_w_err": richardson(mw, mwc),
-           "delta_u_err": richardson(_delta_u(y, u), _delta_u(yc, uc))}
-    return fine, err
-
-
-def _local_transient(scene, t, load):
-    from .rules import YieldRule
-    from .velocity import VELOCITY_NUMERICS, solve_velocity
-
-    rule = YieldRule.for_layer(load.scales(scene.material))
-
-    def solve(numerics):
-        vel = solve_velocity(scene, t, rule=rule, initial="rest", numerics=numerics, compare_steady=False,
-                             **load.imposed)
-        return vel.y, vel.u, vel.mu_w
-
-    return _fine_and_coarse(solve, VELOCITY_NUMERICS)
-
-
-def _ngf_transient(scene, fluidity, t, load):
-    from .ngf import TransientNumerics, solve_transient
-
-    cells = {}
-
-    def solve(numerics):
-        tr = solve_transient(scene, fluidity, t, numerics=numerics, error_estimate=False, **load.imposed)
-        cells[numerics.n_cells] = tr
-        return tr.y, tr.u, tr.mu_w
-
-    numerics = TransientNumerics()
-    fine, err = _fine_and_coarse(solve, numerics)
-    return fine, err, cells[numerics.n_cells]
-
-
-def _g_at_nodes(y, y_cell, g):
-    return np.exp(np.interp(y, y_cell, np.log(np.maximum(g, 1e-300))))
+    if args.model == "local":
+        require(args.A is None, "--A", "given only with --model ngf", args.A)
+        return LOCAL, _load(args, args.p_w, material.mu_d), LOCAL.numerics
+    require(args.A is not None, "--A", "a finite number >= 0, required with --model ngf", args.A)
+    require(finite(args.A) and args.A >= 0, "--A", "a finite number >= 0", args.A)
+    require(args.boundary in BOUNDARIES, "--boundary", f"one of {BOUNDARIES}", args.boundary)
+    require(finite(args.t0_hat) and args.t0_hat > 0, "--t0-hat", "a finite number > 0", args.t0_hat)
+    top = mu_max(material, NonlocalFluidity(A=args.A, boundary=args.boundary, t0_hat=args.t0_hat))
+    # the transient on the solver's default numerics (160 cells, rtol 1e-6), finer than the comparison's
+    load = _load(args, args.p_w, top, "mu(I_max = 10), just below mu_d")
+    return ngf_model(args.A, args.boundary, args.t0_hat), load, SceneNumerics()
 
 
 def predict(args) -> dict:
     """The prediction as a JSON-ready dict (lists and floats)."""
     from .crossing import U_FRACTION
-    from .ngf import NonlocalFluidity, mu_max, solve_steady
+    from .ngf import STEADY_INTERVALS
     from .rules import EPS_FRACTION
     from .scales import UNITS
-    from .scene import scene_steady
     from .solver import check_times
 
-    scene = _scene(args)
-    m = scene.material
-    if args.model == "local":
-        require(args.A is None, "--A", "given only with --model ngf", args.A)
-        fluidity = None
-        load = _load(args, scene.p_w, m.mu_d)
-    else:
-        require(args.A is not None, "--A", "a finite number >= 0, required with --model ngf", args.A)
-        require(finite(args.A) and args.A >= 0, "--A", "a finite number >= 0", args.A)
-        require(args.boundary in BOUNDARIES, "--boundary", f"one of {BOUNDARIES}", args.boundary)
-        require(finite(args.t0_hat) and args.t0_hat > 0, "--t0-hat", "a finite number > 0", args.t0_hat)
-        fluidity = NonlocalFluidity(A=args.A, boundary=args.boundary, t0_hat=args.t0_hat)
-        load = _load(args, scene.p_w, mu_max(m, fluidity), "mu(I_max = 10), just below mu_d")
+    material, scene = _scene(args)
+    model, load, numerics = _model(args, material)
+    m = material
     out = {"model": args.model, "imposed": load.kind, "units": UNITS["dem_units"],
            "I_convention": "dem: I = |du/dy| d/sqrt(p/rho_p)",
-           "parameters": {"mu_s": m.mu_s, "mu_d": m.mu_d, "I0": m.I0, "phi": m.phi, "p_w": scene.p_w,
+           "parameters": {"mu_s": m.mu_s, "mu_d": m.mu_d, "I0": m.I0, "phi": m.phi, "p_w": load.p_w,
                           "depth": scene.depth, "plate_mass": scene.plate_mass, **load.imposed}}
-    if fluidity is not None:
-        out["parameters"].update({"A": fluidity.A, "boundary": fluidity.boundary, "t0_hat": fluidity.t0_hat})
+    if args.model == "ngf":
+        out["parameters"].update({k: model.parameters[k] for k in ("A", "boundary", "t0_hat")})
     if args.steady:
-        if args.model == "local":
-            st = scene_steady(scene, **load.imposed)
-            out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": 0.0, "mu_w_err": 0.0,
-                        "delta_s": st.delta_s, "layer": STEADY_LAYER, "y": st.y.tolist(), "u": st.u.tolist(),
-                        "method": "closed form (continuum.steady) scaled with continuum.scales"})
-        else:
-            st = solve_steady(scene, fluidity, **load.imposed)
-            out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": st.u_w_err, "mu_w_err": st.mu_w_err,
-                        "delta_s": st.delta_s, "layer": STEADY_LAYER, "y": st.y.tolist(), "u": st.u.tolist(),
-                        "g": st.g.tolist(),
-                        "method": f"Chebyshev collocation, {st.n} intervals per piece; errors: change from n/2"})
+        st = model.steady(material, scene, load, estimate=True)
+        out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": st.u_w_err, "mu_w_err": st.mu_w_err,
+                    "delta_s": st.delta_s, "layer": STEADY_LAYER, "y": st.y.tolist(), "u": st.u.tolist()})
+        if st.g is not None:
+            out["g"] = st.g.tolist()
+        out["method"] = ("closed form (continuum.steady) scaled with continuum.scales" if args.model == "local" else
+                         f"Chebyshev collocation, {STEADY_INTERVALS} intervals per piece; errors: change from n/2")
         return out
     t = check_times(args.times, "--times")
+    tr = model.estimated(material, scene, load, t, numerics)
     if args.model == "local":
-        (y, u, mw), err = _local_transient(scene, t, load)
         out["method"] = (f"velocity form (continuum.velocity), eps = {EPS_FRACTION:g} U/delta_s; "
                          "errors: Richardson from N/2")
     else:
-        (y, u, mw), err, tr = _ngf_transient(scene, fluidity, t, load)
-        out["g"] = [_g_at_nodes(y, tr.y_cell, gk).tolist() for gk in tr.g]
+        out["g"] = [gk.tolist() for gk in tr.g]
         out["method"] = "finite volumes (u, ln g), scipy Radau; errors: Richardson from N/2"
-    out.update({"t": t.tolist(), "u_w": u[:, 0].tolist(), "mu_w": np.asarray(mw).tolist(),
-                "delta_u": _delta_u(y, u).tolist(), **{k: v.tolist() for k, v in err.items()},
+    out.update({"t": t.tolist(), "u_w": tr.u_w.tolist(), "mu_w": np.asarray(tr.mu_w).tolist(),
+                "delta_u": tr.delta_u.tolist(), **{k: v.tolist() for k, v in tr.errors.items()},
                 "layer": f"delta_u [d]: the depth below the plate where u falls to {U_FRACTION:g} u_w",
-                "y": np.asarray(y).tolist(), "u": np.asarray(u).tolist()})
+                "y": np.asarray(tr.y).tolist(), "u": np.asarray(tr.u).tolist()})
     return out
 
 

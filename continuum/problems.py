@@ -2,7 +2,8 @@
 
 Unknowns x are tau~ at nodes 0..N-1 of a Mesh; tau~(y~=1) = 1 is fixed.  The mesh's d2/dy~2 and
 quadrature are of ``order`` 2 (three-point, trapezoid) or 4 (continuum.mesh).  Written as
-M x' = F(x) for continuum.stepper: the interior rows are eq. (2.15),
+M x' = F(x, t) for the integrators (continuum.integrators; F does not depend on t here: the wall is held), the
+interior rows eq. (2.15),
 
     d tau~/d t~ = D(y~, tau~) d2 tau~/dy~2,   D = (mu_d p~ - mu_w tau~)^2 / p~^(3/2),  p~ = 1 + beta_w y~,
 
@@ -77,21 +78,21 @@ class ShearStressDiffusion:
         s = self._mud_p - self.mu_w * tau[1:]
         return lap, s, s * s / self._p32
 
-    def rate(self, x: np.ndarray) -> np.ndarray:
-        """F(x): the wall residual in row 0, d tau~/d t~ at the interior nodes."""
+    def rate(self, x: np.ndarray, t: float) -> np.ndarray:
+        """F(x, t): the wall residual in row 0, d tau~/d t~ at the interior nodes (eq. (2.15); t does not enter)."""
         lap, _, diff = self._terms(x)
         out = np.empty(len(x))
         out[0] = self.wall_residual(x)
         np.multiply(diff, lap, out=out[1:])
         return out
 
-    def interior_rate(self, x: np.ndarray) -> np.ndarray:
-        """F(x) without row 0: d tau~/d t~ at the interior nodes (the rows bdf integrates, stepper)."""
+    def interior_rate(self, x: np.ndarray, t: float) -> np.ndarray:
+        """F(x, t) without row 0: d tau~/d t~ at the interior nodes (the rows bdf integrates, stepper)."""
         lap, _, diff = self._terms(x)
         return diff * lap
 
-    def jacobian(self, x: np.ndarray) -> Jacobian:
-        """dF/dx: the Laplacian's band times the diffusivity, its derivative on the diagonal; row 0
+    def jacobian(self, x: np.ndarray, t: float) -> Jacobian:
+        """dF/dx at time t: the Laplacian's band times the diffusivity, its derivative on the diagonal; row 0
         is the wall (dense for the imposed speed)."""
         lap, s, diff = self._terms(x)
         bands = np.zeros((self.kl + self.ku + 1, len(x)))
@@ -197,8 +198,8 @@ class ImposedSpeed(ShearStressDiffusion):
         tau[0] = self._tau0(x[0])
         return tau
 
-    def jacobian(self, x: np.ndarray) -> Jacobian:
-        jac = super().jacobian(x)
+    def jacobian(self, x: np.ndarray, t: float) -> Jacobian:
+        jac = super().jacobian(x, t)
         k = np.arange(1, min(self.kl, len(x) - 1) + 1)
         jac.bands[self.ku + k, 0] *= self._dtau0_dq(x[0])
         return jac
@@ -207,7 +208,7 @@ class ImposedSpeed(ShearStressDiffusion):
         """d tau~_0/d q (tau~_0 = (mu_d - Dmu e^-q) p~_0/mu_w)."""
         return self.friction.dmu * math.exp(min(-q, EXP_MAX)) * self.p[0] / self.mu_w
 
-    def wall_jacobian(self, x: np.ndarray):
+    def wall_jacobian(self, x: np.ndarray, t: float):
         """dF/dx's row 0 (wall_gradient) and column 0 at rows 1..kl (the first nodes' coupling to q), the parts
         of the Jacobian the wall unknown's curvature changes fastest (refreshed at every Newton iterate by BDF)."""
         k = len(self._lap_wall)
@@ -334,7 +335,7 @@ LIFT_OFF_SPAN = 10.0
 # tau and lap workspaces of N + 1 and N - 1 values
 
 @jitable
-def stress_rate(x, f, data):
+def stress_rate(x, t, f, data):
     """ImposedStress.rate: the wall row x_0 - 1, then D(tau~) d2 tau~/dy~2 at nodes 1..N-1."""
     cols, weights, mud_p, p32, mu_w, tau, lap = data[0], data[1], data[2], data[3], data[4], data[7], data[8]
     laplacians(x, x[0], tau, lap, cols, weights)
@@ -345,8 +346,8 @@ def stress_rate(x, f, data):
 
 
 @jitable
-def stress_factor(x, dh, lu, data):
-    """LU of M - dh J(x) into lu = (ab, piv, [U's upper bandwidth]) (ImposedStress.jacobian, whose wall row is e_0
+def stress_factor(x, t, dh, lu, data):
+    """LU of M - dh J(x, t) into lu = (ab, piv, [U's upper bandwidth]) (ImposedStress.jacobian, whose wall row is e_0
     with mass 0; kernels.band_lu); False if singular."""
     cols, weights, mud_p, p32, mu_w, kl, ku, tau, lap = data
     ab, piv, info = lu
@@ -375,7 +376,7 @@ def band_factors_solve(lu, r, data):
 
 
 @jitable
-def no_refresh(lu, x, data):
+def no_refresh(lu, x, t, data):
     """Nothing in the factors changes with the Newton iterate."""
 
 
@@ -422,7 +423,7 @@ def wall_tau(q, mu_w, mu_d, dmu, p0):
 
 
 @jitable
-def speed_rate(x, f, data):
+def speed_rate(x, t, f, data):
     """ImposedSpeed.interior_rate: f = D(tau~) d2 tau~/dy~2 at nodes 1..N-1."""
     cols, weights, mud_p, p32, p, mu_w, mu_d, dmu, tau = (data[0], data[1], data[3], data[4], data[5], data[9],
                                                           data[10], data[12], data[15])
@@ -433,7 +434,7 @@ def speed_rate(x, f, data):
 
 
 @jitable
-def speed_jacobian(x, band, data):
+def speed_jacobian(x, t, band, data):
     """ImposedSpeed.jacobian's rows and columns 1..N-1, band[ku + i - j, j] = dF_i/dz_j (z = x[1:])."""
     cols, weights, mud_p, p32, p, mu_w, mu_d, dmu, ku, tau, lap = (data[0], data[1], data[3], data[4], data[5],
                                                                    data[9], data[10], data[12], data[14], data[15],
@@ -452,7 +453,7 @@ def speed_jacobian(x, band, data):
 
 
 @jitable
-def speed_wall(x, row0, column, data):
+def speed_wall(x, t, row0, column, data):
     """ImposedSpeed.wall_jacobian: the constraint's gradient (row0) and dF_i/dq at rows 1..kl (column)."""
     lap_wall, mud_p, p32, p, wq, w_first, mu_w, mu_d, dmu = (data[2], data[3], data[4], data[5], data[6], data[8],
                                                              data[9], data[10], data[12])

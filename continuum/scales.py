@@ -63,6 +63,16 @@ class Material:
         """I0 in the paper's convention (|gamma_dot| = 1/2 |du/dy|), the one its scales use."""
         return convert_I(self.I0, self.I_convention, "paper")
 
+    @property
+    def weight_gradient(self) -> float:
+        """phi rho_p g: the bed's weight per unit volume, the hydrostatic pressure's gradient (eq. (2.6))."""
+        return self.phi * self.rho_p * self.g
+
+
+def pressure(material: Material, p_w: float, y):
+    """Hydrostatic pressure p(y) = p_w + phi rho_p g y at the depth y below the plate (eq. (2.6))."""
+    return p_w + material.weight_gradient * y
+
 
 @dataclass(frozen=True)
 class Scales:
@@ -172,9 +182,8 @@ class Scales:
         return tau_tilde * self.mu_w * self.p_w
 
     def pressure(self, y):
-        """Hydrostatic pressure p(y) = p_w + phi rho_p g y (eq. (2.6))."""
-        m = self.material
-        return self.p_w + m.phi * m.rho_p * m.g * y
+        """Hydrostatic pressure p(y) at this load's p_w (eq. (2.6))."""
+        return pressure(self.material, self.p_w, y)
 
     def as_dict(self) -> dict:
         return {"p_w": self.p_w, "mu_w": self.mu_w, "mu_w_tilde": self.mu_w_tilde, "beta_w": self.beta_w,

@@ -13,6 +13,7 @@ from granstokes.lib.provenance import provenance
 
 from . import observables as obs
 from .bdf import STALL_FRACTION, STALL_STEPS
+from .integrators import METHODS as REGISTERED
 from .integrators import integrate
 from .mesh import MAX_STRETCH, ORDERS, Mesh
 from .problems import ImposedSpeed, ImposedStress
@@ -20,10 +21,10 @@ from .rheology import Friction, finite, require
 from .richardson import REFINEMENT, richardson
 from .scales import UNITS
 from .steady import SELF_SIMILAR_DELTA, mu_w_for_speed, steady_delta, steady_wall_speed
-from .stepper import TABLEAUX, StepStats
+from .stepper import StepStats
 
-#: the methods a solve may name (continuum.integrators)
-METHODS = (*TABLEAUX, "bdf")
+#: the methods a solve may name: every registered one (continuum.integrators), the solve_ivp baselines included
+METHODS = tuple(REGISTERED)
 #: the default time stepper of each drive (continuum.stepper: BDF keeps its order on the speed's DAE,
 #: the DIRKs' stage order 1 does not)
 DEFAULT_METHOD = {"stress": "sdirk4", "speed": "bdf"}
@@ -72,7 +73,7 @@ MATCHED_RTOL, MATCHED_CELLS = dict.fromkeys(METHODS, 1e-8), 256
 #: the loosest time tolerance of each method: scipy's BDF on the speed takes more steps, not fewer, above
 #: it (measured: u~_w = 4.629 on 64 cells 894 steps at rtol 1e-8, 4389 at 1e-7; 1.334 on 256 cells 1432
 #: and 8431); its time error there is ~1-20 rtol (landing on every output time: stepper)
-MAX_RTOL = {**dict.fromkeys(TABLEAUX, 1e-3), "bdf": 1e-8}
+MAX_RTOL = {**dict.fromkeys(METHODS, 1e-3), "bdf": 1e-8}
 #: the loosest time tolerance of an estimate's companion (``Numerics.coarser``): its time error enters the estimate
 #: (x SAFETY/(gain - 1)), and bdf's in a small speed's delta is ~500 rtol, not TIME_ERROR_PER_RTOL's 30 (delta is
 #: read where mu - mu_s is 1e-3 of mu_w - mu_s, which is tiny: u~_w = 0.001 (beads), 256 cells at rtol 1e-8 and
@@ -109,7 +110,9 @@ SAFETY = 3.0
 class Numerics:
     """Resolution and tolerances of one solve.  ``stretch=None``: the map follows the first output
     time (``map_for``), else the exponential map of this stretch; ``order``: of the spatial discretisation
-    (continuum.mesh); ``method``, ``rtol``, ``atol`` = None: the drive's defaults (``for_drive``); ``compiled``: the
+    (continuum.mesh); ``method``: a registered one (continuum.integrators; a solve_ivp baseline, e.g.
+    "solve_ivp-BDF", takes its own first step and records no per-step rows); ``method``, ``rtol``, ``atol`` = None:
+    the drive's defaults (``for_drive``); ``compiled``: the
     loop and the problem's kernels compiled by numba (continuum.integrators; False: the same loop as Python, far
     slower, a reference);
     ``repeat_cap``: the DIRKs' step cap after a repeated Newton failure (continuum.stepper; False: the baseline);
@@ -365,13 +368,18 @@ def first_cells(imposed: str, accuracy: float) -> int:
 
 
 def _run_one(problem, t, numerics: Numerics, fixed_times=None, record=True) -> Solution:
-    recorder = obs.SeriesRecorder(problem) if record else None
-    options = {"repeat_cap": numerics.repeat_cap, **({"stall": numerics.stall} if numerics.method == "bdf" else {})}
+    """One solve of ``problem`` at the output times t.  A solve_ivp baseline takes its own first step and steps
+    unobserved (no per-step rows), and none of the package's options."""
+    if REGISTERED[numerics.method].kind == "baseline":
+        recorder, h0, options = None, None, {}
+    else:
+        recorder = obs.SeriesRecorder(problem) if record else None
+        h0 = numerics.initial_step * t[0]
+        options = {"repeat_cap": numerics.repeat_cap, **({"stall": numerics.stall} if numerics.method == "bdf" else {})}
     states, stats = integrate(problem, t, method=numerics.method, compiled=numerics.compiled, rtol=numerics.rtol,
-                              atol=numerics.atol, h0=numerics.initial_step * t[0], fixed_times=fixed_times,
-                              observer=recorder, **options)
+                              atol=numerics.atol, h0=h0, fixed_times=fixed_times, observer=recorder, **options)
     tau = np.array([problem.full(x) for x in states])
-    steps = recorder if record else np.empty((0, 4))
+    steps = recorder if recorder is not None else np.empty((0, 4))
     return Solution(problem.imposed, problem.friction, problem.mu_w,
                     getattr(problem, "u_w", None), problem.mesh, t, tau, steps, stats, numerics)
 
@@ -397,7 +405,7 @@ def _run(make_problem, t, numerics: Numerics, grading, early, fixed_times=None, 
 #: the global time error per unit rtol of each method, the floor of an estimate (measured: SDIRK4 on a
 #: stress <= 1, against the independent reference; bdf on a speed up to ~30 in delta, ~6 in mu_w, against
 #: rtol 1e-11 on the same mesh; bench/RESULTS.md)
-TIME_ERROR_PER_RTOL = {**dict.fromkeys(TABLEAUX, 1.0), "bdf": 30.0}
+TIME_ERROR_PER_RTOL = {**dict.fromkeys(METHODS, 1.0), "bdf": 30.0}
 
 
 def _estimate(fine: Solution, coarse: Solution) -> dict:
@@ -415,7 +423,7 @@ def _estimate(fine: Solution, coarse: Solution) -> dict:
     return out
 
 
-def _solve(make_problem, imposed, mu_w, friction, times, numerics, accuracy, estimate, fixed_times,
+def _solve(make_problem, imposed, mu_w, friction, times, numerics, *, accuracy, estimate, fixed_times,
            early_below=0.0) -> Solution:
     t = check_times(times)
     numerics = numerics or Numerics()
@@ -457,7 +465,7 @@ def solve_stress(friction: Friction, mu_w: float, times, numerics: Numerics | No
     with error estimates (from the coarser companion solve) if ``estimate``."""
     mu_w = friction.check_mu_w(mu_w)
     return _solve(lambda mesh, order: ImposedStress(friction, mu_w, mesh, order), "stress", mu_w, friction, times,
-                  numerics, accuracy, estimate, fixed_times)
+                  numerics, accuracy=accuracy, estimate=estimate, fixed_times=fixed_times)
 
 
 def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics | None = None, *,
@@ -466,4 +474,5 @@ def solve_speed(friction: Friction, u_w: float, times, numerics: Numerics | None
     eq. (3.15) (``accuracy``, ``estimate`` as for solve_stress)."""
     mu_w = mu_w_for_speed(friction, u_w)
     return _solve(lambda mesh, order: ImposedSpeed(friction, u_w, mesh, order), "speed", mu_w, friction, times,
-                  numerics, accuracy, estimate, fixed_times, early_until(u_w, (numerics or Numerics()).early_span))
+                  numerics, accuracy=accuracy, estimate=estimate, fixed_times=fixed_times,
+                  early_below=early_until(u_w, (numerics or Numerics()).early_span))

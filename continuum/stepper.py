@@ -1,11 +1,11 @@
-"""Singly diagonally implicit Runge-Kutta (DIRK) time stepping of  M x' = F(x)  (diagonal mass M,
+"""Singly diagonally implicit Runge-Kutta (DIRK) time stepping of  M x' = F(x, t)  (diagonal mass M,
 zero on algebraic rows), adaptive steps from an embedded error estimate.
 
-Every implicit stage solves  M X - h a_ii F(X) = M x_n + h sum_j a_ij F_j  (algebraic rows:
-F(X) = 0) by simplified Newton: one factorisation of M - h a_ii J per step (all SDIRK stages share
-a_ii), through the problem's kernels (continuum.kernels.DirkKernels): its own, or its ``rate`` and
-``jacobian`` factorised by ``NewtonMatrix`` (a band, bordered where row 0 is dense, by LAPACK).  All tableaux
-are stiffly accurate (x_{n+1} is the last stage), so algebraic rows hold at every step (index-1 DAEs).
+Every implicit stage solves  M X - h a_ii F(X, t + c_i h) = M x_n + h sum_j a_ij F_j  (algebraic rows:
+F(X) = 0; c_i = sum_j a_ij the stage's node) by simplified Newton: one factorisation of M - h a_ii J per step
+(all SDIRK stages share a_ii), through the problem's kernels (continuum.kernels.DirkKernels): its own, or its
+``rate`` and ``jacobian`` factorised by ``NewtonMatrix`` (a band, bordered where row 0 is dense, by LAPACK).  All
+tableaux are stiffly accurate (x_{n+1} is the last stage), so algebraic rows hold at every step (index-1 DAEs).
 
 Methods (``TABLEAUX``), plus ``explicit_euler`` (first order, conditionally stable: the
 stability map's foil):
@@ -17,16 +17,19 @@ stability map's foil):
   by the impulsive start ring with amplification -> -1); no error estimate, fixed steps only.
 
 The loop (``dirk_loop``) is written once and runs as Python or compiled by numba with the problem's kernels
-(``compiled``).  The DIRKs have stage order 1, so on the imposed-speed DAE their accuracy drops (measured: steps
-grow as rtol^-0.55 during the lift-off of mu_w); continuum.bdf keeps its order there: the imposed speed's default.
+(``compiled``); what it carries between calls and what it reads are named tuples (``DirkState``, ``DirkSetup``).
+The DIRKs have stage order 1, so on the imposed-speed DAE their accuracy drops (measured: steps grow as
+rtol^-0.55 during the lift-off of mu_w); continuum.bdf keeps its order there: the imposed speed's default.
 """
 from __future__ import annotations
 
 import functools
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -58,6 +61,11 @@ class Tableau:
         return np.array(self.err)
 
     @cached_property
+    def nodes(self) -> np.ndarray:
+        """c_i = sum_j a_ij: stage i is taken at the time t + c_i h."""
+        return self.matrix.sum(axis=1)
+
+    @cached_property
     def stage_weights(self) -> np.ndarray:
         """W[i] = (S_i, P_i) on K = (F(x_n), F_1, ..., F_s): the right-hand side of stage i is
         M x_n + h S_i @ K (the explicit stage sum), its Newton guess  M X_i = M x_n + h P_i @ K: the
@@ -77,7 +85,7 @@ class Tableau:
                 P[i, i] += A[i, i]
             P[1] = 0.0
             return np.stack([stage_sums, P], axis=1)
-        nodes = np.concatenate(([0.0], A.sum(axis=1)))
+        nodes = np.concatenate(([0.0], self.nodes))
         for i in range(s):
             known = np.argsort(np.abs(nodes[:i + 1] - nodes[i + 1]), kind="stable")[:PREDICTOR_POINTS]
             for j in known:
@@ -126,8 +134,9 @@ NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE = 1.0, 0.99, 1e-3
 #: the error norm is floored at ERROR_FLOOR
 LANDING_SHARE, STEP_SAFETY, STEP_SHRINK, STEP_GROW, ERROR_FLOOR = 0.05, 0.9, 0.2, 4.0, 1e-10
 #: a stage's Newton is converged when its contraction-corrected update is below NEWTON_TOL (weighted RMS); an
-#: integration stops with StepperFailure after MAX_STEPS steps (accepted and rejected)
-NEWTON_TOL, MAX_STEPS = 0.03, 200_000
+#: integration stops with StepperFailure after MAX_STEPS steps (accepted and rejected); its first step is FIRST_STEP
+#: unless given
+NEWTON_TOL, MAX_STEPS, FIRST_STEP = 0.03, 200_000, 1e-9
 #: a step ends on an output time within this relative distance of it
 OUTPUT_RTOL = 1e-13
 @dataclass
@@ -154,7 +163,8 @@ class NewtonFailure(StepperFailure):
 
 
 class NewtonMatrix:
-    """LU factors of A = M - dh J(x), reused for every Newton iteration and stage of a step.
+    """LU factors of A = M - dh J of a problem's Jacobian J (continuum.jacobian), reused for every Newton iteration
+    and stage of a step.
 
     A is banded (LAPACK gbtrf/gbtrs, partial pivoting), except that row 0 may be dense (the
     imposed-speed integral condition); then it is eliminated by bordering:
@@ -162,8 +172,7 @@ class NewtonMatrix:
     A dissipative Jacobian makes A symmetric positive definite: L D L^T (LAPACK pttrf/pttrs).
     """
 
-    def __init__(self, problem, x, dh, jac=None):
-        jac = problem.jacobian(x) if jac is None else jac  # J(x), or that Jacobian already at hand
+    def __init__(self, problem, jac, dh):
         mass = problem.mass
         kl, ku = jac.kl, jac.ku
         self.dh, self.dense, self.kl, self.ku = dh, jac.row0 is not None, kl, ku
@@ -218,19 +227,19 @@ def mass_rows(mass):
     return np.flatnonzero(mass == 0), np.divide(1.0, mass, out=np.zeros(len(mass)), where=mass != 0)
 
 
-def _numpy_rate(x, f, problem):
-    f[:] = problem.rate(x)
+def _numpy_rate(x, t, f, problem):
+    f[:] = problem.rate(x, t)
 
 
-def _numpy_factor(x, dh, lu, problem):
+def _numpy_factor(x, t, dh, lu, problem):
     try:
-        lu[0] = NewtonMatrix(problem, x, dh)
+        lu[0] = NewtonMatrix(problem, problem.jacobian(x, t), dh)
     except NewtonFailure:
         return False
     return True
 
 
-def _numpy_refresh(lu, x, problem):
+def _numpy_refresh(lu, x, t, problem):
     if problem.dense_wall:  # the integral condition's row changes fast: keep it current
         lu[0].refresh_row0(problem.mass[0], problem.wall_gradient(x))
 
@@ -315,12 +324,22 @@ def _loop_residual(rhs, mass, x, dh, f, out):
         out[i] = rhs[i] - mass[i] * x[i] + dh * f[i]
 
 
-NUMPY_OPS = (_numpy_stage_sums, _numpy_error_sum, _numpy_norm, _numpy_residual)
-LOOP_OPS = (_loop_stage_sums, _loop_error_sum, rms, _loop_residual)
+class VectorOps(NamedTuple):
+    """The loop's vector operations in one summation order: stage_sums(hw, count, rates, base, rhs, guess),
+    error_sum(h, err, rates, est), norm(v, scale), residual(rhs, mass, x, dh, f, out)."""
+
+    stage_sums: Callable
+    error_sum: Callable
+    norm: Callable
+    residual: Callable
+
+
+NUMPY_OPS = VectorOps(_numpy_stage_sums, _numpy_error_sum, _numpy_norm, _numpy_residual)
+LOOP_OPS = VectorOps(_loop_stage_sums, _loop_error_sum, rms, _loop_residual)
 
 #: the loop's exits
 LANDED, RECORDS_FULL, MAX_STEPS_REACHED, FIXED_STEP_FAILED, FIXED_STEP_PASSED = range(5)
-#: state slots between calls: time, next step, Newton contraction, the last Newton failure's step, the step cap,
+#: clock slots between calls: time, next step, Newton contraction, the last Newton failure's step, the step cap,
 #: the next fixed step
 T, H, ETA, H_FAIL, CAP, NEXT_FIXED = range(6)
 #: counters: accepted steps, rejected steps, Newton iterations, Newton failures, rows recorded in this call
@@ -329,35 +348,150 @@ STEPS, REJECTED, ITERATIONS, FAILURES, RECORDED = range(5)
 RECORD_ROWS = 1024
 
 
-@functools.cache
-def dirk_loop(kernels: DirkKernels, compiled: bool):
-    """The DIRK loop on ``kernels``: ``advance(...)`` steps until an output time, a full record or a limit (its exits).
-    Written once; ``compiled``: numba compiles it with the kernels (continuum.compiled), else it runs as Python."""
-    rate, factor, refresh, solve, project, fraction = kernels
-    stage_sums, error_sum, norm, residual = LOOP_OPS if compiled else NUMPY_OPS
-    sources = source_key(*kernels, dirk_loop)
+class StageTableau(NamedTuple):
+    """A Tableau as the loop takes it: A, the stage weights (Tableau.stage_weights), the error weights b - b_hat
+    (zeros without an estimate), the stage nodes c, whether the first stage is explicit, the local error's order and
+    whether there is an estimate."""
 
-    def solve_stage(x, f, rhs, weights, tol, eta, max_iter, full, dh, lu, full_lu, mass, dx, counters, rules,
-                    data):
-        """Solve M X - dh F(X) = rhs by simplified Newton from the guess x (in place; f gets F(X)).
+    a: np.ndarray
+    weights: np.ndarray
+    err: np.ndarray
+    nodes: np.ndarray
+    explicit_first: bool
+    err_order: int
+    estimates: bool
+
+
+class Rows(NamedTuple):
+    """The diagonal mass M, 1/M on the differential rows (0 on the algebraic ones) and the two sets of rows."""
+
+    mass: np.ndarray
+    inverse_mass: np.ndarray
+    algebraic: np.ndarray
+    differential: np.ndarray
+
+
+class Work(NamedTuple):
+    """The loop's workspace: the stage rates (s + 1 rows: F(x_n), F_1..F_s), the error estimate, the last stage,
+    a stage's Newton iterate and its start, the stage's right-hand side, M x_n, a Newton update, the error weights."""
+
+    rates: np.ndarray
+    est: np.ndarray
+    stage: np.ndarray
+    guess: np.ndarray
+    start: np.ndarray
+    rhs: np.ndarray
+    base: np.ndarray
+    dx: np.ndarray
+    weights: np.ndarray
+
+
+class Control(NamedTuple):
+    """The step control: tolerances, the Newton tolerance, most steps, and the rules of the module's constants
+    (NEWTON_CUT, REPEAT_BAND (0: no cap), CAP_START, CAP_GROWTH, OUTPUT_RTOL, LANDING_SHARE, STEP_SAFETY,
+    STEP_SHRINK, STEP_GROW, ERROR_FLOOR)."""
+
+    rtol: float
+    atol: float
+    newton_tol: float
+    max_steps: int
+    newton_cut: float
+    repeat_band: float
+    cap_start: float
+    cap_growth: float
+    output_rtol: float
+    landing: float
+    safety: float
+    shrink: float
+    grow: float
+    floor: float
+
+
+class NewtonRules(NamedTuple):
+    """A stage's Newton: NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE, whether a stage starts from the last
+    stage's contraction (the problem's ``carries_contraction``), NEWTON_ITERATIONS, the full-Newton fallback's
+    iterations, ETA_FLOOR, ETA_DECAY."""
+
+    no_contraction: float
+    no_contraction_full: float
+    small_update: float
+    carry: bool
+    iterations: int
+    full_iterations: int
+    eta_floor: float
+    eta_decay: float
+
+
+class StageNewton(NamedTuple):
+    """What a stage's Newton works with besides its iterate, right-hand side and rate (``solve_stage``): the update's
+    workspace, the error weights, the mass, the counters, the factors (the step's, the full Newton's), its rules and
+    tolerance and the kernels' data.  A few arrays only, not the whole setup: the loop calls it at every stage."""
+
+    dx: np.ndarray
+    weights: np.ndarray
+    mass: np.ndarray
+    counters: np.ndarray
+    lu: object
+    full_lu: object
+    rules: NewtonRules
+    tol: float
+    data: object
+
+
+class DirkSetup(NamedTuple):
+    """What a loop call reads (and the workspace it writes): the tableau, the controls, the rows, the workspace, the
+    fixed step ends (empty: adaptive), the stages' Newton and the kernels' data."""
+
+    tableau: StageTableau
+    control: Control
+    rows: Rows
+    work: Work
+    fixed: np.ndarray
+    newton: StageNewton
+    data: object
+
+
+class DirkState(NamedTuple):
+    """What the loop carries from call to call: the state x and f = F(x, t), the clock (slots T..NEXT_FIXED), the
+    counters (STEPS..RECORDED), the Newton matrix's factors (the step's and the full Newton's) and the record of the
+    accepted steps since the call began."""
+
+    x: np.ndarray
+    f: np.ndarray
+    clock: np.ndarray
+    counters: np.ndarray
+    lu: object
+    full_lu: object
+    record_t: np.ndarray
+    record_x: np.ndarray
+
+
+def _stage_solver(kernels: DirkKernels, ops: VectorOps):
+    """``solve_stage`` on these kernels and vector operations."""
+    rate, factor, refresh, solve, project, fraction = kernels
+    norm, residual = ops.norm, ops.residual
+
+    def solve_stage(x, f, rhs, t, dh, eta, full, newton):
+        """Solve M X - dh F(X, t) = rhs by simplified Newton from the guess X = x (in place; f gets F(X, t)).
 
         Stops when the contraction-corrected update eta |dx| (weighted RMS, eta = theta/(1-theta); at the first
-        iterate the given ``eta``, carried from the previous stage) is below ``tol`` (Hairer & Wanner 1996, IV.8), then
-        projects onto the algebraic constraints.  ``full``: refactorise at every iterate (full Newton, the fallback
-        when the frozen matrix does not contract).  Returns (converged, eta)."""
-        no_contraction, no_contraction_full, small_update = rules[0], rules[1], rules[2]
-        rate(x, f, data)
+        iterate the given ``eta``, carried from the previous stage) is below the Newton tolerance (Hairer & Wanner
+        1996, IV.8), then projects onto the algebraic constraints.  ``full``: refactorise at every iterate (full
+        Newton, the fallback when the frozen matrix does not contract).  Returns (converged, eta)."""
+        rules, data, counters, dx, tol = newton.rules, newton.data, newton.counters, newton.dx, newton.tol
+        lu = newton.full_lu if full else newton.lu
+        rate(x, t, f, data)
         previous = -1.0
-        for _ in range(max_iter):
+        for _ in range(rules.full_iterations if full else rules.iterations):
             counters[ITERATIONS] += 1
             if full:
-                if not factor(x, dh, full_lu, data):  # a failed step; no Newton failure counted
+                if not factor(x, t, dh, lu, data):  # a failed step; no Newton failure counted
                     return False, eta
             else:
-                refresh(lu, x, data)
-            residual(rhs, mass, x, dh, f, dx)
-            solve(full_lu if full else lu, dx, data)
-            size = norm(dx, weights)
+                refresh(lu, x, t, data)
+            residual(rhs, newton.mass, x, dh, f, dx)
+            solve(lu, dx, data)
+            size = norm(dx, newton.weights)
             if not math.isfinite(size):
                 break
             share = fraction(x, dx, data)
@@ -367,131 +501,147 @@ def dirk_loop(kernels: DirkKernels, compiled: bool):
                 x += share * dx
             if previous >= 0:
                 theta = size / previous
-                if theta >= (no_contraction_full if full else no_contraction):  # no contraction
+                if theta >= (rules.no_contraction_full if full else rules.no_contraction):  # no contraction
                     break
                 eta = theta / (1.0 - theta)
-            if eta * size < tol or size < small_update * tol:
+            if eta * size < tol or size < rules.small_update * tol:
                 project(x, data)
-                rate(x, f, data)
+                rate(x, t, f, data)
                 return True, eta
-            rate(x, f, data)
+            rate(x, t, f, data)
             previous = size
         counters[FAILURES] += 1
         return False, eta
 
-    def dirk_step(x, f, h, weights, newton_tol, eta, tableau, rows, work, lu, full_lu, counters, rules, data):
-        """One step of size h from (x, f = F(x)): the stages into work (the last one, x_{n+1}, in ``stage``, its rate
-        in rates[-1]), the local error estimate filtered through (M - h a_ss J)^-1 (Hosea & Shampine 1996) in ``est``.
-        Returns (ok, eta): ok False if a stage's Newton failed."""
-        a, w, err, explicit_first = tableau[0], tableau[1], tableau[2], tableau[3]
-        mass, inverse_mass, algebraic = rows[0], rows[1], rows[2]
-        rates, est, stage, guess, start, rhs, base, dx = work
-        carry, newton_iterations, full_iterations, eta_floor, eta_decay = (rules[3], rules[4], rules[5], rules[6],
-                                                                         rules[7])
-        s = a.shape[0]
-        dh = h * a[s - 1, s - 1]
-        if not factor(x, dh, lu, data):
+    return solve_stage
+
+
+def _stepper(kernels: DirkKernels, ops: VectorOps, solve_stage):
+    """``dirk_step`` on these kernels and vector operations."""
+    factor, solve = kernels.factor, kernels.solve
+    stage_sums, error_sum = ops.stage_sums, ops.error_sum
+
+    def dirk_step(t, h, eta, setup, state):
+        """One step of size h from (x, f = F(x, t)) of the state: the stages into the work (the last one, x_{n+1}, in
+        ``stage``, its rate in rates[-1]), stage i at t + c_i h, the local error estimate filtered through
+        (M - h a_ss J)^-1 (Hosea & Shampine 1996) in ``est``.  Returns (ok, eta): ok False if a stage's Newton
+        failed."""
+        tab, rows, work, newton, data = setup.tableau, setup.rows, setup.work, setup.newton, setup.data
+        rules = newton.rules
+        x, f, rates, guess = state.x, state.f, work.rates, work.guess
+        s = tab.a.shape[0]
+        dh = h * tab.a[s - 1, s - 1]
+        if not factor(x, t, dh, state.lu, data):
             return False, eta
         rates[0] = f
-        first = 1 if explicit_first else 0
+        first = 1 if tab.explicit_first else 0
         if first:
             rates[1] = f
-        stage[:] = x
-        np.multiply(mass, x, base)
+        work.stage[:] = x
+        np.multiply(rows.mass, x, work.base)
         for i in range(first, s):
-            stage_sums(h * w[i], i + 1, rates, base, rhs, guess)
-            for r in algebraic:
-                rhs[r] = 0.0
-            guess *= inverse_mass
-            for r in algebraic:
-                guess[r] = stage[r]  # from the last stage
-            start[:] = guess  # the full-Newton fallback's guess
-            ok, eta = solve_stage(guess, rates[i + 1], rhs, weights, newton_tol,
-                                  max(eta, eta_floor) ** eta_decay if carry else 1.0, newton_iterations, False, dh,
-                                  lu, full_lu, mass, dx, counters, rules, data)
+            stage_sums(h * tab.weights[i], i + 1, rates, work.base, work.rhs, guess)
+            for r in rows.algebraic:
+                work.rhs[r] = 0.0
+            guess *= rows.inverse_mass
+            for r in rows.algebraic:
+                guess[r] = work.stage[r]  # from the last stage
+            work.start[:] = guess  # the full-Newton fallback's guess
+            t_stage = t + tab.nodes[i] * h
+            carried = max(eta, rules.eta_floor) ** rules.eta_decay if rules.carry else 1.0
+            ok, eta = solve_stage(guess, rates[i + 1], work.rhs, t_stage, dh, carried, False, newton)
             if not ok:
-                guess[:] = start
-                ok, eta = solve_stage(guess, rates[i + 1], rhs, weights, newton_tol, 1.0, full_iterations, True, dh,
-                                      lu, full_lu, mass, dx, counters, rules, data)
+                guess[:] = work.start
+                ok, eta = solve_stage(guess, rates[i + 1], work.rhs, t_stage, dh, 1.0, True, newton)
                 if not ok:
                     return False, eta
-            stage[:] = guess
-        if tableau[5]:
-            error_sum(h, err, rates, est)
-            for r in algebraic:
-                est[r] = 0.0
-            solve(lu, est, data)
+            work.stage[:] = guess
+        if tab.estimates:
+            error_sum(h, tab.err, rates, work.est)
+            for r in rows.algebraic:
+                work.est[r] = 0.0
+            solve(state.lu, work.est, data)
         return True, eta
 
-    def advance(x, f, state, counters, t_bound, fixed, tableau, control, rules, rows, work, lu, full_lu, record,
-                data):
-        """Step from (t = state[T], x, f = F(x)) until t_bound is reached (LANDED, within control's output rtol), the
+    return dirk_step
+
+
+def _advancer(norm, dirk_step, sources: str):
+    """``advance`` on this norm and step; ``sources``: the compiled cache's key (kernels.source_key)."""
+
+    def advance(state, setup, t_bound):
+        """Step from (t = clock[T], x, f = F(x, t)) until t_bound is reached (LANDED, within the output rtol), the
         record is full, or max_steps.  Adaptive steps keep the RMS local error over the differential rows, weighted
-        by atol + rtol |x|, below 1; ``fixed`` (not empty): the steps end at those times, with no error control.
-        control = (rtol, atol, newton_tol, max_steps, NEWTON_CUT, repeat band, CAP_START, CAP_GROWTH, OUTPUT_RTOL,
-        LANDING_SHARE, STEP_SAFETY, STEP_SHRINK, STEP_GROW, ERROR_FLOOR), rules the Newton's (``_rules``)."""
+        by atol + rtol |x|, below 1; setup's ``fixed`` (not empty): the steps end at those times, with no error
+        control."""
         sources  # noqa: B018 -- the cache key (kernels.source_key): numba hashes a closure's cells
-        rtol, atol, newton_tol, max_steps = control[0], control[1], control[2], control[3]
-        newton_cut, repeat_band, cap_start, cap_growth, output_rtol = (control[4], control[5], control[6],
-                                                                       control[7], control[8])
-        landing, safety, shrink, grow, floor = control[9], control[10], control[11], control[12], control[13]
-        differential = rows[3]
-        rates, est, stage, weights = work[0], work[1], work[2], work[8]
-        err_order = tableau[4]
-        s = tableau[0].shape[0]
-        t, h, eta, h_fail, cap = state[T], state[H], state[ETA], state[H_FAIL], state[CAP]
-        rec_t, rec_x = record
+        control, work, fixed = setup.control, setup.work, setup.fixed
+        differential = setup.rows.differential
+        s = setup.tableau.a.shape[0]
+        clock, counters, x = state.clock, state.counters, state.x
+        t, h, eta, h_fail, cap = clock[T], clock[H], clock[ETA], clock[H_FAIL], clock[CAP]
         counters[RECORDED] = 0
         while True:
-            if counters[STEPS] + counters[REJECTED] >= max_steps:
-                state[T], state[H], state[ETA], state[H_FAIL], state[CAP] = t, h, eta, h_fail, cap
+            if counters[STEPS] + counters[REJECTED] >= control.max_steps:
+                clock[T], clock[H], clock[ETA], clock[H_FAIL], clock[CAP] = t, h, eta, h_fail, cap
                 return MAX_STEPS_REACHED
             if len(fixed):
-                h_try = fixed[int(state[NEXT_FIXED])] - t
+                h_try = fixed[int(clock[NEXT_FIXED])] - t
             else:
                 h_try = min(h, t_bound - t)
-                if t_bound - (t + h_try) < landing * h_try:
+                if t_bound - (t + h_try) < control.landing * h_try:
                     h_try = t_bound - t
-            weights[:] = atol + rtol * np.abs(x)
-            ok, eta_step = dirk_step(x, f, h_try, weights, newton_tol, eta, tableau, rows, work[:8], lu, full_lu,
-                                     counters, rules, data)
+            work.weights[:] = control.atol + control.rtol * np.abs(x)
+            ok, eta_step = dirk_step(t, h_try, eta, setup, state)
             if not ok:
                 if len(fixed):
-                    state[T] = t
+                    clock[T] = t
                     return FIXED_STEP_FAILED
                 eta = 1.0
                 counters[REJECTED] += 1
-                if abs(h_try / h_fail - 1.0) < repeat_band:
-                    cap = cap_start * h_try
-                h, h_fail = newton_cut * h_try, h_try
+                if abs(h_try / h_fail - 1.0) < control.repeat_band:
+                    cap = control.cap_start * h_try
+                h, h_fail = control.newton_cut * h_try, h_try
                 continue
             eta = eta_step
             if len(fixed):
-                state[NEXT_FIXED] += 1
+                clock[NEXT_FIXED] += 1
             else:
-                err = max(norm(est[differential], weights[differential]), floor)
-                factor_ = safety * err ** (-1.0 / err_order)
+                err = max(norm(work.est[differential], work.weights[differential]), control.floor)
+                factor_ = control.safety * err ** (-1.0 / setup.tableau.err_order)
                 if err > 1.0:
                     counters[REJECTED] += 1
-                    h = h_try * max(shrink, factor_)
+                    h = h_try * max(control.shrink, factor_)
                     continue
-                h = min(h_try * min(grow, max(shrink, factor_)), cap)
-                cap *= cap_growth
+                h = min(h_try * min(control.grow, max(control.shrink, factor_)), cap)
+                cap *= control.cap_growth
             counters[STEPS] += 1
-            x[:] = stage
-            f[:] = rates[s]
+            x[:] = work.stage
+            state.f[:] = work.rates[s]
             t += h_try
-            rec_t[counters[RECORDED]] = t
-            rec_x[counters[RECORDED]] = x
+            state.record_t[counters[RECORDED]] = t
+            state.record_x[counters[RECORDED]] = x
             counters[RECORDED] += 1
-            state[T], state[H], state[ETA], state[H_FAIL], state[CAP] = t, h, eta, h_fail, cap
-            if abs(t - t_bound) <= output_rtol * abs(t_bound):
+            clock[T], clock[H], clock[ETA], clock[H_FAIL], clock[CAP] = t, h, eta, h_fail, cap
+            if abs(t - t_bound) <= control.output_rtol * abs(t_bound):
                 return LANDED
             if len(fixed) and t > t_bound:
                 return FIXED_STEP_PASSED
-            if counters[RECORDED] == len(rec_t):
+            if counters[RECORDED] == len(state.record_t):
                 return RECORDS_FULL
 
+    return advance
+
+
+@functools.cache
+def dirk_loop(kernels: DirkKernels, compiled: bool):
+    """The DIRK loop on ``kernels``: ``advance(state, setup, t_bound)`` steps until an output time, a full record or a
+    limit (its exits).  Written once; ``compiled``: numba compiles it with the kernels (continuum.compiled), else it
+    runs as Python."""
+    ops = LOOP_OPS if compiled else NUMPY_OPS
+    solve_stage = _stage_solver(kernels, ops)
+    dirk_step = _stepper(kernels, ops, solve_stage)
+    advance = _advancer(ops.norm, dirk_step, source_key(*kernels, dirk_loop))
     if not compiled:
         return advance
     from .compiled import compile_loop
@@ -499,17 +649,32 @@ def dirk_loop(kernels: DirkKernels, compiled: bool):
     return compile_loop(advance, solve_stage, dirk_step)
 
 
-def _rules(problem, full_newton=FULL_NEWTON_ITERATIONS):
+def _rules(problem, full_newton=FULL_NEWTON_ITERATIONS) -> NewtonRules:
     """The Newton's rules as the loop takes them."""
-    return (NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE, bool(problem.carries_contraction), NEWTON_ITERATIONS,
-            full_newton, ETA_FLOOR, ETA_DECAY)
+    return NewtonRules(NO_CONTRACTION, NO_CONTRACTION_FULL, SMALL_UPDATE, bool(problem.carries_contraction),
+                       NEWTON_ITERATIONS, full_newton, ETA_FLOOR, ETA_DECAY)
 
 
-def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol=1e-8, h0=1e-9,
+def _setup(problem, tab: Tableau, control: Control, fixed, state: DirkState, data) -> DirkSetup:
+    """The loop's setup of ``problem`` under the tableau ``tab`` (its workspace allocated; the stages' Newton on the
+    state's counters and factors)."""
+    mass = np.asarray(problem.mass, dtype=float)
+    algebraic, inverse_mass = mass_rows(mass)
+    s, n = len(tab.A), len(mass)
+    tableau = StageTableau(tab.matrix, tab.stage_weights, tab.error_weights if tab.err is not None else np.zeros(s),
+                           tab.nodes, tab.explicit_first, int(tab.err_order), tab.err is not None)
+    work = Work(np.empty((s + 1, n)), *(np.empty(n) for _ in range(8)))
+    newton = StageNewton(work.dx, work.weights, mass, state.counters, state.lu, state.full_lu, _rules(problem),
+                         control.newton_tol, data)
+    return DirkSetup(tableau, control, Rows(mass, inverse_mass, algebraic, np.flatnonzero(mass > 0)), work, fixed,
+                     newton, data)
+
+
+def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol=1e-8, h0=FIRST_STEP,
               newton_tol=NEWTON_TOL, fixed_times=None, observer=None, max_steps=MAX_STEPS, resume=None,
               repeat_cap=True):
-    """Integrate ``problem`` by the DIRK ``method`` from t = 0 (or from ``resume`` = (t0, x0)), returning the state at
-    each time of the sorted ``t_out``.
+    """Integrate ``problem`` (M x' = F(x, t)) by the DIRK ``method`` from t = 0 (or from ``resume`` = (t0, x0)),
+    returning the state at each time of the sorted ``t_out``.
 
     Adaptive steps keep the RMS local error over the differential rows, weighted by atol + rtol |x|, below 1; with
     ``fixed_times`` (an increasing array containing every t_out) the steps are those, with no error control
@@ -529,24 +694,17 @@ def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol
     x = np.array(x, dtype=float)
     n = len(x)
     f = np.empty(n)
-    kernels.rate(x, f, data)
-    mass = np.asarray(problem.mass, dtype=float)
-    algebraic, inverse_mass = mass_rows(mass)
-    rows = (mass, inverse_mass, algebraic, np.flatnonzero(mass > 0))
-    s = len(tab.A)
-    tableau = (tab.matrix, tab.stage_weights, tab.error_weights if tab.err is not None else np.zeros(s),
-               tab.explicit_first, int(tab.err_order), tab.err is not None)
-    control = (float(rtol), float(atol), float(newton_tol), int(max_steps), NEWTON_CUT,
-               REPEAT_BAND if repeat_cap else 0.0, CAP_START, CAP_GROWTH, OUTPUT_RTOL, LANDING_SHARE, STEP_SAFETY,
-               STEP_SHRINK, STEP_GROW, ERROR_FLOOR)
-    work = (np.empty((s + 1, n)), *(np.empty(n) for _ in range(8)))
+    kernels.rate(x, t0, f, data)
+    control = Control(float(rtol), float(atol), float(newton_tol), int(max_steps), NEWTON_CUT,
+                      REPEAT_BAND if repeat_cap else 0.0, CAP_START, CAP_GROWTH, OUTPUT_RTOL, LANDING_SHARE,
+                      STEP_SAFETY, STEP_SHRINK, STEP_GROW, ERROR_FLOOR)
     fixed = np.asarray(fixed_times if fixed_times is not None else [], dtype=float)
     if fixed.size and (fixed[0] <= t0 or np.any(np.diff(fixed) <= 0)
                        or fixed[-1] < t_out[-1] * (1 - OUTPUT_RTOL)):
         raise ValueError("fixed_times must increase from the start time and reach the last output time")
-    state = np.array([t0, h0, 1.0, math.inf, math.inf, 0.0])
-    counters = np.zeros(5, dtype=np.int64)
-    record = (np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n)))
+    state = DirkState(x, f, np.array([t0, h0, 1.0, math.inf, math.inf, 0.0]), np.zeros(5, dtype=np.int64), factors(),
+                      factors(), np.empty(RECORD_ROWS), np.empty((RECORD_ROWS, n)))
+    setup = _setup(problem, tab, control, fixed, state, data)
     if observer is not None and resume is None:
         observer(t0, x.copy())
     states = np.empty((len(t_out), n))
@@ -554,30 +712,28 @@ def integrate(problem, t_out, *, method="sdirk4", compiled=True, rtol=1e-6, atol
     while k < len(t_out) and t_out[k] <= t0:  # output times at the start: the initial state
         states[k] = x
         k += 1
-    rules = _rules(problem)
-    lu, full_lu = factors(), factors()
     while k < len(t_out):
-        exit_ = advance(x, f, state, counters, t_out[k], fixed, tableau, control, rules, rows, work, lu, full_lu,
-                        record, data)
+        exit_ = advance(state, setup, t_out[k])
         if observer is not None:
-            for row in range(counters[RECORDED]):
-                observer(record[0][row], record[1][row].copy())
+            for row in range(state.counters[RECORDED]):
+                observer(state.record_t[row], state.record_x[row].copy())
         if exit_ == MAX_STEPS_REACHED:
-            raise StepperFailure(f"max_steps = {max_steps} reached at t = {state[T]:.3e}")
+            raise StepperFailure(f"max_steps = {max_steps} reached at t = {state.clock[T]:.3e}")
         if exit_ == FIXED_STEP_FAILED:
-            raise NewtonFailure(f"Newton did not converge at the fixed step from t = {state[T]:.3e}")
+            raise NewtonFailure(f"Newton did not converge at the fixed step from t = {state.clock[T]:.3e}")
         if exit_ == FIXED_STEP_PASSED:
             raise ValueError("fixed_times must contain every output time")
-        while exit_ == LANDED and k < len(t_out) and abs(state[T] - t_out[k]) <= OUTPUT_RTOL * abs(t_out[k]):
+        while exit_ == LANDED and k < len(t_out) and abs(state.clock[T] - t_out[k]) <= OUTPUT_RTOL * abs(t_out[k]):
             states[k] = x
             k += 1
+    counters = state.counters
     stats = StepStats(int(counters[STEPS]), int(counters[REJECTED]), int(counters[ITERATIONS]),
                       int(counters[FAILURES]), time.process_time() - start_cpu)
     return states, stats
 
 
 def explicit_euler(problem, t_out, fixed_times, observer=None):
-    """Forward Euler on the differential rows, x += dt F(x)/M, then the problem's projection onto
+    """Forward Euler on the differential rows, x += dt F(x, t)/M, then the problem's projection onto
     its algebraic rows; stable only for dt < 2/|lambda_max(M^-1 J)| (continuum.stability)."""
     t_out = np.asarray(t_out, dtype=float)
     differential = problem.mass > 0
@@ -587,7 +743,7 @@ def explicit_euler(problem, t_out, fixed_times, observer=None):
     states = np.empty((len(t_out), len(x)))
     t, k = 0.0, 0
     for t_next in np.asarray(fixed_times, dtype=float):
-        f = problem.rate(x)
+        f = problem.rate(x, t)
         x = x.copy()
         x[differential] += (t_next - t) * f[differential] / problem.mass[differential]
         x = problem.project(x)

@@ -32,17 +32,18 @@ import pandas as pd
 from scipy.linalg import eigvalsh_tridiagonal
 
 from .. import observables as obs
+from ..load import Load
 from ..mesh import Mesh
-from ..mol import solve_stress_mol
 from ..problems import ImposedSpeed, ImposedStress
 from ..rheology import Friction
 from ..richardson import REFINEMENT, richardson
 from ..rules import YieldRule, wellposedness
 from ..scales import Material, Scales
+from ..scene import BedScene
 from ..solver import CONVERGENCE_ORDER, ORDER_GAIN, SAFETY, Numerics, map_for, solve_speed, solve_stress
 from ..steady import mu_w_for_speed, steady_mu
 from ..stepper import explicit_euler
-from ..velocity import VELOCITY_NUMERICS, BedScene, solve_velocity
+from ..velocity import VELOCITY_NUMERICS, solve_velocity
 
 CLASSES = ("converged", "inaccurate", "oscillating", "constraint-violating", "out of bounds", "blown up")
 COLORS = {"converged": "#2ca02c", "inaccurate": "#ffbf00", "oscillating": "#9467bd",
@@ -119,11 +120,12 @@ def _speed(fr, u_w, n) -> Outcome:
 def _velocity(fr, mu_w, rule, n, t_tilde=VELOCITY_T_TILDE) -> Outcome:
     m = Material(mu_s=fr.mu_s, mu_d=fr.mu_d)
     sc = Scales(m, VELOCITY_P_W, mu_w)
-    scene = BedScene(m, VELOCITY_P_W, sc.delta_s, body_force=m.mu_s * m.phi * m.rho_p * m.g)
-    sol = solve_velocity(scene, [t_tilde * sc.t_s], mu_w=mu_w, rule=rule, initial="yield",
+    load = Load("stress", VELOCITY_P_W, mu_w=mu_w)
+    scene = BedScene(sc.delta_s, body_force=m.mu_s * m.phi * m.rho_p * m.g)
+    sol = solve_velocity(m, scene, load, [t_tilde * sc.t_s], rule=rule, initial="yield",
                          numerics=replace(VELOCITY_NUMERICS, n_cells=n))
     mu = sol.mu[-1]
-    return Outcome(float(sol.u_w[-1] / sc.U), np.abs(sol.s[-1]) / (mu_w * scene.p_w),
+    return Outcome(float(sol.u_w[-1] / sc.U), np.abs(sol.s[-1]) / (mu_w * load.p_w),
                    (float(mu.min()), float(mu.max())))
 
 
@@ -155,7 +157,7 @@ def _stress_cn(fr, mu_w, dt):
 
 
 def _stress_bdf(fr, mu_w, n):
-    return _stress_outcome(solve_stress_mol(fr, mu_w, [T_END], Numerics(n_cells=n, order=2)))
+    return _stress_outcome(solve_stress(fr, mu_w, [T_END], Numerics(n_cells=n, order=2, method="solve_ivp-BDF")))
 
 
 def _stress_reference(cells, t_end=T_END):

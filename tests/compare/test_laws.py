@@ -10,12 +10,12 @@ from granstokes.compare.analysis import DriveAnalysis
 from granstokes.compare.comparison import DriveComparison
 from granstokes.compare.drive import DriveSpec
 from granstokes.compare.laws import GROWTH_END, LAWS, laws
-from granstokes.compare.models import Prediction, Steady
 from granstokes.compare.plate import PlateRecord
 from granstokes.compare.rows import LAW_KEYS
 from granstokes.continuum.crossing import layer_measures
 from granstokes.continuum.load import Load
 from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.scene_models import Prediction, Steady
 from scipy.special import erfc
 
 MATERIAL = Material(mu_s=0.3, mu_d=0.7, I0=0.3, phi=0.8)

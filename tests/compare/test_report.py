@@ -210,7 +210,7 @@ def test_drives_modelled_in_forked_processes_match_one_process(report):
     in one process or in two forked ones, in the drives' order."""
     from granstokes.compare.comparison import ModelSide, model_drive
     from granstokes.compare.experiment import map_drives
-    from granstokes.compare.models import LOCAL, PAPER
+    from granstokes.continuum.scene_models import LOCAL, PAPER
 
     c, _, _ = report
     a = c.drives[0].dem

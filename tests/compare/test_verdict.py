@@ -6,9 +6,9 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 import pytest
-from granstokes.compare.models import LOCAL, PAPER
 from granstokes.compare.scorecard import Measured, _not_scored, _unmeasurable, base_reach, headline, tally
 from granstokes.continuum.calibration import IN_DRIVE, JOP_BOUNDS, from_replicates
+from granstokes.continuum.scene_models import LOCAL, PAPER
 
 
 def _row(drive, observable, model, sigma, scored=True, blind=True):

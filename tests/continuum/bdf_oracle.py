@@ -18,11 +18,11 @@ DENSE_BDF_MAX = 128
 MARKER = -1.0
 
 
-def reduced_jacobian(problem, x, dense_max=DENSE_BDF_MAX):
+def reduced_jacobian(problem, x, t, dense_max=DENSE_BDF_MAX):
     """d/dz of the rate of the differential rows z = x[1:] with the wall x[0] = x0(z) eliminated by
     the constraint g(x0, z) = 0: J_zz - J_z0 (dg/dz)/(dg/dx0), a band plus kl dense rows; a dense
     array up to ``dense_max`` rows (scipy's BDF then factorises it by LAPACK getrf), else CSC (SuperLU)."""
-    jac = problem.jacobian(x)
+    jac = problem.jacobian(x, t)
     n = len(x) - 1
     grad = problem.wall_gradient(x)
     coupling = jac.bands[jac.ku + 1:, 0][:n]  # J[1..kl, 0]
@@ -38,7 +38,7 @@ def reduced_jacobian(problem, x, dense_max=DENSE_BDF_MAX):
 
     rows = np.repeat(np.arange(len(coupling)), n)
     cols = np.tile(np.arange(n), len(coupling))
-    return (jac.interior() + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()
+    return (jac.sparse(1) + sp.coo_matrix((dense.ravel(), (rows, cols)), shape=(n, n))).tocsc()
 
 
 def integrate(problem, t_out, *, rtol, atol, h0, observer=None, max_steps=MAX_STEPS, resume=None, bordered=True,
@@ -72,12 +72,12 @@ def integrate(problem, t_out, *, rtol, atol, h0, observer=None, max_steps=MAX_ST
         return problem.project(np.concatenate(([0.0], z)))
 
     lift_off_end = getattr(problem, "lift_off_end", 0.0)
-    iterate = [None]  # the state of the last rate evaluation: in scipy's Newton, the iterate the next solve is at
+    iterate = [None]  # (t, x) of the last rate evaluation: in scipy's Newton, the iterate the next solve is at
 
     def rate(t, z):
         x = state(z)
-        iterate[0] = x
-        return problem.interior_rate(x) if np.isfinite(x[0]) else np.full(len(z), np.nan)
+        iterate[0] = t, x
+        return problem.interior_rate(x, t) if np.isfinite(x[0]) else np.full(len(z), np.nan)
 
     t0, x0 = resume if resume is not None else (0.0, problem.initial())
     admissible = [state(x0[1:])]
@@ -89,8 +89,8 @@ def integrate(problem, t_out, *, rtol, atol, h0, observer=None, max_steps=MAX_ST
         if np.isfinite(x[0]):
             admissible[0] = x
         if not bordered:
-            return reduced_jacobian(problem, admissible[0], dense_max)
-        unreduced[:] = [problem.jacobian(admissible[0])]
+            return reduced_jacobian(problem, admissible[0], t, dense_max)
+        unreduced[:] = [problem.jacobian(admissible[0], t)]
         return MARKER
 
     x = admissible[0]
@@ -107,14 +107,14 @@ def integrate(problem, t_out, *, rtol, atol, h0, observer=None, max_steps=MAX_ST
 
         def lu(c):
             solver.nlu += 1
-            return NewtonMatrix(problem, None, float(c), jac=unreduced[0])
+            return NewtonMatrix(problem, unreduced[0], float(c))
 
         def solve_lu(factors, b):
             """Newton's correction; the wall's row and column (of an imposed speed) at the current iterate if
             ``wall_newton``."""
-            x = iterate[0]
+            t, x = iterate[0]
             if wall_newton and factors.dense and np.isfinite(x[0]):
-                factors.refresh_wall(problem.mass[0], *problem.wall_jacobian(x))
+                factors.refresh_wall(problem.mass[0], *problem.wall_jacobian(x, t))
             return factors.solve(np.concatenate(([0.0], b)))[1:]
 
         solver.lu, solver.solve_lu = lu, solve_lu

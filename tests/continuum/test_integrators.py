@@ -33,3 +33,21 @@ def test_fixed_steps_that_miss_an_output_or_do_not_increase_are_refused(fixed):
 def test_a_baseline_refuses_an_observer_it_cannot_call():
     with pytest.raises(ValueError, match="observer"):
         integrate(_stress(), [1.0], method="solve_ivp-BDF", observer=lambda t, x: None)
+
+
+def test_scipy_s_solve_ivp_is_called_from_the_registry_only():
+    """Every solve_ivp run is a registered baseline (continuum.integrators): no other module of the package imports
+    or calls it."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    users = set()
+    for folder in ("continuum", "dem", "compare", "granstokes"):
+        for path in (root / folder).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                named = (isinstance(node, ast.ImportFrom) and any(a.name == "solve_ivp" for a in node.names)
+                         or isinstance(node, ast.Attribute) and node.attr == "solve_ivp")
+                if named:
+                    users.add(str(path.relative_to(root)))
+    assert users == {"continuum/integrators.py"}

@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 import pytest
+from granstokes.continuum.load import Load
 from granstokes.continuum.ngf import (
     NonlocalFluidity,
-    TransientNumerics,
     solve_steady,
     solve_transient,
     steady_profile,
@@ -21,22 +21,23 @@ from granstokes.continuum.ngf import (
 )
 from granstokes.continuum.predict_cli import register, run_predict
 from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.scene import BedScene, SceneNumerics
 from granstokes.continuum.steady import steady_velocity
-from granstokes.continuum.velocity import BedScene
 from scipy.integrate import quad
 
 from granstokes.cli import main
 
 MAT = Material(mu_s=0.28, mu_d=0.58, I0=0.3, I_convention="dem", phi=0.8)
 P_W, MU_W, H = 20.0, 0.43, 24.0
-SCENE = BedScene(MAT, P_W, H, plate_mass=2.0)
+SCENE = BedScene(H, plate_mass=2.0)
 TAU_W = MU_W * P_W
+LOAD = Load("stress", P_W, mu_w=MU_W)
 
 
 def local_closed_form(y, scene=SCENE, mu_w=MU_W):
     """Local steady u(y) from the paper's closed form, scaled (I0 converted by Scales)."""
-    sc = Scales(scene.material, scene.p_w, mu_w)
-    fr = scene.material.friction
+    sc = Scales(MAT, P_W, mu_w)
+    fr = MAT.friction
     return sc.U * (steady_velocity(fr, mu_w, np.asarray(y) / sc.delta_s)
                    - steady_velocity(fr, mu_w, scene.depth / sc.delta_s))
 
@@ -46,9 +47,9 @@ def test_steady_converges_spectrally():
     thinnest layers): the local algebraic order log(e1/e2)/log(n2/n1) grows with n (it is ~15, ~24, ~33
     here), i.e. faster than any fixed order, and the error reaches 1e-10 u_w by n = 32."""
     f = NonlocalFluidity(A=0.1)
-    ref = steady_profile(SCENE, f, TAU_W, 128)[1][0]
+    ref = steady_profile(MAT, SCENE, LOAD, f, 128)[1][0]
     ns = np.array([14, 20, 26, 32])
-    err = np.array([abs(steady_profile(SCENE, f, TAU_W, int(n))[1][0] - ref) for n in ns])
+    err = np.array([abs(steady_profile(MAT, SCENE, LOAD, f, int(n))[1][0] - ref) for n in ns])
     order = np.log(err[:-1] / err[1:]) / np.log(ns[1:] / ns[:-1])
     assert np.all(np.diff(order) > 0), order           # accelerating: exponential, not algebraic
     assert order[-1] > 15, order
@@ -62,12 +63,12 @@ def test_A_zero_is_the_local_closed_form_and_A_to_zero_rate():
     """A = 0 reproduces the closed form (quadrature only); as A -> 0, u_w - u_w,loc ~ A^(4/3): the
     fluidity's layer at the yield depth has the Airy width (A^2 d^2/|dmu/dy|)^(1/3) and g there is
     O(width), so the creep adds O(width^2).  Measured exponent 1.344-1.347 for A = 0.1 ... 0.0125."""
-    y, u, *_ = steady_profile(SCENE, NonlocalFluidity(A=0.0), TAU_W, 32)
+    y, u, *_ = steady_profile(MAT, SCENE, LOAD, NonlocalFluidity(A=0.0), 32)
     assert np.max(np.abs(u - local_closed_form(y))) < 1e-11 * u[0]
     As = np.array([0.1, 0.05, 0.025, 0.0125])
     du_w, du_max = [], []
     for A in As:
-        y, u, *_ = steady_profile(SCENE, NonlocalFluidity(A=float(A)), TAU_W, 128)
+        y, u, *_ = steady_profile(MAT, SCENE, LOAD, NonlocalFluidity(A=float(A)), 128)
         du_w.append(u[0] - local_closed_form(0.0))
         du_max.append(np.max(np.abs(u - local_closed_form(y))))
     du_w, du_max = np.array(du_w), np.array(du_max)
@@ -87,9 +88,9 @@ def test_creep_decays_as_wkb_below_yield():
     residual deviation is the WKB prefactor (mu_s - mu)^(-1/4): removing it brings the slope closer
     to -1 by more than half."""
     A = 0.5
-    scene = BedScene(MAT, P_W, 50.0)
-    y, u, g, mu, _ = steady_profile(scene, NonlocalFluidity(A=A), TAU_W, 96)
-    ys = yield_depth(scene, TAU_W)
+    scene = BedScene(50.0)
+    y, u, g, mu, _ = steady_profile(MAT, scene, LOAD, NonlocalFluidity(A=A), 96)
+    ys = yield_depth(MAT, P_W, TAU_W)
     c = lambda yy: MAT.mu_s - TAU_W / (P_W + MAT.phi * yy)
     below = y > ys
     s = np.array([quad(lambda z: math.sqrt(max(c(z), 0.0)), ys, yy)[0] / A for yy in y[below]])
@@ -102,8 +103,8 @@ def test_creep_decays_as_wkb_below_yield():
 
 
 def test_imposed_speed_steady_inverts_imposed_stress():
-    st = solve_steady(SCENE, NonlocalFluidity(A=0.5), mu_w=MU_W)
-    sp = solve_steady(SCENE, NonlocalFluidity(A=0.5), u_w=st.u_w)
+    st = solve_steady(MAT, SCENE, LOAD, fluidity=NonlocalFluidity(A=0.5))
+    sp = solve_steady(MAT, SCENE, Load("speed", P_W, u_w=st.u_w), fluidity=NonlocalFluidity(A=0.5))
     assert abs(sp.mu_w - MU_W) < 1e-12
     assert np.max(np.abs(sp.u - st.u)) < 1e-10 * st.u_w
     assert st.u_w_err < 1e-9 * st.u_w
@@ -114,13 +115,15 @@ def transients():
     """Imposed stress from rest at N = 40 and 80, and the imposed speed of the N = 40 steady wall speed."""
     f = NonlocalFluidity(A=0.5)
     times = np.array([1.0, 10.0, 1000.0, 3000.0])
-    out = {n: solve_transient(SCENE, f, times, mu_w=MU_W, numerics=TransientNumerics(n_cells=n), error_estimate=False)
+    out = {n: solve_transient(MAT, SCENE, LOAD, times, fluidity=f, numerics=SceneNumerics(n_cells=n),
+                              error_estimate=False)
            for n in (40, 80)}
-    out["speed"] = solve_transient(SCENE, f, times, u_w=float(out[40].u_w[-1]), numerics=TransientNumerics(n_cells=40),
-                                   error_estimate=False, y_kink=yield_depth(SCENE, TAU_W))  # the same mesh
-    out["seed"] = solve_transient(SCENE, f, times[:2], mu_w=MU_W, numerics=TransientNumerics(n_cells=40, g_rest=1e-6),
-                                  error_estimate=False)
-    out["steady"] = solve_steady(SCENE, f, mu_w=MU_W)
+    out["speed"] = solve_transient(MAT, SCENE, Load("speed", P_W, u_w=float(out[40].u_w[-1])), times, fluidity=f,
+                                   numerics=SceneNumerics(n_cells=40), error_estimate=False,
+                                   y_kink=yield_depth(MAT, P_W, TAU_W))  # the same mesh
+    out["seed"] = solve_transient(MAT, SCENE, LOAD, times[:2], fluidity=f,
+                                  numerics=SceneNumerics(n_cells=40, g_rest=1e-6), error_estimate=False)
+    out["steady"] = solve_steady(MAT, SCENE, LOAD, fluidity=f)
     return out
 
 
@@ -167,7 +170,7 @@ def test_predict_local_steady_is_the_closed_form(capsys):
     int_0^delta_s sqrt(p) I_loc(tau_w/p) dy done by quadrature here, I0 in the DEM convention."""
     assert run_predict(_args("--model", "local", *SCENE_ARGS, "--mu-w", "0.43", "--steady", "--json")) == 0
     out = json.loads(capsys.readouterr().out)
-    ds = yield_depth(SCENE, TAU_W)
+    ds = yield_depth(MAT, P_W, TAU_W)
 
     def rate(y):  # |du/dy| = sqrt(p/rho_p)/d I_loc(mu), DEM convention
         p = P_W + MAT.phi * y
@@ -187,7 +190,7 @@ def test_predict_local_steady_is_the_closed_form(capsys):
 def test_predict_ngf_json(capsys):
     assert run_predict(_args("--model", "ngf", "--A", "0.5", *SCENE_ARGS, "--mu-w", "0.43", "--steady", "--json")) == 0
     out = json.loads(capsys.readouterr().out)
-    st = solve_steady(BedScene(MAT, P_W, H), NonlocalFluidity(A=0.5), mu_w=MU_W)
+    st = solve_steady(MAT, BedScene(H), LOAD, fluidity=NonlocalFluidity(A=0.5))
     assert out["u_w"] == pytest.approx(st.u_w, rel=1e-14) and len(out["g"]) == len(out["y"]) == len(out["u"])
     assert {"model", "u_w", "mu_w", "y", "u", "g", "units", "I_convention", "u_w_err"} <= set(out)
 

@@ -10,17 +10,12 @@ import pytest
 from granstokes.continuum.load import Load
 from granstokes.continuum.mesh import Mesh
 from granstokes.continuum.ngf import NonlocalFluidity
-from granstokes.continuum.oscillation import (
-    Newtonian,
-    OscillatingVelocity,
-    OscillationNumerics,
-    periodic_state,
-    solve_oscillating,
-)
+from granstokes.continuum.oscillation import Newtonian, periodic_state, solve_oscillating
 from granstokes.continuum.rules import YieldRule
 from granstokes.continuum.scales import Material
+from granstokes.continuum.scene import BedScene, SceneNumerics
 from granstokes.continuum.solver import SAFETY
-from granstokes.continuum.velocity import BedScene
+from granstokes.continuum.velocity import VelocityProblem
 
 MAT = Material(mu_s=0.28, mu_d=0.58, I0=0.3, I_convention="dem", phi=0.8)
 P_W = 20.0
@@ -28,11 +23,11 @@ P_W = 20.0
 ETA, OMEGA, U = 2.0, 1.0, 1.0
 K = math.sqrt(OMEGA / (2 * ETA / (MAT.phi * MAT.rho_p)))
 SPEED = Load("speed", P_W, u_w=U, omega=OMEGA)
-FINE = OscillationNumerics(n_cells=100, rtol=1e-8, atol=1e-11)
+FINE = SceneNumerics(n_cells=100, rtol=1e-8, atol=1e-11)
 
 
 def newtonian(kH, **options):
-    return periodic_state(BedScene(MAT, P_W, kH / K), SPEED, law=Newtonian(ETA), numerics=FINE, **options)
+    return periodic_state(MAT, BedScene(kH / K), SPEED, law=Newtonian(ETA), numerics=FINE, **options)
 
 
 def finite_bed(t, y, H):
@@ -84,8 +79,8 @@ def test_periodic_state_criterion_and_the_bed_s_slowest_mode():
     np.testing.assert_array_equal(short.changes, c[:3])
 
 
-SCENE = BedScene(MAT, P_W, 8.0)
-COARSE = OscillationNumerics(n_cells=50)
+SCENE = BedScene(8.0)
+COARSE = SceneNumerics(n_cells=50)
 RULE = YieldRule(eps=1e-3)
 OMEGA_G = 0.5
 
@@ -93,8 +88,8 @@ OMEGA_G = 0.5
 @pytest.fixture(scope="module")
 def flowing():
     """mu(I) under u_w = 2 sin(0.5 t) and under tau_w = 0.43 p_w sin(0.5 t), periodic states."""
-    speed = periodic_state(SCENE, Load("speed", P_W, u_w=2.0, omega=OMEGA_G), rule=RULE, numerics=COARSE)
-    stress = periodic_state(SCENE, Load("stress", P_W, mu_w=0.43, omega=OMEGA_G), rule=RULE, numerics=COARSE,
+    speed = periodic_state(MAT, SCENE, Load("speed", P_W, u_w=2.0, omega=OMEGA_G), rule=RULE, numerics=COARSE)
+    stress = periodic_state(MAT, SCENE, Load("stress", P_W, mu_w=0.43, omega=OMEGA_G), rule=RULE, numerics=COARSE,
                             error_estimate=False)
     return speed, stress
 
@@ -105,15 +100,20 @@ def cycle_integral(ps, f):
 
 
 @pytest.mark.parametrize("kind", ["speed", "stress"])
-def test_jacobian_is_the_rate_s_derivative(kind):
-    """jac(t, x), the band as a sparse matrix over the mass (plate row included), is d rate/dx (central
-    differences) at a sheared state with the wall value of time t."""
+def test_jacobian_is_the_rate_s_derivative_and_the_wall_is_the_load_s_at_t(kind):
+    """jacobian(x, t), the band (plate row included), is d rate/dx (central differences) at a sheared state with the
+    wall value of time t; the rate reads the load's wall at t (the plate row's force, or the first face's speed)."""
     load = Load(kind, P_W, omega=OMEGA_G, **({"u_w": 2.0} if kind == "speed" else {"mu_w": 0.43}))
-    pb = OscillatingVelocity(SCENE, load, Mesh.graded(16, 2.0), RULE)
-    x = np.linspace(1.5, 0.1, len(pb.inverse_mass)) ** 2
+    pb = VelocityProblem(MAT, SCENE, load, Mesh.graded(16, 2.0), rule=RULE)
+    x = np.linspace(1.5, 0.1, len(pb.mass)) ** 2
     t, h = 1.0, 1e-6
-    numeric = np.array([(pb.rate(t, x + h * e) - pb.rate(t, x - h * e)) / (2 * h) for e in np.eye(len(x))]).T
-    np.testing.assert_allclose(pb.jac(t, x).toarray(), numeric, rtol=1e-6, atol=1e-6 * np.max(np.abs(numeric)))
+    numeric = np.array([(pb.rate(x + h * e, t) - pb.rate(x - h * e, t)) / (2 * h) for e in np.eye(len(x))]).T
+    np.testing.assert_allclose(pb.jacobian(x, t).sparse().toarray(), numeric, rtol=1e-6,
+                               atol=1e-6 * np.max(np.abs(numeric)))
+    assert pb.nodes(x, t)[0] == (load.u_w * math.sin(OMEGA_G * t) if kind == "speed" else x[0])
+    if kind == "stress":  # the plate row: tau_w(t) + sigma_xy(0+), tau_w(t) = mu_w p_w sin(omega t)
+        later = pb.rate(x, 2 * t)[0] - pb.rate(x, t)[0]
+        assert later == pytest.approx(load.tau_w * (math.sin(2 * OMEGA_G * t) - math.sin(OMEGA_G * t)), rel=1e-12)
 
 
 @pytest.mark.slow
@@ -125,7 +125,7 @@ def test_mu_i_speed_drive(flowing):
     np.testing.assert_allclose(ps.u_w, 2.0 * np.sin(OMEGA_G * ps.t), rtol=0, atol=1e-14)
     assert MAT.mu_s < np.max(np.abs(ps.mu_w)) < MAT.mu_d and np.max(ps.mu_w_err) < 1e-3
     work = cycle_integral(ps, ps.mu_w * P_W * ps.u_w)
-    s = ps.mu * (P_W + SCENE.weight_gradient * ps.y_mu)
+    s = ps.mu * (P_W + MAT.weight_gradient * ps.y_mu)
     dissipated = cycle_integral(ps, np.sum(s * np.diff(ps.u, axis=1), axis=1))
     assert work > 0 and work == pytest.approx(dissipated, rel=3e-3)  # measured 8e-4
     half = len(ps.t) // 2
@@ -138,7 +138,7 @@ def test_mu_i_stress_drive_moves_the_plate_above_mu_s_and_creeps_below(flowing):
     u_w proportional to eps (a viscosity mu_s p/eps), below 1% of the flowing amplitude at eps = 1e-3."""
     moving = np.max(np.abs(flowing[1].u_w))
     times = np.pi / OMEGA_G * np.arange(1, 9) / 2
-    creep = {eps: solve_oscillating(SCENE, Load("stress", P_W, mu_w=0.5 * MAT.mu_s, omega=OMEGA_G), times,
+    creep = {eps: solve_oscillating(MAT, SCENE, Load("stress", P_W, mu_w=0.5 * MAT.mu_s, omega=OMEGA_G), times,
                                     rule=YieldRule(eps=eps), numerics=COARSE, error_estimate=False)
              for eps in (1e-3, 1e-2)}
     still = np.max(np.abs(creep[1e-3].u_w))
@@ -153,8 +153,8 @@ def test_ngf_speed_drive_is_periodic_after_a_few_cycles():
     load = Load("speed", P_W, u_w=2.0, omega=OMEGA_G)
     phases, cycles = 16, 4
     times = load.period * np.arange(1, phases * cycles + 1) / phases
-    sol = solve_oscillating(SCENE, load, times, model="ngf", fluidity=NonlocalFluidity(A=0.5),
-                            numerics=OscillationNumerics(n_cells=24), error_estimate=False)
+    sol = solve_oscillating(MAT, SCENE, load, times, model="ngf", fluidity=NonlocalFluidity(A=0.5),
+                            numerics=SceneNumerics(n_cells=24), error_estimate=False)
     mu_w = sol.mu_w.reshape(cycles, phases)
     changes = np.max(np.abs(np.diff(mu_w, axis=0)), axis=1) / np.max(np.abs(mu_w))
     assert np.all(np.diff(changes) < 0) and changes[-1] < 1e-3, changes

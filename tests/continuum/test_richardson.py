@@ -5,7 +5,7 @@ import re
 
 import numpy as np
 import pytest
-from granstokes.continuum import ngf, oscillation, predict_cli, solver
+from granstokes.continuum import ngf, oscillation, scene_models, solver
 from granstokes.continuum.paper import stability
 from granstokes.continuum.richardson import REFINEMENT, richardson, richardson_on_nodes
 
@@ -34,7 +34,7 @@ def test_a_nodal_field_from_a_companion_on_every_other_node():
     assert richardson_on_nodes(y, fine, yc, coarse) == pytest.approx(c * h**2 * (1 + y), rel=1e-9)
 
 
-@pytest.mark.parametrize("function", [solver._estimate, predict_cli._fine_and_coarse, ngf.solve_transient,
+@pytest.mark.parametrize("function", [solver._estimate, scene_models.SceneModel.estimated, ngf.solve_transient,
                                       oscillation._estimate, stability._estimated])
 def test_every_estimate_calls_richardson_and_writes_no_formula_of_its_own(function):
     source = inspect.getsource(function)

@@ -58,12 +58,12 @@ def test_projection_rate_and_jacobian_are_imposed_speeds(speed_state):
     cancel = 8 * np.finfo(float).eps * np.sum(np.abs(pb.lap.weights * tau[pb.lap.cols]), axis=1)
     s = mud_p - pb.mu_w * x[1:]
     f = np.empty(n - 1)
-    problems.speed_rate(x, f, data)
-    ref = pb.interior_rate(x)
+    problems.speed_rate(x, 0.0, f, data)
+    ref = pb.interior_rate(x, 0.0)
     assert np.all(np.abs(f - ref) <= s * s / p32 * cancel + ROUND_OFF * np.abs(ref))
     band = np.zeros((pb.kl + pb.ku + 1, n - 1))
-    problems.speed_jacobian(x, band, data)
-    full = pb.jacobian(x).bands[:, 1:]  # columns 1..N-1; its entries of row 0 (the dense wall row) are masked
+    problems.speed_jacobian(x, 0.0, band, data)
+    full = pb.jacobian(x, 0.0).bands[:, 1:]  # columns 1..N-1; its entries of row 0 (the dense wall row) are masked
     rows = np.arange(band.shape[0])[:, None] - pb.ku + np.arange(1, n)[None, :]  # the row i of each band entry
     interior = (rows >= 1) & (rows <= n - 1)
     allowed = ROUND_OFF * np.abs(full)
@@ -78,8 +78,8 @@ def test_wall_row_and_column_are_imposed_speeds(speed_state):
     pb, x = speed_state
     _, data, n_wall = pb.bdf_kernels()
     row0, column = np.empty(len(x)), np.empty(n_wall)
-    problems.speed_wall(x, row0, column, data)
-    ref_row, ref_column = pb.wall_jacobian(x)
+    problems.speed_wall(x, 0.0, row0, column, data)
+    ref_row, ref_column = pb.wall_jacobian(x, 0.0)
     assert np.max(np.abs(row0 - ref_row)) <= ROUND_OFF * np.max(np.abs(ref_row))
     assert np.max(np.abs(column - ref_column)) <= ROUND_OFF * np.max(np.abs(ref_column))
 

@@ -316,8 +316,8 @@ def test_reduced_jacobian_dense_equals_sparse(paper_friction):
 
     pb = ImposedSpeed(paper_friction, 1.334, Mesh.graded(64, 8.0), order=4)
     x = integrate(pb, [1e-2], method="bdf", rtol=1e-6, atol=1e-8)[0][0]
-    dense = bdf_oracle.reduced_jacobian(pb, x)
-    sparse = bdf_oracle.reduced_jacobian(pb, x, dense_max=0).toarray()
+    dense = bdf_oracle.reduced_jacobian(pb, x, 1e-2)
+    sparse = bdf_oracle.reduced_jacobian(pb, x, 1e-2, dense_max=0).toarray()
     assert isinstance(dense, np.ndarray) and dense.shape == sparse.shape == (63, 63)  # nodes 1..63 (tau~_64 = 1 fixed)
     assert np.max(np.abs(dense - sparse)) <= 1e-15 * np.max(np.abs(sparse))
 

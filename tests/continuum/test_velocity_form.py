@@ -4,11 +4,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from granstokes.compare import calibrate
+from granstokes.continuum.load import Load
 from granstokes.continuum.rules import ShearLaw, YieldRule, well_posed_range, wellposedness
 from granstokes.continuum.scales import Material, Scales
+from granstokes.continuum.scene import BedScene
 from granstokes.continuum.solver import Numerics, solve_stress
 from granstokes.continuum.steady import steady_mu, steady_velocity
-from granstokes.continuum.velocity import BedScene, solve_velocity
+from granstokes.continuum.velocity import solve_velocity
 from granstokes.dem.config import preset
 from granstokes.dem.scene import plate_geometry
 from granstokes.dem.sizing import plan
@@ -17,6 +19,7 @@ M = Material()
 P_W = 10.0
 MU_W = M.friction.mu_w_from_tilde(0.5)
 SC = Scales(M, P_W, MU_W)
+LOAD = Load("stress", P_W, mu_w=MU_W)
 
 
 def test_eps_to_zero_approaches_stress_diffusion():
@@ -24,10 +27,10 @@ def test_eps_to_zero_approaches_stress_diffusion():
     holds it at rest), u_w(t~ = 0.1) converges to the stress-diffusion value as eps -> 0 at the
     measured rate 2/3: the state at yield creeps at |g| ~ eps^(2/3) (|s(g)| = mu_s p needs
     eps^2/(2 g^2) ~ (Dmu/mu_s) I/I0)."""
-    scene = BedScene(M, P_W, SC.delta_s, body_force=M.mu_s * M.phi * M.rho_p * M.g)
+    scene = BedScene(SC.delta_s, body_force=M.mu_s * M.phi * M.rho_p * M.g)
     paper = solve_stress(M.friction, MU_W, [0.1], Numerics(n_cells=400)).u_w[0] * SC.U
     eps = np.array([1e-4, 3e-5, 1e-5])
-    err = [abs(solve_velocity(scene, [0.1 * SC.t_s], mu_w=MU_W, rule=YieldRule(eps=e), initial="yield").u_w[0]
+    err = [abs(solve_velocity(M, scene, LOAD, [0.1 * SC.t_s], rule=YieldRule(eps=e), initial="yield").u_w[0]
                / paper - 1) for e in eps]
     rates = np.log(np.array(err[:-1]) / err[1:]) / np.log(eps[:-1] / eps[1:])
     assert np.all(np.diff(err) < 0) and err[-1] < 0.02
@@ -36,9 +39,9 @@ def test_eps_to_zero_approaches_stress_diffusion():
 
 @pytest.fixture(scope="module")
 def unsheared():
-    scene = BedScene(M, P_W, 1.5 * SC.delta_s)
+    scene = BedScene(1.5 * SC.delta_s)
     times = np.array([0.01, 0.1, 1.0, 50.0]) * SC.t_s
-    return solve_velocity(scene, times, mu_w=MU_W, rule=YieldRule(eps=1e-4), initial="rest")
+    return solve_velocity(M, scene, LOAD, times, rule=YieldRule(eps=1e-4), initial="rest")
 
 
 def test_unsheared_start_reaches_the_paper_steady_state(unsheared):
@@ -64,9 +67,9 @@ def test_yield_front_grows_as_sqrt_t_early(unsheared):
 def test_plate_inertia_acts_early_and_vanishes_as_mass_goes_to_zero():
     """The plate's mass delays u_w(t) while it is comparable with the bed mass set moving
     (phi rho delta(t)); its effect on u_w is linear in m_p as m_p -> 0 and gone in steady state."""
-    scene = lambda m_p: BedScene(M, P_W, 1.2 * SC.delta_s, plate_mass=m_p)
+    scene = lambda m_p: BedScene(1.2 * SC.delta_s, plate_mass=m_p)
     times = np.array([0.01, 100.0]) * SC.t_s
-    run = lambda m_p: solve_velocity(scene(m_p), times, mu_w=MU_W, rule=YieldRule(eps=1e-3)).u_w
+    run = lambda m_p: solve_velocity(M, scene(m_p), LOAD, times, rule=YieldRule(eps=1e-3)).u_w
     base = run(0.0)
     early = [abs(run(m)[0] - base[0]) for m in (1e-4, 1e-3, 1e-2)]  # m_p << bed mass in the layer
     assert early[1] / early[0] == pytest.approx(10, rel=0.3) and early[2] / early[1] == pytest.approx(10, rel=0.3)
@@ -76,9 +79,9 @@ def test_plate_inertia_acts_early_and_vanishes_as_mass_goes_to_zero():
 
 
 def test_imposed_speed_and_stress_meet_at_the_same_steady_state():
-    scene = BedScene(M, P_W, 1.2 * SC.delta_s)
-    stress = solve_velocity(scene, [60 * SC.t_s], mu_w=MU_W, rule=YieldRule(eps=1e-3))
-    speed = solve_velocity(scene, [60 * SC.t_s], u_w=stress.u_w[-1], rule=YieldRule(eps=1e-3))
+    scene = BedScene(1.2 * SC.delta_s)
+    stress = solve_velocity(M, scene, LOAD, [60 * SC.t_s], rule=YieldRule(eps=1e-3))
+    speed = solve_velocity(M, scene, Load("speed", P_W, u_w=stress.u_w[-1]), [60 * SC.t_s], rule=YieldRule(eps=1e-3))
     assert speed.series["mu_w"].iloc[-1] == pytest.approx(MU_W, rel=1e-4)
     assert np.max(np.abs(speed.u[-1] - stress.u[-1])) < 1e-4 * stress.u_w[-1]
 
@@ -110,12 +113,11 @@ def test_wellposedness_of_the_steady_layer():
 def mid_run(request):
     """A velocity problem of each drive and its state at t~ = 0.1, the yield front inside the bed."""
     from granstokes.continuum.velocity import VELOCITY_NUMERICS, VelocityProblem
-    scene = BedScene(M, P_W, 1.5 * SC.delta_s, plate_mass=0.5)
-    load = dict(mu_w=MU_W) if request.param == "stress" else dict(u_w=SC.U)
-    sol = solve_velocity(scene, [0.1 * SC.t_s], rule=YieldRule(eps=1e-3), **load)
-    problem = VelocityProblem(scene, sol.rule, VELOCITY_NUMERICS.mesh(), tau_w=load.get("mu_w", 0) * P_W or None,
-                              u_w=load.get("u_w"))
-    return problem, sol.step_x[-1]
+    scene = BedScene(1.5 * SC.delta_s, plate_mass=0.5)
+    load = LOAD if request.param == "stress" else Load("speed", P_W, u_w=SC.U)
+    sol = solve_velocity(M, scene, load, [0.1 * SC.t_s], rule=YieldRule(eps=1e-3))
+    problem = VelocityProblem(M, scene, load, VELOCITY_NUMERICS.mesh(), rule=sol.rule)
+    return problem, sol.step_x[-1], sol.step_t[-1]
 
 
 def _dense(jac):
@@ -129,15 +131,15 @@ def test_jacobian_is_the_derivative_of_the_rate(mid_run):
     rounding 2 * 2 (3 eps_m max|s|) / (2h) (s carries ~3 eps_m, F is a difference of two).  x +- h v are
     rounded, so J is applied to the step actually taken.  Measured: 1/5 (stress), 1/6 (speed) of the bound,
     3e-9 of max|J v|; J scaled by 1 + 3e-8 fails."""
-    problem, x = mid_run
+    problem, x, t = mid_run
     v = np.random.default_rng(1).standard_normal(len(x))
-    g_v = np.max(np.abs(problem.shear(x + v) - problem.shear(x)))
-    truncation = problem.scene.material.friction.mu_d * np.max(problem.p_face) * g_v**3 / problem.rule.eps**3  # x h^2
-    rounding = 6 * np.finfo(float).eps * np.max(np.abs(problem.stress(x)))  # / h
+    g_v = np.max(np.abs(problem.shear(x + v, t) - problem.shear(x, t)))
+    truncation = problem.material.friction.mu_d * np.max(problem.p_face) * g_v**3 / problem.rule.eps**3  # x h^2
+    rounding = 6 * np.finfo(float).eps * np.max(np.abs(problem.stress(x, t)))  # / h
     h = (rounding / (2 * truncation)) ** (1 / 3)
     xp, xm = x + h * v, x - h * v
-    jv = _dense(problem.jacobian(x)) @ ((xp - xm) / (2 * h))
-    fd = (problem.rate(xp) - problem.rate(xm)) / (2 * h)
+    jv = _dense(problem.jacobian(x, t)) @ ((xp - xm) / (2 * h))
+    fd = (problem.rate(xp, t) - problem.rate(xm, t)) / (2 * h)
     assert np.max(np.abs(fd - jv)) < truncation * h**2 + rounding / h
 
 
@@ -145,18 +147,19 @@ def test_dissipative_newton_matrix_solves_the_newton_system(mid_run):
     """The L D L^T factors (LAPACK pttrf) solve (M - dh J) z = r as a dense solve does, to rounding
     (condition number x machine eps)."""
     from granstokes.continuum.stepper import NewtonMatrix
-    problem, x = mid_run
+    problem, x, t = mid_run
     dh = 1e-3 * SC.t_s
     r = np.random.default_rng(2).standard_normal(len(x))
-    dense = np.diag(problem.mass) - dh * _dense(problem.jacobian(x))
-    z = NewtonMatrix(problem, x, dh).solve(r)
+    dense = np.diag(problem.mass) - dh * _dense(problem.jacobian(x, t))
+    z = NewtonMatrix(problem, problem.jacobian(x, t), dh).solve(r)
     assert np.max(np.abs(z - np.linalg.solve(dense, r))) < 1e-15 * np.linalg.cond(dense) * np.max(np.abs(z))
 
 
 @pytest.mark.parametrize("make, name", [
     (lambda: YieldRule(eps=0.0), "eps"), (lambda: YieldRule(eps=-1e-3), "eps"),
-    (lambda: BedScene(M, P_W, SC.delta_s, plate_mass=-1.0), "plate_mass"),
-    (lambda: solve_velocity(BedScene(M, P_W, 0.5 * SC.delta_s), [1.0], mu_w=MU_W), "depth"),
+    (lambda: BedScene(SC.delta_s, plate_mass=-1.0), "plate_mass"),
+    (lambda: solve_velocity(M, BedScene(0.5 * SC.delta_s), LOAD, [1.0]), "depth"),
+    (lambda: solve_velocity(M, BedScene(SC.delta_s), Load("stress", P_W, mu_w=MU_W, omega=1.0), [1.0]), "load"),
     (lambda: YieldRule(kind="bingham"), "rule"),
 ])
 def test_bad_inputs_are_refused(make, name):
@@ -169,8 +172,8 @@ def test_bad_inputs_are_refused(make, name):
 QUICK_PLAN = plan(preset("quick")[0])
 QUICK_DRIVES = {d.drive.kind: d for d in QUICK_PLAN.drives}
 QUICK = calibrate.load(Path(__file__).resolve().parents[2] / "results/quick-calibration/calibration.json").material()
-QUICK_SCENE = BedScene(QUICK, QUICK_PLAN.config.p_w, QUICK_PLAN.depth,
-                       plate_mass=plate_geometry(QUICK_PLAN)["mass_per_area"])
+QUICK_SCENE = BedScene(QUICK_PLAN.depth, plate_mass=plate_geometry(QUICK_PLAN)["mass_per_area"])
+QUICK_P_W = QUICK_PLAN.config.p_w
 QUICK_MU_W, QUICK_END = QUICK_DRIVES["stress"].load.mu_w, QUICK_DRIVES["stress"].duration
 #: the relative accuracy asked of the velocity-form prediction of a quick drive (VELOCITY_NUMERICS is chosen for it)
 TARGET = 1e-4
@@ -185,8 +188,9 @@ def quick_stress():
 
     from granstokes.continuum.velocity import VELOCITY_NUMERICS
     times = np.geomspace(QUICK_END / 300, QUICK_END, 5)
-    rule = YieldRule.for_layer(Scales(QUICK, QUICK_SCENE.p_w, QUICK_MU_W))
-    run = lambda num: solve_velocity(QUICK_SCENE, times, mu_w=QUICK_MU_W, rule=rule, compare_steady=False,
+    rule = YieldRule.for_layer(Scales(QUICK, QUICK_P_W, QUICK_MU_W))
+    load = Load("stress", QUICK_P_W, mu_w=QUICK_MU_W)
+    run = lambda num: solve_velocity(QUICK, QUICK_SCENE, load, times, rule=rule, compare_steady=False,
                                      numerics=num).u_w
     n = VELOCITY_NUMERICS.n_cells
     tight = [run(replace(VELOCITY_NUMERICS, n_cells=k, **TIGHT)) for k in (n // 2, n, 2 * n)]
@@ -229,8 +233,9 @@ def test_imposed_speed_mu_w_is_second_order_once_the_wall_jump_is_resolved():
     from dataclasses import replace
 
     from granstokes.continuum.velocity import VELOCITY_NUMERICS
-    rule = YieldRule.for_layer(Scales.for_speed(QUICK, QUICK_SCENE.p_w, QUICK_U_W))
-    a, b, c = (solve_velocity(QUICK_SCENE, RESOLVED_TIMES, u_w=QUICK_U_W, rule=rule, compare_steady=False,
+    rule = YieldRule.for_layer(Scales.for_speed(QUICK, QUICK_P_W, QUICK_U_W))
+    load = Load("speed", QUICK_P_W, u_w=QUICK_U_W)
+    a, b, c = (solve_velocity(QUICK, QUICK_SCENE, load, RESOLVED_TIMES, rule=rule, compare_steady=False,
                               numerics=replace(VELOCITY_NUMERICS, n_cells=k, **TIGHT)).mu_w for k in (200, 400, 800))
     order = np.log2(np.abs(b - a) / np.abs(c - b))
     assert np.all(order > 2 - 0.45)

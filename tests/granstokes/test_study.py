@@ -11,13 +11,13 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from granstokes.compare.stokes_experiment import EARLY_FRAMES_PER_TS, FRAMES_PER_TS
 from granstokes.dem import config as dem_config
 from granstokes.dem.calibrate import material_table
 from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS
 
 from granstokes.cli import main as granstokes_main
 from granstokes.study import config
-from granstokes.compare.stokes_experiment import EARLY_FRAMES_PER_TS, FRAMES_PER_TS
 from granstokes.study.plan import calibration_config, plan_study
 
 ROOT = Path(__file__).resolve().parents[2]
