@@ -28,6 +28,7 @@ from tests.continuum.reference import SPEED_CASES
 SPEEDS = (0.198, 1.334, 4.629)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("u_w", SPEEDS)
 def test_constraint_and_bounds_hold_at_every_step(paper_friction, u_w):
     """At every accepted step the integral condition holds to 1e-8 and mu_s <= mu <= mu_d (mu_w = mu_d

@@ -153,6 +153,7 @@ def test_a_well_formed_scheduler_address_passes_without_contact(address):
     assert scheduler_address(address) == address
 
 
+@pytest.mark.slow
 def test_an_address_where_no_scheduler_answers_is_refused_within_the_timeout():
     """A port nobody listens on, and a listener that never speaks Dask: one ValueError naming --scheduler each,
     within the connect timeout (not Dask's default of 30 s, nor forever)."""
@@ -227,6 +228,7 @@ except KeyboardInterrupt:
 """
 
 
+@pytest.mark.slow
 def test_an_interrupt_shuts_the_local_cluster_down_quietly(tmp_path):
     """SIGINT while tasks run on the in-process cluster: the interrupt reaches the caller and Dask's reports of
     the running tasks it cancels (CancelledError warnings) stay off stderr."""
