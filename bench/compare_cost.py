@@ -22,12 +22,11 @@ import numpy as np
 import pandas as pd
 from granstokes.compare.analysis import DriveAnalysis, snapshot_times
 from granstokes.compare.calibrate import load as load_calibration
-from granstokes.compare.comparison import REPLICATES, ModelSide, model_drive, replicates_of
+from granstokes.compare.comparison import REPLICATES, ModelSide, material_at, model_drive, replicates_of
 from granstokes.compare.drive import DriveSpec
 from granstokes.compare.experiment import map_drives
 from granstokes.compare.nonlocal_fit import A_RANGE
 from granstokes.compare.report import display_label, slug
-from granstokes.compare.scorecard import _material
 from granstokes.continuum import ngf
 from granstokes.continuum.scene_models import LOCAL, PAPER, ngf_model
 from granstokes.dem.calibrate import material_table
@@ -88,7 +87,7 @@ def chebyshev_cache(drives: list[DriveAnalysis], side: ModelSide, n: int = 50) -
             for _, r in reps.iterrows():
                 if mode == "rebuilt":
                     ngf._cheb_reference.cache_clear()
-                ngf_side.at(r).steady(_material(side.material, r), a.spec.scene, a.spec.load)
+                ngf_side.at(r).steady(material_at(side.material, r), a.spec.scene, a.spec.load)
             out[mode].append(time.process_time() - t0)
     return {"drive": a.label, "solves": n, **{k: min(v) for k, v in out.items()},
             "speedup": min(out["rebuilt"]) / min(out["cached"])}

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 from granstokes.continuum.calibration import Calibration, mu_law
 from granstokes.continuum.scales import Material, Scales
-from granstokes.continuum.scene_models import LOCAL, PAPER, Prediction, ngf_model
+from granstokes.continuum.scene_models import LOCAL, PAPER, Prediction, SceneModel, ngf_model
 from granstokes.dem.calibrate import grains_difference
 from granstokes.dem.layout import RUN_JSON
 from tqdm import tqdm
@@ -28,6 +28,7 @@ from granstokes.lib.validate import require
 
 from . import calibrate
 from .analysis import DriveAnalysis, analyse_drive, mass_error
+from .band import Sensitivity
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
 from .drive import drive_specs
 from .laws import laws as paper_laws
@@ -337,16 +338,45 @@ def prepare(dem: DemSide, independent: Calibration | None) -> tuple[ModelSide, d
                   "fluidity": fluidity}
 
 
+def material_at(base: Material, row) -> Material:
+    """``base`` with a replicate's (or a shifted) mu_s, mu_d, I0 (DEM convention) and phi."""
+    return replace(base, mu_s=float(row["mu_s"]), mu_d=float(row["mu_d"]), I0=float(row["I0"]),
+                   I_convention="dem", phi=float(row["phi"]))
+
+
+def sensitivity(model: SceneModel, material: Material, a: DriveAnalysis, times, replicates: pd.DataFrame):
+    """Drive ``a``'s prediction by ``model`` re-solved with each calibrated parameter (the material's, then the
+    model's own) shifted (compare.band: one transient and one steady solve per parameter)."""
+    central = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
+               **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
+    return Sensitivity.of(lambda q: model.at(q).predict(material_at(material, q), a.spec.scene, a.spec.load, times),
+                          central, replicates[list(central)].cov())
+
+
+def spread(a: DriveAnalysis, model: SceneModel, material: Material, replicates: pd.DataFrame, times) -> tuple:
+    """The calibration's spread of ``model``'s prediction of drive ``a``: its steady states at the replicates that
+    sustain the drive (in their order) and its Sensitivity."""
+    steadies = []
+    for _, r in replicates.iterrows():
+        try:
+            steadies.append(model.at(r).steady(material_at(material, r), a.spec.scene, a.spec.load))
+        except ValueError:  # a replicate that cannot sustain the drive (e.g. mu_d below mu_w)
+            continue
+    return tuple(steadies), sensitivity(model, material, a, times, replicates)
+
+
 def model_drive(a: DriveAnalysis, side: ModelSide) -> tuple:
-    """One drive's model side: (scales, predictions, note, base, sensitivities by model), its scorecard rows, the
-    band edges' largest relative change and its bands (compare.scorecard.score)."""
+    """One drive's model side, every solve of it (the predictions, their spread over the calibration), then its
+    scoring (compare.scorecard.score, estimation only): ((scales, predictions, note, base, sensitivities by model),
+    scorecard rows, the band edges' largest relative change, bands)."""
     scales, preds, note, base = _predict(a, side.material, side.models, side.failure)
     if not preds:
         return (scales, preds, note, base, {}), pd.DataFrame(), np.nan, {}
-    predictions = {(a.label, p.model): p for p in preds}
-    rows, edges, bands, sens = score([a], list(side.models), predictions, side.material, side.replicates,
-                                     {a.label: preds[0].steady.delta_s}, side.fitted_on, False, side.independent)
-    return (scales, preds, note, base, {key: v for (_, key), v in sens.items()}), rows, edges, bands
+    spreads = {p.model: spread(a, m, side.material, side.replicates, p.series.t.to_numpy())
+               for m, p in zip(side.models, preds)}
+    rows, edges, bands = score(a, side.models, {p.model: p for p in preds}, spreads, len(side.replicates),
+                               side.fitted_on, side.independent)
+    return (scales, preds, note, base, {key: sens for key, (_, sens) in spreads.items()}), rows, edges, bands
 
 
 def conclude(dem: DemSide, side: ModelSide, kept: dict, results: list, settings: CGSettings) -> Comparison:

@@ -32,17 +32,13 @@ drive; only scored blind rows count for a model (``tally``), and models are rank
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import crossing_depth, depth_at_fraction
-from granstokes.continuum.load import Load
-from granstokes.continuum.scales import Material
-from granstokes.continuum.scene import BedScene
 from granstokes.continuum.scene_models import Prediction, SceneModel, Steady
 from scipy import stats
-from tqdm import tqdm
 
 from .analysis import DriveAnalysis
 from .band import Sensitivity
@@ -191,21 +187,6 @@ def model_observables(pred_steady: Steady, series: pd.DataFrame | None, a: Drive
     return out
 
 
-def _material(base: Material, row) -> Material:
-    return replace(base, mu_s=float(row["mu_s"]), mu_d=float(row["mu_d"]), I0=float(row["I0"]),
-                   I_convention="dem", phi=float(row["phi"]))
-
-
-def sensitivity(model: SceneModel, material: Material, scene: BedScene, load: Load, times,
-                replicates: pd.DataFrame) -> Sensitivity:
-    """The prediction of ``model`` re-solved with each calibrated parameter (the material's, then the model's own)
-    shifted (compare.band: one transient and one steady solve per parameter)."""
-    central = {"mu_s": material.mu_s, "mu_d": material.mu_d, "I0": material.I0, "phi": material.phi,
-               **({model.parameter: model.parameters[model.parameter]} if model.parameter else {})}
-    return Sensitivity.of(lambda params: model.at(params).predict(_material(material, params), scene, load, times),
-                          central, replicates[list(central)].cov())
-
-
 def _linearised(sens: Sensitivity, a: DriveAnalysis, central_series: pd.DataFrame) -> tuple[float, pd.DataFrame]:
     """Linearised propagation J C J^T of the calibration through the free response (the drive's response on the
     DEM's output times) and its t90: the standard deviation of t90 and the 95 % band (t, lo, hi)."""
@@ -290,75 +271,65 @@ def _unmeasurable(measured: Measured, lo: float, hi: float, combined: float) -> 
     return ""
 
 
-def score(drives, models: list[SceneModel], predictions: dict, material: Material, replicates: pd.DataFrame,
-          delta_s: dict, fitted_on: dict | None = None, progress: bool = True, independent: bool = True):
-    """Scorecard rows, the band edges' stability (largest relative change from half to all replicates),
-    the free responses' 95 % bands and the Sensitivity per (drive, model) (linearised).
-    ``predictions[(label, key)]``: the central Prediction of each drive and model; ``delta_s[label]``,
-    the calibrated layer depth of each drive; ``fitted_on[key]``:
-    the drive a model's own parameter was fitted on (its rows there are not blind); ``independent``: mu(I)
-    comes from an independent calibration (else no row is blind)."""
+def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicates: int, fitted_on: dict | None = None,
+          independent: bool = True):
+    """Drive ``a``'s scorecard rows, the band edges' stability (largest relative change from half to all
+    replicates) and the free responses' 95 % bands per model (linearised).  Estimation only, no solve:
+    ``predictions[key]`` is a model's central Prediction, ``spreads[key]`` its steady states at the calibration's
+    replicates that sustain the drive and its Sensitivity (compare.comparison's model side); ``n_replicates`` the
+    replicates there were; ``fitted_on[key]``: the drive a model's own parameter was fitted on (its rows there are
+    not blind); ``independent``: mu(I) comes from an independent calibration (else no row is blind)."""
     fitted_on = fitted_on or {}
-    rows, edges, bands, sensitivities = [], [], {}, {}
-    half = len(replicates) // 2
-    for a in drives:
-        dem = dem_observables(a, delta_s[a.label])
-        base = base_reach(a, delta_s[a.label])
-        for model in models:
-            pred: Prediction | None = predictions.get((a.label, model.key))
-            if pred is None:
+    rows, edges, bands = [], [], {}
+    half = n_replicates // 2
+    delta_s = next(iter(predictions.values())).steady.delta_s
+    dem = dem_observables(a, delta_s)
+    base = base_reach(a, delta_s)
+    for model in models:
+        pred: Prediction | None = predictions.get(model.key)
+        if pred is None:
+            continue
+        steadies, sens = spreads[model.key]
+        central = model_observables(pred.steady, pred.series, a, delta_s)
+        samples = [model_observables(st, None, a, delta_s) for st in steadies]
+        end_value = _final_quarter(pred.series, a)
+        t90_sd, bands[(a.label, model.key)] = _linearised(sens, a, pred.series)
+        for obs, measured in dem.items():
+            value = central.get(obs)
+            if value is None or not np.isfinite(value) or not np.isfinite(measured.value):
                 continue
-            central = model_observables(pred.steady, pred.series, a, delta_s[a.label])
-            samples = []
-            for _, r in tqdm(replicates.iterrows(), total=len(replicates), disable=not progress or None, leave=False,
-                             desc=f"uncertainty {a.label} {model.key}"):
-                try:
-                    samples.append(model_observables(model.at(r).steady(_material(material, r), a.spec.scene,
-                                                                        a.spec.load), None,
-                                                     a, delta_s[a.label]))
-                except ValueError:  # a replicate that cannot sustain the drive (e.g. mu_d below mu_w)
-                    continue
-            times = pred.series.t.to_numpy()
-            end_value = _final_quarter(pred.series, a)
-            sens = sensitivities[(a.label, model.key)] = sensitivity(model, material, a.spec.scene, a.spec.load, times,
-                                                                     replicates)
-            t90_sd, bands[(a.label, model.key)] = _linearised(sens, a, pred.series)
-            for obs, measured in dem.items():
-                value = central.get(obs)
-                if value is None or not np.isfinite(value) or not np.isfinite(measured.value):
-                    continue
-                if obs == "t90":
-                    lo, hi, numerical = value - Z95 * t90_sd, value + Z95 * t90_sd, _t90_numerical(pred.series, a)
-                else:
-                    s = np.array([x[obs] for x in samples], dtype=float)
-                    s = s[np.isfinite(s)]
-                    lo = hi = np.nan
-                    if len(s):
-                        lo, hi = np.percentile(s, [2.5, 97.5])
-                        lo, hi = min(lo, value), max(hi, value)
-                    numerical = 0.0
-                    if half >= 2 and len(s) > half and abs(hi - lo) > 0:
-                        lo2, hi2 = np.percentile(s[:half], [2.5, 97.5])
-                        edges.append(max(abs(lo2 - lo), abs(hi2 - hi)) / abs(hi - lo))
-                asymptote = value
-                windowed = obs == f"{a.response}_inf"  # like with like: the model over the DEM's steady window
-                if windowed:
-                    value = end_value
-                    lo, hi = _final_quarter_band(bands[(a.label, model.key)], a)
+            if obs == "t90":
+                lo, hi, numerical = value - Z95 * t90_sd, value + Z95 * t90_sd, _t90_numerical(pred.series, a)
+            else:
+                sampled = np.array([x[obs] for x in samples], dtype=float)
+                sampled = sampled[np.isfinite(sampled)]
+                lo = hi = np.nan
+                if len(sampled):
+                    lo, hi = np.percentile(sampled, [2.5, 97.5])
                     lo, hi = min(lo, value), max(hi, value)
-                band_sd = (hi - lo) / (2 * Z95)
-                combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
-                note = ((_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
-                         else _not_scored("", model, base, end_value, asymptote))
-                        or _unmeasurable(measured, lo, hi, combined))
-                rows.append(score_row(
-                    drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,
-                    dem_how=measured.how, model=model.key, model_label=model.label, predicted=value,
-                    band=[float(lo), float(hi)], numerical_err=numerical, calibration_sd=float(band_sd),
-                    sigma=sigma(measured.value - value, measured.err, band_sd, numerical), note=note,
-                    blind=independent and fitted_on.get(model.key) != a.label,
-                    asymptote=asymptote if windowed else np.nan))
-    return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands, sensitivities
+                numerical = 0.0
+                if half >= 2 and len(sampled) > half and abs(hi - lo) > 0:
+                    lo2, hi2 = np.percentile(sampled[:half], [2.5, 97.5])
+                    edges.append(max(abs(lo2 - lo), abs(hi2 - hi)) / abs(hi - lo))
+            asymptote = value
+            windowed = obs == f"{a.response}_inf"  # like with like: the model over the DEM's steady window
+            if windowed:
+                value = end_value
+                lo, hi = _final_quarter_band(bands[(a.label, model.key)], a)
+                lo, hi = min(lo, value), max(hi, value)
+            band_sd = (hi - lo) / (2 * Z95)
+            combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
+            note = ((_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
+                     else _not_scored("", model, base, end_value, asymptote))
+                    or _unmeasurable(measured, lo, hi, combined))
+            rows.append(score_row(
+                drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,
+                dem_how=measured.how, model=model.key, model_label=model.label, predicted=value,
+                band=[float(lo), float(hi)], numerical_err=numerical, calibration_sd=float(band_sd),
+                sigma=sigma(measured.value - value, measured.err, band_sd, numerical), note=note,
+                blind=independent and fitted_on.get(model.key) != a.label,
+                asymptote=asymptote if windowed else np.nan))
+    return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands
 
 
 def headline(rows: pd.DataFrame, blind: bool, failure: str, n_drives: int) -> str:
