@@ -32,7 +32,25 @@ and seeing the test fail (then restoring it):
 * ``test_plate_record_tau_w_is_minus_f_x``: guards ``compare/plate.py`` ``PlateRecord.read``'s ``-df.f_x``
   (mutation ``df.f_x`` fails) and ``steady_state``'s value and error.
 * ``test_stokes_seeds_pooled_error``: the Stokes side's plate records of several seeds with known levels through
-  ``PlateRecord.read`` + ``steady_state`` + ``pooled``: the error over seeds is std(ddof=1)/sqrt(n).
+  ``PlateRecord.read`` + ``steady_state`` + ``pooled``: the error over seeds is std(ddof=1)/sqrt(n) (guards
+  ``pooled``'s ddof and ``PlateRecord.read``'s sign, as above).
+* ``test_model_record_signs_as_the_dem``: a local-model solution sampled as a record (about 1 s): guards
+  ``compare/oscillation.py`` ``model_record``'s ``top = -sol.mu[:, 0] * (...)`` (the model's tau_w) and
+  ``mu = -np.array(...)`` (the model's profiles' sign); each mutation dropping the minus fails.
+* ``test_trend_limits_are_student_t_with_n_minus_two_dof``: guards ``compare/plate.py`` ``trend``'s
+  ``stats.t.isf(tail / 2, blocks - 2)`` and ``compare/phase.py`` ``stationarity``'s
+  ``stats.t.isf(stats.norm.sf(TREND_SIGMA), len(cycle) - 2)`` (mutations to ``- 1`` fail).
+* ``test_stokes_measured_error_ddof1``: guards ``compare/scorecard.py`` ``_mean_err``'s ``v.std(ddof=1)``.
+* ``test_profile_band_is_student_t_with_m_minus_one_dof``: guards ``compare/profiles.py`` ``_band``'s
+  ``np.nanstd(..., ddof=1)`` and ``stats.t.ppf(0.975, np.maximum(count - 1, 1))``.
+* ``test_fluidity_interval_is_student_t_with_fits_minus_one_dof``: guards ``compare/nonlocal_fit.py``
+  ``fit_amplitude``'s ``stats.t.ppf(0.975, len(fits) - 1) * np.std(fits, ddof=1)`` and ``FluidityFit.err``'s ddof.
+* ``test_law_test_spread_of_the_law_ddof1``: guards ``compare/comparison.py`` ``law_test``'s
+  ``reps.std(axis=0, ddof=1)``.
+
+Not pinned here: ``compare/laws.py`` (a law's DEM error, the bootstrap replicates' ``std(ddof=1)`` over 200 seed
+resamples: ddof changes it by 0.25 %, below what a test of the whole law pipeline resolves) and the figure-only
+bands of ``compare/analysis.py`` ``_ensemble_series`` and ``compare/law_figures.py`` (1.96 x std(ddof=1)/sqrt(n)).
 """
 import json
 
@@ -218,7 +236,7 @@ def test_oscillating_row_signs_dem_minus_prediction(tmp_path):
     a, a_err, _ = dem.values["response_amplitude"]
     lag, lag_err, _ = dem.values["phase_lag"]
     predicted["response_amplitude"] = (a - 0.01, 0.002, 0.003)  # the model under the DEM
-    predicted["phase_lag"] = (3.0, 0.01, 0.02)  # the DEM's lag is ~ -pi/4: the difference wraps to ~ -0.928 + ...
+    predicted["phase_lag"] = (3.0, 0.01, 0.02)  # DEM ~ -pi/4: DEM - model ~ -3.79 wraps to ~ +2.49
     pred = osc.OscPrediction("local", predicted, dem.zones, dem.yielded, dem.loop, dem.velocity)
     setup = osc.ModelSetup(None, None)
     rows = osc.scorecard([dem], {(drive.label, "local"): pred}, setup, "").set_index("observable")
@@ -354,3 +372,104 @@ def test_stokes_seeds_pooled_error(tmp_path):
     assert pool["value"] == pytest.approx(values.mean(), rel=1e-14)
     assert pool["stderr"] == pytest.approx(np.sqrt(np.sum((values - values.mean()) ** 2) / (n - 1) / n), rel=1e-12)
     assert pool["value"] == pytest.approx(levels.mean(), abs=3 * pool["stderr"] + 3e-3)
+
+
+# --- the model side's signs, and the other Student-t quantiles and ddof of compare/ ------------------------------
+
+def test_model_record_signs_as_the_dem():
+    """A local-model solution of a speed drive sampled as a DEM record: tau_w and the profiles' mu carry the DEM's
+    sign (> 0 resisting a plate moving in +x): the energy per cycle is positive, tau_w follows mu_w, the top plane's
+    mu follows mu_w, and the friction leads the speed (lag in (-pi/2, 0])."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from granstokes.compare.drive import DriveSpec
+    from granstokes.continuum.load import Load
+    from granstokes.continuum.scales import Material
+
+    material = Material(mu_s=0.27, mu_d=0.7, I0=0.24, I_convention="dem", phi=0.8)
+    held = Load("speed", 20.0, u_w=2.0)
+    t_s = held.scales(material).t_s
+    load = replace(held, omega=1.0 / t_s)
+    drive = DriveSpec(Path("r"), "w", load, 12.0, 1.0, 0.0, 0, np.nan, 1, 0, 2, t_s, 3 * load.period)
+    rec = osc.model_record(drive, material, "local", None, np.arange(0.5, 12, 1.0), replace(osc.NUMERICS, n_cells=20))
+    p = rec.plate
+    assert phase.dissipation(p.t, p.u_w, p.tau_w, load.omega, 1)["value"] > 0
+    assert np.corrcoef(p.mu_w, p.tau_w)[0, 1] > 0.99
+    top = rec.profiles[rec.profiles.depth == 0.5]
+    assert np.corrcoef(top.mu.to_numpy(), p.mu_w.to_numpy())[0, 1] > 0.99
+    assert -np.pi / 2 < phase.phase_lag(phase.harmonic(p.t, p.mu_w, load.omega, 1)) <= 0
+
+
+def test_trend_limits_are_student_t_with_n_minus_two_dof():
+    rng = np.random.default_rng(5)
+    y = rng.standard_normal(400)
+    tr = plate.trend(np.arange(400.0), y)
+    assert tr["limit"] == pytest.approx(stats.t.isf(stats.norm.sf(plate.TREND_SIGMA), tr["blocks"] - 2), rel=1e-12)
+    t, y = _cycles_with_known_amplitudes(AMPS, PHASES)
+    st = phase.stationarity(t, y, OMEGA, skip=1)
+    n = len(AMPS)
+    assert st["limit"] == pytest.approx(stats.t.isf(stats.norm.sf(plate.TREND_SIGMA), n - 2), rel=1e-12)
+    fit = stats.linregress(np.arange(1.0, n + 1), AMPS)
+    assert st["z"] == pytest.approx(fit.slope / fit.stderr, rel=1e-6)
+
+
+def test_stokes_measured_error_ddof1():
+    from granstokes.compare.scorecard import _mean_err
+
+    values = [0.3, 0.5, 0.45, np.nan, 0.38]
+    v = np.array([0.3, 0.5, 0.45, 0.38])
+    m = _mean_err(values, "how")
+    assert m.value == pytest.approx(v.mean(), rel=1e-15)
+    assert m.err == pytest.approx(np.sqrt(np.sum((v - v.mean()) ** 2) / 3) / 2, rel=1e-14)
+
+
+def test_profile_band_is_student_t_with_m_minus_one_dof():
+    from granstokes.compare.profiles import FIELDS, _band
+
+    samples = np.array([[1.0, 2.0, np.nan], [1.5, 2.5, 3.0], [0.7, 1.0, 3.4], [1.1, 2.2, np.nan]])
+    central = {k: np.nanmean(samples, axis=0) for k in FIELDS}
+    out = _band(central, {k: samples for k in FIELDS}, 4, "frames")
+    for j, col in enumerate(samples.T):
+        col = col[np.isfinite(col)]
+        m = len(col)
+        half = stats.t.ppf(0.975, m - 1) * np.std(col, ddof=1) / np.sqrt(m)
+        k = FIELDS[0]
+        assert (out[f"{k}_hi"][j] - out[f"{k}_lo"][j]) / 2 == pytest.approx(half, rel=1e-12)
+
+
+def test_fluidity_interval_is_student_t_with_fits_minus_one_dof(monkeypatch):
+    from types import SimpleNamespace
+
+    from granstokes.compare import nonlocal_fit
+
+    A_of = {0: 0.8, 1: 1.1, 2: 0.95}  # a sample's fitted A (its u's first value names it), the steady profile's 1.0
+    monkeypatch.setattr(nonlocal_fit, "_fit_one", lambda material, a, grid, u: A_of.get(int(u[0]), 1.0))
+    grid_u = lambda k: SimpleNamespace(depth=np.array([0.0, 10.0]), u_x=np.array([float(k), float(k)]))
+    a = SimpleNamespace(samples=[grid_u(k) for k in A_of], samples_how="3 windows", label="d",
+                        spec=SimpleNamespace(depth=10.0),
+                        steady_profile=pd.DataFrame({"depth": [0.0, 10.0], "u_x": [7.0, 7.0]}))
+    fit = nonlocal_fit.fit_amplitude(a, None)
+    fits = np.array(list(A_of.values()))
+    se = np.std(fits, ddof=1) / np.sqrt(3)
+    assert fit.A == 1.0 and fit.err == pytest.approx(se, rel=1e-14)
+    assert fit.ci95[1] - fit.A == pytest.approx(stats.t.ppf(0.975, 2) * se, rel=1e-12)
+
+
+def test_law_test_spread_of_the_law_ddof1():
+    """comparison.law_test: z = residual / sqrt(s_pair^2 + s_law^2), s_law the replicates' spread (ddof = 1) of
+    mu(I) = mu_s + (mu_d - mu_s) I/(I + I0); with mu_s alone varying, s_law = (1 - I/(I + I0)) sd(mu_s)."""
+    from types import SimpleNamespace
+
+    from granstokes.compare.comparison import law_test
+
+    mu_s = np.array([0.26, 0.28, 0.27])
+    cal = SimpleNamespace(mu_s=0.27, mu_d=0.7, I0_dem=0.3, kind="test",
+                          replicates={"mu_s": mu_s, "mu_d": [0.7] * 3, "I0_dem": [0.3] * 3})
+    s_law = 0.5 * np.std(mu_s, ddof=1)  # at I = I0
+    law = 0.27 + 0.43 * 0.5
+    for z, beyond in ((1.8, 0.0), (2.2, 1.0)):  # ddof = 0 would make the first |z| 1.8 sqrt(3/2) > 2
+        pairs = pd.DataFrame({"I_dem": [0.3], "mu": [law + z * s_law], "mu_err": [0.0]})
+        out = law_test(pairs, cal)
+        assert out["mean_residual"] == pytest.approx(z * s_law, rel=1e-9)
+        assert out["fraction_beyond"] == beyond
