@@ -34,8 +34,7 @@ from .drive import drive_specs
 from .laws import laws as paper_laws
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
-from .profiles import CGSettings
-from .rows import Z95
+from .profiles import CGSettings, standard_error
 from .scorecard import Scorecard, base_reach, headline, scene_checks, score
 
 #: continuum output times per drive (log-spaced from t_end/PREDICTION_SPAN to t_end, plus the snapshots)
@@ -161,8 +160,8 @@ def steady_pairs(drives: list[DriveAnalysis], wall_exclusion: float = calibrate.
         step = max(1, int(round(spacing / abs(np.diff(inside.y.to_numpy()[:2])[0]))))
         pick = inside.iloc[::step]
         rows.append(pick[["depth", "mu", "I_dem", "phi", "p", "tau"]].assign(
-            drive=a.label, mu_err=(pick.mu_hi - pick.mu_lo) / (2 * Z95),
-            phi_err=(pick.phi_hi - pick.phi_lo) / (2 * Z95), I_err=(pick.I_dem_hi - pick.I_dem_lo) / (2 * Z95)))
+            drive=a.label, **{f"{k}_err": standard_error(pick[f"{q}_lo"], pick[f"{q}_hi"], pick.n)
+                              for k, q in (("mu", "mu"), ("phi", "phi"), ("I", "I_dem"))}))
     return pd.concat(rows, ignore_index=True)
 
 

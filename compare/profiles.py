@@ -262,6 +262,17 @@ def derive(fields: dict, y: np.ndarray, dimension: int, d: float = 1.0, rho_p: f
     return out
 
 
+def band_quantile(count):
+    """The profiles' band is central -+ band_quantile(m) x the standard error over m samples: Student-t's 97.5 %
+    quantile at m - 1 degrees of freedom (``standard_error`` undoes it)."""
+    return stats.t.ppf(0.975, np.maximum(np.asarray(count) - 1, 1))
+
+
+def standard_error(lo, hi, count):
+    """The standard error a profile band (lo, hi) over ``count`` samples was built from."""
+    return (np.asarray(hi) - np.asarray(lo)) / (2 * band_quantile(count))
+
+
 def _band(central: dict, samples: dict, n: int, band_over: str) -> dict:
     """Central fields plus ``<f>_lo``/``<f>_hi`` = central -+ t_{0.975, m-1} std(samples)/sqrt(m), m the
     number of non-NaN samples at each y (n samples in all)."""
@@ -271,7 +282,7 @@ def _band(central: dict, samples: dict, n: int, band_over: str) -> dict:
         with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns (no material, no contacts)
             se = np.nanstd(samples[k], axis=0, ddof=1) / np.sqrt(count) if n > 1 else np.full_like(central[k], np.nan)
-            half = np.where(count > 1, stats.t.ppf(0.975, np.maximum(count - 1, 1)) * se, np.nan)
+            half = np.where(count > 1, band_quantile(count) * se, np.nan)
         out[f"{k}_lo"], out[f"{k}_hi"] = central[k] - half, central[k] + half
     out["n"], out["band_over"] = n, band_over
     return out

@@ -48,11 +48,9 @@ and seeing the test fail (then restoring it):
 * ``test_law_test_spread_of_the_law_ddof1``: guards ``compare/comparison.py`` ``law_test``'s
   ``reps.std(axis=0, ddof=1)``.
 
-* ``test_steady_pairs_error_is_the_bands_standard_error`` (strict xfail: a bug found, not fixed here):
-  ``compare/comparison.py`` ``steady_pairs`` sets ``mu_err = (mu_hi - mu_lo) / (2 * Z95)``, but the band is
-  ``profiles._band``'s central -+ ``t.ppf(0.975, m - 1)`` x std/sqrt(m): over the 4 seeds of the committed studies
-  mu_err (the law test's s_pair, the in-drive fit's weights) is 3.18/1.96 = 1.62 x the standard error.  With the
-  quantile of the band's m - 1 dof in place of Z95 the test passes (checked: it then XPASSes, strict fails).
+* ``test_steady_pairs_error_is_the_bands_standard_error``: ``compare/comparison.py`` ``steady_pairs`` undoes the
+  steady window's band with ``profiles.standard_error`` (Student-t at m - 1 dof, as ``profiles._band`` built it);
+  with the normal Z95 instead, mu_err over 4 seeds is 3.18/1.96 = 1.62 x the standard error and the test fails.
 
 Not pinned here: ``compare/laws.py`` (a law's DEM error, the bootstrap replicates' ``std(ddof=1)`` over 200 seed
 resamples: ddof changes it by 0.25 %, below what a test of the whole law pipeline resolves) and the figure-only
@@ -481,9 +479,6 @@ def test_law_test_spread_of_the_law_ddof1():
         assert out["fraction_beyond"] == beyond
 
 
-@pytest.mark.xfail(strict=True, reason="compare/comparison.py steady_pairs turns the window's band back into a "
-                   "standard error with the normal Z95, but profiles._band made it with t.ppf(0.975, m - 1): over "
-                   "m = 4 seeds mu_err is 3.18/1.96 = 1.62 x the standard error (issue 42; see the report)")
 def test_steady_pairs_error_is_the_bands_standard_error():
     """The (mu, I) pairs' mu_err (the law test's s_pair, the in-drive fit's weights) is the standard error over the
     seeds, std(ddof=1)/sqrt(m), of the steady window's mu at each depth."""
