@@ -41,7 +41,7 @@ TARGETS = {
 }
 # the fast lane, restricted to the files that reach the targets; mutmut runs, per mutant, only those of these tests
 # that called the mutated function. The one test dropped reads the repository's folder layout, which the stage changes.
-TESTS = ["tests/compare", "tests/continuum/test_steady_and_scales.py"]
+TESTS = ["tests/compare", "tests/continuum/test_steady_and_scales.py", "tests/continuum/test_rheology.py"]
 PYTEST_ARGS = ["-m", "not slow", "-p", "no:cacheprovider", "-x", "-q", "--deselect",
                "tests/compare/test_experiment.py::test_no_pipeline_branch_on_the_oscillating_plate_outside_the_experiments"]
 PACKAGES = {"lib": "granstokes/lib", "continuum": "granstokes/continuum", "dem": "granstokes/dem",
