@@ -7,7 +7,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 DEMO   ?= demo-out
 
-.PHONY: test demo bench clean
+.PHONY: test demo bench mutants clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -32,5 +32,11 @@ bench: $(STAMP)
 	$(BIN)/python bench/cg_rate.py
 	$(BIN)/python bench/dem_cost_noise.py
 
+# mutation testing of the comparison's statistics and conventions (mutmut, run in build/mutants/: see docs/testing.md);
+# every mutant by default; MUTANTS_DIGITS=147 runs the 30% numbered *1, *4 or *7
+MUTANTS_DIGITS ?= 0123456789
+mutants: $(STAMP)
+	$(BIN)/python bench/mutants.py --digits $(MUTANTS_DIGITS)
+
 clean:
-	rm -rf $(VENV) $(DEMO) *.egg-info
+	rm -rf $(VENV) $(DEMO) *.egg-info build/mutants
