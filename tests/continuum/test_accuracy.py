@@ -72,6 +72,7 @@ def test_estimates_bound_the_true_error_and_are_not_too_pessimistic(references, 
         assert sol.errors[q].max() <= 10 * true.max(), q
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mt", (0.9, 0.5))
 def test_small_time_limit_is_the_similarity_solution(paper_friction, mt):
     """At t~ = 1e-8 (mesh and first step follow the smallest time) u~_w/sqrt(t~) and delta/sqrt(t~)
