@@ -36,6 +36,7 @@ bench: $(STAMP)
 # every mutant by default; MUTANTS_DIGITS=147 runs the 30% numbered *1, *4 or *7
 MUTANTS_DIGITS ?= 0123456789
 mutants: $(STAMP)
+	$(BIN)/python -m pip install -q -e '.[test,mutants]'
 	$(BIN)/python bench/mutants.py --digits $(MUTANTS_DIGITS)
 
 clean:
