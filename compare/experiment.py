@@ -65,6 +65,7 @@ class Experiment:
     titles: ClassVar[dict]            # figure kind -> title
     how_to_read: ClassVar[dict]       # figure kind -> how to read it
     definitions: ClassVar[dict]       # name -> (unit, definition)
+    report: ClassVar = None           # the module that renders it: metrics, files, sections, verdict (each optional)
 
     def __init__(self, calibration: str | Path | None = None, *, jobs: int = 1, progress: bool = True):
         """A subclass adds its own keyword options (checked there, before any work)."""
@@ -115,24 +116,29 @@ class Experiment:
         raise NotImplementedError
 
     @classmethod
+    def _rendered(cls, name: str, default, *args):
+        """The report module's ``name`` of ``args``, or ``default``'s when the module has none."""
+        return getattr(cls.report, name, default)(*args)
+
+    @classmethod
     def verdict(cls, result) -> str:
-        """The comparison's verdict in words."""
-        return result.verdict
+        """The comparison's verdict in words (the report module's ``verdict``, else the result's own)."""
+        return cls._rendered("verdict", lambda r: r.verdict, result)
 
     @classmethod
     def metrics(cls, result) -> dict:
         """metrics.json's entries of this experiment beyond the shared ones."""
-        return {}
+        return cls._rendered("metrics", lambda r: {}, result)
 
     @classmethod
     def files(cls, result, out: Path) -> list[FigureFile]:
         """Write the experiment's CSV files and figures into ``out``; the figures, in the report's order."""
-        return []
+        return cls._rendered("files", lambda r, o: [], result, out)
 
     @classmethod
     def sections(cls, result, metrics: dict) -> list[str]:
         """The report's HTML sections between the heading and the figures."""
-        return []
+        return cls._rendered("sections", lambda r, m: [], result, metrics)
 
     @classmethod
     def outputs(cls, drives, output) -> dict:

@@ -36,6 +36,7 @@ class OscillatingPlate(Experiment):
     tables_marker = oscillation_tables.DRIVES_JSON
     titles = oscillation_report.TITLES
     how_to_read = oscillation_report.HOW_TO_READ
+    report = oscillation_report
     definitions = oscillation_report.DEFINITIONS
 
     def __init__(self, calibration: str | Path | None = None, *, ngf_from: str | Path | None = None, jobs: int = 1,
@@ -98,20 +99,3 @@ class OscillatingPlate(Experiment):
     def _conclude(self, dem, setup, predicted):
         _, dems, models, ngf_note = setup
         return conclude(dem, dems, models, ngf_note, predicted, self.independent.source, self.ngf_from)
-
-    @classmethod
-    def verdict(cls, result) -> str:
-        return oscillation_report.verdict(result)
-
-    @classmethod
-    def metrics(cls, result) -> dict:
-        return oscillation_report.metrics(result)
-
-    @classmethod
-    def files(cls, result, out: Path):
-        return oscillation_report.files(result, out)
-
-    @classmethod
-    def sections(cls, result, m: dict) -> list[str]:
-        return oscillation_report.sections(result, m)
-

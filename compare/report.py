@@ -25,6 +25,7 @@ from .analysis import nearest_frame
 from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .experiment import CSV_FLOAT, FigureFile, table
+from .metrics import metrics  # noqa: F401  (the experiment's report module renders its metrics too)
 from .rows import SIGMA_CONSISTENT, UNSCORED, tally
 from .scorecard import MODEL_UNSTEADY, T90_WINDOW
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, figure_legend, plain_log, suptitle

@@ -43,6 +43,7 @@ class StokesDrives(Experiment):
     tables_marker = tables.DEM_JSON
     titles = report.FIGURE_TITLES
     how_to_read = report.HOW_TO_READ
+    report = report
     definitions = metrics.DEFINITIONS
 
     def __init__(self, calibration: str | Path | None = None, *, fit_on_drives: bool = False,
@@ -104,15 +105,3 @@ class StokesDrives(Experiment):
     def _conclude(self, dem, setup, predicted):
         _, side, kept = setup
         return conclude(dem, side, kept, predicted, self.settings)
-
-    @classmethod
-    def metrics(cls, result) -> dict:
-        return metrics.metrics(result)
-
-    @classmethod
-    def files(cls, result, out: Path):
-        return report.files(result, out)
-
-    @classmethod
-    def sections(cls, result, m: dict) -> list[str]:
-        return report.sections(result, m)
