@@ -1,4 +1,4 @@
-"""Mutation testing of the comparison's statistics and conventions (issue 42): `make mutants`.
+"""Mutation testing of the comparison's statistics and conventions: `make mutants`.
 
 mutmut 3 names a mutant after its file's path (compare/rows.py -> compare.rows) and puts its mutated copies first on
 sys.path, while the tests import granstokes.compare.rows through the editable install: run in place, no mutant would

@@ -1,4 +1,4 @@
-"""Independent answers for the comparison's estimators and statistics (issue 42): synthetic DEM inputs written in
+"""Independent answers for the comparison's estimators and statistics: synthetic DEM inputs written in
 the run-folder format, read through the same reader as real runs, against closed forms and hand computations.
 
 Each test names the production line it guards; every guard was checked by mutating that line, running this file
@@ -183,16 +183,21 @@ def test_newtonian_oscillating_bed_read_from_a_run_folder(tmp_path):
 
 
 GAINS, SHIFTS = (1.0, 1.03, 0.96, 1.012), (0.0, 0.02, -0.035, 0.011)
+SEEDS = (1, 2, 3, 4)
+
+
+def _four_beds(tmp_path):
+    """The Newtonian bed run with four seeds of known gains and phase shifts, through the DEM side."""
+    _run_json(tmp_path, list(SEEDS))
+    for s, g, d in zip(SEEDS, GAINS, SHIFTS):
+        _write_bed(tmp_path, s, g, d)
+    drive, records = _read(tmp_path)
+    return osc.analyse_dem(drive, records, MU_S)
 
 
 def test_dem_error_over_beds_is_std_ddof1_over_sqrt_n(tmp_path):
-    seeds = [1, 2, 3, 4]
-    _run_json(tmp_path, seeds)
-    for s, g, d in zip(seeds, GAINS, SHIFTS):
-        _write_bed(tmp_path, s, g, d)
-    drive, records = _read(tmp_path)
-    dem = osc.analyse_dem(drive, records, MU_S)
-    n = len(seeds)
+    dem = _four_beds(tmp_path)
+    n = len(SEEDS)
     amplitudes = RHO * NU * K * np.sqrt(2) * U / P_W * np.array(GAINS)
     lags = -np.pi / 4 - np.array(SHIFTS)
     for name, per_bed in (("response_amplitude", amplitudes), ("phase_lag", lags)):
@@ -205,8 +210,8 @@ def test_dem_error_over_beds_is_std_ddof1_over_sqrt_n(tmp_path):
     # the velocity profiles' error over the beds: the same rule (the beds' profiles are the closed form here, so
     # the error is ~0; one bed's velocity scaled makes it known)
     scaled = [osc.Record(r.plate, r.profiles, r.velocity.assign(u=r.velocity.u * g), r.interval)
-              for r, g in zip(records, GAINS)]
-    dem = osc.analyse_dem(drive, scaled, MU_S)
+              for r, g in zip(dem.records, GAINS)]
+    dem = osc.analyse_dem(dem.drive, scaled, MU_S)
     g = np.array(GAINS)
     ratio = np.std(g, ddof=1) / np.sqrt(n) / np.mean(g)
     ok = (dem.velocity.abs() > 1e-3).to_numpy()
@@ -230,12 +235,7 @@ def test_sigma_is_dem_minus_model_over_the_combined_error():
 
 
 def test_oscillating_row_signs_dem_minus_prediction(tmp_path):
-    seeds = [1, 2, 3, 4]
-    _run_json(tmp_path, seeds)
-    for s, g, d in zip(seeds, GAINS, SHIFTS):
-        _write_bed(tmp_path, s, g, d)
-    drive, records = _read(tmp_path)
-    dem = osc.analyse_dem(drive, records, MU_S)
+    dem = _four_beds(tmp_path)
     predicted = {o: (np.nan, np.nan, np.nan) for o in osc.OBSERVABLES}
     a, a_err, _ = dem.values["response_amplitude"]
     lag, lag_err, _ = dem.values["phase_lag"]
@@ -243,7 +243,7 @@ def test_oscillating_row_signs_dem_minus_prediction(tmp_path):
     predicted["phase_lag"] = (3.0, 0.01, 0.02)  # DEM ~ -pi/4: DEM - model ~ -3.79 wraps to ~ +2.49
     pred = osc.OscPrediction("local", predicted, dem.zones, dem.yielded, dem.loop, dem.velocity)
     setup = osc.ModelSetup(None, None)
-    rows = osc.scorecard([dem], {(drive.label, "local"): pred}, setup, "").set_index("observable")
+    rows = osc.scorecard([dem], {(dem.drive.label, "local"): pred}, setup, "").set_index("observable")
     local = rows[rows.model == "local"]
     r = local.loc["response_amplitude"]
     assert r.sigma == pytest.approx(0.01 / np.sqrt(a_err ** 2 + 0.002 ** 2 + 0.003 ** 2), rel=1e-12)
