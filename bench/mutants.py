@@ -99,11 +99,12 @@ def line_of(path: str, key: str, diff: str) -> int:
     text = (ROOT / path).read_text()
     lines = text.splitlines()
     start = end = 1
-    for node in ast.walk(ast.parse(text)):
+    tree = ast.parse(text)
+    for node in ast.walk(tree):
         if isinstance(node, ast.FunctionDef) and node.name == func:
             start, end = node.lineno, node.end_lineno
             if cls is None or any(isinstance(c, ast.ClassDef) and c.name == cls and node in c.body
-                                  for c in ast.walk(ast.parse(text))):
+                                  for c in ast.walk(tree)):
                 break
     removed = [d[1:].strip() for d in diff.splitlines() if d.startswith("-") and not d.startswith("---")]
     for r in removed:

@@ -27,3 +27,10 @@ def test_an_empty_scorecard_gives_an_empty_tally_with_its_columns():
     for rows in (pd.DataFrame(), pd.DataFrame([{**_row("x", "a", 0.1), "scored": False}])):
         t = tally(rows)
         assert t.empty and list(t.columns) == COLUMNS
+
+
+def test_models_tied_exactly_keep_the_order_they_were_given():
+    """Equal share and median |sigma|: the order of the scorecard's models, not the alphabet (z before a)."""
+    rows = pd.DataFrame([_row(d, "z", s) for d, s in zip("xy", (0.5, 3.0))]
+                        + [_row(d, "a", s) for d, s in zip("xy", (3.0, 0.5))])
+    assert list(tally(rows).model) == ["z", "a"]

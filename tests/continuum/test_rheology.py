@@ -36,11 +36,12 @@ def test_friction_coefficients_outside_their_range_are_refused(mu_s, mu_d, messa
 def test_the_wall_friction_lies_strictly_between_the_static_and_dynamic_ones():
     f = Friction(0.4, 0.6)
     assert f.check_mu_w(0.5) == 0.5
-    interval = r"^mu_w must be in the open interval \(mu_s, mu_d\) = \(0\.4, 0\.6\), got "
     for mu_w in (0.4, 0.6, float("inf")):
-        with pytest.raises(ValueError, match=interval):
+        with pytest.raises(ValueError) as err:
             f.check_mu_w(mu_w)
+        assert str(err.value) == f"mu_w must be in the open interval (mu_s, mu_d) = (0.4, 0.6), got {mu_w!r}"
     assert f.mu_w_from_tilde(0.25) == pytest.approx(0.55)
     for tilde in (0.0, 1.0, 1.5, float("nan")):
-        with pytest.raises(ValueError, match=r"^mu_w_tilde must be in the open interval \(0, 1\), got "):
+        with pytest.raises(ValueError) as err:
             f.mu_w_from_tilde(tilde)
+        assert str(err.value) == f"mu_w_tilde must be in the open interval (0, 1), got {tilde!r}"
