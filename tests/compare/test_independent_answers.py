@@ -497,3 +497,69 @@ def test_steady_pairs_error_is_the_bands_standard_error():
     pairs = steady_pairs([a]).set_index("depth")
     se = pd.Series(seeds.std(axis=0, ddof=1) / 2, index=band.depth)
     np.testing.assert_allclose(pairs.mu_err, se.reindex(pairs.index), rtol=1e-9)
+
+
+# --- a layer of known growth: delta_f = L(t) erfcinv(f) ---------------------------------------------------------
+
+def _layer_track(L_of_t, times, depth=np.linspace(0.0, 60.0, 3001)):
+    """The layer measures of u = u_w erfc(depth/L(t)) at each time, as the laws read them (a Track)."""
+    from granstokes.compare.laws import Track
+    from granstokes.continuum.crossing import layer_measures
+    from scipy.special import erfc
+    rows = [layer_measures(depth, 2.0 * erfc(depth / L_of_t(t)), 2.0) for t in times]
+    delta = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+    track = Track(times, delta["delta_05"], times, np.ones_like(times), np.ones_like(times), 1.0, np.nan, np.nan)
+    return delta, track
+
+
+def _growth_drive(t_s, nu_g, start, t_end):
+    from types import SimpleNamespace
+    return SimpleNamespace(dem=SimpleNamespace(spec=SimpleNamespace(compared_from=start), t_end=t_end),
+                           scales=SimpleNamespace(t_s=t_s, nu_g=nu_g))
+
+
+def test_a_diffusive_layer_grows_as_sqrt_t_at_every_threshold_with_the_erfc_ratio():
+    """u = u_w erfc(y / 2 sqrt(nu t)): delta_f = 2 sqrt(nu t) erfcinv(f) at every threshold f (delta_05/delta_50 =
+    erfcinv(0.05)/erfcinv(0.5) = 2.906), the first moment 2 sqrt(nu t / pi); the growth law's exponent 1/2 and its
+    prefactor delta_05/sqrt(nu_g t) = 2 erfcinv(0.05) sqrt(nu/nu_g), on a window inside [start, GROWTH_END t_s]."""
+    from granstokes.compare.laws import GROWTH_END, growth
+    from granstokes.continuum.crossing import U_FRACTION
+    from scipy.special import erfcinv
+    nu, nu_g, t_s = 0.7, 1.3, 400.0
+    times = np.geomspace(1.0, 150.0, 30)
+    delta, track = _layer_track(lambda t: 2 * np.sqrt(nu * t), times)
+    assert delta["delta_50"] == pytest.approx(2 * np.sqrt(nu * times) * erfcinv(0.5), rel=2e-4)
+    assert delta["delta_05"] == pytest.approx(2 * np.sqrt(nu * times) * erfcinv(U_FRACTION), rel=2e-4)
+    assert delta["moment"] == pytest.approx(2 * np.sqrt(nu * times / np.pi), rel=1e-4)
+    fit = growth(track, _growth_drive(t_s, nu_g, start=3.0, t_end=1000.0))
+    assert fit["window"] == [3.0, GROWTH_END * t_s]
+    assert fit["t"].min() >= 3.0 and fit["t"].max() <= GROWTH_END * t_s
+    assert fit["exponent"] == pytest.approx(0.5, abs=2e-4)
+    assert fit["prefactor"] == pytest.approx(2 * erfcinv(U_FRACTION) * np.sqrt(nu / nu_g), rel=2e-4)
+
+
+def test_a_layer_growing_as_t_to_one_third_is_fitted_as_such_and_a_covered_window_is_not_measured():
+    """The estimator is not tied to 1/2: L = t^(1/3) gives 1/3. A window the elastic start covers, or half the record
+    ending before it starts, is not measurable, with both times in the reason."""
+    from granstokes.compare.laws import MIN_POINTS, growth
+    times = np.geomspace(1.0, 300.0, 40)
+    _, track = _layer_track(lambda t: 1.5 * t ** (1 / 3), times)
+    assert growth(track, _growth_drive(400.0, 1.0, start=2.0, t_end=1000.0))["exponent"] == pytest.approx(1 / 3,
+                                                                                                         abs=3e-4)
+    covered = growth(track, _growth_drive(400.0, 1.0, start=250.0, t_end=380.0))
+    assert set(covered) == {"why"} and "(3 shear-wave transits, 250) covers the growth window (until 190 =" in \
+        covered["why"]
+    few = growth(track, _growth_drive(400.0, 1.0, start=170.0, t_end=1000.0))
+    inside = int(np.sum((times >= 170.0) & (times <= 200.0)))
+    assert few["why"] == f"{inside} layer depths in the growth window [170, 200] (fewer than {MIN_POINTS})"
+
+
+def test_a_creeping_layer_s_depth_depends_on_the_threshold_as_ln_1_over_f():
+    """u = u_w exp(-y/l) (a creep tail): delta_f = l ln(1/f), so delta_05/delta_50 = ln 20/ln 2 = 4.32, where the
+    diffusive layer gives 2.91: the threshold dependence tells creep from diffusion."""
+    from granstokes.continuum.crossing import U_FRACTION, layer_measures
+    depth = np.linspace(0.0, 60.0, 6001)
+    m = layer_measures(depth, 3.0 * np.exp(-depth / 3.3), 3.0)
+    assert m["delta_50"] == pytest.approx(3.3 * np.log(2), rel=1e-5)
+    assert m["delta_05"] == pytest.approx(3.3 * np.log(1 / U_FRACTION), rel=1e-5)
+    assert m["moment"] == pytest.approx(3.3, rel=1e-4)
