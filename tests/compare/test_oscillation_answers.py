@@ -1,0 +1,304 @@
+"""Independent answers for the oscillating plate's rows and laws (compare.oscillation ``scorecard``, ``_row``,
+``_unmeasurable``, ``_difference``, ``laws``, ``_weighted_slope``), on synthetic DEM sides and model sides: no record
+is read and no solver runs (the real DriveSpec, DemOscillation, OscPrediction and ModelSetup, carrying made-up
+numbers).
+
+What is checked, and how the answers are found without the module:
+
+* a row's DEM value and error are the beds' mean and std(ddof=1)/sqrt(n), computed here from per-bed values; sigma is
+  (DEM - model)/sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2) and the band predicted -+ z sd with z the
+  normal 97.5 % quantile (scipy, not the module's constant); the verdict words are written out per row (|sigma| <= 2:
+  consistent).  No Student-t interval is formed by these functions: the bands are normal (compare.rows);
+* phase differences are wrapped into (-pi, pi]: a DEM lag of +3.0 against a model's -3.0 differs by 6 - 2 pi (not 6),
+  and pi stays pi; other observables are never wrapped (a dissipation difference of 4.5 > pi is 4.5);
+  phase_lag > 0 means the response peaks after the imposed sine (the DEM reader's side of that convention is pinned
+  by test_independent_answers.py's Newtonian Stokes second problem, not repeated here);
+* unscored rows: the note's head is the verdict ("not predicted" when a model has no prediction, with the reason
+  appended once; "not measurable" when the DEM has no value or no error, or when the yielded edge reaches the deepest
+  plane for the two depth observables), sigma is NaN whatever the model's errors;
+* laws: n in yielded_depth ~ (omega t_s)^n and s in phase_lag = a + s ln(omega t_s) on data made from a known power
+  law / line plus known offsets, against numpy.polyfit with weights 1/sd (its unscaled covariance gives the DEM
+  slope's error) and the weighted least-squares hat matrix built here (the model's slope on the DEM's weights, its
+  error from the model's per-drive sds); a three-point line whose slope and error are closed forms; the drives left
+  out (no yielded layer on either side), n_drives, the window and the "need 3" rows.
+"""
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from granstokes.compare import oscillation as osc
+from granstokes.compare.drive import DriveSpec
+from granstokes.continuum.load import Load
+from scipy import stats
+
+P_W, DEPTH, T_S = 20.0, 12.0, 2.0
+PLANES = np.arange(1.0, DEPTH + 0.5)  # the profile planes' depths: the deepest is DEPTH
+Z = stats.norm.ppf(0.975)
+NGF_NOTE = "no NGF amplitude: give a Stokes report's metrics.json (--ngf-from)"
+UNITS_SPEED = {"response_amplitude": "1", "phase_lag": "rad", "yielded_depth": "d",
+               "dissipation": "rho_p g d^2 per plate area", "remobilization_strain": "1"}
+
+
+def _drive(name: str, omega_ts: float, kind: str = "speed", amplitude: float = 2.0) -> DriveSpec:
+    """A drive at omega t_s (t_s = T_S: the division and product by 2 are exact)."""
+    imposed = {"mu_w": amplitude} if kind == "stress" else {"u_w": amplitude}
+    load = Load(kind, P_W, omega=omega_ts / T_S, **imposed)
+    return DriveSpec(Path("runs/p20"), name, load, DEPTH, plate_mass=1.0, surface_offset=0.0, steps=0,
+                     transit_time=np.nan, seeds=4, grains=0, dimension=2, t_s=T_S)
+
+
+def _over_beds(per_bed) -> tuple[float, float, str]:
+    """The beds' mean and its error std(ddof=1)/sqrt(n), by hand."""
+    b = np.asarray(per_bed, dtype=float)
+    n = len(b)
+    mean = b.sum() / n
+    return mean, np.sqrt(((b - mean) ** 2).sum() / (n - 1)) / np.sqrt(n), f"spread over {n} beds (std/sqrt(n))"
+
+
+def _dem(drive: DriveSpec, values: dict, deepest_edge: float = 6.0) -> osc.DemOscillation:
+    """A DEM side with ``values`` (observable -> (value, err, how); the others 1 +- 0.1) and a yielded edge over the
+    phase reaching ``deepest_edge`` (one phase bin without data: NaN)."""
+    values = {o: values.get(o, (1.0, 0.1, "spread over 4 beds (std/sqrt(n))")) for o in osc.OBSERVABLES}
+    zones = pd.DataFrame(np.zeros((4, len(PLANES))), columns=pd.Index(PLANES, name="depth"))
+    yielded = pd.Series([0.5 * deepest_edge, deepest_edge, np.nan, 0.0])
+    empty = pd.DataFrame()
+    return osc.DemOscillation(drive, (), values, zones, yielded, empty, empty, empty, 0.0, [], 3)
+
+
+def _prediction(values: dict, model: str = "local") -> osc.OscPrediction:
+    """A model side with ``values`` (observable -> (predicted, numerical error, calibration sd); the others 1)."""
+    values = {o: values.get(o, (1.0, 0.01, 0.01)) for o in osc.OBSERVABLES}
+    empty = pd.DataFrame()
+    return osc.OscPrediction(model, values, empty, pd.Series(dtype=float), empty, empty)
+
+
+def _rows(dems, predictions, setup=None, ngf_note=NGF_NOTE) -> pd.DataFrame:
+    return osc.scorecard(dems, predictions, setup or osc.ModelSetup(None, None), ngf_note)
+
+
+# --- the scorecard's rows --------------------------------------------------------------------------------------
+
+BEDS = {"response_amplitude": [0.52, 0.55, 0.49, 0.54], "phase_lag": [-0.62, -0.55, -0.66, -0.57],
+        "yielded_depth": [3.1, 3.3, 2.9, 3.2], "dissipation": [50.0, 53.0, 47.0, 52.0],
+        "remobilization_strain": [0.8, 0.9, 0.85, 0.75]}
+MODEL = {"response_amplitude": (0.45, 0.004, 0.006), "phase_lag": (-0.5, 0.01, 0.02), "yielded_depth": (3.0, 0.05, 0.1),
+         "dissipation": (46.0, 0.5, 1.5), "remobilization_strain": (0.6, 0.02, 0.03)}
+# |sigma| by hand: 4.98, 2.99, 0.89, 2.18 (wrapped as a phase it would be -0.86), 4.65
+VERDICTS = {"response_amplitude": "disagrees", "phase_lag": "disagrees", "yielded_depth": "consistent",
+            "dissipation": "disagrees", "remobilization_strain": "disagrees"}
+
+
+def test_each_row_is_the_beds_mean_and_error_against_the_prediction_and_its_band():
+    drive = _drive("speed-1", 1.5)
+    dem = _dem(drive, {o: _over_beds(b) for o, b in BEDS.items()})
+    rows = _rows([dem], {(drive.label, "local"): _prediction(MODEL)})
+    local = rows[rows.model == "local"].set_index("observable")
+    assert list(local.index) == list(osc.OBSERVABLES)
+    assert local.blind.dtype == bool and local.blind.all()  # every row is predicted blind
+    lag = np.mean(BEDS["phase_lag"])
+    for o, per_bed in BEDS.items():
+        r = local.loc[o]
+        b = np.array(per_bed)
+        mean, err = b.mean(), np.std(b, ddof=1) / np.sqrt(len(b))
+        p, num, cal = MODEL[o]
+        assert r.dem == pytest.approx(mean, rel=1e-12) and r.dem_err == pytest.approx(err, rel=1e-12)
+        assert r.dem_how == "spread over 4 beds (std/sqrt(n))"
+        assert r.predicted == p and r.numerical_err == num and r.calibration_sd == cal
+        sd = np.sqrt(num ** 2 + cal ** 2)
+        np.testing.assert_allclose(r.band, [p - Z * sd, p + Z * sd], rtol=1e-12)
+        assert r.sigma == pytest.approx((mean - p) / np.sqrt(err ** 2 + num ** 2 + cal ** 2), rel=1e-12), o
+        assert r.verdict == VERDICTS[o] and r.scored and r.note == "", o
+        assert r.unit == UNITS_SPEED[o] and r.drive == "runs/p20/speed-1" and r.model_label == osc.LABELS["local"]
+        assert r.kind == "speed" and r.amplitude == 2.0 and r.omega == 0.75 and r.omega_ts == 1.5
+        assert r.phase_lag == pytest.approx(lag, rel=1e-12) and r.phase_lag_predicted == -0.5
+    # the difference 50.5 - 46 = 4.5 > pi of a dissipation is not wrapped like a phase
+    assert local.loc["dissipation", "sigma"] > 2
+
+
+def test_phase_difference_is_wrapped_into_minus_pi_pi():
+    cases = {"ahead": (3.0, -3.0, 6.0 - 2 * np.pi),  # 6 is one turn from 6 - 2 pi: the DEM lags 0.28 less
+             "behind": (-3.0, 3.0, 2 * np.pi - 6.0),
+             "half-turn": (np.pi / 2, -np.pi / 2, np.pi),  # pi itself is kept
+             "minus-half-turn": (-np.pi / 2, np.pi / 2, np.pi)}  # -pi is brought to +pi
+    dem_err, num, cal = 0.13, 0.1, 0.12
+    combined = np.sqrt(dem_err ** 2 + num ** 2 + cal ** 2)
+    dems, predictions = [], {}
+    for name, (v, p, _) in cases.items():
+        drive = _drive(name, 1.0)
+        dems.append(_dem(drive, {"phase_lag": (v, dem_err, "spread over 4 beds (std/sqrt(n))")}))
+        predictions[drive.label, "local"] = _prediction({"phase_lag": (p, num, cal)})
+    rows = _rows(dems, predictions)
+    lag = rows[(rows.model == "local") & (rows.observable == "phase_lag")].set_index("drive")
+    for name, (v, p, difference) in cases.items():
+        r = lag.loc[f"runs/p20/{name}"]
+        assert r.sigma == pytest.approx(difference / combined, rel=1e-9), name
+        assert r.dem == v and r.predicted == p and r.phase_lag == v and r.phase_lag_predicted == p
+    # +3.0 against -3.0: |6 - 2 pi| / 0.2 = 1.4 sd, consistent (6 / 0.2 = 30 sd would disagree)
+    assert lag.loc["runs/p20/ahead", "sigma"] < 0 and lag.loc["runs/p20/ahead", "verdict"] == "consistent"
+    assert lag.loc["runs/p20/behind", "sigma"] > 0 and lag.loc["runs/p20/behind", "verdict"] == "consistent"
+    assert lag.loc["runs/p20/half-turn", "verdict"] == "disagrees"  # pi / 0.2 = 15.7 sd
+
+
+def test_rows_without_a_prediction_say_why_and_are_not_scored():
+    failed, missing = _drive("failed", 1.0, "stress", 0.45), _drive("missing", 2.0, "stress", 0.45)
+    dems = [_dem(failed, {"phase_lag": (0.7, 0.05, "how")}), _dem(missing, {"phase_lag": (0.4, 0.05, "how")})]
+    reason = "the local solver failed on this drive: step size too small"
+    rows = _rows(dems, {(failed.label, "local"): reason})
+    assert len(rows) == 2 * 2 * len(osc.OBSERVABLES)  # drives x models (every label) x observables
+    notes = {("failed", "local"): f"not predicted: {reason}", ("missing", "local"): "not predicted: ",
+             ("failed", "ngf"): f"not predicted: {NGF_NOTE}", ("missing", "ngf"): f"not predicted: {NGF_NOTE}"}
+    for (drive, model), note in notes.items():
+        g = rows[(rows.drive == f"runs/p20/{drive}") & (rows.model == model)]
+        assert list(g.observable) == list(osc.OBSERVABLES)
+        assert (g.note == note).all() and (g.verdict == "not predicted").all() and not g.scored.any()
+        assert g.sigma.isna().all() and g.predicted.isna().all() and g.phase_lag_predicted.isna().all()
+        assert g.numerical_err.isna().all() and g.calibration_sd.isna().all()
+        assert np.isnan(np.stack(g.band.to_numpy())).all()
+        assert (g.dem == 1.0).sum() == 4 and (g.phase_lag == (0.7 if drive == "failed" else 0.4)).all()
+        assert (g.model_label == osc.LABELS[model]).all()
+    units = rows[rows.observable == "response_amplitude"].unit
+    assert (units == "sqrt(g d)").all()  # under an imposed stress the response is the plate's speed
+    # a reason that already says "not predicted" is kept as it is
+    again = _rows(dems[:1], {(failed.label, "local"): "not predicted: the bed is too shallow"},
+                  ngf_note="not predicted: NGF is off")
+    assert set(again.note) == {"not predicted: the bed is too shallow", "not predicted: NGF is off"}
+
+
+def test_a_dem_value_without_a_finite_error_is_not_measurable():
+    drive = _drive("speed-1", 1.0)
+    dem = _dem(drive, {"response_amplitude": (0.5, 0.0, "one bed: its cycles as blocks"),  # zero error
+                       "phase_lag": (-0.6, np.nan, "one bed: its cycles as blocks"),  # no error
+                       "dissipation": (np.nan, 0.5, "spread over 4 beds (std/sqrt(n))")})  # no value
+    rows = _rows([dem], {(drive.label, "local"): _prediction({"response_amplitude": (0.3, 0.01, 0.02)})})
+    local = rows[rows.model == "local"].set_index("observable")
+    for o in ("response_amplitude", "phase_lag", "dissipation"):
+        r = local.loc[o]
+        assert r.verdict == "not measurable" and not r.scored, o
+        assert r.note.startswith("not measurable: no error (fewer than two beds"), o
+        assert np.isnan(r.sigma), o  # even where the model's errors would make (0.5 - 0.3)/0.022 finite
+        assert r.predicted == (0.3 if o == "response_amplitude" else 1.0)
+    for o in ("yielded_depth", "remobilization_strain"):  # 1 +- 0.1 against 1: sigma 0
+        assert local.loc[o, "verdict"] == "consistent" and local.loc[o, "note"] == ""
+        assert local.loc[o, "sigma"] == pytest.approx(0.0, abs=1e-15)
+
+
+def test_an_edge_at_the_deepest_plane_makes_only_the_depth_observables_unmeasurable():
+    censored, inside = _drive("censored", 1.0), _drive("inside", 1.0)
+    dems = [_dem(censored, {}, deepest_edge=PLANES.max()), _dem(inside, {}, deepest_edge=PLANES.max() - 0.1)]
+    predictions = {(d.drive.label, "local"): _prediction({}) for d in dems}
+    rows = _rows(dems, predictions)
+    local = rows[rows.model == "local"].set_index(["drive", "observable"])
+    for o in osc.OBSERVABLES:
+        r = local.loc[("runs/p20/censored", o)]
+        if o in ("yielded_depth", "remobilization_strain"):
+            assert r.verdict == "not measurable" and not r.scored and np.isnan(r.sigma), o
+            assert r.note.startswith("not measurable: at some phase the bed yields down to its deepest plane")
+            assert r.note.endswith("(the edge is censored by the base)")
+        else:
+            assert r.verdict == "consistent" and r.scored and r.note == "", o
+        assert local.loc[("runs/p20/inside", o), "verdict"] == "consistent", o
+
+
+# --- the laws ---------------------------------------------------------------------------------------------------
+
+OMEGA_TS = np.array([0.1, 0.3, 1.0, 3.0, 10.0, 30.0])
+# yielded depth: DEM 1.6 (omega t_s)^-1/2, model 1.5 (omega t_s)^-0.4, each times exp(known offsets); the fifth
+# drive's model does not yield and the sixth's DEM does not: both are left out of the exponent
+Y_DEM = 1.6 * OMEGA_TS ** -0.5 * np.exp([0.03, -0.05, 0.02, 0.04, -0.03, 0.0]) * [1, 1, 1, 1, 1, 0]
+Y_DEM_ERR = np.array([0.02, 0.05, 0.03, 0.08, 0.04, 0.05]) * np.where(Y_DEM > 0, Y_DEM, 1.0)
+Y_MODEL = 1.5 * OMEGA_TS ** -0.4 * np.exp([-0.02, 0.01, 0.03, -0.01, 0.0, 0.02]) * [1, 1, 1, 1, 0, 1]
+Y_NUM = np.array([0.01, 0.02, 0.01, 0.03, 0.01, 0.02]) * Y_MODEL
+Y_CAL = np.array([0.03, 0.02, 0.04, 0.02, 0.03, 0.05]) * Y_MODEL
+# phase lag: DEM 0.05 + 0.1 ln(omega t_s), model 0.105 ln(omega t_s), plus known offsets (lags of both signs)
+L_DEM = 0.05 + 0.1 * np.log(OMEGA_TS) + [0.01, -0.02, 0.015, -0.01, 0.02, -0.015]
+L_DEM_ERR = np.array([0.02, 0.03, 0.015, 0.04, 0.025, 0.03])
+L_MODEL = 0.105 * np.log(OMEGA_TS) + [0.0, 0.01, -0.01, 0.02, 0.0, -0.01]
+L_NUM = np.array([0.005, 0.01, 0.008, 0.012, 0.006, 0.01])
+L_CAL = np.array([0.02, 0.015, 0.02, 0.01, 0.03, 0.02])
+
+
+def _wls(x, y, sd, model_y, model_sd):
+    """The DEM's slope and error by numpy.polyfit (weights 1/sd, unscaled covariance), the model's slope on the same
+    weights by the hat matrix (A^T W A)^-1 A^T W and its error from the model's sds."""
+    (slope, _), cov = np.polyfit(x, y, 1, w=1 / sd, cov="unscaled")
+    a, w = np.column_stack([x, np.ones_like(x)]), np.diag(1 / sd ** 2)
+    hat = np.linalg.solve(a.T @ w @ a, a.T @ w)[0]
+    return slope, np.sqrt(cov[0, 0]), hat @ model_y, np.sqrt(np.sum((hat * model_sd) ** 2))
+
+
+def _law_rows() -> pd.DataFrame:
+    """The scorecard of six speed drives at OMEGA_TS (local predicted; NGF not: its rows are not scored)."""
+    dems, predictions = [], {}
+    for i, w in enumerate(OMEGA_TS):
+        drive = _drive(f"speed-{i}", w)
+        dems.append(_dem(drive, {"yielded_depth": (Y_DEM[i], Y_DEM_ERR[i], "how"),
+                                 "phase_lag": (L_DEM[i], L_DEM_ERR[i], "how")}))
+        predictions[drive.label, "local"] = _prediction({"yielded_depth": (Y_MODEL[i], Y_NUM[i], Y_CAL[i]),
+                                                         "phase_lag": (L_MODEL[i], L_NUM[i], L_CAL[i])})
+    return _rows(dems, predictions)
+
+
+def test_laws_are_weighted_least_squares_slopes_against_an_independent_fit():
+    laws = osc.laws(_law_rows())
+    assert len(laws) == 2 and set(laws.model) == {"local"}  # NGF's rows are not scored: no law
+    laws = laws.set_index("law")
+    x = np.log(OMEGA_TS)
+    k = slice(0, 4)  # the yielded layers of both sides
+    expected = {
+        "yielded_depth_exponent": _wls(x[k], np.log(Y_DEM[k]), Y_DEM_ERR[k] / Y_DEM[k], np.log(Y_MODEL[k]),
+                                       np.hypot(Y_NUM[k], Y_CAL[k]) / Y_MODEL[k]),
+        "phase_lag_slope": _wls(x, L_DEM, L_DEM_ERR, L_MODEL, np.hypot(L_NUM, L_CAL))}
+    for law, (dem, dem_err, pred, pred_err) in expected.items():
+        r = laws.loc[law]
+        assert r.dem == pytest.approx(dem, rel=1e-10) and r.dem_err == pytest.approx(dem_err, rel=1e-10), law
+        assert r.predicted == pytest.approx(pred, rel=1e-10), law
+        assert r.predicted_err == pytest.approx(pred_err, rel=1e-10), law
+        s = (dem - pred) / np.sqrt(dem_err ** 2 + pred_err ** 2)
+        assert r.sigma == pytest.approx(s, rel=1e-10), law
+        np.testing.assert_allclose(r.band, [pred - Z * pred_err, pred + Z * pred_err], rtol=1e-10)
+        assert r.kind == "speed" and r.amplitude == 2.0 and r.model == "local" and r.unit == "1" and r.note == ""
+    y, p = laws.loc["yielded_depth_exponent"], laws.loc["phase_lag_slope"]
+    # the offsets move the fits off the laws they were built on by less than 0.01 and 0.002
+    assert y.dem == pytest.approx(-0.5, abs=0.01) and y.predicted == pytest.approx(-0.4, abs=0.02)
+    assert p.dem == pytest.approx(0.1, abs=0.002) and p.predicted == pytest.approx(0.105, abs=0.005)
+    assert y.sigma < -2 and y.verdict == "disagrees"  # -0.50 against -0.38, errors 0.014 and 0.018
+    assert abs(p.sigma) < 2 and p.verdict == "consistent"
+    assert (y.n_drives, y.window) == (4, "omega t_s in [0.1, 3]")
+    assert (p.n_drives, p.window) == (6, "omega t_s in [0.1, 30]")
+    assert y.quantity == "n in yielded_depth ~ (omega t_s)^n"
+    assert p.quantity == "s in phase_lag = a + s ln(omega t_s) [rad]"
+
+
+def test_a_law_needs_three_measurable_drives():
+    """Three stress drives at omega t_s = 1/2, 2, 8 (ln: -ln 2, ln 2, 3 ln 2): none yields, and the lag is a line
+    of slope -0.05 (the model's -0.08) with constant errors, so the slope's error is sd / sqrt(Sxx), Sxx = 8 ln2^2."""
+    omega_ts = np.array([0.5, 2.0, 8.0])
+    dems, predictions = [], {}
+    for w in omega_ts:
+        drive = _drive(f"stress-{w:g}", w, "stress", 0.45)
+        dems.append(_dem(drive, {"yielded_depth": (0.0, 0.05, "how"),
+                                 "phase_lag": (0.2 - 0.05 * np.log(w), 0.02, "how")}))
+        predictions[drive.label, "local"] = _prediction({"yielded_depth": (0.0, 0.01, 0.01),
+                                                         "phase_lag": (0.1 - 0.08 * np.log(w), 0.006, 0.008)})
+    laws = osc.laws(_rows(dems, predictions)).set_index("law")
+    y, p = laws.loc["yielded_depth_exponent"], laws.loc["phase_lag_slope"]
+    assert y.n_drives == 0 and y.window == "" and y.verdict == "not measurable"
+    assert y.note == "not measurable: 0 measurable drive(s), a slope and its error need 3"
+    assert np.isnan([y.dem, y.dem_err, y.predicted, y.predicted_err, y.sigma]).all() and np.isnan(y.band).all()
+    assert y.kind == "stress" and y.amplitude == 0.45 and y.quantity == "n in yielded_depth ~ (omega t_s)^n"
+    root_sxx = 2 * np.sqrt(2) * np.log(2)
+    assert p.n_drives == 3 and p.window == "omega t_s in [0.5, 8]" and p.note == ""
+    assert p.dem == pytest.approx(-0.05, abs=1e-12) and p.dem_err == pytest.approx(0.02 / root_sxx, rel=1e-12)
+    assert p.predicted == pytest.approx(-0.08, abs=1e-12)
+    assert p.predicted_err == pytest.approx(0.01 / root_sxx, rel=1e-12)  # hypot(0.006, 0.008) = 0.01
+    assert p.sigma == pytest.approx(0.03 / np.hypot(0.02, 0.01) * root_sxx, rel=1e-12)
+    assert p.verdict == "disagrees"  # 2.63
+    # two drives: the lag's law is not measurable either
+    two = osc.laws(_rows(dems[:2], {k: v for k, v in predictions.items() if k[0] != dems[2].drive.label}))
+    two = two.set_index("law").loc["phase_lag_slope"]
+    assert two.n_drives == 2 and two.verdict == "not measurable"
+    # floats, also in a table where no law is measured (no None a report's number formats would choke on)
+    assert np.isnan([two.dem, two.dem_err, two.predicted, two.predicted_err, two.sigma]).all()
+    assert two.note == "not measurable: 2 measurable drive(s), a slope and its error need 3"
+    assert two.window == "omega t_s in [0.5, 2]"
