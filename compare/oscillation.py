@@ -290,7 +290,7 @@ def _difference(observable: str, a: float, b: float) -> float:
     return float(phase.wrap(a - b)) if observable == "phase_lag" else a - b
 
 
-def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model: str, note: str = "") -> dict:
+def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model: str, note: str) -> dict:
     drive = dem.drive
     v, err, how = dem.values[observable]
     p, num, s_cal = pred.values[observable] if pred is not None else (np.nan, np.nan, np.nan)
