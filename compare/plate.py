@@ -146,8 +146,9 @@ def trend(t: np.ndarray, y: np.ndarray) -> dict:
     yb = np.array([b.mean() for b in np.array_split(y, blocks)])
     fit = stats.linregress(tb, yb)
     tail = 2 * stats.norm.sf(TREND_SIGMA)  # two-sided: the same false-alarm rate at any number of blocks
+    exact = float(np.copysign(np.inf, fit.slope)) if fit.slope else 0.0  # no scatter about the line
     return {"slope": float(fit.slope), "stderr": float(fit.stderr), "blocks": blocks,
-            "z": float(fit.slope / fit.stderr) if fit.stderr > 0 else 0.0 if fit.slope == 0 else np.inf,
+            "z": float(fit.slope / fit.stderr) if fit.stderr > 0 else exact,
             "limit": float(stats.t.isf(tail / 2, blocks - 2))}
 
 

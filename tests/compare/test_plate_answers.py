@@ -263,6 +263,13 @@ def test_a_constant_series_has_zero_trend():
     assert tr["slope"] == 0.0 and tr["z"] == 0.0 and plate.no_trend(tr)
 
 
+def test_an_exact_line_is_an_infinite_trend_of_its_own_sign():
+    """Zero scatter about a falling line: z = -inf (a falling record drifts down), beyond any limit."""
+    for sign in (1.0, -1.0):
+        tr = plate.trend(np.arange(40.0), sign * np.arange(40.0))
+        assert tr["z"] == sign * np.inf and not plate.no_trend(tr)
+
+
 def test_a_linear_drift_is_flagged_and_the_same_noise_without_it_is_not():
     """y = 0.01 t + white noise (sigma 1) over 400 samples: the slope of the blocks' means (by hand) is ~0.01 and
     beyond the limit; the noise alone is within it."""
