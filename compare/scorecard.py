@@ -224,7 +224,7 @@ def _final_quarter(series: pd.DataFrame, a: DriveAnalysis) -> float:
     return float(np.mean(np.interp(t[last], series.t, series[a.response])))
 
 
-def _final_quarter_band(band: pd.DataFrame, a: DriveAnalysis) -> tuple[float, float]:
+def _final_quarter_band(band: pd.DataFrame) -> tuple[float, float]:
     """The linearised 95 % band of the free response (t, lo, hi on the DEM's output times) averaged over the
     record's final quarter, as ``_final_quarter`` averages the response."""
     t = band.t.to_numpy()
@@ -298,7 +298,14 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
             value = central.get(obs)
             if value is None or not np.isfinite(value) or not np.isfinite(measured.value):
                 continue
-            if obs == "t90":
+            asymptote = value
+            windowed = obs == f"{a.response}_inf"  # like with like: the model over the DEM's steady window
+            numerical = 0.0
+            if windowed:
+                value = end_value
+                lo, hi = _final_quarter_band(bands[(a.label, model.key)])
+                lo, hi = min(lo, value), max(hi, value)
+            elif obs == "t90":
                 lo, hi, numerical = value - Z95 * t90_sd, value + Z95 * t90_sd, _t90_numerical(pred.series, a)
             else:
                 sampled = np.array([x[obs] for x in samples], dtype=float)
@@ -307,16 +314,9 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
                 if len(sampled):
                     lo, hi = np.percentile(sampled, [2.5, 97.5])
                     lo, hi = min(lo, value), max(hi, value)
-                numerical = 0.0
                 if half >= 2 and len(sampled) > half and abs(hi - lo) > 0:
                     lo2, hi2 = np.percentile(sampled[:half], [2.5, 97.5])
                     edges.append(max(abs(lo2 - lo), abs(hi2 - hi)) / abs(hi - lo))
-            asymptote = value
-            windowed = obs == f"{a.response}_inf"  # like with like: the model over the DEM's steady window
-            if windowed:
-                value = end_value
-                lo, hi = _final_quarter_band(bands[(a.label, model.key)], a)
-                lo, hi = min(lo, value), max(hi, value)
             band_sd = (hi - lo) / (2 * Z95)
             combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
             note = ((_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
