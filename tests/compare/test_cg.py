@@ -271,3 +271,104 @@ def test_missing_metadata_is_a_clear_error(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         DriveFolder(d, dimension=2, dt=0.01)  # a whole dump reads without a warning
+
+
+# --- the derived fields and the bands, against hand formulas --------------------------------------------------
+
+def _additive(y):
+    """Additive fields with distinct, y-dependent values (every component different), one point without material
+    and one without pressure."""
+    k = np.arange(len(y), dtype=float)
+    f = {name: 0.1 * (i + 1) * (1 + 0.05 * k) for i, name in enumerate(ADDITIVE)}
+    f["rho"][0] = 0.0
+    f["sigma_k_yy"][1], f["sigma_c_yy"][1] = 0.0, -0.05  # p < 0 at y[1]
+    return f
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_every_derived_field_is_its_formula(dimension):
+    """u = j/rho (NaN without material), T = tr sigma_k/(D rho), sigma = sigma_k + sigma_c (sigma_yx with the contact
+    part's yx), p = sigma_yy, p_mean = tr sigma / D (sigma_zz only in 3D), tau = -sigma_xy, mu = tau/p (NaN where
+    p <= 0), dudy by centred differences, gamma_dot_paper = |dudy|/2, I = gamma_dot d/sqrt(p/rho_p) in each
+    convention; no warning where rho or p vanish."""
+    from granstokes.compare.profiles import derive
+    y = np.array([0.0, 0.3, 0.7, 1.0, 1.6])
+    f = _additive(y)
+    d, rho_p = 1.3, 2.5
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = derive(f, y, dimension, d=d, rho_p=rho_p)
+    rho = f["rho"]
+    ok = slice(1, None)
+    for a in "xyz":
+        assert np.isnan(out[f"u_{a}"][0]) and out[f"u_{a}"][ok] == pytest.approx(f[f"j_{a}"][ok] / rho[ok], rel=1e-14)
+    trace = f["sigma_k_xx"] + f["sigma_k_yy"] + f["sigma_k_zz"]
+    assert out["T"][ok] == pytest.approx(trace[ok] / (dimension * rho[ok]), rel=1e-14)
+    s = {ab: f[f"sigma_k_{ab}"] + f[f"sigma_c_{ab}"] for ab in ("xx", "yy", "zz", "xy")}
+    assert out["sigma_yx"] == pytest.approx(f["sigma_k_xy"] + f["sigma_c_yx"], rel=1e-14)
+    assert out["p"] == pytest.approx(s["yy"], rel=1e-14)
+    zz = s["zz"] if dimension == 3 else 0.0
+    assert out["p_mean"] == pytest.approx((s["xx"] + s["yy"] + zz) / dimension, rel=1e-14)
+    assert out["tau"] == pytest.approx(-s["xy"], rel=1e-14)
+    assert np.isnan(out["mu"][1]) and np.isnan(out["I_dem"][1])
+    good = np.arange(len(y)) != 1
+    assert out["mu"][good] == pytest.approx(-s["xy"][good] / s["yy"][good], rel=1e-14)
+    u = out["u_x"]
+    h1, h2 = y[2] - y[1], y[3] - y[2]  # the second-order difference on an uneven grid, by hand at y[2]
+    centred = (h1 ** 2 * u[3] + (h2 ** 2 - h1 ** 2) * u[2] - h2 ** 2 * u[1]) / (h1 * h2 * (h1 + h2))
+    assert out["dudy"][2] == pytest.approx(centred, rel=1e-12)
+    assert out["gamma_dot_paper"] == pytest.approx(np.abs(out["dudy"]) / 2, rel=1e-14, nan_ok=True)
+    p = s["yy"][2]
+    assert out["I_dem"][2] == pytest.approx(abs(centred) * d / np.sqrt(p / rho_p), rel=1e-12)
+    assert out["I_paper"][2] == pytest.approx(abs(centred) * d / np.sqrt(p / rho_p) / 2, rel=1e-12)
+
+
+def test_the_band_is_student_t_over_the_samples_each_point_has():
+    """Band half-width t_0.975(m - 1) std(ddof=1)/sqrt(m), m the samples that are not NaN at that point; one sample
+    at a point (or one in all): no band, and no warning."""
+    from granstokes.compare.profiles import FIELDS, _band
+    from scipy import stats
+    rng = np.random.default_rng(5)
+    samples = {k: rng.normal(size=(4, 3)) for k in FIELDS}
+    samples["phi"][3, 1] = np.nan               # 3 samples at y[1]
+    samples["phi"][1:, 2] = np.nan              # 1 sample at y[2]
+    central = {k: np.nanmean(samples[k], axis=0) for k in FIELDS}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = _band(central, samples, 4, "seeds")
+        alone = _band(central, {k: v[:1] for k, v in samples.items()}, 1, "frames")
+    for j, m in ((0, 4), (1, 3)):
+        column = samples["phi"][:, j][~np.isnan(samples["phi"][:, j])]
+        half = stats.t.ppf(0.975, m - 1) * column.std(ddof=1) / np.sqrt(m)
+        assert out["phi_hi"][j] - central["phi"][j] == pytest.approx(half, rel=1e-12)
+        assert central["phi"][j] - out["phi_lo"][j] == pytest.approx(half, rel=1e-12)
+    assert np.isnan(out["phi_lo"][2]) and np.isnan(out["phi_hi"][2])
+    assert np.isnan(alone["rho_lo"]).all() and (out["n"], out["band_over"], alone["n"]) == (4, "seeds", 1)
+
+
+def test_a_2d_frame_ignores_its_z_extent_and_a_box_need_not_start_at_zero():
+    """2D: A = L_x (per unit thickness) whatever the box's z bounds; the area is the box's width, not its upper bound;
+    j_y is the grains' y momentum."""
+    x = lattice(200, spacing=0.1, per_layer=20, lx=10.0)
+    v = np.c_[np.zeros(len(x)), np.full(len(x), 0.25), np.full(len(x), -0.6)]
+    s = CGSettings("lucy", 0.5)
+    grid = Grid(-3.0, 23.0, s.h)
+    base = coarse_grain(frame(x, v, radius=0.05), None, s, grid, dimension=2)
+    shifted = frame(x + [5.0, 0.0, 0.0], v, radius=0.05, lz=3.5)
+    shifted.box[0] += 5.0
+    moved = coarse_grain(shifted, None, s, grid, dimension=2)
+    inner = (grid.y > 3) & (grid.y < 17)
+    phi = 20 * np.pi * 0.05 ** 2 / (10.0 * 0.1)
+    assert moved["phi"][inner] == pytest.approx(phi, rel=1e-5) and base["phi"][inner] == pytest.approx(phi, rel=1e-5)
+    assert moved["j_y"][inner] == pytest.approx(0.25 * moved["rho"][inner], rel=1e-12)
+    assert moved["j_z"][inner] == pytest.approx(-0.6 * moved["rho"][inner], rel=1e-12)
+
+
+def test_a_grid_that_does_not_cover_the_grains_height_is_refused_and_the_dimension_named():
+    x = np.array([[1.0, 9.8, 0.0], [2.0, 1.0, 0.0]])  # the highest grain at y = 9.8, both at z = 0
+    s = CGSettings("lucy", 0.5)
+    with pytest.raises(ValueError, match=r"does not cover the grains' y range \[1, 9\.8\]"):
+        coarse_grain(frame(x), None, s, Grid(-2.0, 10.0, s.h), dimension=2)
+    with pytest.raises(ValueError) as err:
+        coarse_grain(frame(x), None, s, Grid(-2.0, 12.0, s.h), dimension=4)
+    assert str(err.value) == "dimension must be 2 or 3, got 4"
