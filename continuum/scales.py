@@ -100,8 +100,7 @@ class Scales:
         """Scales of an imposed dimensional wall speed u_w: mu_w is the steady mu_w^inf, the root of
         U(mu_w) u~_w^inf(mu_w) = u_w (monotone in mu_w; paper section on imposed wall velocity)."""
         require(finite(u_w) and u_w > 0, "u_w", "a finite number > 0", u_w)
-        require(finite(p_w) and p_w > 0, "p_w", "a finite number > 0", p_w)
-        fr = material.friction
+        fr = material.friction  # p_w is checked by the constructor, which the residual calls first
 
         def residual(mu_w):  # u~_w^inf(mu_w) - u_w/U(mu_w): increasing in mu_w, one root
             return steady_wall_speed(fr, mu_w) - u_w / cls(material, p_w, mu_w).U
@@ -110,7 +109,7 @@ class Scales:
         require(residual(lo) < 0 < residual(hi), "u_w", "a speed reachable with mu_s < mu_w < mu_d", u_w)
         from scipy.optimize import brentq  # imported here: it would cost every CLI start-up ~0.3 s
 
-        mu_w = brentq(residual, lo, hi, xtol=1e-15, rtol=1e-15)
+        mu_w = brentq(residual, lo, hi, xtol=1e-15)  # and brentq's default rtol, 4 eps
         return cls(material, p_w, mu_w)
 
     # --- derived scales -------------------------------------------------------------------------

@@ -83,6 +83,8 @@ def test_a_derivative_that_is_not_finite_makes_the_sd_nan():
     sens = band.Sensitivity(("x", "y"), (0.01, 0.01), np.eye(2), (1.0, np.nan))
     assert np.isnan(sens.sd_of(lambda j: sens.shifted[j], 1.0))
     assert sens.sd([3.0, 4.0]) == pytest.approx(5.0)
+    correlated = band.Sensitivity(("x", "y"), (0.01, 0.01), np.array([[1.0, 0.5], [0.5, 1.0]]), (1.0, np.inf))
+    assert np.isnan(correlated.sd_of(lambda j: correlated.shifted[j], 1.0))  # an infinite one too, not inf
 
 
 def test_a_phase_s_derivative_is_taken_wrapped_when_asked():
