@@ -57,6 +57,7 @@ def _steps(compiled, pb, numerics, method):
     return np.array(rows), stats
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["sdirk4", "tr-bdf2"])
 def test_compiled_dirk_takes_the_python_steps(stress_state, method):
     """The loop compiled takes the steps of the loop run as Python (the implicit-first SDIRK4 and the explicit-first

@@ -197,6 +197,7 @@ def quick_stress():
     return tight, run(VELOCITY_NUMERICS)
 
 
+@pytest.mark.slow
 def test_velocity_form_mesh_order_is_two(quick_stress):
     (a, b, c), _ = quick_stress
     order = np.log2(np.abs(b - a) / np.abs(c - b))
@@ -225,6 +226,7 @@ QUICK_U_W = QUICK_DRIVES["speed"].load.u_w
 RESOLVED_TIMES = [1.0, 3.0]
 
 
+@pytest.mark.slow
 def test_imposed_speed_mu_w_is_second_order_once_the_wall_jump_is_resolved():
     """With the wall half-cell's mass on node 1, mu_w converges at second order after the start's jump
     (measured orders 1.62 at t = 1 and 1.80 at t = 3 from 200/400/800 cells, the residue of the start's

@@ -230,6 +230,7 @@ def test_the_smoke_study_through_a_scheduler_killed_and_resumed(tmp_path, capsys
     assert (out / "index.html").exists() and (out / "runs" / "p10" / "run.json").exists()
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_a_study_quietly_and_says_how_to_continue(tmp_path):
     """Ctrl-C (SIGINT to the study's process group, LAMMPS included) while its beds run on the local cluster:
     exit 130, study.json interrupted, no traceback or Dask warning on stderr, and the last line is the command
