@@ -181,3 +181,4 @@ def test_a_law_undefined_at_a_shifted_parameter_has_no_band_and_says_so():
         "local": Sensitivity(("a",), (0.01,), np.array([[0.04]]), (still,))})
     pre = row(laws([dc], resamples=20), "delta_growth_prefactor")
     assert pre.verdict == "not predicted" and "calibration band is unknown" in pre.note and np.isnan(pre.sigma)
+
