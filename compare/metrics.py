@@ -10,7 +10,7 @@ from .analysis import BLOCKS
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
 from .drive import TRANSITS_BEFORE_COMPARISON
-from .laws import SEED_RESAMPLES
+from .laws import BOOTSTRAP_FEW_SEEDS, SEED_RESAMPLES
 from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_WINDOW, TREND_SIGMA
 from .rows import Z95, critical
 from .scorecard import OBSERVABLES, T90_WINDOW, bulk, creep_length
@@ -80,8 +80,8 @@ DEFINITIONS = {
     "wall_exclusion": ("d", f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base"),
     "laws": ("-", "the paper's predictions, one row per law x model (compare/laws.py): the same estimator on the DEM's "
                   "seed-mean series and on the model's output over the same window; dem_err the spread over "
-                  f"{SEED_RESAMPLES} bootstrap resamples of each drive's seeds (dof n_seeds - 1, a fit across drives "
-                  "n_drives - 2); band predicted "
+                  f"{SEED_RESAMPLES} bootstrap resamples of each drive's seeds (times sqrt(n/(n - 1)) below "
+                  f"{BOOTSTRAP_FEW_SEEDS} seeds; dof n - 1, a fit across drives n_drives - 2); band predicted "
                   "-+ 1.96 s_cal, s_cal "
                   "the calibration's replicates propagated linearly (the law re-estimated on predictions re-solved "
                   "with each parameter shifted); sigma = (dem - predicted) / sqrt(dem_err^2 + s_cal^2); "
