@@ -10,9 +10,9 @@ from .analysis import BLOCKS
 from .calibrate import WALL_EXCLUSION
 from .comparison import Comparison, DriveComparison, early_exponents
 from .drive import TRANSITS_BEFORE_COMPARISON
-from .laws import SEED_RESAMPLES
+from .laws import BOOTSTRAP_FEW_SEEDS, SEED_RESAMPLES
 from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_WINDOW, TREND_SIGMA
-from .rows import SIGMA_CONSISTENT
+from .rows import Z95, critical
 from .scorecard import OBSERVABLES, T90_WINDOW, bulk, creep_length
 
 #: name -> (unit, definition)
@@ -34,8 +34,12 @@ DEFINITIONS = {
     "creep_length": ("d", "e-folding length of u below the calibrated delta_s, from a least-squares fit of ln u "
                           f"down to {WALL_EXCLUSION:g} d above the base; local mu(I) is rigid there (0)"),
     "sigma": ("1", "(DEM - predicted) / sqrt(dem_err^2 + calibration_sd^2 + numerical_err^2), calibration_sd = "
-                   "band width / 3.92; "
-                   f"'consistent' when |sigma| <= {SIGMA_CONSISTENT:g}"),
+                   "band width / 3.92; 'consistent' when |sigma| <= t_0.975(dof), Student-t's 97.5 % quantile at the "
+                   f"row's dof ({Z95:.3g} at infinite dof, {critical(3):.3g} at 3, {critical(2):.3g} at 2)"),
+    "dof": ("1", "degrees of freedom of a row's combined error (Welch-Satterthwaite): the DEM error's (seeds - 1, "
+                 "blocks - 1, or infinite for a resolution) with the band's and the numerical error's infinite; "
+                 "the threshold of the row's verdict is t_0.975(dof); in metrics.json an infinite dof is null (JSON "
+                 "has no infinity; a scored row's dof is never undefined)"),
     "scored": ("-", "False where the scene cannot support the row (the flow reaches the base: the layer rows, and "
                     "every row of the half-space model; a model not steady within the record: its steady rows); "
                     "'note' says why. Only scored rows with blind = true count for a model"),
@@ -76,7 +80,9 @@ DEFINITIONS = {
     "wall_exclusion": ("d", f"calibration and bulk averages exclude {WALL_EXCLUSION:g} d next to plate and base"),
     "laws": ("-", "the paper's predictions, one row per law x model (compare/laws.py): the same estimator on the DEM's "
                   "seed-mean series and on the model's output over the same window; dem_err the spread over "
-                  f"{SEED_RESAMPLES} bootstrap resamples of each drive's seeds; band predicted -+ 1.96 s_cal, s_cal "
+                  f"{SEED_RESAMPLES} bootstrap resamples of each drive's seeds (times sqrt(n/(n - 1)) below "
+                  f"{BOOTSTRAP_FEW_SEEDS} seeds; dof n - 1, a fit across drives n_drives - 2); band predicted "
+                  "-+ 1.96 s_cal, s_cal "
                   "the calibration's replicates propagated linearly (the law re-estimated on predictions re-solved "
                   "with each parameter shifted); sigma = (dem - predicted) / sqrt(dem_err^2 + s_cal^2); "
                   "'not measurable' or 'not predicted' with the reason where the data cannot decide"),
@@ -99,9 +105,9 @@ def drive_metrics(dc: DriveComparison) -> dict:
         "grains_x_steps": spec.cost, "t_steady": g.steady["t_steady"], "t_window": g.t_window,
         "pressure_slope": slope.slope, "pressure_slope_err": slope.stderr,
         "u_w_inf": {"dem": g.steady["u_w"]["value"], "dem_err": g.steady["u_w"]["stderr"],
-                    "dem_how": g.steady["u_w"]["method"]},
+                    "dem_dof": g.steady["u_w"]["dof"], "dem_how": g.steady["u_w"]["method"]},
         "mu_w_inf": {"dem": g.steady["mu_w"]["value"], "dem_err": g.steady["mu_w"]["stderr"],
-                     "dem_how": g.steady["mu_w"]["method"]},
+                     "dem_dof": g.steady["mu_w"]["dof"], "dem_how": g.steady["mu_w"]["method"]},
         "slip": g.slip["value"], "slip_err": g.slip["stderr"], "slip_how": g.slip["method"],
         "slip_per_seed": g.slip["per_seed"],
         "tau_bulk": {"cg": g.bulk_tau["cg"]["value"], "cg_err": g.bulk_tau["cg"]["stderr"],

@@ -15,7 +15,9 @@ Observables of a drive (``OBSERVABLES``; the imposed wall value is A sin(omega t
   plate's stress on the bed: the loop's area in the (x_w, tau_w) plane);
 * ``remobilization_strain`` [1]: the plate's displacement from a reversal of its velocity until the response
   regains RESPONSE_FRACTION of its half-cycle peak, over the DEM's yielded depth (both sides: a displacement).
-DEM values are the mean over the beds with their spread / sqrt(n) (one bed: the cycles as blocks).  A model's band
+DEM values are the mean over the beds with their spread / sqrt(n), n - 1 degrees of freedom (one bed: the cycles as
+blocks, cycles - 1); a row's dof is its combined error's (compare.rows.effective_dof: the model's errors have
+infinitely many), and its verdict the Student-t test at that dof (compare.rows.verdict).  A model's band
 is its numerical error (Richardson, n_cells/2) and the calibration's, sqrt(J C J^T) with J from solves at each
 calibrated parameter shifted (compare.band) and C the calibration's replicates' covariance (NGF: A's variance too).
 Conventions: DEM units (d, rho_p, g); mu > 0 where the bed resists a plate moving in +x.
@@ -36,13 +38,14 @@ from granstokes.continuum.rules import YieldRule
 from granstokes.continuum.scales import Material
 from granstokes.continuum.scene import BedScene, SceneNumerics
 from granstokes.dem import layout
+from scipy import stats
 
 from granstokes.lib.validate import require
 
 from . import phase
 from .band import Sensitivity
 from .drive import DriveSpec, drive_specs
-from .rows import band, law_row, score_row, sigma
+from .rows import band, effective_dof, law_row, score_row, sigma
 
 OBSERVABLES = {"response_amplitude": None, "phase_lag": "rad", "yielded_depth": "d",
                "dissipation": "rho_p g d^2 per plate area", "remobilization_strain": "1"}
@@ -60,6 +63,8 @@ LABELS = {"local": "local mu(I), velocity form on the DEM scene", "ngf": "nonloc
 PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
 #: beds whose spread is the DEM's error (one bed: its cycles as blocks)
 MIN_BEDS = 2
+#: a law fitted as a line is "not a line" when the DEM's chi-square about it is this improbable (lack of fit)
+LACK_OF_FIT_P = 0.01
 
 
 def unit(drive: DriveSpec, observable: str) -> str:
@@ -109,8 +114,9 @@ def dem_record(folder: Path, drive: DriveSpec) -> Record:
 
 
 def observables(rec: Record, drive: DriveSpec, mu_s: float, depth_scale: float | None = None) -> dict:
-    """Every observable of one record (value, stderr over its cycles), the phase-averaged zones and the plate's
-    loop; ``depth_scale``: the remobilization strain's length (default: this record's yielded depth)."""
+    """Every observable of one record (value, stderr over its cycles or half-cycles and its degrees of freedom,
+    blocks - 1), the phase-averaged zones and the plate's loop; ``depth_scale``: the remobilization strain's length
+    (default: this record's yielded depth)."""
     p, w = rec.plate, drive.load.omega
     h = phase.harmonic(p.t, p[drive.response], w, SKIP, rec.interval)
     grid = phase.phase_profile(rec.profiles, w, "mu", skip=SKIP)
@@ -123,10 +129,11 @@ def observables(rec: Record, drive: DriveSpec, mu_s: float, depth_scale: float |
     loop = phase.phase_average(p.t, p.u_w, w, skip=SKIP).assign(
         tau_w=phase.phase_average(p.t, p.tau_w, w, skip=SKIP)["mean"])
     velocity = phase.phase_profile(rec.velocity, w, "u", skip=SKIP)["mean"]
-    return {"values": {"response_amplitude": (h.amplitude, h.amplitude_err),
-                       "phase_lag": (phase.phase_lag(h), h.phase_err),
-                       "yielded_depth": (edge, np.nan), "dissipation": (work["value"], work["stderr"]),
-                       "remobilization_strain": (strain["value"], strain["stderr"])},
+    return {"values": {"response_amplitude": (h.amplitude, h.amplitude_err, h.n_cycles - 1),
+                       "phase_lag": (phase.phase_lag(h), h.phase_err, h.n_cycles - 1),
+                       "yielded_depth": (edge, np.nan, np.nan),
+                       "dissipation": (work["value"], work["stderr"], len(work["values"]) - 1),
+                       "remobilization_strain": (strain["value"], strain["stderr"], len(strain["values"]) - 1)},
             "zones": grid["mean"], "yielded": pd.Series(yielded, index=grid["mean"].index), "loop": loop,
             "velocity": velocity,
             "n_cycles": h.n_cycles}
@@ -135,7 +142,7 @@ def observables(rec: Record, drive: DriveSpec, mu_s: float, depth_scale: float |
 @dataclass(frozen=True, eq=False)
 class DemOscillation:
     """A drive's DEM side: its beds' records, per observable the beds' mean and error (``values``: name -> (value,
-    err, how)), the beds' zones averaged, the yielded depth over the phase, the loop, the phase-averaged velocity
+    err, how, dof)), the beds' zones averaged, the yielded depth over the phase, the loop, the phase-averaged velocity
     profiles (mean over the beds and its error, their spread / sqrt(n)), the slip (``_slip``, mean over the beds);
     the periodic-state check per bed."""
 
@@ -161,10 +168,12 @@ def analyse_dem(drive: DriveSpec, records: list[Record], mu_s: float) -> DemOsci
     for name in OBSERVABLES:
         v = np.array([o["values"][name][0] for o in per], dtype=float)
         if len(v) >= MIN_BEDS:
-            values[name] = (float(np.nanmean(v)), float(np.nanstd(v, ddof=1) / np.sqrt(np.isfinite(v).sum())),
-                            f"spread over {len(v)} beds (std/sqrt(n))")
+            n = int(np.isfinite(v).sum())
+            values[name] = (float(np.nanmean(v)), float(np.nanstd(v, ddof=1) / np.sqrt(n)),
+                            f"spread over {len(v)} beds (std/sqrt(n))", n - 1)
         else:
-            values[name] = (float(v[0]), float(per[0]["values"][name][1]), "one bed: its cycles as blocks")
+            _, err, dof = per[0]["values"][name]
+            values[name] = (float(v[0]), float(err), "one bed: its cycles as blocks", dof)
     zones = sum(_on_depths(o["zones"], per[0]["zones"].columns) for o in per) / len(per)
     yielded = sum(o["yielded"] for o in per) / len(per)
     loop = sum(o["loop"][["phase", "mean", "tau_w"]] for o in per) / len(per)
@@ -292,10 +301,10 @@ def _difference(observable: str, a: float, b: float) -> float:
 
 def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model: str, note: str) -> dict:
     drive = dem.drive
-    v, err, how = dem.values[observable]
+    v, err, how, dof = dem.values[observable]
     p, num, s_cal = pred.values[observable] if pred is not None else (np.nan, np.nan, np.nan)
     if pred is not None:
-        note = _unmeasurable(dem, observable)
+        note = _unmeasurable(dem, observable) or _unpredicted(p, num, s_cal)
     elif not note.startswith("not predicted"):
         note = f"not predicted: {note}"
     scored = not note
@@ -303,18 +312,29 @@ def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model
         drive=drive.label, observable=observable, unit=unit(drive, observable), dem=v, dem_err=err, dem_how=how,
         model=model, model_label=LABELS[model], predicted=float(p), band=band(p, float(np.hypot(num, s_cal))),
         numerical_err=num, calibration_sd=s_cal, sigma=sigma(_difference(observable, v, p), err, num, s_cal)
-        if scored else np.nan, note=note, blind=True, kind=drive.load.kind, omega=drive.load.omega,
+        if scored else np.nan, dof=effective_dof((err, num, s_cal), (dof, np.inf, np.inf)), note=note, blind=True,
+        kind=drive.load.kind, omega=drive.load.omega,
         omega_ts=drive.omega_ts, amplitude=drive.load.amplitude, phase_lag=dem.values["phase_lag"][0],
         phase_lag_predicted=pred.values["phase_lag"][0] if pred is not None else np.nan)
 
 
 def _unmeasurable(dem: DemOscillation, observable: str) -> str:
-    v, err, _ = dem.values[observable]
+    v, err, *_ = dem.values[observable]
     if not (np.isfinite(v) and np.isfinite(err) and err > 0):
         return "not measurable: no error (fewer than two beds or whole cycles after the start-up)"
     if observable in ("yielded_depth", "remobilization_strain") and np.nanmax(dem.yielded) >= dem.zones.columns.max():
         return ("not measurable: at some phase the bed yields down to its deepest plane (the edge is censored by the "
                 "base)")
+    return ""
+
+
+def _unpredicted(predicted: float, numerical: float, calibration_sd: float) -> str:
+    """Why a model's value cannot be scored, or "": it gives none, or its error is undefined (a sigma of NaN would
+    otherwise be counted as a disagreement)."""
+    if not np.isfinite(predicted):
+        return "not predicted: the model's solution gives no value of this observable"
+    if not (np.isfinite(numerical) and np.isfinite(calibration_sd)):
+        return "not predicted: the model's numerical error or calibration band is undefined"
     return ""
 
 
@@ -333,7 +353,17 @@ def laws(rows: pd.DataFrame) -> pd.DataFrame:
     """How the yielded depth and the phase lag scale with omega, per drive kind, amplitude and model: n in
     yielded_depth ~ (omega t_s)^n and s in phase_lag = a + s ln(omega t_s), weighted least squares with the DEM's
     errors (the model's slope on the same weights, its error from the per-drive bands taken as independent);
-    drives not measurable are left out."""
+    drives not measurable are left out.
+
+    Lack of fit: chi2, the DEM's weighted squared residuals about its line, has n - 2 degrees of freedom over n
+    drives; the row quotes chi2_dof = chi2/(n - 2).  When chi2.sf(chi2, n - 2) < LACK_OF_FIT_P the DEM is not on a
+    line (a step, a bend) and no slope is quoted: the row is "not measurable: not a line" with chi2/dof and p.
+    Otherwise, when chi2_dof > 1 the scatter about the line exceeds the errors and the DEM slope's error is scaled by
+    sqrt(chi2_dof).  The slope has n - 2 degrees of freedom (the row's dof combines them with the model's error,
+    which has infinitely many).  The weights come from few beds (the per-bed spread of 3 beds has 2 degrees of
+    freedom): each weight is itself uncertain, so chi2 is heavier-tailed than a chi-square and the test flags a
+    true line more often than LACK_OF_FIT_P (five drives of three beds: 15 % of the time, simulated; there the 1 %
+    quantile of chi2_dof is about 18, not 3.8); a chi2_dof in the hundreds is a step, not noise in the weights."""
     out = []
     for (kind, amp, model), g in rows[rows.scored].groupby(["kind", "amplitude", "model"]):
         for law, obs, fx, fy in (("yielded_depth_exponent", "yielded_depth", np.log, np.log),
@@ -344,10 +374,10 @@ def laws(rows: pd.DataFrame) -> pd.DataFrame:
                     "window": f"omega t_s in [{s.omega_ts.min():.3g}, {s.omega_ts.max():.3g}]" if len(s) else "",
                     "quantity": "n in yielded_depth ~ (omega t_s)^n" if obs == "yielded_depth"
                     else "s in phase_lag = a + s ln(omega t_s) [rad]"}
+            unfit = {"dem": np.nan, "dem_err": np.nan, "predicted": np.nan, "predicted_err": np.nan, "sigma": np.nan}
             if len(s) < 3:
-                out.append(law_row(**base, dem=np.nan, dem_err=np.nan, predicted=np.nan, predicted_err=np.nan,
-                                   sigma=np.nan, note=f"not measurable: {len(s)} measurable drive(s), a slope and "
-                                                      "its error need 3"))
+                out.append(law_row(**base, **unfit, dof=np.nan, chi2_dof=np.nan,
+                                   note=f"not measurable: {len(s)} measurable drive(s), a slope and its error need 3"))
                 continue
             x = fx(s.omega_ts.to_numpy())
             scale = s.dem.to_numpy() if obs == "yielded_depth" else 1.0
@@ -355,10 +385,20 @@ def laws(rows: pd.DataFrame) -> pd.DataFrame:
             model_scale = s.predicted.to_numpy() if obs == "yielded_depth" else 1.0
             model_sd = np.hypot(s.numerical_err, s.calibration_sd).to_numpy() / model_scale
             w = 1 / dem_sd ** 2
-            dem_slope, dem_err = _weighted_slope(x, fy(s.dem.to_numpy()), w, dem_sd)
+            y = fy(s.dem.to_numpy())
+            dem_slope, dem_err = _weighted_slope(x, y, w, dem_sd)
+            dof = len(s) - 2
+            chi2 = _chi2(x, y, w, dem_slope)
+            p = float(stats.chi2.sf(chi2, dof))
+            if p < LACK_OF_FIT_P:
+                out.append(law_row(**base, **unfit, dof=dof, chi2_dof=chi2 / dof,
+                                   note=f"not measurable: not a line (chi2/dof = {chi2 / dof:.3g}, p = {p:.2g})"))
+                continue
+            dem_err *= np.sqrt(max(chi2 / dof, 1.0))
             pred_slope, pred_err = _weighted_slope(x, fy(s.predicted.to_numpy()), w, model_sd)
             out.append(law_row(**base, dem=dem_slope, dem_err=dem_err, predicted=pred_slope, predicted_err=pred_err,
-                               sigma=sigma(dem_slope - pred_slope, dem_err, pred_err), note=""))
+                               sigma=sigma(dem_slope - pred_slope, dem_err, pred_err),
+                               dof=effective_dof((dem_err, pred_err), (dof, np.inf)), chi2_dof=chi2 / dof, note=""))
     return pd.DataFrame(out)
 
 
@@ -367,6 +407,13 @@ def _weighted_slope(x, y, w, sd) -> tuple[float, float]:
     xm = np.sum(w * x) / np.sum(w)
     c = w * (x - xm) / np.sum(w * (x - xm) ** 2)  # slope = sum c y
     return float(np.sum(c * y)), float(np.sqrt(np.sum((c * sd) ** 2)))
+
+
+def _chi2(x, y, w, slope: float) -> float:
+    """The weighted squared residuals sum w r^2 about the weighted least-squares line of ``slope`` (through the
+    weighted means)."""
+    xm, ym = np.sum(w * x) / np.sum(w), np.sum(w * y) / np.sum(w)
+    return float(np.sum(w * (y - ym - slope * (x - xm)) ** 2))
 
 
 @dataclass(frozen=True, eq=False)

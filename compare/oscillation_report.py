@@ -14,7 +14,6 @@ import numpy as np  # noqa: E402
 from .experiment import CSV_FLOAT, FigureFile, table  # noqa: E402
 from .oscillation import LABELS, RESPONSE_FRACTION, SKIP, OscillationComparison, OscPrediction  # noqa: E402
 from .report import fmt, fmt_band, slug  # noqa: E402
-from .rows import SIGMA_CONSISTENT  # noqa: E402
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, plain_log, suptitle  # noqa: E402
 
 DEFINITIONS = {
@@ -28,7 +27,9 @@ DEFINITIONS = {
     "remobilization_strain": ("1", f"the plate's displacement from a reversal until the response regains "
                                    f"{RESPONSE_FRACTION:g} of its half-cycle peak, over the DEM's yielded depth"),
     "sigma": ("1", "(DEM - predicted)/sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2) (phase differences "
-                   "wrapped); consistent when |sigma| <= " f"{SIGMA_CONSISTENT:g}"),
+                   "wrapped); consistent when |sigma| <= t_0.975(dof), Student-t's 97.5 % quantile at the "
+                   "Welch-Satterthwaite degrees of freedom of the combined error (column dof: beds - 1 for the DEM's "
+                   "error, a law's slope n_drives - 2)"),
     "cycles": ("-", f"estimates on the whole cycles after the first {SKIP} (the start-up); DEM errors: the beds' "
                     "spread"),
 }
@@ -84,7 +85,7 @@ def verdict_parts(c: OscillationComparison) -> list[str]:
         parts.append(f"{LABELS[m]}: {per}.")
     h = r[(r.observable == "remobilization_strain") & r.scored & (r.model == "local")]
     if len(h):
-        shows = h[h.sigma > 2]
+        shows = h[(h.verdict == "disagrees") & (h.sigma > 0)]
         parts.append(f"History: after a reversal the DEM needs a strain of {h.dem.min():.2g} to {h.dem.max():.2g} to "
                      f"remobilize, local mu(I) {h.predicted.min():.2g} to {h.predicted.max():.2g}; the DEM's is larger "
                      f"beyond its error in {len(shows)} of {len(h)} drives (sigma up to {h.sigma.max():.1f}).")

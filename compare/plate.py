@@ -9,7 +9,10 @@ Errors.  A window's value is a function of the window means of one or more serie
 the ratio of means <tau_w>/<p>, never the mean of the ratios, which is biased when p fluctuates).  Its
 standard error comes from blocks longer than the series' integrated autocorrelation time
 (``block_estimate``); over independent beds (``pooled``) it is the spread of the per-bed values when
-there are at least MIN_SEEDS_SPREAD of them, else the per-bed block errors combined.
+there are at least MIN_SEEDS_SPREAD of them, else the per-bed block errors combined.  Every error carries its
+degrees of freedom (``dof``, for compare.rows' Student-t verdict): blocks - 1 for a block error, n_seeds - 1 for a
+spread over seeds, the Welch-Satterthwaite combination (compare.rows.effective_dof) of the per-bed block errors',
+blocks - 2 for a trend's slope and points - 2 for a power law's exponent.
 """
 from __future__ import annotations
 
@@ -22,6 +25,8 @@ from granstokes.dem.layout import PLATE_CSV
 from scipy import stats
 
 from granstokes.lib.statistics import autocorrelation_time
+
+from .rows import effective_dof
 
 #: steady-state criterion (stated in every report): the final quarter has no trend (its slope, fitted to the
 #: means of blocks longer than the correlation time, within the Student-t quantile of the blocks' degrees of
@@ -77,7 +82,8 @@ class PlateRecord:
 def block_estimate(series: dict, f=None) -> dict:
     """``f`` (default: the identity of the single series) of the series' means, with its standard error
     from blocks of at least BLOCK_TAUS autocorrelation times (the longest of the series'): the spread of
-    f over the blocks' means / sqrt(blocks).  Series: equal-length arrays sampled at equal steps."""
+    f over the blocks' means / sqrt(blocks), with blocks - 1 degrees of freedom.  Series: equal-length arrays
+    sampled at equal steps."""
     f = f or (lambda m: next(iter(m.values())))
     arrays = {k: np.asarray(v, dtype=float) for k, v in series.items()}
     n = len(next(iter(arrays.values())))
@@ -91,21 +97,26 @@ def block_estimate(series: dict, f=None) -> dict:
     enough = n // length >= MIN_BLOCKS
     method = (f"{blocks} blocks of {n / blocks / tau:.3g} autocorrelation times ({tau:.3g} samples) within the run"
               + ("" if enough else f" (too short for {MIN_BLOCKS} blocks of {BLOCK_TAUS:g}: error underestimated)"))
-    return {"value": float(value), "stderr": stderr, "tau_samples": tau, "blocks": int(blocks),
+    return {"value": float(value), "stderr": stderr, "dof": int(blocks) - 1, "tau_samples": tau, "blocks": int(blocks),
             "enough_blocks": bool(enough), "method": method}
 
 
 def pooled(estimates: list[dict]) -> dict:
     """One drive's value over its beds: the mean of the per-bed values; its error the spread over
-    the beds (>= MIN_SEEDS_SPREAD) or the per-bed block errors combined."""
+    the beds (>= MIN_SEEDS_SPREAD; n - 1 degrees of freedom) or the per-bed block errors combined (their
+    Welch-Satterthwaite degrees of freedom: blocks - 1 for one bed)."""
     values = np.array([e["value"] for e in estimates])
     n = len(values)
     if n >= MIN_SEEDS_SPREAD:
         stderr, method = float(np.std(values, ddof=1) / np.sqrt(n)), f"spread over {n} seeds (std/sqrt(n))"
+        dof = n - 1
     else:
-        stderr = float(np.sqrt(np.sum([e["stderr"] ** 2 for e in estimates])) / n)
+        errors = [e["stderr"] for e in estimates]
+        stderr = float(np.sqrt(np.sum(np.square(errors))) / n)
+        dof = effective_dof(errors, [e["dof"] for e in estimates])
         method = estimates[0]["method"] + ("" if n == 1 else f", combined over {n} seeds")
-    return {"value": float(values.mean()), "stderr": stderr, "method": method, "per_seed": values.tolist()}
+    return {"value": float(values.mean()), "stderr": stderr, "dof": dof, "method": method,
+            "per_seed": values.tolist()}
 
 
 def friction(tau: np.ndarray, p: np.ndarray) -> float:
@@ -136,18 +147,18 @@ def slip(record: PlateRecord) -> dict:
 
 def trend(t: np.ndarray, y: np.ndarray) -> dict:
     """Slope of y(t) and its standard error from a straight line through the means of the blocks of
-    ``block_estimate`` (longer than the correlation time: independent), their ratio ``z`` and the ``limit`` |z| may
-    reach for a record without trend (a t quantile with blocks - 2 degrees of freedom)."""
+    ``block_estimate`` (longer than the correlation time: independent), with blocks - 2 degrees of freedom
+    (``dof``), their ratio ``z`` and the ``limit`` |z| may reach for a record without trend (a t quantile at dof)."""
     est = block_estimate({"y": y})
     blocks = est["blocks"]
     if blocks < 3:
-        return {"slope": np.nan, "stderr": np.nan, "z": np.nan, "blocks": blocks}
+        return {"slope": np.nan, "stderr": np.nan, "dof": np.nan, "z": np.nan, "blocks": blocks}
     tb = np.array([b.mean() for b in np.array_split(t, blocks)])
     yb = np.array([b.mean() for b in np.array_split(y, blocks)])
     fit = stats.linregress(tb, yb)
     tail = 2 * stats.norm.sf(TREND_SIGMA)  # two-sided: the same false-alarm rate at any number of blocks
     exact = float(np.copysign(np.inf, fit.slope)) if fit.slope else 0.0  # no scatter about the line
-    return {"slope": float(fit.slope), "stderr": float(fit.stderr), "blocks": blocks,
+    return {"slope": float(fit.slope), "stderr": float(fit.stderr), "dof": blocks - 2, "blocks": blocks,
             "z": float(fit.slope / fit.stderr) if fit.stderr > 0 else exact,
             "limit": float(stats.t.isf(tail / 2, blocks - 2))}
 
@@ -158,7 +169,7 @@ def no_trend(tr: dict) -> bool:
 
 
 def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
-    """Final value (mean over the last quarter), its standard error (``block_estimate``), the final quarter's
+    """Final value (mean over the last quarter), its standard error and dof (``block_estimate``), the final quarter's
     ``trend``, and t_steady: the earliest start, in steps of STEADY_WINDOW of the record, from which the rest
     of the record has no trend (``no_trend``) and the mean of its first quarter agrees with the final value
     within TREND_SIGMA combined errors; nan when the final quarter itself drifts.  The record's
@@ -167,7 +178,8 @@ def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
     t, y = t[ok], y[ok]
     last_t = t >= t[0] + STEADY_LAST * (t[-1] - t[0])
     last = y[last_t]
-    value, stderr = float(last.mean()), block_estimate({"y": last})["stderr"]
+    est = block_estimate({"y": last})
+    value, stderr = float(last.mean()), est["stderr"]
     tr = trend(t[last_t], last)
     def settled(s: float) -> bool:
         """From s on: no trend, and the first quarter of the rest agrees with the final value."""
@@ -180,16 +192,18 @@ def steady_state(t: np.ndarray, y: np.ndarray) -> dict:
     if no_trend(tr):  # a drifting (or too short to test) final quarter is not steady
         starts = t[0] + np.arange(0.0, STEADY_LAST, STEADY_WINDOW) * (t[-1] - t[0])
         t_steady = next((float(s) for s in starts if settled(s)), float(t[last_t][0]))
-    return {"value": value, "stderr": stderr, "t_steady": t_steady, "drift": tr["slope"], "drift_err": tr["stderr"],
-            "drift_z": tr["z"]}
+    return {"value": value, "stderr": stderr, "dof": est["dof"], "t_steady": t_steady, "drift": tr["slope"],
+            "drift_err": tr["stderr"], "drift_z": tr["z"]}
 
 
 def power_law(t: np.ndarray, y: np.ndarray, t_min: float, t_max: float) -> dict:
     """Exponent alpha of y ~ t^alpha by least squares on log-log over [t_min, t_max], with its
-    standard error and 95 % interval (scipy.stats.linregress)."""
+    standard error, its n - 2 degrees of freedom and 95 % interval (scipy.stats.linregress)."""
     sel = (t >= t_min) & (t <= t_max) & (y > 0) & np.isfinite(y)
     if sel.sum() < 4:
-        return {"alpha": np.nan, "stderr": np.nan, "ci95": (np.nan, np.nan), "n": int(sel.sum())}
+        return {"alpha": np.nan, "stderr": np.nan, "dof": np.nan, "ci95": (np.nan, np.nan), "n": int(sel.sum())}
     fit = stats.linregress(np.log(t[sel]), np.log(y[sel]))
-    q = stats.t.ppf(0.975, sel.sum() - 2) * fit.stderr
-    return {"alpha": fit.slope, "stderr": fit.stderr, "ci95": (fit.slope - q, fit.slope + q), "n": int(sel.sum())}
+    dof = int(sel.sum()) - 2
+    q = stats.t.ppf(0.975, dof) * fit.stderr
+    return {"alpha": fit.slope, "stderr": fit.stderr, "dof": dof, "ci95": (fit.slope - q, fit.slope + q),
+            "n": int(sel.sum())}

@@ -26,7 +26,7 @@ from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
 from .experiment import CSV_FLOAT, FigureFile, table
 from .metrics import metrics  # noqa: F401  (the experiment's report module renders its metrics too)
-from .rows import SIGMA_CONSISTENT, UNSCORED, tally
+from .rows import UNSCORED, Z95, critical, tally
 from .scorecard import MODEL_UNSTEADY, T90_WINDOW
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, figure_legend, plain_log, suptitle
 
@@ -365,8 +365,9 @@ def calibration_section(c: Comparison) -> str:
 
 
 def sigma_figure(c: Comparison, out: Path) -> Path:
-    """One bar per scorecard row: sigma = (DEM - predicted)/combined error in the model's colour, the +-2
-    band shaded, each row's label in its verdict's colour."""
+    """One bar per scorecard row: sigma = (DEM - predicted)/combined error in the model's colour, the threshold's
+    infinite-dof limit -+Z95 shaded and each scored row's own threshold -+t_0.975(dof) marked, each row's label in
+    its verdict's colour."""
     rows, names = c.scorecard.rows, display_labels(c)
     fig = Figure(figsize=(8.5, 0.32 * len(rows) + 2.0), layout="constrained")
     ax = fig.subplots()
@@ -381,7 +382,9 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
     for k in np.flatnonzero(scored & (np.abs(sigma) > SIGMA_CLIP)):
         ax.text(np.sign(sigma[k]) * SIGMA_CLIP, k, f" {sigma[k]:+.0f} ", va="center", fontsize=7,
                 ha="left" if sigma[k] < 0 else "right", color="w")
-    ax.axvspan(-SIGMA_CONSISTENT, SIGMA_CONSISTENT, color="0.88", zorder=0)
+    ax.axvspan(-Z95, Z95, color="0.88", zorder=0)
+    limit = np.array([min(critical(d), SIGMA_CLIP) if s else np.nan for d, s in zip(rows.dof, scored, strict=True)])
+    ax.scatter(np.r_[-limit, limit], np.r_[y, y], marker="|", color="k", s=60, zorder=3)
     ax.set_yticks(y, [f"{names.get(r.drive, r.drive)}, {r.observable} ({r.model})" for r in rows.itertuples()],
                   fontsize=7)
     for tick, verdict in zip(ax.get_yticklabels(), rows.verdict, strict=True):
@@ -391,7 +394,9 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
            title="scorecard: how far each prediction is from the DEM")
     handles = [Patch(color=MODEL_STYLE[m]["color"], label=label)
                for m, label in dict(zip(rows.model, rows.model_label, strict=True)).items()]
-    handles += [Patch(color="0.88", label=f"|sigma| <= {SIGMA_CONSISTENT:g}: consistent")]
+    handles += [Patch(color="0.88", label=f"|sigma| <= {Z95:.2f}: consistent at infinite dof"),
+                Line2D([], [], marker="|", color="k", ls="", label="the row's threshold t_0.975(dof): consistent "
+                                                                    "within")]
     shown = {VERDICT_COLOUR[v]: v for v in ("consistent", "disagrees")} | {VERDICT_COLOUR[UNSCORED[0]]: "not scored, "
                                                                           "predicted or measurable"}
     handles += [Patch(color=colour, label=f"row label: {verdict}") for colour, verdict in shown.items()]
@@ -500,11 +505,11 @@ def scorecard_html(c: Comparison) -> str:
                                               if not c.blind else " (not blind: fitted on this drive)")
         rows.append([html.escape(names.get(r.drive, r.drive)), f"{html.escape(r.observable)} [{html.escape(r.unit)}]",
                      fmt(r.dem, r.dem_err), model, fmt(r.predicted), fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}",
-                     verdict])
+                     f"{critical(r.dof):.2f}" if r.scored else "", verdict])
     if not rows:
         return f"<p>No scorecard rows: {html.escape(c.failure or 'no drive has a continuum prediction')}.</p>"
     return table(["drive", "observable [unit]", "DEM ± error", "model", "predicted", "95 % band", "sigma",
-                   "verdict"], rows)
+                   "consistent within |sigma| &le; t<sub>0.975</sub>(dof)", "verdict"], rows)
 
 
 def laws_summary(c: Comparison) -> str:
@@ -554,11 +559,13 @@ def laws_html(c: Comparison) -> str:
     grey = VERDICT_COLOUR[UNSCORED[0]]
     rows = [[html.escape(r.law), html.escape(r.quantity), html.escape(r.model), fmt(r.dem, r.dem_err),
              fmt(r.predicted), fmt_cell(r.sigma) if np.isfinite(r.sigma) else "",
+             f"{critical(r.dof):.2f}" if np.isfinite(r.sigma) else "",
              f"<span style='color:{VERDICT_COLOUR.get(r.verdict, grey)}'>{html.escape(r.verdict)}</span>",
              str(r.n_drives), html.escape(r.note or r.window)] for r in c.laws.itertuples()]
     return (f"<p>{html.escape(laws_summary(c))}</p>"
-            + table(["law", "quantity", "model", "DEM", "predicted", "sigma", "verdict", "drives",
-                      "window or why not"], rows))
+            + table(["law", "quantity", "model", "DEM", "predicted", "sigma",
+                     "consistent within |sigma| &le; t<sub>0.975</sub>(dof)", "verdict", "drives", "window or why not"],
+                    rows))
 
 
 def scene_html(c: Comparison) -> str:
@@ -591,7 +598,8 @@ def conclusions(c: Comparison) -> list[str]:
     for _, g in scored.groupby("model", sort=False):
         ok = g[g.verdict == "consistent"]
         bad = g[g.verdict != "consistent"]
-        text = f"<b>{html.escape(g.model_label.iloc[0])}</b>: {len(ok)} of {len(g)} predictions within 2 sigma"
+        text = (f"<b>{html.escape(g.model_label.iloc[0])}</b>: {len(ok)} of {len(g)} predictions consistent "
+                "(|sigma| &le; t<sub>0.975</sub>(dof))")
         if len(bad):
             worst = ", ".join(f"{html.escape(r.observable)} of {name(r.drive)} "
                               f"({(r.predicted / r.dem - 1) * 100:+.0f} %, {r.sigma:+.1f} sigma)"
@@ -644,8 +652,11 @@ def conclusions(c: Comparison) -> list[str]:
 
 HOW_TO_READ = {**law_figures.HOW_TO_READ,
     "scorecard": "Each bar is one scorecard row, in its model's colour: how many combined standard errors the DEM "
-                 "lies from the prediction. Inside the grey band the prediction is consistent with the DEM; each row's "
-                 "label has its verdict's colour (green consistent, red disagrees, grey not scored).",
+                 "lies from the prediction. The threshold is per row: consistent within the black ticks, -+ "
+                 "Student-t's 97.5 % quantile at the degrees of freedom of the row's error "
+                 f"({critical(2):.2f} at 2, {critical(3):.2f} at 3); the grey band is its limit at infinitely many, "
+                 f"-+{Z95:.2f}. Each row's label has its verdict's colour (green consistent, red disagrees, grey not "
+                 "scored).",
     "drive": "Top left: the free response (u_w under an imposed stress, mu_w under an imposed speed), the DEM as a "
              "running mean with its band over seeds, each model as a line with its 95 % band from the calibration's "
              "uncertainty (linearised). Top right: the layer thickness delta_u on log axes "
@@ -709,8 +720,9 @@ def sections(c: Comparison, m: dict) -> list[str]:
         "<h2>Scorecard</h2>", scorecard_html(c),
         f"<p>Bands: {c.scorecard.replicates} calibration replicates per steady prediction (band edges change by at "
         f"most {c.scorecard.edge_stability:.0%} of the band width from half to all replicates); t90 by linearised "
-        "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; "
-        f"{SIGMA_CONSISTENT:g}.</p>",
+        "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; t<sub>0.975</sub>(dof), "
+        "Student-t's 97.5 % quantile at the degrees of freedom of the row's combined error (column dof: "
+        f"{critical(2):.2f} at 2, {critical(3):.2f} at 3, {Z95:.2f} at infinitely many).</p>",
         "<h2>Conclusions</h2><ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>",
         "<h2 id='laws'>The paper's laws</h2>", laws_html(c),
         "<h2>The scene's own checks</h2>", scene_html(c),

@@ -11,17 +11,19 @@ Observables (DEM units; estimators applied alike to the DEM and to every model):
 * ``creep_length``: e-folding length of u below the calibrated delta_s (least squares of ln u over
   depth, from delta_s to WALL_EXCLUSION above the base); local mu(I) is rigid there: 0.
 
-Errors.  DEM: spread over seeds (standard error of the mean) when a drive has >= 2 seeds; with one
-seed, for the profile observables the spread over BLOCKS consecutive blocks of the steady window, for
-t90 the running mean's half-width (a resolution, not a statistical error); for the steady response
-the block or seed error of compare.plate.steady_state.  Model: the band is the 2.5-97.5 % range over
+Errors.  DEM: spread over seeds (standard error of the mean; n_seeds - 1 degrees of freedom) when a drive has
+>= 2 seeds; with one seed, for the profile observables the spread over BLOCKS consecutive blocks of the steady
+window (BLOCKS - 1 degrees of freedom), for t90 the running mean's half-width (a resolution, not a statistical
+error: infinitely many degrees of freedom); for the steady response the block or seed error of
+compare.plate.pooled with its degrees of freedom.  Model: the band is the 2.5-97.5 % range over
 the calibration's replicates (joint samples of mu_s, mu_d, I0, phi) for the steady profile observables; for
 t90 and the windowed plate value (a transient solve per sample is too costly) the linearised propagation
 J C J^T of the replicates' covariance C, J by one-sided differences, band +-1.96 sd (the plate value's: the
 band's mean over the window); the numerical error of t90 is its change when every other output time is dropped
 (interpolation), none for the others (the solvers' errors are far below the bands).  sigma =
-(dem - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical^2), band_sd = band width / (2 x 1.96); verdict
-"consistent" when |sigma| <= 2.
+(dem - predicted) / sqrt(dem_err^2 + band_sd^2 + numerical^2), band_sd = band width / (2 x 1.96); the row's dof
+the Welch-Satterthwaite degrees of freedom of that combined error (the band's and the numerical error's infinite);
+verdict "consistent" when |sigma| <= t_0.975(dof) (compare.rows.verdict).
 
 Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where
 the drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose
@@ -44,7 +46,7 @@ from .analysis import DriveAnalysis
 from .band import Sensitivity
 from .calibrate import WALL_EXCLUSION
 from .plate import STEADY_LAST
-from .rows import SIGMA_CONSISTENT, Z95, score_row, sigma, tally
+from .rows import Z95, critical, effective_dof, score_row, sigma, tally
 
 OBSERVABLES = {
     "u_w_inf": ("sqrt(g d)", "steady plate speed"),
@@ -94,16 +96,21 @@ def creep_length(depth, u, delta_s: float, bed_depth: float) -> float:
 
 @dataclass(frozen=True)
 class Measured:
+    """A DEM value, its standard error, how it was estimated and the error's degrees of freedom."""
+
     value: float
     err: float
     how: str
+    dof: float
 
 
 def _mean_err(values, how: str) -> Measured:
+    """The mean of the finite ``values`` (independent samples: seeds or blocks) and its standard error, with
+    samples - 1 degrees of freedom."""
     v = np.asarray([x for x in values if np.isfinite(x)], dtype=float)
     if len(v) < 2:
-        return Measured(float(v.mean()) if len(v) else np.nan, np.nan, how)
-    return Measured(float(v.mean()), float(v.std(ddof=1) / np.sqrt(len(v))), how)
+        return Measured(float(v.mean()) if len(v) else np.nan, np.nan, how, np.nan)
+    return Measured(float(v.mean()), float(v.std(ddof=1) / np.sqrt(len(v))), how, len(v) - 1)
 
 
 def base_reach(a: DriveAnalysis, delta_s: float) -> str:
@@ -142,6 +149,7 @@ def scene_checks(a: DriveAnalysis) -> list[dict]:
     bt, sl = a.bulk_tau, a.slip
     phi = float(whole.phi.mean())  # hydrostatics: the weight of the grains over the same depths
     pressure = fit.slope / phi
+    within = critical(len(whole) - 2) * fit.stderr / phi  # the slope's 95 % half-width (least squares: n - 2 dof)
     return [
         {"drive": a.label, "check": "slip at the plate", "unit": "1", "value": sl["value"], "err": sl["stderr"],
          "how": sl["method"], "target": f"<= {SLIP_MAX:.0%}",
@@ -152,8 +160,7 @@ def scene_checks(a: DriveAnalysis) -> list[dict]:
         {"drive": a.label, "check": "pressure slope / (mean phi rho_p g)", "unit": "1", "value": pressure,
          "err": fit.stderr / phi, "how": "least squares over the bulk of the whole run's mean profile (depths "
          "correlated: a lower bound; passes within 10 %)", "target": "1",
-         "verdict": "within error" if abs(pressure - 1) <= max(SIGMA_CONSISTENT * fit.stderr / phi, PRESSURE_TOLERANCE)
-         else "off"},
+         "verdict": "within error" if abs(pressure - 1) <= max(within, PRESSURE_TOLERANCE) else "off"},
     ]
 
 
@@ -161,7 +168,7 @@ def dem_observables(a: DriveAnalysis, delta_s: float) -> dict[str, Measured]:
     """The DEM's value and error of every observable of drive ``a`` (its steady window: ``a.samples``)."""
     resp = a.response
     st = a.steady[resp]
-    out = {f"{resp}_inf": Measured(st["value"], st["stderr"], st["method"])}
+    out = {f"{resp}_inf": Measured(st["value"], st["stderr"], st["method"], st["dof"])}
     samples, how = a.samples, a.samples_how
     out["delta_u"] = _mean_err([depth_at_fraction(s.depth.to_numpy(), s.u_x.to_numpy(), s.u_x.iloc[0])
                                 for s in samples], how)
@@ -171,7 +178,8 @@ def dem_observables(a: DriveAnalysis, delta_s: float) -> dict[str, Measured]:
     else:
         t = a.series.t.to_numpy()
         out["t90"] = Measured(t90(t, a.series[resp]), 0.5 * T90_WINDOW * (t[-1] - t[0]),
-                              "half-width of the running mean (1 seed: a resolution)")
+                              "half-width of the running mean (1 seed: a resolution, not a statistical error; "
+                              "infinite dof)", np.inf)
     return out
 
 
@@ -326,7 +334,8 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
                 drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,
                 dem_how=measured.how, model=model.key, model_label=model.label, predicted=value,
                 band=[float(lo), float(hi)], numerical_err=numerical, calibration_sd=float(band_sd),
-                sigma=sigma(measured.value - value, measured.err, band_sd, numerical), note=note,
+                sigma=sigma(measured.value - value, measured.err, band_sd, numerical),
+                dof=effective_dof((measured.err, band_sd, numerical), (measured.dof, np.inf, np.inf)), note=note,
                 blind=independent and fitted_on.get(model.key) != a.label,
                 asymptote=asymptote if windowed else np.nan))
     return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands

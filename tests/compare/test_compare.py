@@ -169,8 +169,9 @@ def test_block_errors_follow_the_autocorrelation_time():
     assert est["enough_blocks"] and "autocorrelation" in est["method"]
     three = pooled([{"value": v, "stderr": 0.01, "method": "blocks"} for v in (1.0, 2.0, 3.0)])
     assert three["stderr"] == pytest.approx(1 / np.sqrt(3)) and "spread over 3 seeds" in three["method"]
-    two = pooled([{"value": v, "stderr": 0.3, "method": "blocks"} for v in (1.0, 2.0)])
+    two = pooled([{"value": v, "stderr": 0.3, "dof": 3, "method": "blocks"} for v in (1.0, 2.0)])
     assert two["stderr"] == pytest.approx(0.3 / np.sqrt(2)) and "combined over 2 seeds" in two["method"]
+    assert two["dof"] == pytest.approx(6.0)  # two equal block errors of 3 dof each (Welch-Satterthwaite)
 
 
 def test_depth_at_fraction_interpolates():

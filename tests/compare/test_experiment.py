@@ -15,6 +15,7 @@ from granstokes.compare.experiment import Experiment, experiment_for, experiment
 from granstokes.compare.oscillation_experiment import OscillatingPlate
 from granstokes.compare.stokes_experiment import StokesDrives
 from granstokes.continuum.load import Load
+from scipy import stats
 
 ROOT = Path(__file__).resolve().parents[2]
 HELD = Load("stress", 10.0, mu_w=0.4)
@@ -53,12 +54,20 @@ def test_no_pipeline_branch_on_the_oscillating_plate_outside_the_experiments():
     assert not found, found
 
 
-@pytest.mark.parametrize(("sigma", "note", "verdict"), [
-    (2.0, "", "consistent"), (-2.0, "", "consistent"), (2.0001, "", "disagrees"), (np.nan, "", "disagrees"),
-    (0.1, "not scored: the flow reaches the base", "not scored"),
-    (0.1, "not measurable: one bed", "not measurable"), (0.1, "not predicted: no amplitude", "not predicted")])
-def test_one_verdict_rule(sigma, note, verdict):
-    assert rows.verdict(sigma, note) == verdict
+Z95, T3 = stats.norm.ppf(0.975), stats.t.ppf(0.975, 3)  # 1.96; 3.18 (four samples)
+
+
+@pytest.mark.parametrize(("sigma", "note", "dof", "verdict"), [
+    (Z95, "", np.inf, "consistent"), (-Z95, "", np.inf, "consistent"), (Z95 + 1e-4, "", np.inf, "disagrees"),
+    (2.0, "", np.inf, "disagrees"), (np.nan, "", np.inf, "disagrees"),
+    (-3.0, "", 3, "consistent"), (T3, "", 3, "consistent"), (T3 + 1e-4, "", 3, "disagrees"),
+    (0.1, "not scored: the flow reaches the base", 3, "not scored"),
+    (0.1, "not measurable: one bed", np.nan, "not measurable"),
+    (0.1, "not predicted: no amplitude", 3, "not predicted")])
+def test_one_verdict_rule(sigma, note, dof, verdict):
+    """Consistent within Student-t's 97.5 % quantile at the row's dof (the normal one at infinitely many); a note's
+    head decides whatever the dof."""
+    assert rows.verdict(sigma, note, dof) == verdict
 
 
 def test_a_note_that_does_not_say_why_is_refused():
@@ -116,11 +125,12 @@ class ToyPlate(Experiment):
         return rows.score_row(drive=label, observable="gap", unit="d", dem=value, dem_err=err, dem_how="toy",
                               model="double", model_label="twice one", predicted=setup, band=rows.band(setup, 0.0),
                               numerical_err=0.0, calibration_sd=0.0, sigma=rows.sigma(value - setup, err),
-                              note="", blind=True)
+                              dof=np.inf, note="", blind=True)
 
     def _conclude(self, dem, setup, predicted):
-        law = rows.law_row(law="toy_law", quantity="gap", unit="d", model="double", dem=1.0, dem_err=0.5,
-                           predicted=2.0, predicted_err=0.0, sigma=-2.0, n_drives=len(dem), window="", note="")
+        law = rows.law_row(law="toy_law", quantity="gap", unit="d", kind="toy", model="double", dem=1.0, dem_err=0.5,
+                           predicted=2.0, predicted_err=0.0, sigma=-2.0, dof=np.inf, chi2_dof=np.nan,
+                           n_drives=len(dem), window="", note="")
         return ToyResult(pd.DataFrame(predicted), pd.DataFrame([law]), ("runs/toy",), "none")
 
     @classmethod

@@ -14,9 +14,11 @@ and seeing the test fail (then restoring it):
   interval's centre and their depth from the plate's contact plane (the zones equal the bin-averaged closed form).
 * ``test_dem_error_over_beds_is_std_ddof1_over_sqrt_n``: beds with known per-bed amplitude and phase offsets.
   Guards ``compare/oscillation.py`` ``analyse_dem``'s ``np.nanstd(v, ddof=1) / np.sqrt(...)`` (mutation ddof=0
-  fails) and ``velocity_err``'s ``beds.std(axis=0, ddof=1)`` (mutation ddof=0 fails).
+  fails), its degrees of freedom n_beds - 1 (one bed: its kept cycles - 1) and ``velocity_err``'s
+  ``beds.std(axis=0, ddof=1)`` (mutation ddof=0 fails).
 * ``test_sigma_is_dem_minus_model_over_the_combined_error``: guards ``compare/rows.py`` ``sigma``
-  (``difference / combined``; mutation ``-difference`` fails) and ``score_row``'s verdict.
+  (``difference / combined``; mutation ``-difference`` fails) and ``score_row``'s verdict (Student-t at the row's
+  dof: -2.4 disagrees at infinite dof, is consistent at 3).
 * ``test_oscillating_row_signs_dem_minus_prediction``: guards ``compare/oscillation.py`` ``_row``'s
   ``sigma(_difference(observable, v, p), err, num, s_cal)`` (mutation ``_difference(observable, p, v)`` fails) and
   ``_difference``'s wrap of phase differences (mutation without ``phase.wrap`` fails).
@@ -143,8 +145,9 @@ def test_newtonian_oscillating_bed_read_from_a_run_folder(tmp_path):
     drive, records = _read(tmp_path)
     assert drive.response == "mu_w" and drive.load.omega == pytest.approx(OMEGA, rel=1e-15)
     dem = osc.analyse_dem(drive, records, MU_S)
-    amplitude, amplitude_err, _ = dem.values["response_amplitude"]
-    lag, _, _ = dem.values["phase_lag"]
+    amplitude, amplitude_err, _, dof = dem.values["response_amplitude"]
+    lag, *_ = dem.values["phase_lag"]
+    assert dof == 1  # two beds
     # mu_w = tau_w / p_w leads u_w sin(omega t) by pi/4: the project's lag (imposed - response phase) is -pi/4
     assert amplitude == pytest.approx(RHO * NU * K * np.sqrt(2) * U / P_W, rel=1e-9)
     assert lag == pytest.approx(-np.pi / 4, abs=1e-9)
@@ -201,7 +204,8 @@ def test_dem_error_over_beds_is_std_ddof1_over_sqrt_n(tmp_path):
     amplitudes = RHO * NU * K * np.sqrt(2) * U / P_W * np.array(GAINS)
     lags = -np.pi / 4 - np.array(SHIFTS)
     for name, per_bed in (("response_amplitude", amplitudes), ("phase_lag", lags)):
-        value, err, how = dem.values[name]
+        value, err, how, dof = dem.values[name]
+        assert dof == n - 1
         mean = sum(per_bed) / n
         sd = np.sqrt(sum((per_bed - mean) ** 2) / (n - 1))  # ddof = 1, by hand
         assert value == pytest.approx(mean, rel=1e-9)
@@ -218,6 +222,19 @@ def test_dem_error_over_beds_is_std_ddof1_over_sqrt_n(tmp_path):
     np.testing.assert_allclose((dem.velocity_err / dem.velocity.abs()).to_numpy()[ok], ratio, rtol=1e-9)
 
 
+def test_one_bed_s_error_is_its_cycles_with_cycles_minus_one_dof(tmp_path):
+    """One bed of CYCLES = 4 periods: the first is the start-up, the other 3 are the blocks of the harmonic's and the
+    dissipation's errors (2 dof); the yielded depth has no error, hence no dof."""
+    _run_json(tmp_path, [1])
+    _write_bed(tmp_path, 1)
+    drive, records = _read(tmp_path)
+    dem = osc.analyse_dem(drive, records, MU_S)
+    for name in ("response_amplitude", "phase_lag", "dissipation"):
+        value, err, how, dof = dem.values[name]
+        assert how == "one bed: its cycles as blocks" and dof == CYCLES - 1 - 1, name
+    assert np.isnan(dem.values["yielded_depth"][1]) and np.isnan(dem.values["yielded_depth"][3])
+
+
 # --- sigma and the rows -----------------------------------------------------------------------------------------
 
 def test_sigma_is_dem_minus_model_over_the_combined_error():
@@ -225,20 +242,23 @@ def test_sigma_is_dem_minus_model_over_the_combined_error():
     assert sigma(0.4 - 1.0, 0.3, 0.4) == pytest.approx(-1.2, rel=1e-15)
     assert np.isnan(sigma(1.0, 0.0, 0.0)) and np.isnan(sigma(1.0, np.nan, 0.1))
     base = dict(drive="d", observable="o", unit="1", dem=1.0, dem_err=0.3, dem_how="", model="local",
-                model_label="", predicted=0.4, band=[], numerical_err=0.0, calibration_sd=0.4, blind=True)
+                model_label="", predicted=0.4, band=[], numerical_err=0.0, calibration_sd=0.4, blind=True,
+                dof=np.inf)
     row = score_row(**base, sigma=sigma(1.0 - 0.4, 0.3, 0.0, 0.4), note="")
     assert row["sigma"] == pytest.approx(1.2) and row["verdict"] == "consistent" and row["scored"]
     row = score_row(**base, sigma=sigma(1.0 - 0.1, 0.3, 0.0, 0.4), note="")
     assert row["sigma"] == pytest.approx(1.8) and row["verdict"] == "consistent"
     row = score_row(**base, sigma=sigma(0.4 - 1.6, 0.3, 0.0, 0.4), note="")
     assert row["sigma"] == pytest.approx(-2.4) and row["verdict"] == "disagrees"
+    row = score_row(**{**base, "dof": 3}, sigma=sigma(0.4 - 1.6, 0.3, 0.0, 0.4), note="")
+    assert row["verdict"] == "consistent"  # t_0.975(3) = 3.18
 
 
 def test_oscillating_row_signs_dem_minus_prediction(tmp_path):
     dem = _four_beds(tmp_path)
     predicted = {o: (np.nan, np.nan, np.nan) for o in osc.OBSERVABLES}
-    a, a_err, _ = dem.values["response_amplitude"]
-    lag, lag_err, _ = dem.values["phase_lag"]
+    a, a_err, *_ = dem.values["response_amplitude"]
+    lag, lag_err, *_ = dem.values["phase_lag"]
     predicted["response_amplitude"] = (a - 0.01, 0.002, 0.003)  # the model under the DEM
     predicted["phase_lag"] = (3.0, 0.01, 0.02)  # DEM ~ -pi/4: DEM - model ~ -3.79 wraps to ~ +2.49
     pred = osc.OscPrediction("local", predicted, dem.zones, dem.yielded, dem.loop, dem.velocity)

@@ -5,10 +5,11 @@ numbers).
 
 What is checked, and how the answers are found without the module:
 
-* a row's DEM value and error are the beds' mean and std(ddof=1)/sqrt(n), computed here from per-bed values; sigma is
-  (DEM - model)/sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2) and the band predicted -+ z sd with z the
-  normal 97.5 % quantile (scipy, not the module's constant); the verdict words are written out per row (|sigma| <= 2:
-  consistent).  No Student-t interval is formed by these functions: the bands are normal (compare.rows);
+* a row's DEM value and error are the beds' mean and std(ddof=1)/sqrt(n), computed here from per-bed values, with
+  n - 1 degrees of freedom; sigma is (DEM - model)/sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2), the row's
+  dof the Welch-Satterthwaite (sum e^2)^2 / (dem_err^4/(n - 1)) (the model's errors exact), written out here, and the
+  band predicted -+ z sd with z the normal 97.5 % quantile (scipy, not the module's constant); the verdict words are
+  written out per row (consistent when |sigma| <= scipy's t.ppf(0.975, dof)).  The bands are normal (compare.rows);
 * phase differences are wrapped into (-pi, pi]: a DEM lag of +3.0 against a model's -3.0 differs by 6 - 2 pi (not 6),
   and pi stays pi; other observables are never wrapped (a dissipation difference of 4.5 > pi is 4.5);
   phase_lag > 0 means the response peaks after the imposed sine (the DEM reader's side of that convention is pinned
@@ -20,7 +21,10 @@ What is checked, and how the answers are found without the module:
   law / line plus known offsets, against numpy.polyfit with weights 1/sd (its unscaled covariance gives the DEM
   slope's error) and the weighted least-squares hat matrix built here (the model's slope on the DEM's weights, its
   error from the model's per-drive sds); a three-point line whose slope and error are closed forms; the drives left
-  out (no yielded layer on either side), n_drives, the window and the "need 3" rows.
+  out (no yielded layer on either side), n_drives, the window and the "need 3" rows.  Lack of fit: chi2 = the
+  weighted squared residuals about the polyfit line, by hand; chi2/dof above 1 scales the DEM slope's error by its
+  square root, a step in the lag (chi2's p-value, scipy's chi2.sf, below 0.01) is "not a line" with no slope; a
+  slope has n - 2 degrees of freedom.
 """
 from pathlib import Path
 
@@ -36,6 +40,7 @@ P_W, DEPTH, T_S = 20.0, 12.0, 2.0
 PLANES = np.arange(1.0, DEPTH + 0.5)  # the profile planes' depths: the deepest is DEPTH
 Z = stats.norm.ppf(0.975)
 NGF_NOTE = "no NGF amplitude: give a Stokes report's metrics.json (--ngf-from)"
+BEDS4 = "spread over 4 beds (std/sqrt(n))"
 UNITS_SPEED = {"response_amplitude": "1", "phase_lag": "rad", "yielded_depth": "d",
                "dissipation": "rho_p g d^2 per plate area", "remobilization_strain": "1"}
 
@@ -48,18 +53,24 @@ def _drive(name: str, omega_ts: float, kind: str = "speed", amplitude: float = 2
                      transit_time=np.nan, seeds=4, grains=0, dimension=2, t_s=T_S)
 
 
-def _over_beds(per_bed) -> tuple[float, float, str]:
-    """The beds' mean and its error std(ddof=1)/sqrt(n), by hand."""
+def _over_beds(per_bed) -> tuple[float, float, str, int]:
+    """The beds' mean, its error std(ddof=1)/sqrt(n) and its n - 1 degrees of freedom, by hand."""
     b = np.asarray(per_bed, dtype=float)
     n = len(b)
     mean = b.sum() / n
-    return mean, np.sqrt(((b - mean) ** 2).sum() / (n - 1)) / np.sqrt(n), f"spread over {n} beds (std/sqrt(n))"
+    return mean, np.sqrt(((b - mean) ** 2).sum() / (n - 1)) / np.sqrt(n), f"spread over {n} beds (std/sqrt(n))", n - 1
+
+
+def _welch(dem_err, dem_dof, *exact):
+    """Welch-Satterthwaite degrees of freedom of sqrt(dem_err^2 + sum exact^2), the exact errors' dof infinite."""
+    total = dem_err ** 2 + sum(e ** 2 for e in exact)
+    return total ** 2 / (dem_err ** 4 / dem_dof)
 
 
 def _dem(drive: DriveSpec, values: dict, deepest_edge: float = 6.0) -> osc.DemOscillation:
-    """A DEM side with ``values`` (observable -> (value, err, how); the others 1 +- 0.1) and a yielded edge over the
-    phase reaching ``deepest_edge`` (one phase bin without data: NaN)."""
-    values = {o: values.get(o, (1.0, 0.1, "spread over 4 beds (std/sqrt(n))")) for o in osc.OBSERVABLES}
+    """A DEM side with ``values`` (observable -> (value, err, how, dof); the others 1 +- 0.1 over 4 beds) and a
+    yielded edge over the phase reaching ``deepest_edge`` (one phase bin without data: NaN)."""
+    values = {o: values.get(o, (1.0, 0.1, BEDS4, 3)) for o in osc.OBSERVABLES}
     zones = pd.DataFrame(np.zeros((4, len(PLANES))), columns=pd.Index(PLANES, name="depth"))
     yielded = pd.Series([0.5 * deepest_edge, deepest_edge, np.nan, 0.0])
     empty = pd.DataFrame()
@@ -84,9 +95,13 @@ BEDS = {"response_amplitude": [0.52, 0.55, 0.49, 0.54], "phase_lag": [-0.62, -0.
         "remobilization_strain": [0.8, 0.9, 0.85, 0.75]}
 MODEL = {"response_amplitude": (0.45, 0.004, 0.006), "phase_lag": (-0.5, 0.01, 0.02), "yielded_depth": (3.0, 0.05, 0.1),
          "dissipation": (46.0, 0.5, 1.5), "remobilization_strain": (0.6, 0.02, 0.03)}
-# |sigma| by hand: 4.98, 2.99, 0.89, 2.18 (wrapped as a phase it would be -0.86), 4.65
+# |sigma| by hand: 4.98, 2.99, 0.89, 2.18 (wrapped as a phase it would be -0.86), 4.65; the rows' dof 5.1, 9.8, 22.1,
+# 17.7, 15.2 (4 beds: the DEM's 3, the model's exact errors adding to the sum), thresholds t_0.975(dof) 2.56, 2.23,
+# 2.07, 2.10, 2.13: the dissipation's 2.18 still disagrees
 VERDICTS = {"response_amplitude": "disagrees", "phase_lag": "disagrees", "yielded_depth": "consistent",
             "dissipation": "disagrees", "remobilization_strain": "disagrees"}
+DOF = {"response_amplitude": 5.05, "phase_lag": 9.84, "yielded_depth": 22.1, "dissipation": 17.69,
+       "remobilization_strain": 15.16}
 
 
 def test_each_row_is_the_beds_mean_and_error_against_the_prediction_and_its_band():
@@ -108,6 +123,10 @@ def test_each_row_is_the_beds_mean_and_error_against_the_prediction_and_its_band
         sd = np.sqrt(num ** 2 + cal ** 2)
         np.testing.assert_allclose(r.band, [p - Z * sd, p + Z * sd], rtol=1e-12)
         assert r.sigma == pytest.approx((mean - p) / np.sqrt(err ** 2 + num ** 2 + cal ** 2), rel=1e-12), o
+        assert r.dof == pytest.approx(_welch(err, len(b) - 1, num, cal), rel=1e-12), o
+        assert r.dof == pytest.approx(DOF[o], abs=0.05), o
+        threshold = stats.t.ppf(0.975, r.dof)
+        assert (abs(r.sigma) <= threshold) == (VERDICTS[o] == "consistent"), o
         assert r.verdict == VERDICTS[o] and r.scored and r.note == "", o
         assert r.unit == UNITS_SPEED[o] and r.drive == "runs/p20/speed-1" and r.model_label == osc.LABELS["local"]
         assert r.kind == "speed" and r.amplitude == 2.0 and r.omega == 0.75 and r.omega_ts == 1.5
@@ -126,7 +145,7 @@ def test_phase_difference_is_wrapped_into_minus_pi_pi():
     dems, predictions = [], {}
     for name, (v, p, _) in cases.items():
         drive = _drive(name, 1.0)
-        dems.append(_dem(drive, {"phase_lag": (v, dem_err, "spread over 4 beds (std/sqrt(n))")}))
+        dems.append(_dem(drive, {"phase_lag": (v, dem_err, BEDS4, 3)}))
         predictions[drive.label, "local"] = _prediction({"phase_lag": (p, num, cal)})
     rows = _rows(dems, predictions)
     lag = rows[(rows.model == "local") & (rows.observable == "phase_lag")].set_index("drive")
@@ -134,7 +153,7 @@ def test_phase_difference_is_wrapped_into_minus_pi_pi():
         r = lag.loc[f"runs/p20/{name}"]
         assert r.sigma == pytest.approx(difference / combined, rel=1e-9), name
         assert r.dem == v and r.predicted == p and r.phase_lag == v and r.phase_lag_predicted == p
-    # +3.0 against -3.0: |6 - 2 pi| / 0.2 = 1.4 sd, consistent (6 / 0.2 = 30 sd would disagree)
+    # +3.0 against -3.0: |6 - 2 pi| / 0.2 = 1.4 sd, consistent at any dof (6 / 0.2 = 30 sd would disagree)
     assert lag.loc["runs/p20/ahead", "sigma"] < 0 and lag.loc["runs/p20/ahead", "verdict"] == "consistent"
     assert lag.loc["runs/p20/behind", "sigma"] > 0 and lag.loc["runs/p20/behind", "verdict"] == "consistent"
     assert lag.loc["runs/p20/half-turn", "verdict"] == "disagrees"  # pi / 0.2 = 15.7 sd
@@ -142,7 +161,7 @@ def test_phase_difference_is_wrapped_into_minus_pi_pi():
 
 def test_rows_without_a_prediction_say_why_and_are_not_scored():
     failed, missing = _drive("failed", 1.0, "stress", 0.45), _drive("missing", 2.0, "stress", 0.45)
-    dems = [_dem(failed, {"phase_lag": (0.7, 0.05, "how")}), _dem(missing, {"phase_lag": (0.4, 0.05, "how")})]
+    dems = [_dem(failed, {"phase_lag": (0.7, 0.05, "how", 3)}), _dem(missing, {"phase_lag": (0.4, 0.05, "how", 3)})]
     reason = "the local solver failed on this drive: step size too small"
     rows = _rows(dems, {(failed.label, "local"): reason})
     assert len(rows) == 2 * 2 * len(osc.OBSERVABLES)  # drives x models (every label) x observables
@@ -167,9 +186,9 @@ def test_rows_without_a_prediction_say_why_and_are_not_scored():
 
 def test_a_dem_value_without_a_finite_error_is_not_measurable():
     drive = _drive("speed-1", 1.0)
-    dem = _dem(drive, {"response_amplitude": (0.5, 0.0, "one bed: its cycles as blocks"),  # zero error
-                       "phase_lag": (-0.6, np.nan, "one bed: its cycles as blocks"),  # no error
-                       "dissipation": (np.nan, 0.5, "spread over 4 beds (std/sqrt(n))")})  # no value
+    dem = _dem(drive, {"response_amplitude": (0.5, 0.0, "one bed: its cycles as blocks", 4),  # zero error
+                       "phase_lag": (-0.6, np.nan, "one bed: its cycles as blocks", 0),  # no error
+                       "dissipation": (np.nan, 0.5, BEDS4, 3)})  # no value
     rows = _rows([dem], {(drive.label, "local"): _prediction({"response_amplitude": (0.3, 0.01, 0.02)})})
     local = rows[rows.model == "local"].set_index("observable")
     for o in ("response_amplitude", "phase_lag", "dissipation"):
@@ -181,6 +200,19 @@ def test_a_dem_value_without_a_finite_error_is_not_measurable():
     for o in ("yielded_depth", "remobilization_strain"):  # 1 +- 0.1 against 1: sigma 0
         assert local.loc[o, "verdict"] == "consistent" and local.loc[o, "note"] == ""
         assert local.loc[o, "sigma"] == pytest.approx(0.0, abs=1e-15)
+
+
+def test_a_prediction_without_a_value_or_an_error_is_not_scored():
+    """A model value of NaN, or a NaN calibration sd, would make sigma NaN: the row says why and is not scored."""
+    drive = _drive("speed-1", 1.0)
+    pred = _prediction({"dissipation": (np.nan, 0.5, 1.0), "phase_lag": (-0.5, 0.01, np.nan)})
+    local = _rows([_dem(drive, {})], {(drive.label, "local"): pred}).query("model == 'local'").set_index("observable")
+    assert local.loc["dissipation", "note"] == "not predicted: the model's solution gives no value of this observable"
+    assert local.loc["phase_lag", "note"] == ("not predicted: the model's numerical error or calibration band is "
+                                              "undefined")
+    assert not local.loc[["dissipation", "phase_lag"], "scored"].any()
+    assert (local.loc[["dissipation", "phase_lag"], "verdict"] == "not predicted").all()
+    assert local.loc["response_amplitude", "verdict"] == "consistent"  # 1 +- 0.1 against 1
 
 
 def test_an_edge_at_the_deepest_plane_makes_only_the_depth_observables_unmeasurable():
@@ -220,11 +252,13 @@ L_CAL = np.array([0.02, 0.015, 0.02, 0.01, 0.03, 0.02])
 
 def _wls(x, y, sd, model_y, model_sd):
     """The DEM's slope and error by numpy.polyfit (weights 1/sd, unscaled covariance), the model's slope on the same
-    weights by the hat matrix (A^T W A)^-1 A^T W and its error from the model's sds."""
-    (slope, _), cov = np.polyfit(x, y, 1, w=1 / sd, cov="unscaled")
+    weights by the hat matrix (A^T W A)^-1 A^T W and its error from the model's sds, and the DEM's chi2 about its
+    line."""
+    (slope, intercept), cov = np.polyfit(x, y, 1, w=1 / sd, cov="unscaled")
     a, w = np.column_stack([x, np.ones_like(x)]), np.diag(1 / sd ** 2)
     hat = np.linalg.solve(a.T @ w @ a, a.T @ w)[0]
-    return slope, np.sqrt(cov[0, 0]), hat @ model_y, np.sqrt(np.sum((hat * model_sd) ** 2))
+    chi2 = np.sum(((y - slope * x - intercept) / sd) ** 2)
+    return slope, np.sqrt(cov[0, 0]), hat @ model_y, np.sqrt(np.sum((hat * model_sd) ** 2)), chi2
 
 
 def _law_rows() -> pd.DataFrame:
@@ -232,14 +266,17 @@ def _law_rows() -> pd.DataFrame:
     dems, predictions = [], {}
     for i, w in enumerate(OMEGA_TS):
         drive = _drive(f"speed-{i}", w)
-        dems.append(_dem(drive, {"yielded_depth": (Y_DEM[i], Y_DEM_ERR[i], "how"),
-                                 "phase_lag": (L_DEM[i], L_DEM_ERR[i], "how")}))
+        dems.append(_dem(drive, {"yielded_depth": (Y_DEM[i], Y_DEM_ERR[i], "how", 2),
+                                 "phase_lag": (L_DEM[i], L_DEM_ERR[i], "how", 2)}))
         predictions[drive.label, "local"] = _prediction({"yielded_depth": (Y_MODEL[i], Y_NUM[i], Y_CAL[i]),
                                                          "phase_lag": (L_MODEL[i], L_NUM[i], L_CAL[i])})
     return _rows(dems, predictions)
 
 
 def test_laws_are_weighted_least_squares_slopes_against_an_independent_fit():
+    """The yielded depth's four points scatter about their line a little more than their errors (chi2/dof 1.10):
+    its slope's error is scaled by sqrt(1.10); the lag's six points scatter less (0.52): its error is not scaled.
+    Both slopes have n - 2 degrees of freedom (2 and 4)."""
     laws = osc.laws(_law_rows())
     assert len(laws) == 2 and set(laws.model) == {"local"}  # NGF's rows are not scored: no law
     laws = laws.set_index("law")
@@ -249,25 +286,90 @@ def test_laws_are_weighted_least_squares_slopes_against_an_independent_fit():
         "yielded_depth_exponent": _wls(x[k], np.log(Y_DEM[k]), Y_DEM_ERR[k] / Y_DEM[k], np.log(Y_MODEL[k]),
                                        np.hypot(Y_NUM[k], Y_CAL[k]) / Y_MODEL[k]),
         "phase_lag_slope": _wls(x, L_DEM, L_DEM_ERR, L_MODEL, np.hypot(L_NUM, L_CAL))}
-    for law, (dem, dem_err, pred, pred_err) in expected.items():
+    points = {"yielded_depth_exponent": 4, "phase_lag_slope": 6}
+    for law, (dem, dem_err, pred, pred_err, chi2) in expected.items():
         r = laws.loc[law]
+        reduced = chi2 / (points[law] - 2)
+        dem_err *= np.sqrt(max(reduced, 1.0))
+        assert r.chi2_dof == pytest.approx(reduced, rel=1e-9), law
         assert r.dem == pytest.approx(dem, rel=1e-10) and r.dem_err == pytest.approx(dem_err, rel=1e-10), law
         assert r.predicted == pytest.approx(pred, rel=1e-10), law
         assert r.predicted_err == pytest.approx(pred_err, rel=1e-10), law
         s = (dem - pred) / np.sqrt(dem_err ** 2 + pred_err ** 2)
         assert r.sigma == pytest.approx(s, rel=1e-10), law
+        assert r.dof == pytest.approx((dem_err ** 2 + pred_err ** 2) ** 2 / (dem_err ** 4 / (points[law] - 2)),
+                                      rel=1e-10), law
         np.testing.assert_allclose(r.band, [pred - Z * pred_err, pred + Z * pred_err], rtol=1e-10)
         assert r.kind == "speed" and r.amplitude == 2.0 and r.model == "local" and r.unit == "1" and r.note == ""
     y, p = laws.loc["yielded_depth_exponent"], laws.loc["phase_lag_slope"]
+    assert y.chi2_dof == pytest.approx(1.097, abs=1e-3) and p.chi2_dof == pytest.approx(0.521, abs=1e-3)
     # the offsets move the fits off the laws they were built on by less than 0.01 and 0.002
     assert y.dem == pytest.approx(-0.5, abs=0.01) and y.predicted == pytest.approx(-0.4, abs=0.02)
     assert p.dem == pytest.approx(0.1, abs=0.002) and p.predicted == pytest.approx(0.105, abs=0.005)
-    assert y.sigma < -2 and y.verdict == "disagrees"  # -0.50 against -0.38, errors 0.014 and 0.018
-    assert abs(p.sigma) < 2 and p.verdict == "consistent"
+    # -0.50 against -0.38, errors 0.015 and 0.018: -5.2 sigma beyond t_0.975 at its dof (above 2: the model's error
+    # is exact and the larger)
+    assert y.sigma < -stats.t.ppf(0.975, y.dof) and y.verdict == "disagrees"
+    assert abs(p.sigma) < stats.norm.ppf(0.975) and p.verdict == "consistent"
     assert (y.n_drives, y.window) == (4, "omega t_s in [0.1, 3]")
     assert (p.n_drives, p.window) == (6, "omega t_s in [0.1, 30]")
     assert y.quantity == "n in yielded_depth ~ (omega t_s)^n"
     assert p.quantity == "s in phase_lag = a + s ln(omega t_s) [rad]"
+
+
+OFFSETS = np.array([0.01, -0.01, 0.0, 0.01, -0.01, 0.005])  # a known scatter about a line: an error each
+
+
+def _lag_law(lags, errors, model_lags):
+    """The phase-lag law of speed drives at OMEGA_TS with the DEM's ``lags`` and ``errors`` (3 beds: 2 dof)."""
+    dems, predictions = [], {}
+    for i, w in enumerate(OMEGA_TS):
+        drive = _drive(f"speed-{i}", w)
+        dems.append(_dem(drive, {"phase_lag": (lags[i], errors[i], "spread over 3 beds (std/sqrt(n))", 2)}))
+        predictions[drive.label, "local"] = _prediction({"phase_lag": (model_lags[i], 0.005, 0.01)})
+    return osc.laws(_rows(dems, predictions)).set_index("law").loc["phase_lag_slope"]
+
+
+def test_a_lag_on_a_step_is_not_a_line_and_quotes_no_slope():
+    """The DEM's lag steps from -0.1 to -0.6 between omega t_s = 1 and 3 (flat on either side, errors 0.01): a line
+    through it leaves chi2/dof in the hundreds (by hand: polyfit's weighted residuals), p far below 0.01; the row is
+    "not measurable: not a line" with chi2/dof and p, no slope and no sigma.  The same six drives on a line with
+    residuals of about their errors give a slope, chi2/dof near 1 (0.668 by hand) and the unscaled error."""
+    x = np.log(OMEGA_TS)
+    err = np.full(6, 0.01)
+    model = -0.1 * x
+    step = np.where(OMEGA_TS < 2, -0.1, -0.6)
+    r = _lag_law(step, err, model)
+    (slope, intercept) = np.polyfit(x, step, 1, w=1 / err)
+    chi2 = np.sum(((step - slope * x - intercept) / err) ** 2)
+    p = stats.chi2.sf(chi2, 4)
+    assert chi2 / 4 > 100 and p < 1e-50
+    assert r.verdict == "not measurable"
+    assert r.note == f"not measurable: not a line (chi2/dof = {chi2 / 4:.3g}, p = {p:.2g})"  # chi2/dof = 216
+    assert r.chi2_dof == pytest.approx(chi2 / 4, rel=1e-9) and r.dof == 4 and r.n_drives == 6
+    assert np.isnan([r.dem, r.dem_err, r.predicted, r.predicted_err, r.sigma]).all()
+    line = 0.05 - 0.2 * x + 0.8 * OFFSETS
+    r = _lag_law(line, err, model)
+    (slope, intercept), cov = np.polyfit(x, line, 1, w=1 / err, cov="unscaled")
+    chi2 = np.sum(((line - slope * x - intercept) / err) ** 2)
+    assert chi2 / 4 == pytest.approx(0.668, abs=1e-3)
+    assert r.note == "" and r.chi2_dof == pytest.approx(chi2 / 4, rel=1e-9) and r.dof > 4
+    assert r.dem == pytest.approx(slope, rel=1e-10) and r.dem_err == pytest.approx(np.sqrt(cov[0, 0]), rel=1e-10)
+    assert r.verdict == "disagrees"  # -0.2 against -0.1, errors 0.0021 and 0.0023
+
+
+def test_a_scatter_beyond_the_errors_but_not_a_step_scales_the_slopes_error():
+    """Residuals of about 1.7 errors each: chi2/dof = 3.02 by hand, p = chi2.sf(12.1, 4) = 0.017 (not below 0.01):
+    a slope is quoted, its error the weighted one times sqrt(3.02)."""
+    x = np.log(OMEGA_TS)
+    err = np.full(6, 0.01)
+    line = 0.05 - 0.2 * x + 1.7 * OFFSETS
+    r = _lag_law(line, err, -0.1 * x)
+    (slope, intercept), cov = np.polyfit(x, line, 1, w=1 / err, cov="unscaled")
+    chi2 = np.sum(((line - slope * x - intercept) / err) ** 2)
+    assert 0.01 < stats.chi2.sf(chi2, 4) < 0.05 and chi2 / 4 == pytest.approx(3.016, abs=1e-3)
+    assert r.note == "" and r.chi2_dof == pytest.approx(chi2 / 4, rel=1e-9)
+    assert r.dem == pytest.approx(slope, rel=1e-10)
+    assert r.dem_err == pytest.approx(np.sqrt(cov[0, 0]) * np.sqrt(chi2 / 4), rel=1e-10)
 
 
 def test_a_law_needs_three_measurable_drives():
@@ -277,8 +379,8 @@ def test_a_law_needs_three_measurable_drives():
     dems, predictions = [], {}
     for w in omega_ts:
         drive = _drive(f"stress-{w:g}", w, "stress", 0.45)
-        dems.append(_dem(drive, {"yielded_depth": (0.0, 0.05, "how"),
-                                 "phase_lag": (0.2 - 0.05 * np.log(w), 0.02, "how")}))
+        dems.append(_dem(drive, {"yielded_depth": (0.0, 0.05, "how", 2),
+                                 "phase_lag": (0.2 - 0.05 * np.log(w), 0.02, "how", 2)}))
         predictions[drive.label, "local"] = _prediction({"yielded_depth": (0.0, 0.01, 0.01),
                                                          "phase_lag": (0.1 - 0.08 * np.log(w), 0.006, 0.008)})
     laws = osc.laws(_rows(dems, predictions)).set_index("law")
@@ -293,7 +395,11 @@ def test_a_law_needs_three_measurable_drives():
     assert p.predicted == pytest.approx(-0.08, abs=1e-12)
     assert p.predicted_err == pytest.approx(0.01 / root_sxx, rel=1e-12)  # hypot(0.006, 0.008) = 0.01
     assert p.sigma == pytest.approx(0.03 / np.hypot(0.02, 0.01) * root_sxx, rel=1e-12)
-    assert p.verdict == "disagrees"  # 2.63
+    # an exact line: chi2 = 0; one degree of freedom (3 points - 2), the model's error exact: dof (4 + 1)^2/16 = 1.56,
+    # so 2.63 sigma is within t_0.975(1.56) (beyond the normal 1.96)
+    assert p.chi2_dof == pytest.approx(0.0, abs=1e-20) and p.dof == pytest.approx(25 / 16, rel=1e-12)
+    assert stats.norm.ppf(0.975) < p.sigma < stats.t.ppf(0.975, 25 / 16)
+    assert p.verdict == "consistent"
     # two drives: the lag's law is not measurable either
     two = osc.laws(_rows(dems[:2], {k: v for k, v in predictions.items() if k[0] != dems[2].drive.label}))
     two = two.set_index("law").loc["phase_lag_slope"]

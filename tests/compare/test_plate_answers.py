@@ -19,6 +19,8 @@ whose answers are known in closed form or recomputed here by hand with numpy fro
   the Student-t quantile at blocks - 2 degrees of freedom exceeded as often as a normal variable exceeds TREND_SIGMA,
   the power law's interval t.ppf(0.975, n - 2) stderr.
 * Slip: 1 - (sum u_c n_c / sum n_c) / <u_w> over the second half (SLIP_FROM) of the record, grain-weighted.
+* Degrees of freedom: blocks - 1 for a block error, n - 1 for the spread over n seeds, the Welch-Satterthwaite
+  (sum e_i^2)^2 / sum(e_i^4/dof_i) written out for block errors combined over beds, blocks - 2 for a trend.
 
 Constants (STEADY_*, BLOCK_TAUS, MIN_BLOCKS, MIN_SEEDS_SPREAD, TREND_SIGMA, SLIP_FROM) are imported from the module.
 """
@@ -182,6 +184,7 @@ def test_block_error_of_ar1_noise_is_the_spread_of_blocks_of_ten_correlation_tim
     assert est["stderr"] == pytest.approx(_stderr(means), rel=1e-12)
     assert est["stderr"] == pytest.approx(np.sqrt(1 / (1 - a ** 2)) * np.sqrt(2 * tau / n), rel=0.15)
     assert est["value"] == pytest.approx(y.mean(), rel=1e-12)
+    assert est["dof"] == est["blocks"] - 1
 
 
 def test_exactly_min_blocks_blocks_of_ten_correlation_times_are_enough():
@@ -208,7 +211,7 @@ def test_a_series_shorter_than_min_blocks_has_a_block_per_sample():
     without a warning."""
     three = plate.block_estimate({"y": [1.0, 4.0, 2.0]})
     assert three["blocks"] == 3 and three["value"] == pytest.approx(7 / 3) and not three["enough_blocks"]
-    assert three["stderr"] == pytest.approx(np.sqrt(21) / 3 / np.sqrt(3), rel=1e-14)
+    assert three["stderr"] == pytest.approx(np.sqrt(21) / 3 / np.sqrt(3), rel=1e-14) and three["dof"] == 2
     assert three["tau_samples"] == 0.5
     assert three["method"] == ("3 blocks of 2 autocorrelation times (0.5 samples) within the run (too short for "
                                f"{plate.MIN_BLOCKS} blocks of {plate.BLOCK_TAUS:g}: error underestimated)")
@@ -223,17 +226,20 @@ def test_a_series_shorter_than_min_blocks_has_a_block_per_sample():
 def test_pooled_error_is_the_spread_over_enough_seeds_else_the_combined_block_errors():
     """One bed: its own value, error and method.  Fewer than MIN_SEEDS_SPREAD: sqrt(sum stderr^2)/n and the first
     bed's method.  MIN_SEEDS_SPREAD or more: std(ddof=1)/sqrt(n) of the values, whatever their block errors."""
-    one = plate.pooled([{"value": 0.3, "stderr": 0.02, "method": "blocks of bed 1"}])
-    assert one == {"value": 0.3, "stderr": 0.02, "method": "blocks of bed 1", "per_seed": [0.3]}
-    two = plate.pooled([{"value": 0.3, "stderr": 0.03, "method": "blocks of bed 1"},
-                        {"value": 0.5, "stderr": 0.04, "method": "blocks of bed 2"}])
+    one = plate.pooled([{"value": 0.3, "stderr": 0.02, "dof": 3, "method": "blocks of bed 1"}])
+    assert one == {"value": 0.3, "stderr": 0.02, "dof": 3, "method": "blocks of bed 1", "per_seed": [0.3]}
+    two = plate.pooled([{"value": 0.3, "stderr": 0.03, "dof": 3, "method": "blocks of bed 1"},
+                        {"value": 0.5, "stderr": 0.04, "dof": 5, "method": "blocks of bed 2"}])
     assert two["value"] == pytest.approx(0.4) and two["stderr"] == pytest.approx(0.025, rel=1e-14)
+    # Welch-Satterthwaite: (0.03^2 + 0.04^2)^2 / (0.03^4/3 + 0.04^4/5) = 6.25e-6 / 7.82e-7 = 7.99
+    assert two["dof"] == pytest.approx(6.25e-6 / (8.1e-7 / 3 + 2.56e-6 / 5), rel=1e-12)
     assert two["method"] == "blocks of bed 1, combined over 2 seeds" and two["per_seed"] == [0.3, 0.5]
     values = 0.3 + 0.1 * np.arange(plate.MIN_SEEDS_SPREAD) ** 2
     many = plate.pooled([{"value": v, "stderr": 1e-6, "method": "blocks"} for v in values])
     assert many["value"] == pytest.approx(values.mean(), rel=1e-14)
     assert many["stderr"] == pytest.approx(_stderr(values), rel=1e-14)
     assert many["method"] == f"spread over {plate.MIN_SEEDS_SPREAD} seeds (std/sqrt(n))"
+    assert many["dof"] == plate.MIN_SEEDS_SPREAD - 1  # the block errors' dof do not enter
     assert many["per_seed"] == pytest.approx(values.tolist(), rel=1e-15)
 
 
@@ -246,6 +252,7 @@ def test_trend_of_three_blocks_is_the_line_through_them():
     assert tr["slope"] == pytest.approx(0.5, rel=1e-14) and tr["stderr"] == pytest.approx(np.sqrt(0.75), rel=1e-14)
     assert tr["z"] == pytest.approx(0.5 / np.sqrt(0.75), rel=1e-14)
     assert tr["limit"] == pytest.approx(stats.t.isf(stats.norm.sf(plate.TREND_SIGMA), 1), rel=1e-12)
+    assert tr["dof"] == 1  # three blocks, a line through them
     assert plate.no_trend(tr)
 
 

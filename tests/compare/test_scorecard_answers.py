@@ -16,8 +16,9 @@ The drive and the models are plain objects carrying only what ``score`` reads (n
   differences over the steps.
 
 Every expected number is computed here from those closed forms with plain arithmetic (std with ddof = 1 written
-out, the percentile's interpolation written out); the constants (Z95, SIGMA_CONSISTENT, MODEL_UNSTEADY,
-STEADY_LAST, T90_WINDOW, WALL_EXCLUSION) are imported from their modules.  The notes and the headline are compared as
+out, the percentile's interpolation written out, a row's Welch-Satterthwaite degrees of freedom written out and its
+threshold Student-t's 97.5 % quantile from scipy); the constants (Z95, MODEL_UNSTEADY, STEADY_LAST, T90_WINDOW,
+WALL_EXCLUSION) are imported from their modules.  The notes and the headline are compared as
 whole sentences: they are what the report prints.
 """
 import warnings
@@ -29,7 +30,7 @@ import pytest
 from granstokes.compare.band import Sensitivity
 from granstokes.compare.calibrate import WALL_EXCLUSION
 from granstokes.compare.plate import STEADY_LAST
-from granstokes.compare.rows import SIGMA_CONSISTENT, Z95
+from granstokes.compare.rows import Z95
 from granstokes.compare.scorecard import (
     MODEL_UNSTEADY,
     T90_WINDOW,
@@ -39,6 +40,7 @@ from granstokes.compare.scorecard import (
     headline,
     score,
 )
+from scipy import stats
 
 T = np.arange(21.0)               # the DEM's output times
 BED = 20.0                        # the bed's depth [d]
@@ -63,13 +65,14 @@ def _profile(d0, ell):
 
 
 def _drive(d0s=(5.0, 6.0, 4.0), ells=(2.4, 3.0, 2.7), rises=(8.0, 10.0, 12.0), response="u_w", steady=(0.95, 0.01),
-           samples=None, steady_profile=None, label=LABEL):
+           samples=None, steady_profile=None, label=LABEL, steady_dof=None):
     assert int(T90_WINDOW * len(T)) <= 1  # the running mean of t90 is the series itself
     assert max(d0s) < DELTA_S and DELTA_S < BED - WALL_EXCLUSION  # the creep zone lies in the exponential tail
     samples = samples if samples is not None else tuple(_profile(d, e) for d, e in zip(d0s, ells))
     plates = tuple(NS(t=T, **{response: _ramp(T, r, 1.0)}) for r in rises)
     return NS(label=label, response=response, spec=NS(depth=BED),
-              steady={response: {"value": steady[0], "stderr": steady[1], "method": "pooled over 3 seeds"}},
+              steady={response: {"value": steady[0], "stderr": steady[1], "dof": steady_dof or len(rises) - 1,
+                                 "method": "pooled over 3 seeds"}},
               steady_profile=steady_profile if steady_profile is not None else samples[0], samples=samples,
               samples_how="spread over 3 seeds", plates=plates,
               series=pd.DataFrame({"t": T, response: np.mean([getattr(p, response) for p in plates], axis=0)}))
@@ -215,7 +218,16 @@ def test_t90_has_the_linearised_band_and_its_numerical_error_from_every_other_ou
     assert row.numerical_err == pytest.approx(T90_NUMERICAL, rel=1e-9)
 
 
+def _welch(dem_err, dem_dof, *exact):
+    """Welch-Satterthwaite degrees of freedom of sqrt(dem_err^2 + sum exact^2), the exact errors' dof infinite."""
+    total = dem_err**2 + sum(e**2 for e in exact)
+    return total**2 / (dem_err**4 / dem_dof)
+
+
 def test_sigma_is_dem_minus_model_over_every_error_in_quadrature_and_gives_the_verdict(central):
+    """Three seeds: the DEM's errors have 2 degrees of freedom, the rows' combined errors 2.2 to 4.6, and the verdict
+    is Student-t's at those: u_w_inf at -2.50 sigma and delta_u at -2.22 are consistent (thresholds 2.73 and 3.93),
+    though both lie beyond the normal 1.96."""
     rows = _by(central[0])
     delta, delta_err = _mean_and_error([0.95 * d for d in (5.0, 6.0, 4.0)])
     creep, creep_err = _mean_and_error([2.4, 3.0, 2.7])
@@ -226,12 +238,46 @@ def test_sigma_is_dem_minus_model_over_every_error_in_quadrature_and_gives_the_v
                 "delta_u": (delta - 6.0) / np.sqrt(delta_err**2 + delta_sd**2),
                 "creep_length": (creep - 3.0) / np.sqrt(creep_err**2 + creep_sd**2),
                 "t90": (t90 - 8.1) / np.sqrt(t90_err**2 + T90_SD**2 + T90_NUMERICAL**2)}
+    dof = {"u_w_inf": _welch(0.01, 2, PLATEAU_SD), "delta_u": _welch(delta_err, 2, delta_sd),
+           "creep_length": _welch(creep_err, 2, creep_sd), "t90": _welch(t90_err, 2, T90_SD, T90_NUMERICAL)}
     assert rows.sigma.to_dict() == pytest.approx(expected, rel=1e-8)
-    assert expected["u_w_inf"] < -SIGMA_CONSISTENT and expected["delta_u"] < -SIGMA_CONSISTENT
-    assert -SIGMA_CONSISTENT < expected["creep_length"] < 0 < expected["t90"] < SIGMA_CONSISTENT
-    assert rows.verdict.to_dict() == {"u_w_inf": "disagrees", "delta_u": "disagrees", "creep_length": "consistent",
+    assert rows.dof.to_dict() == pytest.approx(dof, rel=1e-9)
+    threshold = {k: stats.t.ppf(0.975, v) for k, v in dof.items()}
+    assert threshold == pytest.approx({"u_w_inf": 2.7317, "delta_u": 3.9289, "creep_length": 2.6344,
+                                       "t90": 3.8288}, abs=1e-4)
+    normal = stats.norm.ppf(0.975)
+    assert expected["u_w_inf"] < -normal and expected["delta_u"] < -normal  # beyond 1.96 ...
+    assert all(abs(expected[k]) <= threshold[k] for k in expected)  # ... within their own t quantile
+    assert rows.verdict.to_dict() == {"u_w_inf": "consistent", "delta_u": "consistent", "creep_length": "consistent",
                                       "t90": "consistent"}
     assert rows.scored.all() and (rows.note == "").all()
+
+
+def test_the_dem_errors_dof_is_seeds_minus_one_or_blocks_of_one_seed_minus_one():
+    """Four seeds: every DEM error has 3 degrees of freedom.  One seed whose steady window is cut into four blocks:
+    the profile rows' errors have 3, and t90's error, the running mean's half-width, is a resolution (infinite dof,
+    said in dem_how), so its row's dof is infinite."""
+    d0s, ells, rises = (5.0, 6.0, 4.0, 5.5), (2.4, 3.0, 2.7, 2.6), (8.0, 10.0, 12.0, 9.0)
+    rows = _by(_score(_drive(d0s=d0s, ells=ells, rises=rises), {"local": _model_side()})[0])
+    delta, delta_err = _mean_and_error([0.95 * d for d in d0s])
+    assert rows.loc["delta_u", ["dem", "dem_err"]].tolist() == pytest.approx([delta, delta_err], rel=1e-12)
+    assert rows.loc["delta_u", "dof"] == pytest.approx(_welch(delta_err, 3, (6.49 - 6.0) / (2 * Z95)), rel=1e-9)
+    assert rows.loc["u_w_inf", "dof"] == pytest.approx(_welch(0.01, 3, PLATEAU_SD), rel=1e-9)
+    assert _mean_err([0.95 * d for d in d0s], "four seeds").dof == 3
+    one = _drive(rises=(10.0,), samples=tuple(_profile(d, e) for d, e in zip(d0s, ells)), steady_dof=3)
+    one.samples_how = "spread over 4 blocks of the steady window (1 seed)"
+    rows = _by(_score(one, {"local": _model_side()})[0])
+    creep, creep_err = _mean_and_error(ells)
+    assert rows.loc["creep_length", "dem_err"] == pytest.approx(creep_err, rel=1e-9)
+    assert rows.loc["creep_length", "dof"] == pytest.approx(_welch(creep_err, 3, (3.0 - 2.51) / (2 * Z95)),
+                                                            rel=1e-9)
+    t90 = rows.loc["t90"]
+    assert t90.dem_err == pytest.approx(0.5 * T90_WINDOW * (T[-1] - T[0])) and np.isinf(t90.dof)
+    assert t90.dem_how == ("half-width of the running mean (1 seed: a resolution, not a statistical error; infinite "
+                           "dof)")
+    # 9.0 against 8.1 over sqrt(0.5^2 + T90_SD^2 + 0.1^2): 1.58, within the normal 1.96
+    assert t90.sigma == pytest.approx(0.9 / np.sqrt(0.25 + T90_SD**2 + T90_NUMERICAL**2), rel=1e-9)
+    assert t90.verdict == "consistent"
 
 
 def test_a_t90_row_whose_only_error_is_the_interpolations_is_scored_on_it():
@@ -406,15 +452,15 @@ def test_a_speed_drive_is_scored_on_its_free_friction():
 
 
 def test_a_band_with_an_undefined_edge_is_no_band():
-    assert _unmeasurable(Measured(1.0, 0.1, "seeds"), 0.9, np.nan, 0.1).startswith("not scored: no calibration")
-    assert _unmeasurable(Measured(1.0, 0.1, "seeds"), np.nan, 1.1, 0.1).startswith("not scored: no calibration")
+    assert _unmeasurable(Measured(1.0, 0.1, "seeds", 2), 0.9, np.nan, 0.1).startswith("not scored: no calibration")
+    assert _unmeasurable(Measured(1.0, 0.1, "seeds", 2), np.nan, 1.1, 0.1).startswith("not scored: no calibration")
 
 
 def test_the_mean_of_one_value_has_no_error_and_of_two_has_one():
     one = _mean_err([np.nan, 0.7], "one block")
-    assert (one.value, one.how) == (0.7, "one block") and np.isnan(one.err)
+    assert (one.value, one.how) == (0.7, "one block") and np.isnan(one.err) and np.isnan(one.dof)
     two = _mean_err([0.4, np.nan, 0.6], "two seeds")
-    assert (two.value, two.how) == (pytest.approx(0.5), "two seeds")
+    assert (two.value, two.how, two.dof) == (pytest.approx(0.5), "two seeds", 1)
     assert two.err == pytest.approx(np.sqrt(0.1**2 + 0.1**2) / np.sqrt(2), rel=1e-12)  # std(ddof=1)/sqrt(2) = 0.1
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no mean of an empty slice
@@ -427,7 +473,8 @@ def test_the_mean_of_one_value_has_no_error_and_of_two_has_one():
 def _row(drive, model, sigma, observable="u_w_inf", scored=True, blind=True):
     return {"drive": drive, "observable": observable, "model": model, "model_label": f"{model} model",
             "sigma": sigma, "scored": scored, "blind": blind, "note": "" if scored else "not scored: why",
-            "verdict": "not scored" if not scored else "consistent" if abs(sigma) <= 2 else "disagrees"}
+            "verdict": "not scored" if not scored else "consistent" if abs(sigma) <= stats.norm.ppf(0.975)
+            else "disagrees"}
 
 
 def test_the_headline_without_a_verdict_says_why():

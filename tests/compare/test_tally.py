@@ -3,13 +3,15 @@ by share then median |sigma| with a fresh index, and an empty scorecard gives an
 import pandas as pd
 import pytest
 from granstokes.compare.rows import tally
+from scipy import stats
 
 COLUMNS = ["model", "label", "n", "consistent", "share", "median_abs_sigma"]
 
 
 def _row(drive, model, sigma):
     return {"drive": drive, "observable": "u_w_inf", "model": model, "model_label": f"{model} model", "sigma": sigma,
-            "scored": True, "blind": True, "verdict": "consistent" if abs(sigma) <= 2 else "disagrees"}
+            "scored": True, "blind": True,
+            "verdict": "consistent" if abs(sigma) <= stats.norm.ppf(0.975) else "disagrees"}  # the threshold at inf dof
 
 
 def test_the_share_is_consistent_rows_over_rows_and_orders_the_models():

@@ -9,12 +9,14 @@ import pytest
 from granstokes.compare.scorecard import Measured, _not_scored, _unmeasurable, base_reach, headline, tally
 from granstokes.continuum.calibration import IN_DRIVE, JOP_BOUNDS, from_replicates
 from granstokes.continuum.scene_models import LOCAL, PAPER
+from scipy import stats
 
 
 def _row(drive, observable, model, sigma, scored=True, blind=True):
     return {"drive": drive, "observable": observable, "model": model, "model_label": f"{model} model",
             "sigma": sigma, "scored": scored, "blind": blind, "note": "" if scored else "not scored: why",
-            "verdict": "not scored" if not scored else "consistent" if abs(sigma) <= 2 else "disagrees"}
+            "verdict": "not scored" if not scored else "consistent" if abs(sigma) <= stats.norm.ppf(0.975)
+            else "disagrees"}
 
 
 def test_models_are_ranked_over_the_rows_they_share_only():
@@ -104,10 +106,11 @@ def test_a_model_at_rest_in_its_steady_state_is_judged_without_dividing_by_zero(
 
 
 def test_a_row_without_a_dem_error_or_a_band_is_not_scored():
-    assert _unmeasurable(Measured(1.0, 0.1, "seeds"), 0.9, 1.1, 0.1) == ""
-    assert _unmeasurable(Measured(1.0, np.nan, "one seed"), 0.9, 1.1, np.nan).startswith("not measurable: no DEM error")
-    assert "no calibration replicate" in _unmeasurable(Measured(1.0, 0.1, "seeds"), np.nan, np.nan, np.nan)
-    assert "sigma is undefined" in _unmeasurable(Measured(1.0, 0.0, "seeds"), 1.0, 1.0, 0.0)
+    assert _unmeasurable(Measured(1.0, 0.1, "seeds", 2), 0.9, 1.1, 0.1) == ""
+    assert _unmeasurable(Measured(1.0, np.nan, "one seed", np.nan), 0.9, 1.1, np.nan).startswith(
+        "not measurable: no DEM error")
+    assert "no calibration replicate" in _unmeasurable(Measured(1.0, 0.1, "seeds", 2), np.nan, np.nan, np.nan)
+    assert "sigma is undefined" in _unmeasurable(Measured(1.0, 0.0, "seeds", 2), 1.0, 1.0, 0.0)
 
 
 def test_the_paper_s_predictions_in_words_come_from_its_model_s_law_rows():
