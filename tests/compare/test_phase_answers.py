@@ -1,0 +1,334 @@
+"""compare.phase against answers known in closed form or counted by hand: the wrap's boundaries; which samples
+make a whole cycle (a non-integer number of samples per period, the one-step slack and ROUNDING); the harmonic's
+per-cycle errors and Student-t interval; phase averages and a Stokes-layer profile on sparse samples (empty bins);
+yielded depths on curved profiles; remobilisation strains of plates whose reversals, friction and displacement are
+known; the periodic-state check on three and two cycles; the dissipation's per-cycle loop areas.
+
+How the answers are independent: every record is a sum of sinusoids (or a plate snapping at a reversal) whose
+per-cycle amplitude, phase and mean are chosen by the test, sampled uniformly over whole periods, where least
+squares and the trapezoid rule are exact; the expected values are those closed forms (loop area
+pi u tau cos(lag)/omega; strain U (1 - cos chi)/omega/depth with chi = lag + arcsin(level)), counts of samples by
+integer arithmetic, and the documented statistics done here in plain numpy (error = std(ddof=1)/sqrt(n),
+Student-t quantiles from scipy.stats, the least-squares line of amplitude against cycle).  Nothing expected is
+computed by compare.phase; its constants (ROUNDING, PHASE_BINS) and plate.TREND_SIGMA are imported.
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+from granstokes.compare import phase
+from granstokes.compare.phase import PHASE_BINS, ROUNDING
+from granstokes.compare.plate import TREND_SIGMA
+from scipy import stats
+
+OMEGA = 2.0
+PERIOD = 2 * np.pi / OMEGA
+
+
+def _uniform(cycles: int, per_cycle: int) -> tuple[np.ndarray, np.ndarray]:
+    """Samples at i T/per_cycle over [0, cycles T] and each one's cycle (i // per_cycle, by integers)."""
+    i = np.arange(cycles * per_cycle + 1)
+    return i * PERIOD / per_cycle, i // per_cycle
+
+
+def test_wrap_keeps_pi_and_sends_minus_pi_and_three_half_pi_into_the_half_open_range():
+    got = phase.wrap([np.pi, -np.pi, 1.5 * np.pi, -1.5 * np.pi, 0.3 + 4 * np.pi, -0.3 - 6 * np.pi, 0.0])
+    assert got == pytest.approx([np.pi, np.pi, -0.5 * np.pi, 0.5 * np.pi, 0.3, -0.3, 0.0], abs=1e-12)
+
+
+def test_cycle_members_follow_the_boundaries_with_seven_and_a_half_samples_per_period():
+    """Sample i at i T/7.5 is in cycle k when 7.5 k <= i < 7.5 (k + 1); samples 15, 30 and 45 fall on a boundary
+    (up to rounding) and open their cycle; cycle 6 (one sample, at 6 T) is not whole."""
+    t = np.arange(46) * PERIOD / 7.5
+    got = phase.cycles(t, OMEGA)
+    first = [(15 * k + 1) // 2 for k in range(7)]  # ceil(7.5 k) by integers
+    assert list(got) == [1, 2, 3, 4, 5]
+    for k in got:
+        assert got[k].tolist() == list(range(first[k], first[k + 1]))
+
+
+def test_a_cycle_is_whole_when_the_samples_reach_its_ends_within_one_step_up_to_rounding():
+    """7.5 samples a period.  A record starting one step (plus half a ROUNDING period) after 1 T has cycle 1 whole,
+    one starting one step and 3 ROUNDING periods after it has not; likewise at the end, a record stopping one step
+    and ROUNDING periods short of 4 T has cycle 3 whole, one stopping 3 ROUNDING periods further short has not."""
+    step = PERIOD / 7.5
+    n = np.arange(22)
+    assert list(phase.cycles(PERIOD + step + 0.5 * ROUNDING * PERIOD + n * step, OMEGA, skip=0)) == [1, 2, 3]
+    assert list(phase.cycles(PERIOD + step + 3 * ROUNDING * PERIOD + n * step, OMEGA, skip=0)) == [2, 3]
+    for gap, whole in ((1.0, [1, 2, 3]), (3.0, [1, 2])):
+        end = 4 * PERIOD - step - gap * ROUNDING * PERIOD
+        t = end - np.arange(29)[::-1] * step  # from just after 0 (within one step) up to ``end``
+        assert 0 < t[0] < step and list(phase.cycles(t, OMEGA)) == whole
+
+
+def test_cycle_slack_is_one_step_between_distinct_times_and_none_for_a_single_time():
+    """A long table (each time repeated per depth): two times 0.6 T apart reach both ends of cycle 0 within one
+    step, so it is whole; a table of one time (omega = 2 pi, so T = 1) has no whole cycle."""
+    two = np.repeat([0.0, 0.6 * PERIOD], 3)
+    got = phase.cycles(two, OMEGA, skip=0)
+    assert list(got) == [0] and got[0].tolist() == [0, 1, 2, 3, 4, 5]
+    assert phase.cycles(np.full(3, 0.5), 2 * np.pi, skip=0) == {}
+
+
+def test_harmonic_refuses_an_average_over_a_whole_period():
+    t, _ = _uniform(4, 32)
+    with pytest.raises(ValueError, match="one period"):
+        phase.harmonic(t, np.sin(OMEGA * t), OMEGA, interval=PERIOD)  # omega interval = 2 pi exactly
+
+
+def test_harmonic_without_a_whole_cycle_is_nan_and_says_why():
+    t, _ = _uniform(2, 32)
+    h = phase.harmonic(t[:40], np.sin(OMEGA * t[:40]), OMEGA, skip=1)
+    assert h.n_cycles == 0 and np.isnan([h.amplitude, h.phase, h.mean, h.amplitude_err]).all()
+    assert "no whole cycle" in h.note
+
+
+def test_harmonic_of_one_whole_cycle_has_its_values_but_no_errors():
+    t, _ = _uniform(2, 32)  # cycle 1 only, after the start-up
+    h = phase.harmonic(t, 0.4 + 1.5 * np.sin(OMEGA * t + 2.0), OMEGA)
+    assert h.n_cycles == 1 and "needs 2" in h.note
+    assert (h.amplitude, h.phase, h.mean) == pytest.approx((1.5, 2.0, 0.4), abs=1e-12)
+    assert np.isnan([h.amplitude_err, h.phase_err, h.mean_err]).all()
+
+
+def test_harmonic_errors_are_the_spread_of_two_cycles_fits_over_root_two():
+    """Cycles 0 and 1 (skip=0) with mean, amplitude and phase (0.3, 1.0, 0.1) and (0.2, 1.2, -0.1), read as
+    averages over half a period: each cycle's fit is exact, amplitude / sinc(1/2) = A pi/2 and phase + pi/2; the
+    whole fit is the mean of the cycles' [1, sin, cos] coefficients; each error is std(ddof=1)/sqrt(2) of the two
+    cycles' values.  The phases pi/2 +- 0.1 would split at +-pi if they were centred on anything but the estimate."""
+    t, k = _uniform(2, 40)
+    m, a, q = np.array([0.3, 0.2, 0.2]), np.array([1.0, 1.2, 1.2]), np.array([0.1, -0.1, -0.1])
+    y = m[k] + a[k] * np.sin(OMEGA * t + q[k])
+    h = phase.harmonic(t, y, OMEGA, skip=0, interval=PERIOD / 2)
+    s, c = np.mean(a[:2] * np.cos(q[:2])), np.mean(a[:2] * np.sin(q[:2]))
+    assert h.n_cycles == 2 and h.note == ""
+    assert (h.mean, h.amplitude, h.phase) == pytest.approx(
+        (0.25, np.hypot(s, c) * np.pi / 2, np.arctan2(c, s) + np.pi / 2), abs=1e-12)
+    spread = lambda v: np.std(v, ddof=1) / np.sqrt(2)  # noqa: E731
+    assert (h.mean_err, h.amplitude_err, h.phase_err) == pytest.approx(
+        (spread(m[:2]), spread(a[:2] * np.pi / 2), spread(q[:2])), abs=1e-12)
+    assert h.phase_err == pytest.approx(0.1, abs=1e-12)
+
+
+def test_harmonic_interval_is_student_t_with_n_cycles_minus_one_dof():
+    h = phase.Harmonic(amplitude=2.0, phase=0.5, mean=0.1, amplitude_err=0.3, phase_err=0.05, mean_err=0.02,
+                       n_cycles=4)
+    q95, q90 = stats.t.ppf(0.975, 3), stats.t.ppf(0.95, 3)
+    assert h.interval("amplitude") == pytest.approx((2.0 - 0.3 * q95, 2.0 + 0.3 * q95), abs=1e-12)
+    assert h.interval("phase", level=0.9) == pytest.approx((0.5 - 0.05 * q90, 0.5 + 0.05 * q90), abs=1e-12)
+    assert h.interval("mean") == pytest.approx((0.1 - 0.02 * q95, 0.1 + 0.02 * q95), abs=1e-12)
+
+
+def _sparse(cycles: int) -> tuple[np.ndarray, np.ndarray]:
+    """Times at the centres of the even phase bins (PHASE_BINS a period, so the odd bins stay empty) over
+    ``cycles`` cycles, and each one's cycle."""
+    k, m = np.meshgrid(np.arange(cycles), np.arange(0, PHASE_BINS, 2) + 0.5, indexing="ij")
+    return (k + m / PHASE_BINS).ravel() * PERIOD, k.ravel()
+
+
+def test_phase_average_of_sparse_samples_leaves_the_empty_bins_with_no_cycles():
+    """y = A_k sin(omega t) with A_k per cycle, one sample per even bin at its centre; skip=2 keeps cycles 2-5:
+    an even bin's mean is mean(A_2..A_5) sin(centre), its error std(A, ddof=1)/2 |sin(centre)|, n_cycles 4; an odd
+    bin has no sample: nan and 0 cycles."""
+    amp = np.array([3.0, 2.0, 1.0, 1.2, 0.9, 1.3])
+    t, k = _sparse(len(amp))
+    y = amp[k] * np.sin(OMEGA * t)
+    avg = phase.phase_average(t, y, OMEGA, skip=2)
+    centre = (np.arange(PHASE_BINS) + 0.5) * 2 * np.pi / PHASE_BINS
+    even = np.arange(PHASE_BINS) % 2 == 0
+    kept = amp[2:]
+    assert list(avg.columns) == ["phase", "mean", "err", "n_cycles"] and list(avg.index) == list(range(PHASE_BINS))
+    assert avg.phase.to_numpy() == pytest.approx(centre, abs=1e-12)
+    assert avg["mean"][even].to_numpy() == pytest.approx(kept.mean() * np.sin(centre[even]), abs=1e-12)
+    assert avg.err[even].to_numpy() == pytest.approx(
+        np.std(kept, ddof=1) / 2 * np.abs(np.sin(centre[even])), abs=1e-12)
+    assert avg["mean"][~even].isna().all() and avg.err[~even].isna().all()
+    assert avg.n_cycles.dtype.kind == "i" and avg.n_cycles.tolist() == [4, 0] * (PHASE_BINS // 2)
+
+
+def test_phase_profile_of_a_stokes_layer_on_sparse_samples():
+    """A long table of u = A_k e^{-y/delta} sin(omega t - y/delta) (amplitude decaying, phase lagging with depth y)
+    at the even bins' centres, rows shuffled; skip=2: mean(A) e^{-y/delta} sin(centre - y/delta) and its error,
+    (phase x depth) tables named as such, empty bins nan with 0 cycles."""
+    amp, delta, depth = np.array([3.0, 2.0, 1.0, 1.2, 0.9, 1.3]), 1.3, np.array([0.0, 0.5, 1.0, 2.0])
+    t, k = _sparse(len(amp))
+    tt, yy = np.meshgrid(t, depth, indexing="ij")
+    a = amp[k][:, None]
+    df = pd.DataFrame({"t": tt.ravel(), "depth": yy.ravel(),
+                       "u": (a * np.exp(-yy / delta) * np.sin(OMEGA * tt - yy / delta)).ravel()})
+    grid = phase.phase_profile(df.sample(frac=1.0, random_state=4), OMEGA, "u", skip=2)
+    centre = (np.arange(PHASE_BINS) + 0.5) * 2 * np.pi / PHASE_BINS
+    even = np.arange(PHASE_BINS) % 2 == 0
+    shape = np.exp(-depth / delta) * np.sin(centre[even, None] - depth / delta)
+    for name in ("mean", "err", "n_cycles"):
+        table = grid[name]
+        assert table.index.name == "phase" and table.columns.name == "depth"
+        assert table.index.to_numpy() == pytest.approx(centre, abs=1e-12) and list(table.columns) == list(depth)
+    assert grid["mean"].to_numpy()[even] == pytest.approx(amp[2:].mean() * shape, abs=1e-12)
+    assert grid["err"].to_numpy()[even] == pytest.approx(np.std(amp[2:], ddof=1) / 2 * np.abs(shape), abs=1e-12)
+    assert grid["mean"].to_numpy()[~even].size and np.isnan(grid["mean"].to_numpy()[~even]).all()
+    counts = grid["n_cycles"].to_numpy()
+    assert counts.dtype.kind == "i" and (counts[even] == 4).all() and (counts[~even] == 0).all()
+
+
+def test_dissipation_is_each_cycles_loop_area_with_the_spread_over_root_n():
+    """u = U sin(omega t), tau = a_k sin(omega t + lag) with a_k per cycle: cycle k dissipates pi U a_k cos(lag) /
+    omega (the trapezoid is exact over a period's uniform samples); the error is std(ddof=1)/sqrt(n), from n = 2."""
+    u, lag, a = 0.7, 0.6, np.array([2.0, 0.5, 0.4, 0.5, 0.7, 0.55, 0.55])
+    t, k = _uniform(6, 32)
+    w = np.pi * u * a * np.cos(lag) / OMEGA
+    for skip in (2, 4):  # cycles 2-5, and cycles 4-5
+        got = phase.dissipation(t, u * np.sin(OMEGA * t), a[k] * np.sin(OMEGA * t + lag), OMEGA, skip=skip)
+        assert got["values"] == pytest.approx(w[skip:6], rel=1e-12)
+        assert got["value"] == pytest.approx(w[skip:6].mean(), rel=1e-12)
+        assert got["stderr"] == pytest.approx(np.std(w[skip:6], ddof=1) / np.sqrt(6 - skip), rel=1e-9)
+
+
+def test_dissipation_of_one_or_no_whole_cycle_is_quiet():
+    """One whole cycle: its area and a nan error; none: nan; no numpy warning either way."""
+    u, tau, lag = 0.7, 0.4, 0.6
+    t, _ = _uniform(6, 32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        one = phase.dissipation(t, u * np.sin(OMEGA * t), tau * np.sin(OMEGA * t + lag), OMEGA, skip=5)
+        none = phase.dissipation(t[:40], u * np.sin(OMEGA * t[:40]), tau * np.sin(OMEGA * t[:40] + lag), OMEGA)
+    assert one["value"] == pytest.approx(np.pi * u * tau * np.cos(lag) / OMEGA, rel=1e-12)
+    assert len(one["values"]) == 1 and np.isnan(one["stderr"])
+    assert len(none["values"]) == 0 and np.isnan(none["value"]) and np.isnan(none["stderr"])
+
+
+def test_dissipation_leaves_out_samples_missing_in_any_column():
+    """None (an object column) or nan in the start-up cycle: those samples are dropped, cycles 1-5 unchanged."""
+    u, tau, lag = 0.7, 0.4, 0.6
+    t, _ = _uniform(6, 32)
+    speed, friction = list(u * np.sin(OMEGA * t)), tau * np.sin(OMEGA * t + lag)
+    speed[3], friction[7] = None, np.nan
+    got = phase.dissipation(list(t), speed, friction, OMEGA)
+    assert got["values"] == pytest.approx([np.pi * u * tau * np.cos(lag) / OMEGA] * 5, rel=1e-12)
+
+
+def test_yielded_depth_interpolates_the_crossing_between_the_bracketing_depths():
+    """Curved profiles on an uneven grid (a straight line would hide a wrong bracket): 0.8 e^{-y/1.2} crosses 0.3
+    between y = 1.0 and 1.5; -0.9 e^{-y/3} between 3.0 and 4.0, the last two depths."""
+    depth = np.array([0.2, 0.5, 1.0, 1.5, 2.5, 3.0, 4.0])
+    mu = np.array([0.8 * np.exp(-depth / 1.2), -0.9 * np.exp(-depth / 3.0)])
+
+    def crossing(f, y0, y1):  # linear between the two depths
+        e0, e1 = f(y0) - 0.3, f(y1) - 0.3
+        return y0 + e0 / (e0 - e1) * (y1 - y0)
+
+    expected = [crossing(lambda y: 0.8 * np.exp(-y / 1.2), 1.0, 1.5),
+                crossing(lambda y: 0.9 * np.exp(-y / 3.0), 3.0, 4.0)]
+    assert 1.0 < expected[0] < 1.5 and 3.0 < expected[1] < 4.0
+    assert phase.yielded_depth(depth, mu, 0.3) == pytest.approx(expected, abs=1e-12)
+
+
+def test_a_depth_exactly_at_the_threshold_is_yielded():
+    depth = np.array([0.5, 1.0, 1.5, 2.0])
+    mu = np.array([[0.5, 0.25, 0.25, 0.125],  # down to 1.5 (at mu_s), then below
+                   [0.25, 0.125, 0.0, 0.0]])  # only the first depth, at mu_s
+    assert phase.yielded_depth(depth, mu, 0.25) == pytest.approx([1.5, 0.5], abs=1e-12)
+
+
+def test_yielded_depth_is_quiet_where_nothing_or_everything_yields():
+    """Never yielded: 0; yielded to the last depth (above mu_s, or exactly at it): the last depth; no floating-point
+    error raised (numpy set to raise)."""
+    depth = np.array([0.5, 1.0, 1.5, 2.0])
+    mu = np.array([[0.2, 0.1, 0.1, 0.05], [0.5, 0.4, 0.35, 0.3], [0.5, 0.4, 0.3, 0.25]])
+    with np.errstate(all="raise"):
+        got = phase.yielded_depth(depth, mu, 0.25)
+    assert got == pytest.approx([0.0, 2.0, 2.0], abs=0)
+
+
+U, TAU, DEPTH, LEVEL = 0.8, 0.5, 4.0, 0.9
+PER_CYCLE = 16 * PHASE_BINS  # 16 samples a phase bin, symmetric about its centre
+
+
+def _times(cycles: int = 6) -> np.ndarray:
+    """Samples at the middles of PER_CYCLE equal steps: each bin's mean of a straight line is its centre value."""
+    return (np.arange(cycles * PER_CYCLE) + 0.5) * PERIOD / PER_CYCLE
+
+
+@pytest.mark.parametrize("shift", [np.pi / 48, np.pi / 2])
+def test_remobilization_strain_alternates_with_a_biased_friction_after_a_creeping_start(shift):
+    """Plate speed U sin(psi), psi = omega t - shift (its reversals at omega t = shift and pi + shift: pi/48, just
+    after each cycle's start, or pi/2), plus U/2 during the start-up cycles 0-1 (skip=2; the displacement creeps
+    accordingly); friction TAU (sin(psi - lag) + b).  After an up reversal s tau reaches LEVEL of its peak
+    TAU (1 + b) at chi = lag + arcsin(LEVEL - (1 - LEVEL) b), after a down one TAU (1 - b) at lag + arcsin(LEVEL +
+    (1 - LEVEL) b); the strain is U (1 - cos chi)/omega/DEPTH.  Cycles 2-5 give up, down, ..., up: 7 half-cycles."""
+    lag, b = np.pi / 6, 0.5
+    t = _times()
+    psi = OMEGA * t - shift
+    creep = 0.5 * U * (t < 2 * PERIOD)
+    x = U / OMEGA * (1 - np.cos(psi)) + 0.5 * U * np.minimum(t, 2 * PERIOD)
+    got = phase.remobilization_strain(t, x, U * np.sin(psi) + creep, TAU * (np.sin(psi - lag) + b), OMEGA, DEPTH,
+                                      LEVEL, skip=2)
+    up, down = (U * (1 - np.cos(lag + np.arcsin(LEVEL + s * (1 - LEVEL) * b))) / OMEGA / DEPTH for s in (-1, 1))
+    expected = np.array([up, down] * 3 + [up])
+    assert got["values"] == pytest.approx(expected, rel=2e-4)
+    assert got["value"] == pytest.approx(expected.mean(), rel=2e-4)
+    assert got["stderr"] == pytest.approx(np.std(expected, ddof=1) / np.sqrt(7), rel=2e-3)
+
+
+def test_remobilization_strain_of_a_snapping_plate_reversing_next_to_its_extremes():
+    """Plate speed U sin(psi_w/2), psi_w = psi wrapped into (-pi, pi], psi = omega t - pi/2: it rises through zero at
+    psi = 0 and snaps from +U to -U at psi = pi, so its largest and smallest phase bins sit on either side of that
+    reversal (and, curved, the bins before an extreme do not point at a zero).  Displacement (its integral)
+    2 U (1 - cos(psi_w/2))/omega; friction TAU sin(psi - lag) reaches LEVEL of its peak at chi = lag +
+    arcsin(LEVEL) after either reversal: the strain is x(chi) - x(0) after an up reversal, x(pi) - x(pi - chi) after
+    the snap, over DEPTH, with x at a reversal read by linear interpolation between the samples half a step either
+    side (at the snap's cusp that is x(pi - half a step)).  Cycles 1-5: up, down, ..., up (9 half-cycles)."""
+    lag = np.pi / 6
+    t = _times()
+    psi = OMEGA * t - np.pi / 2
+    psi_w = np.where(np.mod(psi, 2 * np.pi) > np.pi, np.mod(psi, 2 * np.pi) - 2 * np.pi, np.mod(psi, 2 * np.pi))
+    x = 2 * U * (1 - np.cos(psi_w / 2)) / OMEGA
+    got = phase.remobilization_strain(t, x, U * np.sin(psi_w / 2), TAU * np.sin(psi - lag), OMEGA, DEPTH, LEVEL)
+    chi, half = lag + np.arcsin(LEVEL), np.pi / PER_CYCLE  # half a step in phase
+    at = lambda p: 2 * U * (1 - np.cos(p / 2)) / OMEGA  # noqa: E731  x at psi_w = p
+    up, down = (at(chi) - at(half)) / DEPTH, (at(np.pi - half) - at(np.pi - chi)) / DEPTH
+    assert got["values"] == pytest.approx(np.array([up, down] * 4 + [up]), rel=2e-4)
+
+
+def test_a_friction_leading_the_plate_is_remobilised_at_the_reversal():
+    """Friction TAU sin(psi + 1.2), plate U sin(psi), psi = omega t - 0.05 (reversals off the sampling grid): right
+    after each reversal s tau = sin(1.2) TAU = 0.93 TAU, already above LEVEL of its peak TAU: the strain is 0 in
+    every half-cycle."""
+    t = _times()
+    psi = OMEGA * t - 0.05
+    got = phase.remobilization_strain(t, U / OMEGA * (1 - np.cos(psi)), U * np.sin(psi), TAU * np.sin(psi + 1.2),
+                                      OMEGA, DEPTH, LEVEL)
+    assert len(got["values"]) == 9 and (got["values"] == 0).all() and got["value"] == 0 and got["stderr"] == 0
+
+
+def test_remobilization_to_the_full_peak_stops_at_the_peak_sample():
+    """fraction 1: the strain up to the friction's peak, chi = lag + pi/2, put on a sample (chi = 170.5 steps)."""
+    step = 2 * np.pi / PER_CYCLE
+    lag = 170.5 * step - np.pi / 2
+    t = _times()
+    got = phase.remobilization_strain(t, U / OMEGA * (1 - np.cos(OMEGA * t)), U * np.sin(OMEGA * t),
+                                      TAU * np.sin(OMEGA * t - lag), OMEGA, DEPTH, fraction=1.0)
+    assert got["values"] == pytest.approx([U * (1 - np.cos(170.5 * step)) / OMEGA / DEPTH] * 9, rel=1e-4)
+
+
+def test_stationarity_of_three_cycles_is_the_hand_least_squares_line():
+    """Amplitudes 1.0, 1.5, 1.7 in cycles 2-4 (skip=2; the start-up cycles 0-1 differ): slope 0.35, residuals
+    (-0.05, 0.1, -0.05), stderr sqrt(0.015/1/2); the limit is the Student-t quantile at 1 dof of the normal tail
+    beyond TREND_SIGMA."""
+    amp = np.array([3.0, 0.2, 1.0, 1.5, 1.7, 1.7])
+    t, k = _uniform(5, 32)
+    got = phase.stationarity(t, 0.1 + amp[k] * np.sin(OMEGA * t + 0.4), OMEGA, skip=2)
+    stderr, limit = np.sqrt(0.015 / 1 / 2), stats.t.isf(stats.norm.sf(TREND_SIGMA), 1)
+    assert list(got["cycle"]) == [2, 3, 4] and got["amplitude"] == pytest.approx([1.0, 1.5, 1.7], abs=1e-12)
+    assert (got["slope"], got["stderr"], got["z"]) == pytest.approx((0.35, stderr, 0.35 / stderr), abs=1e-9)
+    assert got["limit"] == pytest.approx(limit, rel=1e-12) and got["steady"] == (0.35 / stderr <= limit)
+
+
+def test_stationarity_of_two_cycles_has_no_slope_and_is_not_steady():
+    t, k = _uniform(3, 32)
+    got = phase.stationarity(t, np.array([1.0, 1.0, 2.0, 2.0])[k] * np.sin(OMEGA * t), OMEGA)
+    assert list(got["cycle"]) == [1, 2] and got["amplitude"] == pytest.approx([1.0, 2.0], abs=1e-12)
+    assert np.isnan([got["slope"], got["stderr"], got["z"], got["limit"]]).all() and got["steady"] is False
