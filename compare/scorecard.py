@@ -26,6 +26,7 @@ the Welch-Satterthwaite degrees of freedom of that combined error (the band's an
 verdict "consistent" when |sigma| <= t_0.975(dof) (compare.rows.verdict).
 
 Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where
+the plate slips by more than SLIP_MAX against the grains touching it (``slipping``), its plate observables; where
 the drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose
 bed is a half-space; where a model is not yet steady over the DEM's final quarter (the record is shorter
 than the model's time scale), that model's steady profile rows (delta_u, creep_length).  A row is ``blind``
@@ -138,6 +139,20 @@ SLIP_MAX = 0.05
 #: the pressure slope's least-squares error counts correlated depths as independent (a lower bound): the
 #: check passes within this relative tolerance as well (the smoke CG test's 10 %)
 PRESSURE_TOLERANCE = 0.1
+
+
+#: the observables read off the plate (its speed, its friction, their transient), which a slipping plate falsifies
+PLATE_OBSERVABLES = ("u_w_inf", "mu_w_inf", "t90")
+
+
+def slipping(a: DriveAnalysis) -> str:
+    """Why drive ``a``'s plate observables are not scored, or "": the grains touching the plate lag it by more than
+    SLIP_MAX of its speed, so the plate's speed is not the bed's and its friction is a wall's, not the material's."""
+    value = a.slip["value"]
+    if not value > SLIP_MAX:
+        return ""
+    return (f"not scored: the plate slips {value:.0%} against the grains touching it (more than {SLIP_MAX:.0%}), "
+            "so its speed and friction are not the bed's")
 
 
 def scene_checks(a: DriveAnalysis) -> list[dict]:
@@ -293,6 +308,7 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
     delta_s = next(iter(predictions.values())).steady.delta_s
     dem = dem_observables(a, delta_s)
     base = base_reach(a, delta_s)
+    slip = slipping(a)
     for model in models:
         pred: Prediction | None = predictions.get(model.key)
         if pred is None:
@@ -327,8 +343,9 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
                     edges.append(max(abs(lo2 - lo), abs(hi2 - hi)) / abs(hi - lo))
             band_sd = (hi - lo) / (2 * Z95)
             combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
-            note = ((_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
-                     else _not_scored("", model, base, end_value, asymptote))
+            note = ((slip if obs in PLATE_OBSERVABLES else "")
+                    or (_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
+                        else _not_scored("", model, base, end_value, asymptote))
                     or _unmeasurable(measured, lo, hi, combined))
             rows.append(score_row(
                 drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,

@@ -65,7 +65,7 @@ def _profile(d0, ell):
 
 
 def _drive(d0s=(5.0, 6.0, 4.0), ells=(2.4, 3.0, 2.7), rises=(8.0, 10.0, 12.0), response="u_w", steady=(0.95, 0.01),
-           samples=None, steady_profile=None, label=LABEL, steady_dof=None):
+           samples=None, steady_profile=None, label=LABEL, steady_dof=None, slip=0.01):
     assert int(T90_WINDOW * len(T)) <= 1  # the running mean of t90 is the series itself
     assert max(d0s) < DELTA_S and DELTA_S < BED - WALL_EXCLUSION  # the creep zone lies in the exponential tail
     samples = samples if samples is not None else tuple(_profile(d, e) for d, e in zip(d0s, ells))
@@ -74,7 +74,7 @@ def _drive(d0s=(5.0, 6.0, 4.0), ells=(2.4, 3.0, 2.7), rises=(8.0, 10.0, 12.0), r
               steady={response: {"value": steady[0], "stderr": steady[1], "dof": steady_dof or len(rises) - 1,
                                  "method": "pooled over 3 seeds"}},
               steady_profile=steady_profile if steady_profile is not None else samples[0], samples=samples,
-              samples_how="spread over 3 seeds", plates=plates,
+              samples_how="spread over 3 seeds", plates=plates, slip={"value": slip},
               series=pd.DataFrame({"t": T, response: np.mean([getattr(p, response) for p in plates], axis=0)}))
 
 
@@ -525,3 +525,20 @@ def test_the_headline_calls_an_exact_tie_a_tie():
         "Blind test on the 1 row(s) the models share over 1 drive(s): local model consistent on 1 of 1 (median "
         "|sigma| 0.5), ngf model consistent on 1 of 1 (median |sigma| 0.5), paper model consistent on 1 of 1 "
         "(median |sigma| 0.5); the DEM does not separate local model and ngf model and paper model (a tie).")
+
+
+def test_a_slipping_plate_s_observables_are_not_scored_and_the_layer_s_are():
+    """The grains touching the plate lag it by 12 % (> SLIP_MAX): the plate's steady speed and t90 are kept, not
+    scored, their note naming the slip; the layer's rows (read off the grains) are scored as before. At SLIP_MAX
+    exactly the plate grips."""
+    from granstokes.compare.scorecard import PLATE_OBSERVABLES, SLIP_MAX
+    models = [_model("local")]
+    predictions, spreads = _model_side()
+    for slip, slipped in ((0.12, True), (SLIP_MAX, False)):
+        rows, _, _ = score(_drive(slip=slip), models, {"local": predictions}, {"local": spreads}, 5)
+        plate_rows = rows[rows.observable.isin(PLATE_OBSERVABLES)]
+        assert len(plate_rows) == 2 and (~plate_rows.scored).all() == slipped
+        if slipped:
+            assert (plate_rows.note == "not scored: the plate slips 12% against the grains touching it (more than "
+                                      "5%), so its speed and friction are not the bed's").all()
+        assert rows[~rows.observable.isin(PLATE_OBSERVABLES)].scored.all()
