@@ -44,7 +44,8 @@ from granstokes.lib.validate import require
 
 from . import phase
 from .band import Sensitivity
-from .drive import DriveSpec, drive_specs
+from .drive import TRANSITS_BEFORE_COMPARISON, DriveSpec, drive_specs
+from .plate import SLIP_MAX
 from .rows import band, effective_dof, law_row, score_row, sigma
 
 OBSERVABLES = {"response_amplitude": None, "phase_lag": "rad", "yielded_depth": "d",
@@ -304,7 +305,7 @@ def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model
     v, err, how, dof = dem.values[observable]
     p, num, s_cal = pred.values[observable] if pred is not None else (np.nan, np.nan, np.nan)
     if pred is not None:
-        note = _unmeasurable(dem, observable) or _unpredicted(p, num, s_cal)
+        note = _scene(dem, observable) or _unmeasurable(dem, observable) or _unpredicted(p, num, s_cal)
     elif not note.startswith("not predicted"):
         note = f"not predicted: {note}"
     scored = not note
@@ -316,6 +317,25 @@ def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model
         kind=drive.load.kind, omega=drive.load.omega,
         omega_ts=drive.omega_ts, amplitude=drive.load.amplitude, phase_lag=dem.values["phase_lag"][0],
         phase_lag_predicted=pred.values["phase_lag"][0] if pred is not None else np.nan)
+
+
+#: the plate's observables (read off its speed and force), which a slipping plate falsifies
+PLATE_OBSERVABLES = ("response_amplitude", "phase_lag", "dissipation")
+
+
+def _scene(dem: DemOscillation, observable: str) -> str:
+    """Why the scene cannot support a row against the rigid-plastic models, or "": a period shorter than
+    TRANSITS_BEFORE_COMPARISON shear-wave transits over the bed (the bed answers elastically within a cycle, as the
+    Stokes drives before their comparison starts), or, for the plate's observables, a plate that slips by more than
+    SLIP_MAX against the grains touching it.  A drive whose tables carry no transit time is not checked for it."""
+    transits = dem.drive.load.period / dem.drive.transit_time
+    if transits < TRANSITS_BEFORE_COMPARISON:
+        return (f"not scored: the plate's period spans {transits:.2g} shear-wave transits of the bed (fewer than "
+                f"{TRANSITS_BEFORE_COMPARISON:g}): an elastic response, which rigid-plastic models do not have")
+    if observable in PLATE_OBSERVABLES and dem.slip > SLIP_MAX:
+        return (f"not scored: the plate slips {dem.slip:.0%} against the grains touching it (more than "
+                f"{SLIP_MAX:.0%}), so its speed and force are not the bed's")
+    return ""
 
 
 def _unmeasurable(dem: DemOscillation, observable: str) -> str:

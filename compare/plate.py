@@ -137,6 +137,10 @@ def window_values(record: PlateRecord, t0: float) -> dict:
             "mu_w": block_estimate({"tau": s["tau_w"], "p": s["p"]}, lambda m: friction(m["tau"], m["p"]))}
 
 
+#: the plate grips when at most this fraction of its speed is lost to slip against the grains touching it
+SLIP_MAX = 0.05
+
+
 def slip(record: PlateRecord) -> dict:
     """1 - <u_x of the bed grains touching a plate grain>/<plate u_x> over the second half of the
     drive (grain-weighted over the samples), with its block error."""

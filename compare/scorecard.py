@@ -46,7 +46,7 @@ from scipy import stats
 from .analysis import DriveAnalysis
 from .band import Sensitivity
 from .calibrate import WALL_EXCLUSION
-from .plate import STEADY_LAST
+from .plate import SLIP_MAX, STEADY_LAST
 from .rows import Z95, critical, effective_dof, score_row, sigma, tally
 
 OBSERVABLES = {
@@ -134,8 +134,6 @@ def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
     return (table.depth > WALL_EXCLUSION) & (table.depth < bed_depth - WALL_EXCLUSION)
 
 
-#: the plate grips when at most this fraction of its speed is lost to slip
-SLIP_MAX = 0.05
 #: the pressure slope's least-squares error counts correlated depths as independent (a lower bound): the
 #: check passes within this relative tolerance as well (the smoke CG test's 10 %)
 PRESSURE_TOLERANCE = 0.1

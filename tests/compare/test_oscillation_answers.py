@@ -45,12 +45,14 @@ UNITS_SPEED = {"response_amplitude": "1", "phase_lag": "rad", "yielded_depth": "
                "dissipation": "rho_p g d^2 per plate area", "remobilization_strain": "1"}
 
 
-def _drive(name: str, omega_ts: float, kind: str = "speed", amplitude: float = 2.0) -> DriveSpec:
-    """A drive at omega t_s (t_s = T_S: the division and product by 2 are exact)."""
+def _drive(name: str, omega_ts: float, kind: str = "speed", amplitude: float = 2.0,
+           transit_time: float = np.nan) -> DriveSpec:
+    """A drive at omega t_s (t_s = T_S: the division and product by 2 are exact); its transit time unknown unless
+    given."""
     imposed = {"mu_w": amplitude} if kind == "stress" else {"u_w": amplitude}
     load = Load(kind, P_W, omega=omega_ts / T_S, **imposed)
     return DriveSpec(Path("runs/p20"), name, load, DEPTH, plate_mass=1.0, surface_offset=0.0, steps=0,
-                     transit_time=np.nan, seeds=4, grains=0, dimension=2, t_s=T_S)
+                     transit_time=transit_time, seeds=4, grains=0, dimension=2, t_s=T_S)
 
 
 def _over_beds(per_bed) -> tuple[float, float, str, int]:
@@ -67,14 +69,14 @@ def _welch(dem_err, dem_dof, *exact):
     return total ** 2 / (dem_err ** 4 / dem_dof)
 
 
-def _dem(drive: DriveSpec, values: dict, deepest_edge: float = 6.0) -> osc.DemOscillation:
+def _dem(drive: DriveSpec, values: dict, deepest_edge: float = 6.0, slip: float = 0.0) -> osc.DemOscillation:
     """A DEM side with ``values`` (observable -> (value, err, how, dof); the others 1 +- 0.1 over 4 beds) and a
     yielded edge over the phase reaching ``deepest_edge`` (one phase bin without data: NaN)."""
     values = {o: values.get(o, (1.0, 0.1, BEDS4, 3)) for o in osc.OBSERVABLES}
     zones = pd.DataFrame(np.zeros((4, len(PLANES))), columns=pd.Index(PLANES, name="depth"))
     yielded = pd.Series([0.5 * deepest_edge, deepest_edge, np.nan, 0.0])
     empty = pd.DataFrame()
-    return osc.DemOscillation(drive, (), values, zones, yielded, empty, empty, empty, 0.0, [], 3)
+    return osc.DemOscillation(drive, (), values, zones, yielded, empty, empty, empty, slip, [], 3)
 
 
 def _prediction(values: dict, model: str = "local") -> osc.OscPrediction:
@@ -408,3 +410,27 @@ def test_a_law_needs_three_measurable_drives():
     assert np.isnan([two.dem, two.dem_err, two.predicted, two.predicted_err, two.sigma]).all()
     assert two.note == "not measurable: 2 measurable drive(s), a slope and its error need 3"
     assert two.window == "omega t_s in [0.5, 2]"
+
+
+def test_a_period_under_three_transits_is_elastic_and_a_slipping_plate_s_rows_are_not_scored():
+    """Period 2 pi/omega over the transit time: 2.5 transits (< TRANSITS_BEFORE_COMPARISON) leaves every row of the
+    drive unscored; 4 transits scores them. A plate slipping 20 % (> SLIP_MAX) leaves its own observables (amplitude,
+    lag, dissipation) unscored and the profile's (yielded depth, remobilization strain) scored."""
+    from granstokes.compare.drive import TRANSITS_BEFORE_COMPARISON
+    from granstokes.compare.plate import SLIP_MAX
+    omega_ts = 1.0
+    period = 2 * np.pi / (omega_ts / T_S)
+    predictions = {("runs/p20/fast", "local"): _prediction(MODEL)}
+    fast = _rows([_dem(_drive("fast", omega_ts, transit_time=period / 2.5), {})], predictions)
+    assert (~fast.scored[fast.model == "local"]).all()
+    assert (fast[fast.model == "local"].note == "not scored: the plate's period spans 2.5 shear-wave transits of the "
+            f"bed (fewer than {TRANSITS_BEFORE_COMPARISON:g}): an elastic response, which rigid-plastic models do not "
+            "have").all()
+    held = _rows([_dem(_drive("fast", omega_ts, transit_time=period / 4), {})], predictions)
+    assert held[held.model == "local"].scored.all()
+    slipping = _rows([_dem(_drive("fast", omega_ts, transit_time=period / 4), {}, slip=4 * SLIP_MAX)], predictions)
+    local = slipping[slipping.model == "local"].set_index("observable")
+    plate_side = ["response_amplitude", "phase_lag", "dissipation"]
+    assert (~local.scored[plate_side]).all() and local.scored[["yielded_depth", "remobilization_strain"]].all()
+    assert local.note["phase_lag"] == ("not scored: the plate slips 20% against the grains touching it (more than 5%), "
+                                      "so its speed and force are not the bed's")
