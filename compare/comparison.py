@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from granstokes.continuum.calibration import Calibration, mu_law
+from granstokes.continuum.rheology import convert_I
 from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.scene_models import LOCAL, PAPER, Prediction, SceneModel, ngf_model
 from granstokes.dem.calibrate import grains_difference
@@ -35,7 +36,7 @@ from .laws import laws as paper_laws
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings, standard_error
-from .scorecard import Scorecard, base_reach, headline, scene_checks, score
+from .scorecard import Scorecard, base_reach, extrapolated, headline, scene_checks, score
 
 #: continuum output times per drive (log-spaced from t_end/PREDICTION_SPAN to t_end, plus the snapshots)
 PREDICTION_TIMES, PREDICTION_SPAN = 60, 300
@@ -257,6 +258,7 @@ class ModelSide:
     replicates: pd.DataFrame
     fitted_on: dict
     independent: bool
+    calibrated_I: tuple[float, float]  # the calibration's range of I (DEM convention): a model beyond it extrapolates
 
 
 def replicates_of(cal: Calibration, phi: np.ndarray, n: int = REPLICATES) -> pd.DataFrame:
@@ -331,8 +333,10 @@ def prepare(dem: DemSide, independent: Calibration | None) -> tuple[ModelSide, d
     models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if ngf else [])
     if ngf:
         replicates = replicates.assign(A=_amplitude_samples(fluidity, len(replicates)))
+    measured = cal.points["I"].to_numpy(dtype=float)
+    calibrated_I = (float(measured.min()), float(measured.max())) if len(measured) else (np.nan, np.nan)
     side = ModelSide(material, tuple(models), failure, replicates, {"ngf": fluidity.drive} if ngf else {},
-                     independent is not None)
+                     independent is not None, calibrated_I)
     return side, {"pairs": pairs, "calibration": cal, "calibration_source": source, "phi_bulk": phi,
                   "fluidity": fluidity}
 
@@ -373,8 +377,11 @@ def model_drive(a: DriveAnalysis, side: ModelSide) -> tuple:
         return (scales, preds, note, base, {}), pd.DataFrame(), np.nan, {}
     spreads = {p.model: spread(a, m, side.material, side.replicates, p.series.t.to_numpy())
                for m, p in zip(side.models, preds)}
+    I0 = convert_I(side.material.I0, side.material.I_convention, "dem")
+    beyond = {p.model: extrapolated(float(side.material.friction.I_of_mu(p.steady.mu_w, I0)), side.calibrated_I)
+              for p in preds}
     rows, edges, bands = score(a, side.models, {p.model: p for p in preds}, spreads, len(side.replicates),
-                               side.fitted_on, side.independent)
+                               side.fitted_on, side.independent, beyond)
     return (scales, preds, note, base, {key: sens for key, (_, sens) in spreads.items()}), rows, edges, bands
 
 

@@ -26,7 +26,8 @@ the Welch-Satterthwaite degrees of freedom of that combined error (the band's an
 verdict "consistent" when |sigma| <= t_0.975(dof) (compare.rows.verdict).
 
 Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where
-the plate slips by more than SLIP_MAX against the grains touching it (``slipping``), its plate observables; where
+the plate slips by more than SLIP_MAX against the grains touching it (``slipping``), its plate observables; where a
+model's steady wall inertial number lies beyond the calibration's largest I (``extrapolated``), its steady rows; where
 the drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose
 bed is a half-space; where a model is not yet steady over the DEM's final quarter (the record is shorter
 than the model's time scale), that model's steady profile rows (delta_u, creep_length).  A row is ``blind``
@@ -151,6 +152,16 @@ def slipping(a: DriveAnalysis) -> str:
         return ""
     return (f"not scored: the plate slips {value:.0%} against the grains touching it (more than {SLIP_MAX:.0%}), "
             "so its speed and friction are not the bed's")
+
+
+def extrapolated(I_wall: float, calibrated: tuple[float, float]) -> str:
+    """Why a model's steady rows are not scored, or "": its steady wall inertial number ``I_wall`` (DEM convention,
+    the profile's largest) lies beyond the largest I the calibration measured, so the prediction rests on the fitted
+    law outside its data (an unknown ``calibrated`` range is not checked)."""
+    if not I_wall > calibrated[1]:
+        return ""
+    return (f"not scored: extrapolated: the model's steady wall inertial number I = {I_wall:.3g} (DEM convention) lies "
+            f"beyond the calibration's largest, {calibrated[1]:.3g}")
 
 
 def scene_checks(a: DriveAnalysis) -> list[dict]:
@@ -293,14 +304,15 @@ def _unmeasurable(measured: Measured, lo: float, hi: float, combined: float) -> 
 
 
 def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicates: int, fitted_on: dict | None = None,
-          independent: bool = True):
+          independent: bool = True, beyond: dict | None = None):
     """Drive ``a``'s scorecard rows, the band edges' stability (largest relative change from half to all
     replicates) and the free responses' 95 % bands per model (linearised).  Estimation only, no solve:
     ``predictions[key]`` is a model's central Prediction, ``spreads[key]`` its steady states at the calibration's
     replicates that sustain the drive and its Sensitivity (compare.comparison's model side); ``n_replicates`` the
     replicates there were; ``fitted_on[key]``: the drive a model's own parameter was fitted on (its rows there are
-    not blind); ``independent``: mu(I) comes from an independent calibration (else no row is blind)."""
-    fitted_on = fitted_on or {}
+    not blind); ``independent``: mu(I) comes from an independent calibration (else no row is blind); ``beyond[key]``:
+    why a model's steady rows extrapolate the calibration (``extrapolated``), or ""."""
+    fitted_on, beyond = fitted_on or {}, beyond or {}
     rows, edges, bands = [], [], {}
     half = n_replicates // 2
     delta_s = next(iter(predictions.values())).steady.delta_s
@@ -342,6 +354,7 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
             band_sd = (hi - lo) / (2 * Z95)
             combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
             note = ((slip if obs in PLATE_OBSERVABLES else "")
+                    or (beyond.get(model.key, "") if obs in STEADY_OBSERVABLES else "")
                     or (_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
                         else _not_scored("", model, base, end_value, asymptote))
                     or _unmeasurable(measured, lo, hi, combined))

@@ -217,7 +217,7 @@ def test_drives_modelled_in_forked_processes_match_one_process(report):
 
     c, _, _ = report
     a = c.drives[0].dem
-    side = ModelSide(c.material, (LOCAL, PAPER), "", c.replicates.head(12), {}, True)
+    side = ModelSide(c.material, (LOCAL, PAPER), "", c.replicates.head(12), {}, True, (np.nan, np.nan))
     one = map_drives(lambda d: model_drive(d, side), [a, a], jobs=1, progress=False)
     two = map_drives(lambda d: model_drive(d, side), [a, a], jobs=2, progress=False)
     for (head1, rows1, edge1, _), (head2, rows2, edge2, _) in zip(one, two):

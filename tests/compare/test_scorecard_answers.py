@@ -542,3 +542,20 @@ def test_a_slipping_plate_s_observables_are_not_scored_and_the_layer_s_are():
             assert (plate_rows.note == "not scored: the plate slips 12% against the grains touching it (more than "
                                       "5%), so its speed and friction are not the bed's").all()
         assert rows[~rows.observable.isin(PLATE_OBSERVABLES)].scored.all()
+
+
+def test_a_model_beyond_the_calibrated_inertial_number_extrapolates_its_steady_rows():
+    """A steady wall I of 0.8 against a calibration measured up to 0.55: the model's steady rows (the plate's steady
+    value, the layer) are kept, not scored, their note saying so with both numbers; t90 (transient) is scored. At the
+    calibration's largest I exactly, and with no calibrated range, nothing is extrapolated."""
+    from granstokes.compare.scorecard import STEADY_OBSERVABLES, extrapolated
+    note = extrapolated(0.8, (0.005, 0.55))
+    assert note == ("not scored: extrapolated: the model's steady wall inertial number I = 0.8 (DEM convention) lies "
+                    "beyond the calibration's largest, 0.55")
+    assert extrapolated(0.55, (0.005, 0.55)) == "" and extrapolated(0.8, (np.nan, np.nan)) == ""
+    predictions, spreads = _model_side()
+    rows, _, _ = score(_drive(), [_model("local")], {"local": predictions}, {"local": spreads}, 5,
+                       beyond={"local": note})
+    steady = rows.observable.isin(STEADY_OBSERVABLES)
+    assert (rows[steady].note == note).all() and (~rows[steady].scored).all()
+    assert rows[~steady].scored.all() and set(rows[~steady].observable) == {"t90"}
