@@ -12,7 +12,8 @@ sigma = (DEM - predicted) / sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2)
 into (-pi, pi] by the experiment.  ``verdict``: "consistent" when |sigma| <= SIGMA_CONSISTENT, else "disagrees"; a
 row that cannot be scored carries a note that starts with why, and its verdict is that note's head: "not scored"
 (the scene cannot support it), "not predicted" (the model has no prediction for it), "not measurable" (the data
-give no value or no error).
+give no value or no error).  A law row measured over an estimator family (compare.families) whose choices split, some
+consistent and some not, has the note's head ESTIMATOR_DEPENDENT as its verdict: neither consistent nor disagrees.
 """
 from __future__ import annotations
 
@@ -26,18 +27,22 @@ SIGMA_CONSISTENT = 2.0
 Z95 = float(stats.norm.ppf(0.975))
 #: what an unscored row's note starts with (its verdict)
 UNSCORED = ("not scored", "not predicted", "not measurable")
+#: the verdict of a law whose estimator family splits (compare.families.family_note)
+ESTIMATOR_DEPENDENT = "depends on the estimator"
 ROW_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted", "band",
             "numerical_err", "calibration_sd", "sigma", "verdict", "scored", "note", "blind")
 LAW_KEYS = ("law", "quantity", "unit", "model", "dem", "dem_err", "predicted", "predicted_err", "band", "sigma",
-            "verdict", "n_drives", "window", "note")
+            "verdict", "n_drives", "window", "note", "choices", "systematic")
 
 
 def verdict(sigma: float, note: str = "") -> str:
-    """The verdict of a row: its note's head when it has one (UNSCORED), else consistent or disagrees by |sigma|."""
+    """The verdict of a row: its note's head when it has one (UNSCORED or ESTIMATOR_DEPENDENT), else consistent or
+    disagrees by |sigma|."""
     if note:
-        head = next((h for h in UNSCORED if note.startswith(h)), None)
+        heads = (*UNSCORED, ESTIMATOR_DEPENDENT)
+        head = next((h for h in heads if note.startswith(h)), None)
         if head is None:
-            raise ValueError(f"a row's note must start with one of {UNSCORED}: {note!r}")
+            raise ValueError(f"a row's note must start with one of {heads}: {note!r}")
         return head
     return "consistent" if abs(sigma) <= SIGMA_CONSISTENT else "disagrees"
 
