@@ -413,7 +413,7 @@ def _mean_of(per_drive, key):
         if not kept:
             reasons = {}
             for o, dc in zip(out, drives):
-                reasons.setdefault(o.get("why", ""), []).append(dc.dem.spec.name)
+                reasons.setdefault(o.get("why", ""), []).append(dc.label)
             why = "; ".join(f"{', '.join(names)}: {why}" for why, names in reasons.items() if why)
             return np.nan, "not measurable: " + (why or "no drive of this kind")
         used = [o["window"] for o in kept if "window" in o]

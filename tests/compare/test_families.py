@@ -180,3 +180,27 @@ def test_systematic_is_half_the_range_of_the_difference_over_measured_choices():
     assert np.isnan(systematic([ok, off]))
     assert family_note([ok, bad, off]).startswith(f"{ESTIMATOR_DEPENDENT}: 1 of 2 measured choices consistent")
     assert family_note([bad, bad]) == ""
+
+
+def test_the_family_panel_draws_each_measured_choice_and_the_systematic_beside_the_primary():
+    """Two choices measured (DEM 0.2 and 0.5 against 0.5), one not: the panel has a tick per choice and one for the
+    primary, DEM points at the measured choices only, and a grey bar of half-height systematic = (0.3 - 0)/2 around
+    the primary's DEM value."""
+    from granstokes.compare.law_figures import family_panel
+    from granstokes.compare.rows import Z95
+    from matplotlib.figure import Figure
+
+    choices = [entry(Choice("delta_05"), 0.2, 0.01, 0.5, 0.0, ""), entry(Choice("delta_50"), 0.5, 0.02, 0.5, 0.0, ""),
+               entry(Choice("moment"), np.nan, np.nan, np.nan, 0.0, "not measurable: no window")]
+    rows = pd.DataFrame([{"law": "delta_growth_exponent", "kind": "stress", "model": "local", "dem": 0.2,
+                          "dem_err": 0.01, "choices": choices, "systematic": systematic(choices)}])
+    ax = Figure().subplots()
+    family_panel(ax, rows, "n")
+    assert len(ax.get_xticks()) == len(choices) + 1
+    dem_points, primary, syst = ax.containers
+    assert list(dem_points.lines[0].get_ydata()) == [0.2, 0.5]
+    assert primary.lines[0].get_ydata()[0] == 0.2
+    lo_hi = syst.lines[2][0].get_segments()[0][:, 1]
+    assert lo_hi == pytest.approx([0.2 - 0.15, 0.2 + 0.15])
+    bars = dem_points.lines[2][0].get_segments()
+    assert [s[1, 1] - s[0, 1] for s in bars] == pytest.approx([2 * Z95 * 0.01, 2 * Z95 * 0.02])
