@@ -12,7 +12,7 @@ A ``Choice`` names what reads the response and how:
   continuum model does not slip, so its contact speed is its u_w).  The layer's depths over time are stored against
   the plate's speed only (compare.analysis.layer_series), so the transient depths have that reference alone;
 * ``from_transits``: the window's start in shear-wave transits over the bed (FROM_TRANSITS: at 1 the elastic wave has
-  crossed the bed once, at 3 it is compare.drive's elastic start, at 10 the elastic loading is over in every drive);
+  crossed the bed once, at 3 it is compare.drive's elastic start, at 10 it has crossed it ten times);
   None for a law of the steady state.
 
 ``FAMILIES`` holds each kind of law's family, its primary choice first: the depth delta_05 (U_FRACTION of the
@@ -38,14 +38,12 @@ from granstokes.continuum.crossing import LAYER_FRACTIONS, U_FRACTION
 from .drive import TRANSITS_BEFORE_COMPARISON
 from .rows import ESTIMATOR_DEPENDENT, sigma, verdict
 
-#: the layer estimators: the depths at LAYER_FRACTIONS, shallowest threshold (deepest depth) first, and the moment
+#: the layer estimators: the depths at LAYER_FRACTIONS, smallest fraction (the deepest depth) first, and the moment
 LAYER_ESTIMATORS = (*sorted(LAYER_FRACTIONS, key=LAYER_FRACTIONS.get), "moment")
 #: the primary layer depth: delta_u, the depth at U_FRACTION of the reference speed
 PRIMARY_ESTIMATOR = next(k for k, f in LAYER_FRACTIONS.items() if f == U_FRACTION)
 #: the windows' starts, in shear-wave transits over the bed
 FROM_TRANSITS = (1.0, TRANSITS_BEFORE_COMPARISON, 10.0)
-#: the keys of a choice's entry in a law row's ``choices`` (besides ``note``: why it has no sigma, or "")
-ENTRY_KEYS = ("estimator", "reference", "from_transits", "dem", "dem_err", "predicted", "predicted_err", "sigma")
 
 
 @dataclass(frozen=True)
@@ -88,7 +86,8 @@ FAMILIES = {
 
 
 def entry(choice: Choice, dem: float, dem_err: float, predicted: float, predicted_err: float, note: str) -> dict:
-    """One choice's entry in a law row (ENTRY_KEYS and ``note``): its sigma when ``note`` is empty, else NaN."""
+    """One choice's entry in a law row's ``choices``: the choice, the DEM's and the model's values and errors, and
+    ``sigma`` when ``note`` (why the choice has no sigma) is empty, else NaN."""
     s = np.nan if note else sigma(dem - predicted, dem_err, predicted_err)
     return {"estimator": choice.estimator, "reference": choice.reference, "from_transits": choice.from_transits,
             "dem": float(dem), "dem_err": float(dem_err), "predicted": float(predicted),
