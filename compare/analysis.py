@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from granstokes.continuum.crossing import depth_at_fraction, layer_measures
+from granstokes.continuum.crossing import LAYER_FRACTIONS, depth_at_fraction, layer_measures
 from granstokes.dem import layout
 
 from .calibrate import WALL_EXCLUSION
@@ -59,7 +59,7 @@ class DriveAnalysis:
     samples_how: str             # what they are: seeds or blocks of one seed
     frames: int                  # snapshots of a bed
     dropped_frames: int          # snapshots lost to truncated dumps, over the seeds
-    layers: pd.DataFrame         # every seed's layer over time (layer_series): seed, t, u_w, delta_50, delta_05, moment
+    layers: pd.DataFrame         # every seed's layer over time (layer_series): seed, t, u_w, depths, moment
 
     @property
     def response(self) -> str:
@@ -192,7 +192,7 @@ def layer_series(prof: DepthProfiles, plate: PlateRecord, surface_offset: float,
         if t > 0 and u_w > DELTA_MIN_SPEED * u_scale:
             surface = layout.plate_surface(float(np.interp(t, plate.t, plate.y)), surface_offset)
             rows.append({"t": float(t), "u_w": u_w, **layer_measures(surface - r.y, u[k], u_w)})
-    return pd.DataFrame(rows, columns=["t", "u_w", "delta_50", "delta_05", "moment"])
+    return pd.DataFrame(rows, columns=["t", "u_w", *LAYER_FRACTIONS, "moment"])
 
 
 #: blocks of a single seed's steady window that stand for independent samples (steady_samples)

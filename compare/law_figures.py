@@ -12,16 +12,23 @@ from granstokes.continuum.steady import steady_wall_speed
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
+from .rows import Z95
 from .scorecard import creep_length
 from .style import DEM_COLOUR, MODEL_STYLE, figure_legend, plain_log, suptitle
 
 #: the DEM's plate series are drawn as running means over this fraction of the record, at about POINTS times
 SMOOTHING, POINTS = 0.01, 150
 HOW_TO_READ = {
-    "law_growth": "Each drive's layer depth delta_u (u = 5 % of u_w) over its calibrated delta_s against t/t_s, "
+    "law_growth": "Left: each drive's layer depth delta_u (u = 5 % of u_w) over its calibrated delta_s against t/t_s, "
                   "log-log: DEM seed means as points (one colour per drive, darker = higher pressure), local mu(I) as "
                   "thin lines. The paper's self-similar regime is a slope of 1/2 (dotted guide) up to t/t_s of order "
-                  "1; points before the elastic start (3 shear-wave transits) are left out.",
+                  "1; points before the elastic start (3 shear-wave transits) are left out. Right: the growth "
+                  "exponent over its estimator family (compare.families: the depth at 5, 10, 20, 50 % of u_w and the "
+                  "profile's moment, from 1, 3 and 10 transits), imposed stresses (circles) and speeds (squares): the "
+                  "DEM with its 95 % statistical error, local mu(I) (open markers); a choice with no point is not "
+                  "measurable (its row's choices say why). Last column: the primary choice's DEM value with its "
+                  "statistical error and, beside it (grey), the family's systematic error (half its range of DEM - "
+                  "model).",
     "law_wall": "Left, imposed stresses: the plate speed in the paper's unit U = g delta_s^2/(beta_w nu_g) against "
                 "t/t_s; the paper predicts u~_w ~ sqrt(t~) early (dotted guide), then its steady value. Right, imposed "
                 "speeds: (mu_w - mu_s)/Dmu against t~/u~_w^2 (the paper's figure 8): a plateau near 1 (mu_w near mu_d) "
@@ -37,6 +44,10 @@ HOW_TO_READ = {
                     "self-similarly the curves of every drive and time fall on one.",
 }
 GUIDE = dict(color="k", lw=0.8, ls=":")
+#: the model whose law rows a family panel shows: the one whose curves the figures draw
+FAMILY_MODEL = "local"
+#: a family panel's marker and horizontal offset per kind of drive
+KIND_MARKER = {"stress": ("o", -0.15), "speed": ("s", 0.15), "all": ("D", 0.0)}
 
 
 def _drives(c):
@@ -87,10 +98,45 @@ def _finish(fig, axes, title: str, path: Path, ncols: int) -> Path:
     return path
 
 
+def _choice_label(e: dict) -> str:
+    return e["estimator"] + ("" if e["from_transits"] is None else f", from {e['from_transits']:g}")
+
+
+def family_panel(ax, rows, what: str) -> None:
+    """One law's rows (one per kind) over its estimator family: each measured choice's DEM value with its 95 %
+    statistical error and the model's value, then the primary choice with its statistical and systematic errors."""
+    rows = rows[rows.choices.map(len) > 0] if len(rows) else rows
+    if rows.empty:
+        ax.text(0.5, 0.5, "no law row with an estimator family", transform=ax.transAxes, ha="center")
+        ax.set_axis_off()
+        return
+    labels = [_choice_label(e) for e in rows.iloc[0].choices]
+    n = len(labels)
+    for r in rows.itertuples():
+        marker, off = KIND_MARKER[r.kind]
+        shown = [(i, e) for i, e in enumerate(r.choices) if np.isfinite(e["dem"]) and np.isfinite(e["predicted"])]
+        if shown:
+            x = np.array([i for i, _ in shown]) + off
+            ax.errorbar(x, [e["dem"] for _, e in shown], yerr=[Z95 * np.nan_to_num(e["dem_err"]) for _, e in shown],
+                        fmt=marker, ms=4, color=DEM_COLOUR, label=f"DEM, imposed {r.kind} (95 % statistical)")
+            ax.plot(x, [e["predicted"] for _, e in shown], marker, ms=6, mfc="none", ls="none",
+                    color=MODEL_STYLE[r.model]["color"], label=f"{r.model} (the same choice), imposed {r.kind}")
+        if np.isfinite(r.dem):
+            ax.errorbar(n + off - 0.06, r.dem, yerr=Z95 * np.nan_to_num(r.dem_err), fmt=marker, ms=4,
+                        color=DEM_COLOUR)
+            if np.isfinite(r.systematic):
+                ax.errorbar(n + off + 0.06, r.dem, yerr=r.systematic, fmt="none", ecolor="0.55", elinewidth=4,
+                            label="systematic: half the family's range of DEM - model")
+    ax.axvline(n - 0.5, color="0.8", lw=0.8)
+    ax.set_xticks(range(n + 1), [*labels, "primary: statistical | systematic"], rotation=60, ha="right", fontsize=7)
+    ax.set(xlim=(-0.6, n + 0.6), ylabel=what, xlabel="estimator, from (shear-wave transits)",
+           title=f"{what} by estimator choice")
+
+
 def growth_figure(c, out: Path) -> Path:
     drives = _drives(c)
-    fig = Figure(figsize=(8, 6.5), layout="constrained")
-    ax = fig.subplots()
+    fig = Figure(figsize=(14, 7), layout="constrained")
+    ax, fam = fig.subplots(1, 2, width_ratios=[3, 2])
     for dc in drives:
         sc, colour = dc.scales, _colour(dc, drives)
         t, d = _layer_mean(dc)
@@ -103,8 +149,11 @@ def growth_figure(c, out: Path) -> Path:
     ax.plot(x, np.sqrt(x), label="slope 1/2 (the paper's self-similar growth)", **GUIDE)
     ax.plot([], [], lw=0.8, color="0.4", label="local mu(I) on the DEM's scene (same colours)")
     ax.set(xscale="log", yscale="log", xlabel="t / t_s", ylabel="delta_u / delta_s (calibrated)")
-    return _finish(fig, [ax], "Layer growth in the paper's variables (DEM units; delta_s, t_s from the calibration)",
-                   out / "law_growth.png", 3)
+    laws = c.laws
+    family_panel(fam, laws[(laws.law == "delta_growth_exponent") & (laws.model == FAMILY_MODEL)] if len(laws) else laws,
+                 "growth exponent n")
+    return _finish(fig, [ax, fam], "Layer growth in the paper's variables (DEM units; delta_s, t_s from the "
+                   "calibration) and its exponent over the estimator family", out / "law_growth.png", 3)
 
 
 def wall_figure(c, out: Path) -> Path:

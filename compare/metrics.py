@@ -85,7 +85,9 @@ DEFINITIONS = {
                   "-+ 1.96 s_cal, s_cal "
                   "the calibration's replicates propagated linearly (the law re-estimated on predictions re-solved "
                   "with each parameter shifted); sigma = (dem - predicted) / sqrt(dem_err^2 + s_cal^2); "
-                  "'not measurable' or 'not predicted' with the reason where the data cannot decide"),
+                  "'not measurable' or 'not predicted' with the reason where the data cannot decide; choices: the law "
+                  "over its estimator family (compare/families.py), systematic: half their range of dem - predicted, "
+                  "verdict 'depends on the estimator' where consistent and disagreeing choices meet"),
     "units": ("-", UNITS["dem_units"]),
     "inertial_number": ("-", UNITS["inertial_number"]),
 }
@@ -174,9 +176,9 @@ def row_differences(committed: dict, regenerated: dict) -> dict:
     only one side has, the largest relative difference of a number (|a - b| / max(|a|, |b|), lists element-wise),
     and the fields whose words differ."""
     def numbers(v):
-        """A field's numbers (None as NaN), or [] for words."""
+        """A field's numbers (None as NaN), or [] for words (a law's choices, dicts with words, among them)."""
         items = v if isinstance(v, list) else [v]
-        if not items or any(isinstance(x, bool | str) for x in items) or all(x is None for x in items):
+        if not items or any(isinstance(x, bool | str | dict) for x in items) or all(x is None for x in items):
             return []
         return [np.nan if x is None else float(x) for x in items]
 

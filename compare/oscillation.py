@@ -390,7 +390,9 @@ def laws(rows: pd.DataFrame) -> pd.DataFrame:
                                  ("phase_lag_slope", "phase_lag", np.log, lambda v: v)):
             s = g[(g.observable == obs) & (g.dem > 0 if obs == "yielded_depth" else g.dem.notna())]
             s = s[s.predicted > 0] if obs == "yielded_depth" else s
+            # one estimator per law: no family of choices (compare.families holds the Stokes drives')
             base = {"law": law, "kind": kind, "amplitude": amp, "model": model, "n_drives": len(s), "unit": "1",
+                    "choices": [], "systematic": np.nan,
                     "window": f"omega t_s in [{s.omega_ts.min():.3g}, {s.omega_ts.max():.3g}]" if len(s) else "",
                     "quantity": "n in yielded_depth ~ (omega t_s)^n" if obs == "yielded_depth"
                     else "s in phase_lag = a + s ln(omega t_s) [rad]"}

@@ -19,7 +19,8 @@ row's dof (``critical``: 4.30 at 2 dof, 3.18 at 3, Z95 = 1.96 at infinitely many
 whatever the number of samples.  The threshold is not a column: ``critical(dof)`` gives it from the row's dof.  A row
 that cannot be scored carries a note that starts with why, and its verdict is that note's head: "not scored" (the
 scene cannot support it), "not predicted" (the model has no prediction for it), "not measurable" (the data give no
-value or no error).
+value or no error).  A law row measured over an estimator family (compare.families) whose choices split, some
+consistent and some not, has the note's head ESTIMATOR_DEPENDENT as its verdict: neither consistent nor disagrees.
 """
 from __future__ import annotations
 
@@ -33,10 +34,12 @@ CONFIDENCE = 0.95
 Z95 = float(stats.norm.ppf((1 + CONFIDENCE) / 2))
 #: what an unscored row's note starts with (its verdict)
 UNSCORED = ("not scored", "not predicted", "not measurable")
+#: the verdict of a law whose estimator family splits (compare.families.family_note)
+ESTIMATOR_DEPENDENT = "depends on the estimator"
 ROW_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted", "band",
             "numerical_err", "calibration_sd", "sigma", "dof", "verdict", "scored", "note", "blind")
 LAW_KEYS = ("law", "quantity", "unit", "kind", "model", "dem", "dem_err", "predicted", "predicted_err", "band",
-            "sigma", "dof", "chi2_dof", "verdict", "n_drives", "window", "note")
+            "sigma", "dof", "chi2_dof", "verdict", "n_drives", "window", "note", "choices", "systematic")
 
 
 def critical(dof: float) -> float:
@@ -62,12 +65,13 @@ def effective_dof(errors, dofs) -> float:
 
 
 def verdict(sigma: float, note: str = "", dof: float = np.inf) -> str:
-    """The verdict of a row: its note's head when it has one (UNSCORED), else consistent when |sigma| is within
-    ``critical(dof)``, disagrees beyond."""
+    """The verdict of a row: its note's head when it has one (UNSCORED or ESTIMATOR_DEPENDENT), else consistent when
+    |sigma| is within ``critical(dof)``, disagrees beyond."""
     if note:
-        head = next((h for h in UNSCORED if note.startswith(h)), None)
+        heads = (*UNSCORED, ESTIMATOR_DEPENDENT)
+        head = next((h for h in heads if note.startswith(h)), None)
         if head is None:
-            raise ValueError(f"a row's note must start with one of {UNSCORED}: {note!r}")
+            raise ValueError(f"a row's note must start with one of {heads}: {note!r}")
         return head
     return "consistent" if abs(sigma) <= critical(dof) else "disagrees"
 

@@ -97,9 +97,10 @@ def depth_at_fraction(depth, u, u_w: float, frac: float = U_FRACTION) -> float:
     return crossing_depth(depth, np.asarray(u) / u_w, frac)
 
 
-#: the layer's depths by threshold of u/u_w (transient observables): where u falls to half the plate's speed,
-#: and delta_u's U_FRACTION
-LAYER_FRACTIONS = {"delta_50": 0.5, "delta_05": U_FRACTION}
+#: the layer's depths by threshold of u/u_w (transient observables, compare.families' estimators): where u falls to
+#: half the plate's speed (the least sensitive to a creep tail, whose depth grows as ln(1/f)), to a fifth and a tenth
+#: of it, and delta_u's U_FRACTION
+LAYER_FRACTIONS = {"delta_50": 0.5, "delta_20": 0.2, "delta_10": 0.1, "delta_05": U_FRACTION}
 
 
 def layer_measures(depth, u, u_w: float) -> dict:

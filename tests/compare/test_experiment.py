@@ -130,7 +130,8 @@ class ToyPlate(Experiment):
     def _conclude(self, dem, setup, predicted):
         law = rows.law_row(law="toy_law", quantity="gap", unit="d", kind="toy", model="double", dem=1.0, dem_err=0.5,
                            predicted=2.0, predicted_err=0.0, sigma=-2.0, dof=np.inf, chi2_dof=np.nan,
-                           n_drives=len(dem), window="", note="")
+                           n_drives=len(dem), window="", note="",
+                           choices=[], systematic=np.nan)
         return ToyResult(pd.DataFrame(predicted), pd.DataFrame([law]), ("runs/toy",), "none")
 
     @classmethod

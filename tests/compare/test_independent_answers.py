@@ -533,9 +533,12 @@ def _layer_track(L_of_t, times, depth=np.linspace(0.0, 60.0, 3001)):
 
 
 def _growth_drive(t_s, nu_g, start, t_end):
+    """A drive whose elastic start (TRANSITS_BEFORE_COMPARISON shear-wave transits) is ``start``."""
     from types import SimpleNamespace
-    return SimpleNamespace(dem=SimpleNamespace(spec=SimpleNamespace(compared_from=start), t_end=t_end),
-                           scales=SimpleNamespace(t_s=t_s, nu_g=nu_g))
+
+    from granstokes.compare.drive import TRANSITS_BEFORE_COMPARISON
+    return SimpleNamespace(dem=SimpleNamespace(spec=SimpleNamespace(transit_time=start / TRANSITS_BEFORE_COMPARISON),
+                                               t_end=t_end), scales=SimpleNamespace(t_s=t_s, nu_g=nu_g))
 
 
 def test_a_diffusive_layer_grows_as_sqrt_t_at_every_threshold_with_the_erfc_ratio():
@@ -560,8 +563,9 @@ def test_a_diffusive_layer_grows_as_sqrt_t_at_every_threshold_with_the_erfc_rati
 
 def test_a_layer_growing_as_t_to_one_third_is_fitted_as_such_and_a_covered_window_is_not_measured():
     """The estimator is not tied to 1/2: L = t^(1/3) gives 1/3. A window the elastic start covers, or half the record
-    ending before it starts, is not measurable, with both times in the reason."""
-    from granstokes.compare.laws import MIN_POINTS, growth
+    ending before it starts, is not measurable, with both times in the reason; so is a window of under MIN_DECADES
+    (170 to 200: log10(200/170) = 0.071 decade) and one holding fewer than MIN_POINTS depths."""
+    from granstokes.compare.laws import MIN_DECADES, MIN_POINTS, growth
     times = np.geomspace(1.0, 300.0, 40)
     _, track = _layer_track(lambda t: 1.5 * t ** (1 / 3), times)
     assert growth(track, _growth_drive(400.0, 1.0, start=2.0, t_end=1000.0))["exponent"] == pytest.approx(1 / 3,
@@ -569,9 +573,12 @@ def test_a_layer_growing_as_t_to_one_third_is_fitted_as_such_and_a_covered_windo
     covered = growth(track, _growth_drive(400.0, 1.0, start=250.0, t_end=380.0))
     assert set(covered) == {"why"} and "(3 shear-wave transits, 250) covers the growth window (until 190 =" in \
         covered["why"]
-    few = growth(track, _growth_drive(400.0, 1.0, start=170.0, t_end=1000.0))
-    inside = int(np.sum((times >= 170.0) & (times <= 200.0)))
-    assert few["why"] == f"{inside} layer depths in the growth window [170, 200] (fewer than {MIN_POINTS})"
+    short = growth(track, _growth_drive(400.0, 1.0, start=170.0, t_end=1000.0))
+    assert short["why"] == f"the window [170, 200] spans 0.071 decade(s) of time (fewer than {MIN_DECADES:g})"
+    sparse = np.array([1.0, 5.0, 50.0, 300.0])
+    _, sparse_track = _layer_track(lambda t: 1.5 * t ** (1 / 3), sparse)
+    few = growth(sparse_track, _growth_drive(400.0, 1.0, start=2.0, t_end=1000.0))
+    assert few["why"] == f"2 layer depths in the window [2, 200] (fewer than {MIN_POINTS})"
 
 
 def test_a_creeping_layer_s_depth_depends_on_the_threshold_as_ln_1_over_f():

@@ -51,7 +51,7 @@ def drive(p_w: float = 10.0, mu_w: float = 0.45, seeds: int = 4, k: float = 1.0,
     spec = DriveSpec(Path("run"), f"stress-{p_w:g}-{mu_w:g}", Load("stress", p_w, mu_w=mu_w), DEPTH, 1.0, 0.0, 1000,
                      transit, seeds, 1000, 2)
     series = pd.DataFrame({"t": t, "u_w": u, "mu_w": mu_w})
-    a = DriveAnalysis(spec, tuple(plates), (), series, {}, 0.7 * t_end, t_end, {}, {}, sample, sample,
+    a = DriveAnalysis(spec, tuple(plates), (), series, {}, 0.7 * t_end, t_end, {"value": 0.0}, {}, sample, sample,
                       pd.DataFrame(), pd.DataFrame(), np.array([]), tuple(sample for _ in range(seeds)), "seeds",
                       len(t_frames), 0, pd.concat(layers, ignore_index=True))
     model_t = np.geomspace(t_end / 3000, t_end, 80)
@@ -63,16 +63,19 @@ def drive(p_w: float = 10.0, mu_w: float = 0.45, seeds: int = 4, k: float = 1.0,
     return DriveComparison(a, scales, (pred,), "")
 
 
-def row(table: pd.DataFrame, law: str, quantity_starts: str = "") -> pd.Series:
-    sel = table[(table.law == law) & table.quantity.str.startswith(quantity_starts)]
+def row(table: pd.DataFrame, law: str, quantity_starts: str = "", kind: str = "stress") -> pd.Series:
+    """The one row of ``law`` (its quantity starting so) read on the drives of ``kind`` (or every drive: "all")."""
+    sel = table[(table.law == law) & table.quantity.str.startswith(quantity_starts)
+                & table.kind.isin([kind, "all"])]
     assert len(sel) == 1, sel
     return sel.iloc[0]
 
 
 def test_every_law_has_a_row_with_every_key():
     table = laws([drive()], resamples=20)
-    assert list(table.columns) == list(LAW_KEYS)
-    assert {(law.name, law.quantity) for law in LAWS} == set(zip(table.law, table.quantity))
+    assert list(table.columns) == list(dict.fromkeys([*LAW_KEYS, "kind"]))
+    assert {(law.name, law.quantity, law.kind or "all") for law in LAWS} == set(zip(table.law, table.quantity,
+                                                                                    table.kind))
     for r in table.itertuples():
         assert r.verdict in ("consistent", "disagrees", "not measurable", "not predicted")
         assert (r.verdict in ("consistent", "disagrees")) == (r.note == "") and (r.note == "" or r.note.strip())
@@ -135,15 +138,15 @@ def test_a_model_with_an_assumed_time_scale_predicts_no_transient_law():
                                                                   transient_calibrated=False)))
                 for dc in compared]
     table = laws(compared, resamples=20)
-    ngf = table[table.model == "ngf"].set_index(["law", "quantity"])
-    local = table[table.model == "local"].set_index(["law", "quantity"])
+    ngf = table[table.model == "ngf"].set_index(["law", "quantity", "kind"])
+    local = table[table.model == "local"].set_index(["law", "quantity", "kind"])
     for law in LAWS:
-        key = (law.name, law.quantity)
+        key = (law.name, law.quantity, law.kind or "all")
         if law.transient:
             assert ngf.loc[key, "verdict"] == "not predicted" and "time scale is assumed" in ngf.loc[key, "note"]
         else:
             assert ngf.loc[key, "verdict"] == local.loc[key, "verdict"]
-    assert local.loc[("t_s_collapse", "slope of log t90 against log t_s"), "verdict"] != "not predicted"
+    assert local.loc[("t_s_collapse", "slope of log t90 against log t_s", "stress"), "verdict"] != "not predicted"
 
 
 def test_the_calibration_spread_propagates_into_a_law_s_band_and_sigma():
@@ -197,4 +200,4 @@ def test_the_bootstrap_over_few_seeds_is_corrected_to_the_sample_s_standard_erro
     first = dc.dem.layers.groupby("seed").delta_05.first().to_numpy()  # delta_05 ~ factor: the prefactor's ratio
     p = pre.dem * first / first.mean()
     assert pre.dem_err == pytest.approx(abs(p[0] - p[1]) / 2, rel=0.15)
-    assert pre.dof == 1 and pre.kind == "both" and np.isnan(pre.chi2_dof)
+    assert pre.dof == 1 and pre.kind == "stress" and np.isnan(pre.chi2_dof)

@@ -43,3 +43,14 @@ def test_the_spheres_study_regenerates_from_its_tables(tmp_path):
     for section in ("scorecard", "laws"):
         assert d[section]["rows"] > 0 and d[section]["only_committed"] == d[section]["only_regenerated"] == 0
         assert d[section]["max_relative"] <= REGENERATED_RTOL and not d[section]["words_differ"], d
+
+
+def test_a_law_s_choices_are_compared_as_words():
+    """A law row's choices (dicts with words) are equal or a word difference, never a number to subtract."""
+    committed = {"scorecard": [], "laws": [{"law": "growth", "quantity": "n", "kind": "stress", "model": "local",
+                                            "dem": 0.5, "choices": [{"estimator": "delta_05", "dem": 0.5}]}]}
+    assert row_differences(committed, copy.deepcopy(committed))["laws"]["words_differ"] == []
+    changed = copy.deepcopy(committed)
+    changed["laws"][0]["choices"][0]["dem"] = 0.6
+    d = row_differences(committed, changed)["laws"]
+    assert d["words_differ"] == ["choices"] and d["max_relative"] == 0

@@ -38,13 +38,17 @@ def test_a_row_without_one_of_its_keys_is_refused_naming_it():
 def test_a_law_row_without_a_note_is_judged_by_sigma_and_gets_its_band():
     law = rows.law_row(law="t90 ~ t_s", quantity="slope", unit="1", kind="stress", model="local", dem=1.0,
                        dem_err=0.1, predicted=1.2, predicted_err=0.05, sigma=-2.1, dof=np.inf, chi2_dof=0.8,
-                       n_drives=4, window="all", note="", extra="kept")
+                       n_drives=4, window="all", note="", choices=[], systematic=np.nan, extra="kept")
     assert list(law) == [*rows.LAW_KEYS, "extra"]
     assert law["verdict"] == "disagrees" and (law["kind"], law["chi2_dof"]) == ("stress", 0.8)
     assert law["band"] == pytest.approx([1.2 - rows.Z95 * 0.05, 1.2 + rows.Z95 * 0.05], rel=1e-15)
     assert rows.law_row(**{**law, "sigma": 0.3})["verdict"] == "consistent"
     assert rows.law_row(**{**law, "dof": 2})["verdict"] == "consistent"  # -2.1 within t_0.975(2) = 4.30
     assert rows.law_row(**{**law, "note": "not measurable: one drive"})["verdict"] == "not measurable"
+    split = rows.law_row(**{**law, "note": f"{rows.ESTIMATOR_DEPENDENT}: 1 of 2 measured choices consistent"})
+    assert split["verdict"] == "depends on the estimator"
+    with pytest.raises(ValueError, match="must start with one of"):
+        rows.law_row(**{**law, "note": "depends on the weather"})
     z = stats.norm.ppf(0.975)
     assert rows.verdict(-z) == "consistent" and rows.verdict(z + 1e-12) == "disagrees"
     assert rows.verdict(-2.0) == "disagrees"  # beyond 1.96 at infinite dof
