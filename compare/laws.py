@@ -281,8 +281,8 @@ def in_regime(w: Window, t, y, what: str) -> Window:
 
 
 def _in(t: np.ndarray, values: np.ndarray, w: Window) -> tuple[np.ndarray, np.ndarray]:
-    """The positive, finite values at times in the window."""
-    sel = (t >= w.t0) & (t <= w.t1) & np.isfinite(values) & (values > 0)
+    """The positive, finite values at positive times in the window (a power law has no value at t = 0)."""
+    sel = (t >= w.t0) & (t <= w.t1) & (t > 0) & np.isfinite(values) & (values > 0)
     return t[sel], values[sel]
 
 
