@@ -182,7 +182,7 @@ class SceneState:
     def text(self) -> str:
         """The failing drives in words (named up to NAMED_DRIVES), or the check with "holds" or "not known"."""
         if not self.failing:
-            return f"{self.check.what} {'holds' if self.holds else 'not known'}"
+            return f"{self.check.what}: {'holds' if self.holds else 'not known'}"
         named = "; ".join(self.failing[:NAMED_DRIVES]) + ("; …" if len(self.failing) > NAMED_DRIVES else "")
         own = ", the evidence's drive among them" if self.evidence_fails else ""
         return f"{self.check.fails} in {len(self.failing)} of {self.drives} drives ({named}){own}"

@@ -351,7 +351,7 @@ def scene(c: OscillationComparison) -> list[dict]:
     for d in c.drives:
         dr = d.drive
         out.append({"check": "slip", "drive": dr.label, "holds": bool(d.slip <= SLIP_MAX),
-                    "detail": f"slip {d.slip * 100:.0f} %"})
+                    "detail": f"slip {d.slip * 100:.1f} %"})
         out.append({"check": "periodic", "drive": dr.label, "holds": _periodic(d.stationary),
                     "detail": f"{sum(s is False for s in d.stationary)} of {len(d.stationary)} beds not periodic"})
         transits = dr.load.period / dr.transit_time if np.isfinite(dr.transit_time) and dr.transit_time > 0 else np.nan

@@ -691,7 +691,7 @@ def scene(c: Comparison) -> list[dict]:
     by_check = {"slip at the plate": "slip", "bulk CG tau - plate <tau_w>": "stresses",
                 "pressure slope / (mean phi rho_p g)": "stresses"}
     for r in c.scorecard.scene.itertuples() if len(c.scorecard.scene) else []:
-        detail = f"slip {r.value * 100:.0f} %" if by_check[r.check] == "slip" else f"{r.check} = {fmt(r.value, r.err)}"
+        detail = f"slip {r.value * 100:.1f} %" if by_check[r.check] == "slip" else f"{r.check} = {fmt(r.value, r.err)}"
         out.append({"check": by_check[r.check], "drive": r.drive, "detail": detail,
                     "holds": r.verdict in ("grips", "within error")})
     rows = c.scorecard.rows

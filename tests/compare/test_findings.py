@@ -91,6 +91,9 @@ def test_the_scene_names_the_drives_that_fail_and_whether_the_evidence_s_drive_i
              {"check": "base", "drive": "runs/p5/a", "holds": True, "detail": ""},
              {"check": "base", "drive": "runs/p10/b", "holds": True, "detail": ""}]
     (f,) = fd.findings(card, None, scene, names={"runs/p5/a": "p5: a"})
+    assert {s.check.key: s.text() for s in f.scene if s.check.key != "slip"} == {
+        "transit": "the elastic transit: not known", "record": "the record's length: not known",
+        "base": "the base: holds"}
     assert fd.scene_text(f) == (f"the plate slips by more than {SLIP_MAX * 100:g} % in 1 of 2 drives (p5: a: slip "
                                 "9 %), the evidence's drive among them; the base: holds in every drive; the elastic "
                                 "transit, the record's length: not known")
@@ -143,6 +146,10 @@ class LayerReport(Experiment):
     titles = {"map": "The map", "drive": "A drive"}
     how_to_read = {"map": "how to read the map", "drive": "how to read a drive"}
     definitions = {"delta_u": ("d", "the layer's depth")}
+
+    @classmethod
+    def accepts(cls, load) -> bool:
+        return load.kind == "layer"  # no load is: it never takes a real drive from the registry
 
     @classmethod
     def write_tables(cls, result, folder):
