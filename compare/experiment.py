@@ -36,7 +36,9 @@ from granstokes.lib.page import page
 from granstokes.lib.provenance import provenance
 from granstokes.lib.validate import require
 
-from .rows import tally
+from .findings import as_dict, evidence_text, findings, rows_text, scene_text
+from .rows import UNSCORED, tally
+from .words import VERDICT_COLOUR
 
 #: the modules whose Experiment subclasses make the registry, in the order they are asked
 MODULES = ("granstokes.compare.stokes_experiment", "granstokes.compare.oscillation_experiment")
@@ -44,15 +46,35 @@ MODULES = ("granstokes.compare.stokes_experiment", "granstokes.compare.oscillati
 TABLES = "tables"
 #: the CSV files' number format
 CSV_FLOAT = "%.6g"
+#: the reasons a finding without a scored row gives (the rest are in its rows' notes)
+NAMED_REASONS = 2
+
+
+#: the report's pages: index.html opens with the title, the verdict and the findings, then a contents list
+INDEX, SCORECARD, DRIVES = "index.html", "scorecard.html", "drives.html"
+#: the pages beside index.html, each headed by the study's title and this
+PAGES = {SCORECARD: "the scorecard, row by row", DRIVES: "the drives, one by one"}
 
 
 @dataclass(frozen=True)
 class FigureFile:
-    """A figure of a report: its kind (the experiment's TITLES and HOW_TO_READ key), file and drive name (or "")."""
+    """A figure of a report: its kind (the experiment's TITLES and HOW_TO_READ key), file, drive name (or "") and
+    the page it is on."""
 
     kind: str
     path: Path
     name: str = ""
+    page: str = INDEX
+
+
+@dataclass(frozen=True)
+class Section:
+    """A titled part of a report: its heading, its HTML, its anchor (the id the contents link to) and its page."""
+
+    heading: str
+    body: str
+    anchor: str
+    page: str = INDEX
 
 
 class Experiment:
@@ -65,7 +87,8 @@ class Experiment:
     titles: ClassVar[dict]            # figure kind -> title
     how_to_read: ClassVar[dict]       # figure kind -> how to read it
     definitions: ClassVar[dict]       # name -> (unit, definition)
-    report: ClassVar = None           # the module that renders it: metrics, files, sections, verdict (each optional)
+    report: ClassVar = None           # the module that renders it: verdict, metrics, files, sections, scene, names,
+                                      # kinds (each optional)
 
     def __init__(self, calibration: str | Path | None = None, *, jobs: int = 1, progress: bool = True):
         """A subclass adds its own keyword options (checked there, before any work)."""
@@ -136,9 +159,24 @@ class Experiment:
         return cls._rendered("files", lambda r, o: [], result, out)
 
     @classmethod
-    def sections(cls, result, metrics: dict) -> list[str]:
-        """The report's HTML sections between the heading and the figures."""
+    def sections(cls, result, metrics: dict) -> list[Section]:
+        """The report's titled sections, each on its page (index.html's after its findings and contents)."""
         return cls._rendered("sections", lambda r, m: [], result, metrics)
+
+    @classmethod
+    def scene(cls, result) -> list[dict]:
+        """Each drive's scene checks in compare.findings' terms (check, drive, holds, detail)."""
+        return cls._rendered("scene", lambda r: [], result)
+
+    @classmethod
+    def names(cls, result) -> dict:
+        """The drives' labels as a reader sees them (label -> name)."""
+        return cls._rendered("names", lambda r: {}, result)
+
+    @classmethod
+    def kinds(cls, result) -> dict:
+        """Each drive's load kind (label -> "stress" or "speed"), for rows that do not carry it."""
+        return cls._rendered("kinds", lambda r: {}, result)
 
     @classmethod
     def outputs(cls, drives, output) -> dict:
@@ -168,15 +206,20 @@ class Experiment:
 
     @classmethod
     def write(cls, result, out_dir) -> dict:
-        """The shell every report shares: metrics.json (the shared keys, then the experiment's), scorecard.csv,
-        laws.csv, the experiment's files and tables/, and index.html (heading, the experiment's sections, figures,
-        definitions, provenance); returns the metrics."""
+        """The shell every report shares: metrics.json (the shared keys with the findings, then the experiment's),
+        scorecard.csv, laws.csv, the experiment's files and tables/, and the pages: index.html (the study's title,
+        the verdict and the findings on one screen, a contents list, the index's sections and figures, definitions,
+        provenance) and each of PAGES that has a section or a figure, titled by the study and linking back; returns
+        the metrics."""
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         rows, laws = result.rows, result.laws
         runs = [str(r) for r in result.runs]
+        names = cls.names(result)
+        found = findings(rows, laws, cls.scene(result), names, cls.kinds(result))
         m = json_ready({
             "experiment": cls.name, "problem": cls.problem, "verdict": cls.verdict(result),
+            "findings": [as_dict(f, names) for f in found],
             "tally": tally(rows).to_dict("records"),
             "scorecard": [{k: r[k] for k in rows.columns} for r in rows.to_dict("records")],
             "laws": laws.to_dict("records"),
@@ -190,21 +233,76 @@ class Experiment:
         laws.to_csv(out / "laws.csv", index=False, float_format=CSV_FLOAT)
         figures = cls.files(result, out)
         cls.write_tables(result, out / TABLES)
-        body = [f"<h1>{html.escape(cls.title)}</h1>", *cls.sections(result, m), "<h2>Figures</h2>",
-                *(cls._figure_html(f) for f in figures), "<h2>Definitions</h2>",
-                table(["name", "unit", "definition"], [[html.escape(k), html.escape(u), html.escape(d)]
-                                                       for k, (u, d) in cls.definitions.items()]),
-                "<h2>Provenance</h2>", table(["item", "value"], [[html.escape(k), html.escape(_cell(v))]
-                                                                 for k, v in m["provenance"].items() if k != "inputs"])]
-        (out / "index.html").write_text(page(f"granstokes: {cls.title}", "".join(body)))
+        sections = cls.sections(result, m)
+        pages = [p for p in PAGES if any(s.page == p for s in sections) or any(f.page == p for f in figures)]
+        closing = [Section("Definitions", table(["name", "unit", "definition"], [
+                       [html.escape(k), html.escape(u), html.escape(d)] for k, (u, d) in cls.definitions.items()]),
+                           "definitions"),
+                   Section("Provenance", table(["item", "value"], [[html.escape(k), html.escape(_cell(v))] for k, v
+                                                                  in m["provenance"].items() if k != "inputs"]),
+                           "provenance")]
+        index = [s for s in sections if s.page == INDEX] + cls._figures_section(figures, INDEX) + closing
+        contents = "".join(f"<li><a href='#{s.anchor}'>{html.escape(s.heading)}</a></li>" for s in index)
+        contents += "".join(f"<li><a href='{p}'>{html.escape(PAGES[p][:1].upper() + PAGES[p][1:])}</a> (a page of "
+                            "its own)</li>" for p in pages)
+        title = cls.title[:1].upper() + cls.title[1:]
+        body = [f"<h1>{html.escape(title)}</h1>",
+                f"<p class='verdict'><b>Verdict.</b> {html.escape(m['verdict'])}</p>",
+                "<h2 id='findings'>Findings</h2>", findings_html(found, names),
+                f"<h2 id='contents'>Contents</h2><ul>{contents}</ul>", *(cls._section_html(s) for s in index)]
+        (out / INDEX).write_text(page(f"granstokes: {title}", "".join(body)))
+        for p in pages:
+            here = [s for s in sections if s.page == p] + cls._figures_section(figures, p)
+            links = "".join(f"<li><a href='#{s.anchor}'>{html.escape(s.heading)}</a></li>" for s in here)
+            body = [f"<h1>{html.escape(title)}: {html.escape(PAGES[p])}</h1>",
+                    f"<p><a href='{INDEX}'>Back to the report: the verdict and the findings</a></p>",
+                    f"<ul>{links}</ul>", *(cls._section_html(s) for s in here)]
+            (out / p).write_text(page(f"granstokes: {title}: {PAGES[p]}", "".join(body)))
         return m
 
+    @staticmethod
+    def _section_html(s: Section) -> str:
+        return f"<h2 id='{s.anchor}'>{html.escape(s.heading)}</h2>{s.body}"
+
     @classmethod
-    def _figure_html(cls, f: FigureFile) -> str:
+    def _figures_section(cls, figures: list[FigureFile], on: str) -> list[Section]:
+        """The figures of page ``on`` as one section (none when it has none); off the index, the first figure of each
+        name (a drive's) links from the section's head."""
+        shown = [f for f in figures if f.page == on]
+        if not shown:
+            return []
+        drives = list(dict.fromkeys(f.name for f in shown if f.name))
+        anchors = {name: f"figures-{k}" for k, name in enumerate(drives)}
+        head = ("<p>Jump to: " + ", ".join(f"<a href='#{anchors[n]}'>{html.escape(n)}</a>" for n in drives)
+                + ".</p>" if drives and on != INDEX else "")
+        first = {f.name: f for f in reversed(shown) if f.name}
+        body = "".join(cls._figure_html(f, anchors[f.name] if f.name and first[f.name] is f else "") for f in shown)
+        return [Section("Figures", head + body, "figures")]
+
+    @classmethod
+    def _figure_html(cls, f: FigureFile, anchor: str = "") -> str:
         title = cls.titles[f.kind] + (f": {f.name}" if f.name else "")
         alt = f"{cls.titles[f.kind]} figure" + (f" of {f.name}" if f.name else "")
-        return (f"<h3>{html.escape(title)}</h3><p class='how'>{html.escape(cls.how_to_read[f.kind])}</p>"
+        ident = f" id='{anchor}'" if anchor else ""
+        return (f"<h3{ident}>{html.escape(title)}</h3><p class='how'>{html.escape(cls.how_to_read[f.kind])}</p>"
                 f"<p><img src='{Path(f.path).name}' alt='{html.escape(alt)}'></p>")
+
+
+def findings_html(found: list, names: dict) -> str:
+    """The findings as a short table: the effect and its status, its strongest robust evidence, the rows behind it,
+    the scene checks that could fake it (compare.findings)."""
+    if not found:
+        return "<p>No finding: no row of this study measures an effect.</p>"
+    rows = [[f"<b>{html.escape(f.effect)}</b><br><small style='color:{_status_colour(f.status)}'>"
+             f"{html.escape(f.status)}</small>",
+             html.escape(evidence_text(f, names) or "no scored row: " + "; ".join(f.why[:NAMED_REASONS])),
+             html.escape(rows_text(f)), html.escape(scene_text(f))] for f in found]
+    return table(["finding", "strongest robust evidence", "rows", "what could fake it: the scene"], rows)
+
+
+def _status_colour(status: str) -> str:
+    """A finding's status in its rows' verdict colour: no row disagrees (green), none is scored (grey), else red."""
+    return VERDICT_COLOUR[{"not shown": "consistent", "not measurable": UNSCORED[-1]}.get(status, "disagrees")]
 
 
 def table(header, rows) -> str:

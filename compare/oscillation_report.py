@@ -1,5 +1,7 @@
 """The oscillating plate's report: renders a compare.oscillation.OscillationComparison into metrics.json, CSV tables,
-PNG figures and index.html (nothing is computed here but the words of the verdict)."""
+PNG figures and the pages of compare.experiment's shell (nothing is computed here but the words of the verdict):
+index.html (after the verdict and the findings: the laws in omega, the calibration and the map across frequencies),
+scorecard.html (every row) and drives.html (the drives, their zones, profiles and loops)."""
 from __future__ import annotations
 
 import html
@@ -11,10 +13,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .experiment import CSV_FLOAT, FigureFile, table  # noqa: E402
+from .drive import TRANSITS_BEFORE_COMPARISON  # noqa: E402
+from .experiment import CSV_FLOAT, DRIVES, SCORECARD, FigureFile, Section, table  # noqa: E402
 from .oscillation import LABELS, RESPONSE_FRACTION, SKIP, OscillationComparison, OscPrediction  # noqa: E402
-from .report import fmt, fmt_band, slug  # noqa: E402
+from .plate import SLIP_MAX  # noqa: E402
+from .report import display_label, slug  # noqa: E402
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, plain_log, suptitle  # noqa: E402
+from .words import MODEL_WORDS, fmt, fmt_band, words  # noqa: E402
 
 DEFINITIONS = {
     "response_amplitude": ("sqrt(g d) or 1", "the fundamental's amplitude of the free response: u_w [sqrt(g d)] "
@@ -72,7 +77,8 @@ def verdict(c: OscillationComparison) -> str:
 
 
 def verdict_parts(c: OscillationComparison) -> list[str]:
-    """The verdict's sentences: per model, the observables' agreement; the history effect; the laws in omega."""
+    """The verdict's sentences: per model, the observables' agreement; the history effect (the laws in omega have
+    their own, ``law_sentences``)."""
     r, parts = c.rows, []
     for m in LABELS:
         s = r[(r.model == m) & r.scored]
@@ -80,7 +86,7 @@ def verdict_parts(c: OscillationComparison) -> list[str]:
             note = r[r.model == m].note.iloc[0] if len(r[r.model == m]) else ""
             parts.append(f"{LABELS[m]}: not predicted ({note}).")
             continue
-        per = "; ".join(f"{o.replace('_', ' ')} {int((g.verdict == 'consistent').sum())}/{len(g)} consistent"
+        per = "; ".join(f"{words(o)} {int((g.verdict == 'consistent').sum())}/{len(g)} consistent"
                         for o, g in s.groupby("observable", sort=False))
         parts.append(f"{LABELS[m]}: {per}.")
     h = r[(r.observable == "remobilization_strain") & r.scored & (r.model == "local")]
@@ -89,13 +95,19 @@ def verdict_parts(c: OscillationComparison) -> list[str]:
         parts.append(f"History: after a reversal the DEM needs a strain of {h.dem.min():.2g} to {h.dem.max():.2g} to "
                      f"remobilize, local mu(I) {h.predicted.min():.2g} to {h.predicted.max():.2g}; the DEM's is larger "
                      f"beyond its error in {len(shows)} of {len(h)} drives (sigma up to {h.sigma.max():.1f}).")
-    measured = c.laws[c.laws.verdict != "not measurable"]
+    return parts
+
+
+def law_sentences(c: OscillationComparison) -> list[str]:
+    """The laws in omega in words: per law, drive kind and amplitude, the DEM's value and each model's."""
+    parts = []
+    measured = c.laws[c.laws.verdict != "not measurable"] if len(c.laws) else c.laws
     for (_, kind, amp), g in measured.groupby(["law", "kind", "amplitude"], sort=False):
         err = g.dem_err.iloc[0]
-        models = ", ".join(f"{r.model} {fmt(r.predicted, err).split(' ± ')[0]} ({r.verdict}, {r.sigma:+.1f} sigma)"
-                           for r in g.itertuples())
-        parts.append(f"{g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}): DEM {fmt(g.dem.iloc[0], err)}; "
-                     f"{models}.")
+        models = ", ".join(f"{MODEL_WORDS.get(r.model, r.model)} {fmt(r.predicted, err).split(' ± ')[0]} "
+                           f"({r.verdict}, {r.sigma:+.1f} sigma)" for r in g.itertuples())
+        parts.append(f"{words(g.law.iloc[0])}, {g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}): DEM "
+                     f"{fmt(g.dem.iloc[0], err)}; {models}.")
     return parts
 
 
@@ -278,38 +290,74 @@ def files(c: OscillationComparison, out: Path) -> list[FigureFile]:
             p.zones.to_csv(out / f"zones_{stem}_{model}.csv", float_format=CSV_FLOAT)
             p.loop.to_csv(out / f"loop_{stem}_{model}.csv", index=False, float_format=CSV_FLOAT)
     figures = [FigureFile("map", map_figure(c, out))]
-    figures += [FigureFile("zones", zones_figure(c, out, k), f"imposed {k}") for k in sorted(c.rows.kind.unique())]
-    return figures + [FigureFile("profiles", profiles_figure(c, out)), FigureFile("loops", loops_figure(c, out))]
+    figures += [FigureFile("zones", zones_figure(c, out, k), f"imposed {k}", DRIVES)
+                for k in sorted(c.rows.kind.unique())]
+    return figures + [FigureFile("profiles", profiles_figure(c, out), page=DRIVES),
+                      FigureFile("loops", loops_figure(c, out), page=DRIVES)]
 
 
 def _sigma(value: float) -> str:
     return f"{value:+.1f}" if np.isfinite(value) else "–"
 
 
-def sections(c: OscillationComparison, m: dict) -> list[str]:
-    """The report's sections before its figures: verdict, calibration, laws in omega, scorecard, drives."""
-    rows = [[html.escape(r.drive), html.escape(r.observable), fmt(r.dem, r.dem_err), html.escape(r.model),
+def sections(c: OscillationComparison, m: dict) -> list[Section]:
+    """The report's sections: on index.html the laws in omega and the calibration, on scorecard.html every row, on
+    drives.html the drives."""
+    shown = names(c)
+    rows = [[html.escape(shown.get(r.drive, r.drive)), html.escape(words(r.observable)), fmt(r.dem, r.dem_err),
+             html.escape(MODEL_WORDS.get(r.model, r.model)),
              fmt(r.predicted, np.hypot(r.numerical_err, r.calibration_sd)) if np.isfinite(r.predicted) else "–",
              fmt_band(r.band, r.dem_err) if np.isfinite(r.predicted) else "–",
              _sigma(r.sigma), html.escape(r.verdict), html.escape(r.note.removeprefix(r.verdict + ": "))]
             for r in c.rows.itertuples()]
-    laws = [[html.escape(r.law), html.escape(r.kind), fmt(r.amplitude), html.escape(r.model),
-             fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err), _sigma(r.sigma),
-             html.escape(r.verdict), html.escape(r.note.removeprefix(r.verdict + ": "))] for r in c.laws.itertuples()]
-    drives = [[html.escape(label), d["kind"], fmt(d["amplitude"]), fmt(d["omega"]), fmt(d["omega_ts"]),
-               str(d["seeds"]), str(d["whole_cycles"]), f"{100 * d['slip']:.1f} %",
+    laws = [[html.escape(words(r.law)), html.escape(r.quantity), html.escape(r.kind), fmt(r.amplitude),
+             html.escape(MODEL_WORDS.get(r.model, r.model)), fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err),
+             _sigma(r.sigma), html.escape(r.verdict), html.escape(r.note.removeprefix(r.verdict + ": "))]
+            for r in c.laws.itertuples()]
+    drives = [[html.escape(shown.get(label, label)), d["kind"], fmt(d["amplitude"]), fmt(d["omega"]),
+               fmt(d["omega_ts"]), str(d["seeds"]), str(d["whole_cycles"]), f"{100 * d['slip']:.1f} %",
                ", ".join({True: "yes", False: "no", None: "untested"}[s] for s in d["periodic"])]
               for label, d in m["drives"].items()]
     cal = m["calibration"]
-    return ["<h2>Verdict</h2><ul>" + "".join(f"<li>{html.escape(p)}</li>" for p in verdict_parts(c)) + "</ul>",
-            f"<p>Calibration: {html.escape(c.calibration_source)} (mu_s = {fmt(cal['mu_s'])}, mu_d = "
-            f"{fmt(cal['mu_d'])}, I0 = {fmt(cal['I0_dem'])} in the DEM convention, phi = {fmt(cal['phi'])}); "
-            f"{html.escape(c.ngf_source)}. Units: {html.escape(m['units'])}; {html.escape(m['I_convention'])}.</p>",
-            "<h2 id='laws'>Laws in omega</h2>",
-            table(["law", "kind", "amplitude", "model", "DEM", "predicted", "sigma", "verdict", "note"], laws),
-            "<h2 id='scorecard'>Scorecard</h2>",
-            table(["drive", "observable", "DEM", "model", "predicted", "95 % band", "sigma", "verdict", "note"], rows),
-            "<h2>Drives</h2>",
-            table(["drive", "kind", "amplitude", "omega", "omega t_s", "beds", "whole cycles",
-                   "slip rms(u_c - u_w)/rms(u_w)",
-                   "periodic (per bed: no trend of the cycles' amplitudes; untested below 3 cycles)"], drives)]
+    return [Section("The laws in omega", "<ul>" + "".join(f"<li>{html.escape(p)}</li>" for p in law_sentences(c))
+                    + "</ul>" + table(["law", "quantity", "kind", "amplitude", "model", "DEM", "predicted", "sigma",
+                                       "verdict", "note"], laws), "laws"),
+            Section("Calibration", f"<p>Calibration: {html.escape(c.calibration_source)} (mu_s = {fmt(cal['mu_s'])}, "
+                    f"mu_d = {fmt(cal['mu_d'])}, I0 = {fmt(cal['I0_dem'])} in the DEM convention, phi = "
+                    f"{fmt(cal['phi'])}); {html.escape(c.ngf_source)}. Units: {html.escape(m['units'])}; "
+                    f"{html.escape(m['I_convention'])}.</p>", "calibration"),
+            Section("The scorecard", table(["drive", "observable", "DEM", "model", "predicted", "95 % band", "sigma",
+                                            "verdict", "note"], rows), "scorecard", SCORECARD),
+            Section("The drives", table(["drive", "kind", "amplitude", "omega", "omega t_s", "beds", "whole cycles",
+                                         "slip rms(u_c - u_w)/rms(u_w)", "periodic (per bed: no trend of the cycles' "
+                                         "amplitudes; untested below 3 cycles)"], drives), "drives", DRIVES)]
+
+
+def names(c: OscillationComparison) -> dict:
+    """The drives' labels as a reader sees them (compare.report.display_label)."""
+    labels = [d.drive.label for d in c.drives]
+    return {x: display_label(x, labels) for x in labels}
+
+
+def _periodic(stationary: list) -> bool | None:
+    """Every bed periodic (True), one bed not (False), no bed tested (None)."""
+    return False if any(s is False for s in stationary) else (None if all(s is None for s in stationary) else True)
+
+
+def scene(c: OscillationComparison) -> list[dict]:
+    """Each drive's scene checks in compare.findings' terms: the plate's slip (at most SLIP_MAX), the beds'
+    periodic state, and the shear wave's transits per period (at least TRANSITS_BEFORE_COMPARISON, as a Stokes
+    drive's comparison starts after them; unknown where the run recorded no transit time)."""
+    out = []
+    for d in c.drives:
+        dr = d.drive
+        out.append({"check": "slip", "drive": dr.label, "holds": bool(d.slip <= SLIP_MAX),
+                    "detail": f"slip {d.slip * 100:.1f} %"})
+        out.append({"check": "periodic", "drive": dr.label, "holds": _periodic(d.stationary),
+                    "detail": f"{sum(s is False for s in d.stationary)} of {len(d.stationary)} beds not periodic"})
+        transits = dr.load.period / dr.transit_time if np.isfinite(dr.transit_time) and dr.transit_time > 0 else np.nan
+        out.append({"check": "transit", "drive": dr.label,
+                    "holds": bool(transits >= TRANSITS_BEFORE_COMPARISON) if np.isfinite(transits) else None,
+                    "detail": f"{transits:.2g} shear-wave transits per period" if np.isfinite(transits)
+                    else "the run recorded no transit time"})
+    return out

@@ -1,10 +1,11 @@
 """The continuum-vs-DEM report: renders a compare.comparison.Comparison (nothing is computed here but
-the figures' drawing): metrics.json, CSV tables, PNG figures and index.html, which opens with the
-scorecard and the conclusions."""
+the figures' drawing): metrics.json, CSV tables, PNG figures and the pages of compare.experiment's shell, index.html
+(after the verdict and the findings: the paper's laws, the conclusions, the calibration and the figures across
+drives), scorecard.html (the scorecard, its table and chart) and drives.html (the drives, their scene checks and
+figures)."""
 from __future__ import annotations
 
 import html
-import math
 import re
 from pathlib import Path, PurePath
 
@@ -24,11 +25,13 @@ from . import law_figures
 from .analysis import nearest_frame
 from .calibrate import PUBLISHED
 from .comparison import Comparison, DriveComparison
-from .experiment import CSV_FLOAT, FigureFile, table
+from .experiment import CSV_FLOAT, DRIVES, SCORECARD, FigureFile, Section, table
+from .laws import GROWTH_END
 from .metrics import metrics  # noqa: F401  (the experiment's report module renders its metrics too)
 from .rows import UNSCORED, Z95, critical, tally
 from .scorecard import MODEL_UNSTEADY, T90_WINDOW
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, figure_legend, plain_log, suptitle
+from .words import MODEL_WORDS, VERDICT_COLOUR, fmt, fmt_band, fmt_cell, words
 
 PUBLISHED_COLOURS = ("C6", "C8", "C9")  # published laws beside the calibration
 SIGMA_CLIP = 20.0                   # the scorecard figure's bars stop here (the value is written on the bar)
@@ -62,60 +65,6 @@ def display_labels(c: Comparison) -> dict:
     """Every drive label of ``c`` (and of its scorecard) to its display_label."""
     labels = list(dict.fromkeys([dc.label for dc in c.drives] + list(c.scorecard.rows.get("drive", []))))
     return {x: display_label(x, labels) for x in labels}
-
-
-#: significant digits a page prints at most (an error finer than that is shown to 1 digit beside it)
-MAX_DIGITS = 6
-
-
-def _decimals(err) -> int:
-    """Decimals that print ``err`` to 2 significant digits."""
-    return max(0, 1 - int(math.floor(math.log10(err))))
-
-
-def _too_fine(value, decimals) -> bool:
-    """``value`` to ``decimals`` would print more than MAX_DIGITS significant digits (or a long run of zeros)."""
-    return decimals > MAX_DIGITS + 2 or bool(value) and decimals + int(math.floor(math.log10(abs(value)))) >= MAX_DIGITS
-
-
-#: values closer to zero than this are round-off of an exact zero (a fit's offset through the origin)
-ROUND_OFF = 1e-12
-
-
-def fmt(value, err=None) -> str:
-    """A number to the digits its error supports (the error to 2 significant digits), at most MAX_DIGITS
-    significant digits; 4 significant digits without an error; an en dash when there is no number."""
-    if value is None or not np.isfinite(value):
-        return "–"
-    value = 0.0 if abs(value) < ROUND_OFF else value
-    if err is None or not np.isfinite(err) or err <= 0:
-        return f"{value:.4g}"
-    digits = _decimals(err)
-    if _too_fine(value, digits):
-        return f"{value:.{MAX_DIGITS}g} ± {err:.0e}"
-    shown = f"{value:.{digits}f}"
-    return f"{shown.lstrip('-') if float(shown) == 0 else shown} ± {err:.{digits}f}"
-
-
-def fmt_band(band, err_like) -> str:
-    """A band [lo, hi] to the decimals of ``err_like`` (fmt's), at most MAX_DIGITS significant digits."""
-    lo, hi = band
-    if not (err_like and np.isfinite(err_like) and err_like > 0):
-        return f"[{lo:.3f}, {hi:.3f}]"
-    if _too_fine(max(abs(lo), abs(hi)), _decimals(err_like)):
-        return f"[{lo:.{MAX_DIGITS}g}, {hi:.{MAX_DIGITS}g}]"
-    return f"[{lo:.{_decimals(err_like)}f}, {hi:.{_decimals(err_like)}f}]"
-
-
-def fmt_cell(value) -> str:
-    """A table cell: counts (and whole floats from JSON) as integers, other numbers through fmt, text escaped."""
-    if isinstance(value, bool) or value is None:
-        return html.escape(str(value))
-    if isinstance(value, (int, np.integer)) or (isinstance(value, float) and value.is_integer()):
-        return str(int(value))
-    if isinstance(value, (float, np.floating)):
-        return fmt(float(value))
-    return html.escape(str(value))
 
 
 def _running(s: pd.Series, n: int) -> pd.Series:
@@ -357,7 +306,7 @@ def calibration_section(c: Comparison) -> str:
             "<p><b>In-drive fit</b>: mu(I) is fitted on the drives' own steady windows, so the steady predictions "
             "are close to a restatement of the fit; pass <code>--calibration DIR/calibration.json</code> "
             "(<code>granstokes dem calibrate</code>) for a blind test.</p>")
-    return ("<h2>Calibration</h2>" + head + table(["parameter", "value", "95 % interval (bootstrap)"], rows)
+    return (head + table(["parameter", "value", "95 % interval (bootstrap)"], rows)
             + f"<p>{len(cal.points)} points, rms residual of the Jop law {cal.rms_mu:.3f}.</p>"
             f"<p>Test of the law by the drives: {html.escape(c.law_test['verdict'])}.</p>"
             "<p>Published values (plane shear or rheometry; differences: friction mu_p, restitution and "
@@ -385,8 +334,8 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
     ax.axvspan(-Z95, Z95, color="0.88", zorder=0)
     limit = np.array([min(critical(d), SIGMA_CLIP) if s else np.nan for d, s in zip(rows.dof, scored, strict=True)])
     ax.scatter(np.r_[-limit, limit], np.r_[y, y], marker="|", color="k", s=60, zorder=3)
-    ax.set_yticks(y, [f"{names.get(r.drive, r.drive)}, {r.observable} ({r.model})" for r in rows.itertuples()],
-                  fontsize=7)
+    ax.set_yticks(y, [f"{names.get(r.drive, r.drive)}, {words(r.observable)} ({MODEL_WORDS.get(r.model, r.model)})"
+                      for r in rows.itertuples()], fontsize=7)
     for tick, verdict in zip(ax.get_yticklabels(), rows.verdict, strict=True):
         tick.set_color(VERDICT_COLOUR[verdict])
     ax.invert_yaxis()
@@ -487,14 +436,6 @@ def cost_figure(c: Comparison, out: Path) -> Path:
 
 # --- the page ------------------------------------------------------------------------------------------
 
-VERDICT_COLOUR = {"consistent": "#2a7", "disagrees": "#c33", **dict.fromkeys(UNSCORED, "#777")}
-
-
-def verdict_html(c: Comparison) -> str:
-    """The one-sentence verdict the page opens with."""
-    return f"<p class='verdict'><b>Verdict.</b> {html.escape(c.verdict)}</p>"
-
-
 def scorecard_html(c: Comparison) -> str:
     rows, names = [], display_labels(c)
     for r in c.scorecard.rows.itertuples():
@@ -503,8 +444,9 @@ def scorecard_html(c: Comparison) -> str:
             verdict += f"<br><small>{html.escape(r.note.removeprefix(r.verdict + ': '))}</small>"
         model = html.escape(r.model_label) + ("" if r.blind else " (not blind: fitted on the drives)"
                                               if not c.blind else " (not blind: fitted on this drive)")
-        rows.append([html.escape(names.get(r.drive, r.drive)), f"{html.escape(r.observable)} [{html.escape(r.unit)}]",
-                     fmt(r.dem, r.dem_err), model, fmt(r.predicted), fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}",
+        rows.append([html.escape(names.get(r.drive, r.drive)),
+                     f"{html.escape(words(r.observable))} [{html.escape(r.unit)}]", fmt(r.dem, r.dem_err), model,
+                     fmt(r.predicted), fmt_band(r.band, r.dem_err), f"{r.sigma:+.1f}",
                      f"{critical(r.dof):.2f}" if r.scored else "", verdict])
     if not rows:
         return f"<p>No scorecard rows: {html.escape(c.failure or 'no drive has a continuum prediction')}.</p>"
@@ -520,8 +462,8 @@ def laws_summary(c: Comparison) -> str:
     parts = []
     for model, g in rows.groupby("model", sort=False):
         v = g.verdict.value_counts()
-        parts.append(f"{model}: consistent on {v.get('consistent', 0)}, disagrees on {v.get('disagrees', 0)}, "
-                     f"not predicted on {v.get('not predicted', 0)}")
+        parts.append(f"{MODEL_WORDS.get(model, model)}: consistent on {v.get('consistent', 0)}, disagrees on "
+                     f"{v.get('disagrees', 0)}, not predicted on {v.get('not predicted', 0)}")
     n = int((rows.drop_duplicates(["law", "quantity"]).verdict == "not measurable").sum())
     return (f"Of {rows[['law', 'quantity']].drop_duplicates().shape[0]} law quantities, {n} are not measurable with "
             f"these drives (each row says why); " + "; ".join(parts) + ".")
@@ -536,9 +478,10 @@ def laws_verdict(c: Comparison) -> dict[str, list[str]]:
     sigma) and those this scene cannot decide (with why); empty lists are left out."""
     rows = c.laws[c.laws.model == PAPER_MODEL] if not c.laws.empty else c.laws
     verbs = {"consistent": "supports", "disagrees": "refutes"}
-    out = {verb: [f"{r.law} ({r.quantity}): DEM {fmt(r.dem, r.dem_err)} against {fmt(r.predicted)}, "
-                  f"{r.sigma:+.1f} sigma" for r in rows.itertuples() if r.verdict == v] for v, verb in verbs.items()}
-    out["cannot decide"] = [f"{r.law} ({r.quantity}): "
+    out = {verb: [f"{words(r.law, r.quantity)} ({r.quantity}): DEM {fmt(r.dem, r.dem_err)} against "
+                  f"{fmt(r.predicted)}, {r.sigma:+.1f} sigma" for r in rows.itertuples() if r.verdict == v]
+           for v, verb in verbs.items()}
+    out["cannot decide"] = [f"{words(r.law, r.quantity)} ({r.quantity}): "
                             + (r.note or "").removeprefix("not measurable: ").removeprefix("not predicted: ")
                             for r in rows.itertuples() if r.verdict not in verbs]
     return {k: v for k, v in out.items() if v}
@@ -550,15 +493,15 @@ def laws_verdict_html(c: Comparison) -> str:
         return "<p><b>The paper's predictions.</b> No law of the paper was evaluated (no drive was predicted).</p>"
     items = "".join(f"<li>The DEM {html.escape(verb)}: {html.escape('; '.join(laws))}.</li>"
                     for verb, laws in verdict.items())
-    return (f"<p><b>The paper's predictions</b> (its model's rows; the other models': "
-            f"<a href='#laws'>the paper's laws</a>)</p><ul>{items}</ul>")
+    return f"<p><b>The paper's predictions</b> (its model's rows; every model's in the table below)</p><ul>{items}</ul>"
 
 
 def laws_html(c: Comparison) -> str:
     """The laws' rows (compare.laws) as a table, after one summary sentence."""
     grey = VERDICT_COLOUR[UNSCORED[0]]
-    rows = [[html.escape(r.law), html.escape(r.quantity), html.escape(r.model), fmt(r.dem, r.dem_err),
-             fmt(r.predicted), fmt_cell(r.sigma) if np.isfinite(r.sigma) else "",
+    rows = [[html.escape(words(r.law, r.quantity)), html.escape(r.quantity),
+             html.escape(MODEL_WORDS.get(r.model, r.model)), fmt(r.dem, r.dem_err), fmt(r.predicted),
+             fmt_cell(r.sigma) if np.isfinite(r.sigma) else "",
              f"{critical(r.dof):.2f}" if np.isfinite(r.sigma) else "",
              f"<span style='color:{VERDICT_COLOUR.get(r.verdict, grey)}'>{html.escape(r.verdict)}</span>",
              str(r.n_drives), html.escape(r.note or r.window)] for r in c.laws.itertuples()]
@@ -601,7 +544,7 @@ def conclusions(c: Comparison) -> list[str]:
         text = (f"<b>{html.escape(g.model_label.iloc[0])}</b>: {len(ok)} of {len(g)} predictions consistent "
                 "(|sigma| &le; t<sub>0.975</sub>(dof))")
         if len(bad):
-            worst = ", ".join(f"{html.escape(r.observable)} of {name(r.drive)} "
+            worst = ", ".join(f"{html.escape(words(r.observable))} of {name(r.drive)} "
                               f"({(r.predicted / r.dem - 1) * 100:+.0f} %, {r.sigma:+.1f} sigma)"
                               for r in bad.itertuples() if r.dem)
             text += f"; it fails on {worst}"
@@ -686,8 +629,9 @@ def files(c: Comparison, out: Path) -> list[FigureFile]:
     predictions, the coarse-graining checks) and figures into ``out``; the figures in the report's order."""
     c.pairs.to_csv(out / "calibration_pairs.csv", index=False, float_format=CSV_FLOAT)
     names = display_labels(c)
-    figs = [FigureFile("scorecard", sigma_figure(c, out))] if len(c.scorecard.rows) else []
-    figs += [FigureFile("calibration", calibration_figure(c, out)), FigureFile("cost_noise", cost_figure(c, out))]
+    figs = [FigureFile("scorecard", sigma_figure(c, out), page=SCORECARD)] if len(c.scorecard.rows) else []
+    figs += [FigureFile("calibration", calibration_figure(c, out)),
+             FigureFile("cost_noise", cost_figure(c, out), page=DRIVES)]
     if any(dc.predictions and dc.scales is not None for dc in c.drives):
         figs += [FigureFile(kind, draw(c, out)) for kind, draw in law_figures.FIGURES.items()]
     for dc in c.drives:
@@ -700,33 +644,83 @@ def files(c: Comparison, out: Path) -> list[FigureFile]:
             p.series.assign(model=p.model).to_csv(out / f"prediction_{stem}_{p.model}.csv", index=False,
                                                   float_format=CSV_FLOAT)
         if dc.predictions:
-            figs += [FigureFile("drive", drive_figure(dc, c.scorecard.bands, out, name), name),
-                     FigureFile("profiles", profiles_figure(dc, c.material, out, name), name),
-                     FigureFile("transient", transient_figure(dc, c.material, out, name), name),
-                     FigureFile("fluidity", fluidity_figure(dc, c.material, out, name), name)]
+            figs += [FigureFile("drive", drive_figure(dc, c.scorecard.bands, out, name), name, DRIVES),
+                     FigureFile("profiles", profiles_figure(dc, c.material, out, name), name, DRIVES),
+                     FigureFile("transient", transient_figure(dc, c.material, out, name), name, DRIVES),
+                     FigureFile("fluidity", fluidity_figure(dc, c.material, out, name), name, DRIVES)]
     c.checks.width.to_csv(out / "width_check.csv", index=False, float_format=CSV_FLOAT)
     c.checks.crosscheck.to_csv(out / "lammps_crosscheck.csv", index=False, float_format=CSV_FLOAT)
     return figs
 
 
-def sections(c: Comparison, m: dict) -> list[str]:
-    """The report's sections before its figures: verdict, scorecard, conclusions, laws, the scene's checks; and
-    after them (the shell puts the figures first): calibration, drives, the coarse-graining's checks."""
+def sections(c: Comparison, m: dict) -> list[Section]:
+    """The report's sections: on index.html the paper's laws, the conclusions and the calibration; on scorecard.html
+    the scorecard; on drives.html the drives, their scene checks and the coarse-graining's checks."""
     names = display_labels(c)
-    return [
-        verdict_html(c), laws_verdict_html(c),
-        f"<p>Runs: {html.escape(', '.join(m['runs']))}. Calibration: {html.escape(c.calibration_source)}. "
-        f"DEM units: {html.escape(UNITS['dem_units'])}. Inertial number: {html.escape(UNITS['inertial_number'])}.</p>",
-        "<h2>Scorecard</h2>", scorecard_html(c),
-        f"<p>Bands: {c.scorecard.replicates} calibration replicates per steady prediction (band edges change by at "
-        f"most {c.scorecard.edge_stability:.0%} of the band width from half to all replicates); t90 by linearised "
-        "propagation. sigma = (DEM - predicted)/combined error; consistent when |sigma| &le; t<sub>0.975</sub>(dof), "
-        "Student-t's 97.5 % quantile at the degrees of freedom of the row's combined error (column dof: "
-        f"{critical(2):.2f} at 2, {critical(3):.2f} at 3, {Z95:.2f} at infinitely many).</p>",
-        "<h2>Conclusions</h2><ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>",
-        "<h2 id='laws'>The paper's laws</h2>", laws_html(c),
-        "<h2>The scene's own checks</h2>", scene_html(c),
-        calibration_section(c), "<h2>Drives</h2>", drives_html(m, names), checks_html(c, names)]
+    out = [Section("The paper's laws", laws_verdict_html(c) + laws_html(c), "laws"),
+           Section("Conclusions", "<ul>" + "".join(f"<li>{s}</li>" for s in conclusions(c)) + "</ul>", "conclusions"),
+           Section("Calibration", f"<p>Runs: {html.escape(', '.join(m['runs']))}. Calibration: "
+                   f"{html.escape(c.calibration_source)}. DEM units: {html.escape(UNITS['dem_units'])}. Inertial "
+                   f"number: {html.escape(UNITS['inertial_number'])}.</p>" + calibration_section(c), "calibration"),
+           Section("The scorecard", scorecard_html(c) + f"<p>Bands: {c.scorecard.replicates} calibration replicates "
+                   f"per steady prediction (band edges change by at most {c.scorecard.edge_stability:.0%} of the band "
+                   "width from half to all replicates); t90 by linearised propagation. sigma = (DEM - "
+                   "predicted)/combined error; consistent when |sigma| &le; t<sub>0.975</sub>(dof), Student-t's 97.5 % "
+                   "quantile at the degrees of freedom of the row's combined error (column dof: "
+                   f"{critical(2):.2f} at 2, {critical(3):.2f} at 3, {Z95:.2f} at infinitely many).</p>", "scorecard",
+                   SCORECARD),
+           Section("The drives", drives_html(m, names), "drives", DRIVES),
+           Section("The scene's own checks", scene_html(c), "scene", DRIVES)]
+    ch = c.checks
+    return out + [Section(f"Checks of the coarse-graining ({names.get(ch.drive, ch.drive)})", checks_html(c),
+                          "coarse-graining", DRIVES)]
+
+
+def names(c: Comparison) -> dict:
+    """The drives' labels as a reader sees them (display_label)."""
+    return display_labels(c)
+
+
+def kinds(c: Comparison) -> dict:
+    """Each drive's load kind (its scorecard rows do not carry it)."""
+    return {dc.label: dc.dem.spec.kind for dc in c.drives}
+
+
+def _record(dc: DriveComparison, models: list[str]) -> tuple[bool, str]:
+    """Whether drive ``dc``'s record is long enough: the DEM registers a steady state and every model is steady
+    within it (``models``: those that are not); why not, in words."""
+    t_steady = dc.dem.steady.get("t_steady")
+    if t_steady is None or not np.isfinite(t_steady):
+        return False, "the DEM never registers steady"
+    if models:
+        return False, f"{', '.join(MODEL_WORDS.get(k, k) for k in models)} not steady by its end"
+    return True, ""
+
+
+def scene(c: Comparison) -> list[dict]:
+    """Each drive's scene checks in compare.findings' terms: the plate's slip and the stresses' balance (the
+    scorecard's scene checks), the base (compare.scorecard.base_reach), the elastic start against the growth window
+    (it must end before GROWTH_END t_s) and the record (the DEM steady in it, every model steady by its end)."""
+    out = []
+    by_check = {"slip at the plate": "slip", "bulk CG tau - plate <tau_w>": "stresses",
+                "pressure slope / (mean phi rho_p g)": "stresses"}
+    for r in c.scorecard.scene.itertuples() if len(c.scorecard.scene) else []:
+        detail = f"slip {r.value * 100:.1f} %" if by_check[r.check] == "slip" else f"{r.check} = {fmt(r.value, r.err)}"
+        out.append({"check": by_check[r.check], "drive": r.drive, "detail": detail,
+                    "holds": r.verdict in ("grips", "within error")})
+    rows = c.scorecard.rows
+    for dc in c.drives:
+        spec = dc.dem.spec
+        out.append({"check": "base", "drive": dc.label, "holds": not dc.base, "detail": dc.base})
+        if dc.scales is not None and np.isfinite(spec.compared_from):
+            ratio = spec.compared_from / dc.scales.t_s
+            out.append({"check": "transit", "drive": dc.label, "holds": bool(ratio < GROWTH_END),
+                        "detail": f"the elastic start ends at {ratio:.2g} t_s"})
+        short = sorted(rows[(rows.drive == dc.label) & rows.note.str.contains("record is shorter")].model.unique()
+                       ) if len(rows) else []
+        holds, detail = _record(dc, short)
+        out.append({"check": "record", "drive": dc.label, "holds": holds, "detail": detail})
+    return out
 
 
 def drives_html(m: dict, names: dict) -> str:
@@ -735,18 +729,18 @@ def drives_html(m: dict, names: dict) -> str:
              fmt(d["mu_w_inf"]["dem"], d["mu_w_inf"]["dem_err"]), fmt(d["t_steady"]), fmt_cell(d["frames"]),
              fmt_cell(d["dropped_frames"]), "yes" if d["base_confined"] else "no"]
             for label, d in m["drives"].items()]
-    return table(["drive", "kind", "imposed", "unit", "seeds", "u_w_inf [sqrt(g d)]", "mu_w_inf",
-                  "t_steady [sqrt(d/g)]", "frames", "dropped frames", "flow reaches the base"], rows)
+    return table(["drive", "kind", "imposed", "unit", "seeds", f"{words('u_w_inf')} [sqrt(g d)]",
+                  html.escape(words("mu_w_inf")), "steady from t [sqrt(d/g)]", "frames", "dropped frames",
+                  "flow reaches the base"], rows)
 
 
-def checks_html(c: Comparison, names: dict) -> str:
+def checks_html(c: Comparison) -> str:
     """The coarse-graining's checks on the first drive: the kernel width's plateau and LAMMPS's chunk averages."""
     ch = c.checks
     plateau = ch.plateau
     plateau_rows = [[html.escape(f)] + [f"{v * 100:.0f} %" for v in plateau.loc[f]] for f in plateau.index]
     cross_rows = [[html.escape(q), f"{v * 100:.1f} %"] for q, v in ch.crosscheck_bulk.items()]
-    return (f"<h2>Checks of the coarse-graining ({html.escape(names.get(ch.drive, ch.drive))})</h2>"
-            "<p>Width check: fraction of heights where a field plateaus (relative change within 5 %) going from the "
+    return ("<p>Width check: fraction of heights where a field plateaus (relative change within 5 %) going from the "
             "next smaller kernel width to this one, over the last 30 % of the run (width_check.csv):</p>"
             + table(["field"] + [f"w = {w:g} d" for w in plateau.columns], plateau_rows)
             + "<p>Against LAMMPS's own 1 d chunk averages (profiles.csv): mean |CG - LAMMPS| / mean |LAMMPS| in the "

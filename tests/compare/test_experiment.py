@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from granstokes.compare import band, rows
-from granstokes.compare.experiment import Experiment, experiment_for, experiments
+from granstokes.compare.experiment import Experiment, Section, experiment_for, experiments
 from granstokes.compare.oscillation_experiment import OscillatingPlate
 from granstokes.compare.stokes_experiment import StokesDrives
 from granstokes.continuum.load import Load
@@ -128,8 +128,8 @@ class ToyPlate(Experiment):
                               dof=np.inf, note="", blind=True)
 
     def _conclude(self, dem, setup, predicted):
-        law = rows.law_row(law="toy_law", quantity="gap", unit="d", kind="toy", model="double", dem=1.0, dem_err=0.5,
-                           predicted=2.0, predicted_err=0.0, sigma=-2.0, dof=np.inf, chi2_dof=np.nan,
+        law = rows.law_row(law="toy_law", quantity="gap", unit="d", kind="toy", model="double", dem=1.0, dem_err=0.8,
+                           predicted=2.0, predicted_err=0.0, sigma=-1.25, dof=np.inf, chi2_dof=np.nan,
                            n_drives=len(dem), window="", note="",
                            choices=[], systematic=np.nan)
         return ToyResult(pd.DataFrame(predicted), pd.DataFrame([law]), ("runs/toy",), "none")
@@ -145,7 +145,7 @@ class ToyPlate(Experiment):
 
     @classmethod
     def sections(cls, result, metrics):
-        return ["<p id='toy'>toy section</p>"]
+        return [Section("Toy", "<p>toy section</p>", "toy")]
 
 
 def test_a_new_experiment_is_a_subclass_and_nothing_else(tmp_path):
@@ -160,6 +160,8 @@ def test_a_new_experiment_is_a_subclass_and_nothing_else(tmp_path):
     assert saved["definitions"]["gap"] == {"unit": "d", "definition": "a toy observable"}
     assert saved["tally"][0]["n"] == 2 and "provenance" in saved and "units" in saved
     page = (tmp_path / "index.html").read_text()
-    assert "<h1>a toy plate</h1>" in page and "toy section" in page and "a toy observable" in page
+    assert "<h1>A toy plate</h1>" in page and "toy section" in page and "a toy observable" in page
+    assert "<a href='#toy'>Toy</a>" in page and [(f["finding"], f["status"]) for f in saved["findings"]] == [
+        ("Gap", "shown"), ("Toy law", "not shown")]  # rows no effect claims: a finding each, by their name
     assert (tmp_path / "tables" / "toy.json").is_file() and (tmp_path / "scorecard.csv").is_file()
     assert re.search(r"consistent", (tmp_path / "scorecard.csv").read_text())

@@ -97,7 +97,7 @@ def test_rows_and_drives_carry_the_frequency_amplitude_and_lag(scored, tmp_path)
     assert drive["omega"] == pytest.approx(dem.drive.load.omega) and drive["amplitude"] == 2.0
     # u_c is the model's u_w, u_w carries noise NOISE max|u_w|: slip = NOISE sqrt(2) for a sine
     assert drive["seeds"] == BEDS and drive["slip"] == pytest.approx(NOISE * np.sqrt(2), rel=0.15)
-    html = (tmp_path / "index.html").read_text()
+    html = (tmp_path / "index.html").read_text() + (tmp_path / "drives.html").read_text()
     for png in ("map.png", "zones_speed.png", "loops.png"):
         assert (tmp_path / png).stat().st_size > 10_000 and f"src='{png}'" in html
     back = oscillation_tables.read(tmp_path / "tables")

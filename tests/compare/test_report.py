@@ -168,10 +168,11 @@ def test_every_page_the_demo_writes_is_whole(report):
     decided = {(r["law"], r["quantity"]) for r in m["laws"] if r["verdict"] in ("consistent", "disagrees")}
     opening = f"{len(decided)} of {len({(r['law'], r['quantity']) for r in m['laws']})} law quantities measurable"
     assert index.read_text().index(opening) < index.read_text().index(html.escape(m["verdict"]))
-    compare_page = check_page(out / "compare" / "index.html")
+    pages = {name: check_page(out / "compare" / name) for name in ("index.html", "scorecard.html", "drives.html")}
     text = (out / "compare" / "index.html").read_text()
-    assert text.index("Scorecard") < text.index("Conclusions") < text.index("Figures")
-    assert len(compare_page.images) >= 5
+    assert text.index("Findings") < text.index("Contents") < text.index("Conclusions") < text.index("<img")
+    assert {"scorecard.html", "drives.html"} <= set(pages["index.html"].links)
+    assert sum(len(p.images) for p in pages.values()) >= 5
     check_page(out / "continuum" / "index.html")
 
 
