@@ -35,8 +35,11 @@ def test_the_note_s_hand_recomputation_finds_the_committed_report_s_numbers(caps
     assert len(namespace["clear"]) >= 6
     assert math.isclose(namespace["slope"], law["slope"], rel_tol=1e-5)
     assert math.isclose(namespace["offset"], law["offset"], rel_tol=1e-5, abs_tol=1e-6)
+    for name, offset in namespace["family"].items():  # the estimator family's choices, each by hand
+        assert math.isclose(offset, namespace["offsets"][name], rel_tol=1e-5), name
+    assert namespace["family"]["delta_05"] > namespace["family"]["delta_50"]  # the offset depends on the threshold
     printed = capsys.readouterr().out
-    assert printed.count("by hand") == 3
+    assert printed.count("by hand") == 7
 
 
 @pytest.mark.slow
