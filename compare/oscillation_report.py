@@ -105,9 +105,10 @@ def law_sentences(c: OscillationComparison) -> list[str]:
     for (_, kind, amp), g in measured.groupby(["law", "kind", "amplitude"], sort=False):
         err = g.dem_err.iloc[0]
         models = ", ".join(f"{MODEL_WORDS.get(r.model, r.model)} {fmt(r.predicted, err).split(' ± ')[0]} "
-                           f"({r.verdict}, {r.sigma:+.1f} sigma)" for r in g.itertuples())
-        parts.append(f"{words(g.law.iloc[0])}, {g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}): DEM "
-                     f"{fmt(g.dem.iloc[0], err)}; {models}.")
+                           f"({r.verdict}, {r.sigma:+.1f} sigma at {r.dof:.2g} degrees of freedom)"
+                           for r in g.itertuples())
+        parts.append(f"{words(g.law.iloc[0])}, {g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}, "
+                     f"{g.n_drives.iloc[0]} drives): DEM {fmt(g.dem.iloc[0], err)}; {models}.")
     return parts
 
 
