@@ -569,7 +569,7 @@ LAWS = (
                "a t90 and a t_s"), FAMILIES["response time"]),
     Law("t_mud_scaling", "slope of log t~_mud against log u~_w", "1", "speed",
         Across(lambda tr, dc, choice: dc.dem.spec.load.u_w / _scale(dc, "U"),
-                lambda tr, dc, choice: t_mud(tr, dc, choice.from_transits) / _scale(dc, "t_s"), "a t_mud"),
+               lambda tr, dc, choice: t_mud(tr, dc, choice.from_transits) / _scale(dc, "t_s"), "a t_mud"),
         FAMILIES["friction"]),
     Law("steady_speed_law", "u~_w^inf / f(beta_w), exact steady integral", "1", "stress",
         _mean_of(_steady_window(_ratio_exact), "r"), FAMILIES["steady speed"], transient=False),
