@@ -41,18 +41,29 @@ each drive's numbers (window, span, the model's local exponents).
 Errors: dem_err is the standard deviation of the DEM's estimate over SEED_RESAMPLES bootstrap resamples of each
 drive's seeds (independent samples), times sqrt(n/(n - 1)) where the smallest drive has n < BOOTSTRAP_FEW_SEEDS
 seeds (the bootstrap's spread of a mean over n samples is the sample's standard error times sqrt((n - 1)/n)), with
-n - 1 degrees of freedom (a law fitted across drives: n_drives - 2); the model's standard deviation s_cal
-propagates the calibration's replicates linearly (compare.band.Sensitivity: the same estimate on the predictions
-re-solved with each parameter shifted), band = predicted -+ 1.96 s_cal, sigma = (dem - predicted)/sqrt(dem_err^2 +
-s_cal^2) and each choice's verdict is at Student-t's quantile of its Welch-Satterthwaite dof (compare.rows).  A
-drive whose plate slips (compare.scorecard.slipping) is left out of every law that reads the plate.  A law the data
-cannot decide (a window the elastic start covers, too short or outside the model's regime, too few points or
-drives, a model without the quantity) is ``not measurable`` with the reason, never a number fitted on noise.
+n - 1 degrees of freedom.  A law fitted as a line across drives (``Across``) weights each drive by its own error:
+the standard deviation of that drive's y (ln y for a power law) over the same resamples of its seeds, corrected
+alike for its number of seeds; the DEM's slope or offset and its error are the weighted least-squares line's
+(``Line``), the error scaled by sqrt(chi2_dof) where the drives scatter about the line beyond their errors
+(chi2_dof = chi2/(n - 2) > 1), with n - 2 degrees of freedom over the n drives fitted; where chi2.sf(chi2, n - 2) <
+LACK_OF_FIT_P the drives are no line (a step, a bend) and the choice is "not measurable: not a line" with chi2/dof
+and p (compare.rows.not_a_line); every choice carries its chi2_dof (NaN for a law that is a mean over drives), and
+each model's line is fitted with the DEM's weights.  The model's standard deviation s_cal propagates the
+calibration's replicates linearly (compare.band.Sensitivity: the same estimate on the predictions re-solved with
+each parameter shifted), band = predicted -+ 1.96 s_cal, sigma = (dem - predicted)/sqrt(dem_err^2 + s_cal^2) and
+each choice's verdict is at Student-t's quantile of its Welch-Satterthwaite dof (compare.rows).
+
+Scenes: a drive whose plate slips (compare.scorecard.slipping) is left out of every law that reads the plate, a drive
+whose bed is short of delta_s + CREEP_LENGTHS_TO_BASE of its measured creep lengths (compare.scorecard.short_bed) of
+every law that reads the steady layer (delta_s_scaling, creep_length_scaling).  A law the data cannot decide (a
+window the elastic start covers, too short or outside the model's regime, too few points or drives, a model without
+the quantity) is ``not measurable`` with the reason, never a number fitted on noise.
 """
 from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -60,14 +71,13 @@ from granstokes.continuum.closed_forms import uwall_asymp
 from granstokes.continuum.crossing import layer_measures
 from granstokes.continuum.paper.equations import eq
 from granstokes.continuum.steady import steady_wall_speed
-from scipy import stats
 
 from .band import STEP
 from .drive import TRANSITS_BEFORE_COMPARISON
 from .families import FAMILIES, LAYER_ESTIMATORS, PRIMARY_ESTIMATOR, Choice, entry, family_note, headline, systematic
 from .plate import STEADY_LAST
-from .rows import LAW_KEYS, effective_dof, law_row
-from .scorecard import creep_length, slipping, t90
+from .rows import LAW_KEYS, effective_dof, law_row, not_a_line
+from .scorecard import creep_length, short_bed, slipping, t90
 
 #: the growth window ends at this many t_s (the paper's self-similar regime holds to t~ of order 1)
 GROWTH_END = 0.5
@@ -410,8 +420,13 @@ class Law:
     family: tuple[Choice, ...]          # compare.families: the primary choice first
     window: object = None               # (dc, choice, DEM track, model track) -> Window; None: no window to choose
     transient: bool = True              # it reads the response over time (a model needs a calibrated time scale)
-    across: bool = False                # a line fitted across drives (its dof: drives - 2), else a mean over drives
     plate: bool = True                  # it reads the plate's speed or friction: a drive whose plate slips is left out
+    layer: bool = False                 # it reads the steady layer: a drive whose bed is too shallow is left out
+
+    @property
+    def across(self) -> bool:
+        """A line fitted across drives (its dof: drives - 2), else a mean over drives."""
+        return isinstance(self.estimate, Across)
 
 
 def _mean_of(per_drive, key):
@@ -432,20 +447,80 @@ def _mean_of(per_drive, key):
     return estimate
 
 
-def _across(x_of, y_of, what: str, fit: str = "slope"):
-    def estimate(tracks, drives, choice, windows):
-        x = np.array([x_of(tr, dc, choice) for tr, dc in zip(tracks, drives)], dtype=float)
-        y = np.array([y_of(tr, dc, choice) for tr, dc in zip(tracks, drives)], dtype=float)
-        ok = np.isfinite(x) & np.isfinite(y)
-        if fit == "slope":
-            ok &= (x > 0) & (y > 0)
+@dataclass(frozen=True)
+class Line:
+    """The least-squares line y = offset + slope x through n points weighted by 1/sd^2, each point's ``sd`` its own
+    error: the slope and offset with their errors propagated from the sd (1/S_xx and 1/S_w + x_m^2/S_xx, S_w = sum w,
+    x_m the weighted mean of x, S_xx = sum w (x - x_m)^2), and chi2 = sum ((y - offset - slope x)/sd)^2, the
+    weighted squared residuals, with n - 2 degrees of freedom."""
+
+    slope: float
+    offset: float
+    slope_err: float
+    offset_err: float
+    chi2: float
+    n: int
+
+    @classmethod
+    def fit(cls, x, y, sd) -> Line:
+        x, y, w = (np.asarray(v, dtype=float) for v in (x, y, np.asarray(sd, dtype=float) ** -2.0))
+        s_w = w.sum()
+        x_m, y_m = (w @ x) / s_w, (w @ y) / s_w
+        s_xx = w @ (x - x_m) ** 2
+        slope = (w @ ((x - x_m) * (y - y_m))) / s_xx
+        offset = y_m - slope * x_m
+        return cls(float(slope), float(offset), float(np.sqrt(1 / s_xx)), float(np.sqrt(1 / s_w + x_m**2 / s_xx)),
+                   float(w @ (y - offset - slope * x) ** 2), len(x))
+
+    @property
+    def dof(self) -> int:
+        return self.n - 2
+
+    @property
+    def chi2_dof(self) -> float:
+        return self.chi2 / self.dof
+
+
+@dataclass(frozen=True)
+class Across:
+    """A law fitted as a line across drives: ``y_of`` against ``x_of`` per drive (``fit`` "slope": the slope of
+    ln y against ln x, a power law's exponent; "linear_slope" and "offset": the line's in y against x), weighted by
+    each drive's error of its (transformed) y, the DEM's (``_Sources.dem_line``): the same weights for the DEM and every
+    model, so that both lines are the same estimator; a drive without a value or an error is left out."""
+
+    x_of: object                        # (track, dc, choice) -> the drive's x
+    y_of: object                        # (track, dc, choice) -> the drive's y
+    what: str
+    fit: str = "slope"
+
+    def points(self, tracks, drives, choice) -> tuple[np.ndarray, np.ndarray]:
+        """Each drive's (x, y), logs for a power law (NaN where not positive), NaN where the drive has none."""
+        x = np.array([self.x_of(tr, dc, choice) for tr, dc in zip(tracks, drives)], dtype=float)
+        y = np.array([self.y_of(tr, dc, choice) for tr, dc in zip(tracks, drives)], dtype=float)
+        if self.fit == "slope":
+            x, y = (np.log(np.where(v > 0, v, np.nan)) for v in (x, y))
+        return x, y
+
+    def line(self, x, y, sd) -> tuple[Line | None, str]:
+        """The weighted line through the drives with a value and an error, and its text (or None and why not)."""
+        valued = np.isfinite(x) & np.isfinite(y)
+        ok = valued & np.isfinite(sd) & (sd > 0)
+        unweighted = f" ({int(valued.sum() - ok.sum())} more without a seed spread)" if valued.sum() > ok.sum() else ""
         if ok.sum() < MIN_DRIVES or len(np.unique(np.round(x[ok], 12))) < 2:
-            return np.nan, f"not measurable: {int(ok.sum())} drive(s) with {what} (at least {MIN_DRIVES}, 2 values)"
-        if fit == "slope":
-            return _slope(x[ok], y[ok]), f"{int(ok.sum())} drives, log-log least squares"
-        lin = stats.linregress(x[ok], y[ok])
-        return float(lin.slope if fit == "linear_slope" else lin.intercept), f"{int(ok.sum())} drives, least squares"
-    return estimate
+            return None, (f"not measurable: {int(ok.sum())} drive(s) with {self.what}{unweighted} (at least "
+                          f"{MIN_DRIVES}, 2 values)")
+        scale = "log-log " if self.fit == "slope" else ""
+        return Line.fit(x[ok], y[ok], sd[ok]), (f"{int(ok.sum())} drives{unweighted}, {scale}least squares weighted by "
+                                                "each drive's seed-spread error")
+
+    def value(self, line: Line) -> tuple[float, float]:
+        """The law's number and its error from the line."""
+        return (line.offset, line.offset_err) if self.fit == "offset" else (line.slope, line.slope_err)
+
+    def __call__(self, tracks, drives, choice, windows, sd) -> tuple[float, str]:
+        """The law on ``tracks`` weighted by the DEM's errors ``sd`` (one per drive): (value, text) or (NaN, why)."""
+        line, text = self.line(*self.points(tracks, drives, choice), np.asarray(sd, dtype=float))
+        return (self.value(line)[0], text) if line is not None else (np.nan, text)
 
 
 def _scale(dc, name):
@@ -485,32 +560,53 @@ LAWS = (
         _plateau_both),
     Law("mu_w_decay_exponent", "n in mu_w - mu_s ~ t^n", "1", "speed", _mean_of(decay, "exponent"),
         FAMILIES["friction"], _DECAY_WINDOW),
-    Law("delta_s_scaling", "slope of delta_u against delta_s", "1", None, _across(*_DELTA_S, "linear_slope"),
-        FAMILIES["steady layer"], transient=False, across=True, plate=False),
-    Law("delta_s_scaling", "offset of delta_u against delta_s", "d", None, _across(*_DELTA_S, "offset"),
-        FAMILIES["steady layer"], transient=False, across=True, plate=False),
+    Law("delta_s_scaling", "slope of delta_u against delta_s", "1", None, Across(*_DELTA_S, "linear_slope"),
+        FAMILIES["steady layer"], transient=False, plate=False, layer=True),
+    Law("delta_s_scaling", "offset of delta_u against delta_s", "d", None, Across(*_DELTA_S, "offset"),
+        FAMILIES["steady layer"], transient=False, plate=False, layer=True),
     Law("t_s_collapse", "slope of log t90 against log t_s", "1", "stress",
-        _across(lambda tr, dc, choice: _scale(dc, "t_s"), lambda tr, dc, choice: t90(tr.t, tr.speed(choice.reference)),
-                "a t90 and a t_s"), FAMILIES["response time"], across=True),
+        Across(lambda tr, dc, choice: _scale(dc, "t_s"), lambda tr, dc, choice: t90(tr.t, tr.speed(choice.reference)),
+               "a t90 and a t_s"), FAMILIES["response time"]),
     Law("t_mud_scaling", "slope of log t~_mud against log u~_w", "1", "speed",
-        _across(lambda tr, dc, choice: dc.dem.spec.load.u_w / _scale(dc, "U"),
-                lambda tr, dc, choice: t_mud(tr, dc, choice.from_transits) / _scale(dc, "t_s"), "a t_mud"),
-        FAMILIES["friction"], across=True),
+        Across(lambda tr, dc, choice: dc.dem.spec.load.u_w / _scale(dc, "U"),
+               lambda tr, dc, choice: t_mud(tr, dc, choice.from_transits) / _scale(dc, "t_s"), "a t_mud"),
+        FAMILIES["friction"]),
     Law("steady_speed_law", "u~_w^inf / f(beta_w), exact steady integral", "1", "stress",
         _mean_of(_steady_window(_ratio_exact), "r"), FAMILIES["steady speed"], transient=False),
     Law("steady_speed_law", f"u~_w^inf / {eq('Uwall_asymp', named=True)}", "1", "stress",
         _mean_of(_steady_window(_ratio_asymp), "r"), FAMILIES["steady speed"], transient=False),
     Law("creep_length_scaling", "slope of log creep length against log p_w", "1", None,
-        _across(lambda tr, dc, choice: dc.dem.spec.p_w, lambda tr, dc, choice: tr.creep, "a creep length"),
-        FAMILIES["creep"], transient=False, across=True, plate=False),
+        Across(lambda tr, dc, choice: dc.dem.spec.p_w, lambda tr, dc, choice: tr.creep, "a creep length"),
+        FAMILIES["creep"], transient=False, plate=False, layer=True),
 )
 
 
-def _drives(compared, kind, plate: bool = False):
-    """The drives a law reads: predicted, their flow clear of the base, of the law's kind, and (``plate``: a law that
-    reads the plate) their plate gripping (compare.scorecard.slipping)."""
+def _drives(compared, kind, plate: bool = False, layer: bool = False):
+    """The drives a law reads: predicted, their flow clear of the base, of the law's kind, (``plate``: a law that
+    reads the plate) their plate gripping (compare.scorecard.slipping) and (``layer``: a law that reads the steady
+    layer) their bed deep enough for the creep (compare.scorecard.short_bed)."""
     return [dc for dc in compared if dc.predictions and not dc.base and (kind is None or dc.dem.spec.kind == kind)
-            and not (plate and slipping(dc.dem))]
+            and not (plate and slipping(dc.dem)) and not (layer and short_bed(dc.dem, dc.scales.delta_s))]
+
+
+def _few_seeds(n: int) -> float:
+    """The bootstrap's correction over ``n`` seeds: sqrt(n/(n - 1)) below BOOTSTRAP_FEW_SEEDS (module docstring)."""
+    return float(np.sqrt(n / (n - 1))) if 1 < n < BOOTSTRAP_FEW_SEEDS else 1.0
+
+
+@dataclass(frozen=True)
+class _DemLaw:
+    """The DEM's estimate of a law for one choice: its value (NaN: ``text`` says why), the window text, its standard
+    error and that error's degrees of freedom; for a line across drives, the fit's reduced chi-square, the lack-of-fit
+    note (compare.rows.not_a_line) and each drive's error ``sd``, which weights the models' lines alike."""
+
+    value: float
+    text: str
+    err: float
+    dof: float
+    chi2_dof: float = np.nan
+    lack: str = ""
+    sd: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -539,9 +635,9 @@ class _Sources:
                    for dc in usable for key, sens in dc.sensitivity.items()}
         return cls(full, replicas, predicted, shifted, {label: len(s.u_w) for label, s in seeds.items()})
 
-    def dem_estimate(self, law: Law, choice: Choice, drives, windows: dict) -> tuple[float, str, float, float]:
-        """(value, window text or why not, standard error, its degrees of freedom) of the DEM's estimate: the
-        bootstrap's standard deviation, corrected for few seeds (see the module's docstring)."""
+    def dem_estimate(self, law: Law, choice: Choice, drives, windows: dict) -> _DemLaw:
+        """The DEM's estimate of a law that is a mean over drives: its error the bootstrap's standard deviation,
+        corrected for few seeds (see the module's docstring), with n - 1 degrees of freedom."""
         key = (law.name, law.quantity, law.kind, choice, tuple(sorted(windows.items(), key=lambda kv: kv[0])))
         if key not in self.dem:
             dem, text = law.estimate([self.full[dc.label] for dc in drives], drives, choice, windows)
@@ -549,10 +645,34 @@ class _Sources:
                              for r in self.replicas] if np.isfinite(dem) else [])
             boot = boot[np.isfinite(boot)]
             n = min((self.seeds[dc.label] for dc in drives), default=0)
-            few = np.sqrt(n / (n - 1)) if 1 < n < BOOTSTRAP_FEW_SEEDS else 1.0
-            dof = len(drives) - 2 if law.across else n - 1
-            self.dem[key] = (dem, text, float(boot.std(ddof=1)) * few if len(boot) >= 2 else np.nan,
-                             float(dof) if dof > 0 else np.nan)
+            self.dem[key] = _DemLaw(dem, text, float(boot.std(ddof=1)) * _few_seeds(n) if len(boot) >= 2 else np.nan,
+                                    float(n - 1) if n > 1 else np.nan)
+        return self.dem[key]
+
+    def spread(self, law: Law, choice: Choice, drives) -> np.ndarray:
+        """Each drive's seed-spread error of a line's y (its log for a power law): the standard deviation of that
+        drive's y over the bootstrap resamples of its seeds, corrected for few seeds; NaN with fewer than 2 finite
+        resamples."""
+        ys = np.array([law.estimate.points([r[dc.label] for dc in drives], drives, choice)[1]
+                       for r in self.replicas]).reshape(len(self.replicas), len(drives))
+        return np.array([np.std(y[np.isfinite(y)], ddof=1) * _few_seeds(self.seeds[dc.label])
+                         if np.isfinite(y).sum() >= 2 else np.nan for y, dc in zip(ys.T, drives)])
+
+    def dem_line(self, law: Law, choice: Choice, drives) -> _DemLaw:
+        """The DEM's line across drives (an Across law), each drive weighted by its seed-spread error (``spread``):
+        the slope or offset, its error scaled by sqrt(chi2/dof) where that is above 1 (the points scatter about the
+        line beyond their errors), n - 2 degrees of freedom, and the lack-of-fit note where the points are no line."""
+        key = (law.name, law.quantity, law.kind, choice)
+        if key not in self.dem:
+            x, y = law.estimate.points([self.full[dc.label] for dc in drives], drives, choice)
+            sd = self.spread(law, choice, drives)
+            line, text = law.estimate.line(x, y, sd)
+            if line is None:
+                self.dem[key] = _DemLaw(np.nan, text, np.nan, np.nan, sd=sd)
+            else:
+                value, err = law.estimate.value(line)
+                self.dem[key] = _DemLaw(value, text, err * np.sqrt(max(line.chi2_dof, 1.0)), float(line.dof),
+                                        line.chi2_dof, not_a_line(line.chi2, line.dof), sd)
         return self.dem[key]
 
 
@@ -567,27 +687,37 @@ def _calibration_sd(estimate, drives, key: str, predicted: float, shifted_tracks
 
 
 def _choice(law: Law, choice: Choice, drives, model: str, src: _Sources) -> tuple[dict, str]:
-    """One choice of ``law`` for ``model``: its entry (compare.families.entry) and the DEM's window text."""
+    """One choice of ``law`` for ``model``: its entry (compare.families.entry, with the DEM line's ``chi2_dof``) and
+    the DEM's window text.  A line that is no line (compare.rows.not_a_line) quotes no DEM value."""
     windows = ({dc.label: law.window(dc, choice, src.full[dc.label], src.predicted[(dc.label, model)])
                 for dc in drives} if law.window is not None else {})
-    dem, text, dem_err, dem_dof = src.dem_estimate(law, choice, drives, windows)
-    predicted, model_text = law.estimate([src.predicted[(dc.label, model)] for dc in drives], drives, choice, windows)
+    if law.across:
+        dem = src.dem_line(law, choice, drives)
+        estimate = partial(law.estimate, drives=drives, choice=choice, windows=windows, sd=dem.sd)
+    else:
+        dem = src.dem_estimate(law, choice, drives, windows)
+        estimate = partial(law.estimate, drives=drives, choice=choice, windows=windows)
+    predicted, model_text = estimate([src.predicted[(dc.label, model)] for dc in drives])
     note = ""
-    if not np.isfinite(dem):
-        note = text
+    if not np.isfinite(dem.value):
+        note = dem.text
+    elif dem.lack:
+        note = dem.lack
     elif not np.isfinite(predicted):
         note = f"not predicted: {model_text.removeprefix('not measurable: ')}"
-    elif not (np.isfinite(dem_err) and dem_err > 0):
+    elif not (np.isfinite(dem.err) and dem.err > 0):
         note = "not measurable: no spread over resampled seeds (fewer than 2 seeds per drive)"
-    s_cal = 0.0 if note else _calibration_sd(lambda tracks: law.estimate(tracks, drives, choice, windows)[0],
-                                             drives, model, predicted, src.shifted)
+    s_cal = 0.0 if note else _calibration_sd(lambda tracks: estimate(tracks)[0], drives, model, predicted,
+                                             src.shifted)
     if not np.isfinite(s_cal):
         note, s_cal = ("not predicted: the law is undefined for a calibration parameter shifted by "
                        f"{STEP:g} of its value, so its calibration band is unknown"), 0.0
-    if not note and not dem_dof > 0:
+    if not note and not dem.dof > 0:
         note = f"not measurable: no degree of freedom left for the DEM's error ({len(drives)} drive(s))"
-    dof = effective_dof((dem_err, s_cal), (dem_dof, np.inf)) if not note else np.nan
-    return entry(choice, dem, dem_err, predicted, s_cal, note, dof), text if np.isfinite(dem) else ""
+    dof = effective_dof((dem.err, s_cal), (dem.dof, np.inf)) if not note else np.nan
+    value, err = (np.nan, np.nan) if dem.lack else (dem.value, dem.err)
+    return ({**entry(choice, value, err, predicted, s_cal, note, dof), "chi2_dof": dem.chi2_dof},
+            dem.text if np.isfinite(value) else "")
 
 
 def _law_row(law: Law, model: str, drives, src: _Sources, calibrated: bool) -> dict:
@@ -606,7 +736,7 @@ def _law_row(law: Law, model: str, drives, src: _Sources, calibrated: bool) -> d
                 "so its transient is no prediction")
     return law_row(law=law.name, quantity=law.quantity, unit=law.unit, model=model, dem=e["dem"],
                    dem_err=e["dem_err"], predicted=e["predicted"], predicted_err=e["predicted_err"],
-                   sigma=e["sigma"] if note in ("", split) else np.nan, dof=e["dof"], chi2_dof=np.nan,
+                   sigma=e["sigma"] if note in ("", split) else np.nan, dof=e["dof"], chi2_dof=e["chi2_dof"],
                    n_drives=len(drives), window=window, note=note, choices=entries, systematic=systematic(entries),
                    kind=law.kind or "all")
 
@@ -617,6 +747,6 @@ def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFra
     usable = _drives(compared, None)
     src = _Sources.of(usable, resamples, seed)
     calibrated = {p.model: p.transient_calibrated for dc in usable for p in dc.predictions}
-    rows = [_law_row(law, model, _drives(compared, law.kind, law.plate), src, calibrated[model])
+    rows = [_law_row(law, model, _drives(compared, law.kind, law.plate, law.layer), src, calibrated[model])
             for law in LAWS for model in calibrated]
     return pd.DataFrame(rows, columns=list(dict.fromkeys([*LAW_KEYS, *(k for r in rows for k in r)])))

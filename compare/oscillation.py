@@ -46,7 +46,7 @@ from . import phase
 from .band import Sensitivity
 from .drive import TRANSITS_BEFORE_COMPARISON, DriveSpec, drive_specs
 from .plate import SLIP_MAX
-from .rows import band, effective_dof, law_row, score_row, sigma
+from .rows import LACK_OF_FIT_P, band, effective_dof, law_row, score_row, sigma
 
 OBSERVABLES = {"response_amplitude": None, "phase_lag": "rad", "yielded_depth": "d",
                "dissipation": "rho_p g d^2 per plate area", "remobilization_strain": "1"}
@@ -64,8 +64,6 @@ LABELS = {"local": "local mu(I), velocity form on the DEM scene", "ngf": "nonloc
 PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
 #: beds whose spread is the DEM's error (one bed: its cycles as blocks)
 MIN_BEDS = 2
-#: a law fitted as a line is "not a line" when the DEM's chi-square about it is this improbable (lack of fit)
-LACK_OF_FIT_P = 0.01
 
 
 def unit(drive: DriveSpec, observable: str) -> str:

@@ -8,7 +8,8 @@ Every experiment (compare.experiment) writes two kinds of row:
 * a **law row** per law x model (``LAW_KEYS``, plus the experiment's own): the same estimator fitted on the DEM and on
   each model over the same window and drives, the drives' ``kind`` it reads ("stress", "speed", or "both" for a law
   across kinds), its ``dof`` and, for a law fitted as a line, the DEM fit's reduced chi-square ``chi2_dof`` (NaN for
-  a law that is not such a fit).
+  a law that is not such a fit); a line whose DEM points are improbably far from it (``not_a_line``: chi2.sf(chi2,
+  n - 2) < LACK_OF_FIT_P) is "not measurable: not a line".
 
 sigma = (DEM - predicted) / sqrt(dem_err^2 + numerical_err^2 + calibration_sd^2), the difference of phases wrapped
 into (-pi, pi] by the experiment.  Errors from a few beds, seeds or blocks are not Gaussian: every error carries its
@@ -36,6 +37,8 @@ Z95 = float(stats.norm.ppf((1 + CONFIDENCE) / 2))
 UNSCORED = ("not scored", "not predicted", "not measurable")
 #: the verdict of a law whose estimator family splits (compare.families.family_note)
 ESTIMATOR_DEPENDENT = "depends on the estimator"
+#: a law fitted as a line is "not a line" when the DEM's chi-square about it is this improbable (lack of fit)
+LACK_OF_FIT_P = 0.01
 ROW_KEYS = ("drive", "observable", "unit", "dem", "dem_err", "dem_how", "model", "model_label", "predicted", "band",
             "numerical_err", "calibration_sd", "sigma", "dof", "verdict", "scored", "note", "blind")
 LAW_KEYS = ("law", "quantity", "unit", "kind", "model", "dem", "dem_err", "predicted", "predicted_err", "band",
@@ -74,6 +77,14 @@ def verdict(sigma: float, note: str = "", dof: float = np.inf) -> str:
             raise ValueError(f"a row's note must start with one of {heads}: {note!r}")
         return head
     return "consistent" if abs(sigma) <= critical(dof) else "disagrees"
+
+
+def not_a_line(chi2: float, dof: int) -> str:
+    """The lack-of-fit note of a line whose DEM points have the weighted squared residuals ``chi2`` about it with
+    ``dof`` degrees of freedom (points - 2), or "" when chi2.sf(chi2, dof) is at least LACK_OF_FIT_P: a step or a bend
+    through the points, whose slope is no number to score."""
+    p = float(stats.chi2.sf(chi2, dof))
+    return f"not measurable: not a line (chi2/dof = {chi2 / dof:.3g}, p = {p:.2g})" if p < LACK_OF_FIT_P else ""
 
 
 def sigma(difference: float, *errors: float) -> float:

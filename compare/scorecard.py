@@ -29,10 +29,12 @@ Rows that the scene cannot support are kept but not scored (``scored`` False, ``
 the plate slips by more than SLIP_MAX against the grains touching it (``slipping``), its plate observables; where a
 model's steady wall inertial number lies beyond the calibration's largest I (``extrapolated``), its steady rows; where
 the drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose
-bed is a half-space; where a model is not yet steady over the DEM's final quarter (the record is shorter
-than the model's time scale), that model's steady profile rows (delta_u, creep_length).  A row is ``blind``
-only when mu(I) comes from an independent calibration and the model's own parameter was not fitted on that
-drive; only scored blind rows count for a model (``tally``), and models are ranked over the rows they share.
+bed is a half-space; where the bed is shorter than delta_s + CREEP_LENGTHS_TO_BASE of the DEM's own creep lengths
+(``short_bed``; the sizing's assumed creep length where the DEM measures none), its layer observables (the base
+constrains the creep); where a model is not yet steady over the DEM's final quarter (the record is shorter than the
+model's time scale), that model's steady profile rows (delta_u, creep_length).  A row is ``blind`` only when mu(I)
+comes from an independent calibration and the model's own parameter was not fitted on that drive; only scored blind
+rows count for a model (``tally``), and models are ranked over the rows they share.
 """
 from __future__ import annotations
 
@@ -42,6 +44,7 @@ import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import crossing_depth, depth_at_fraction
 from granstokes.continuum.scene_models import Prediction, SceneModel, Steady
+from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS
 from scipy import stats
 
 from .analysis import DriveAnalysis
@@ -65,6 +68,10 @@ MODEL_UNSTEADY = 0.05
 #: the observables of the steady state, and those of the layer (meaningless where the flow reaches the base)
 STEADY_OBSERVABLES = ("u_w_inf", "mu_w_inf", "delta_u", "creep_length")
 LAYER_OBSERVABLES = ("delta_u", "creep_length")
+#: the bed holds delta_s and this many creep lengths below it: there the creep's speed has e-folded to e^-5 < 1 % of
+#: its value at delta_s, so the base's no-slip does not cut the tail short and the layer's depth and creep length are
+#: the material's (the margin a sized bed gets, dem.sizing.CREEP_LENGTHS)
+CREEP_LENGTHS_TO_BASE = CREEP_LENGTHS
 TRANSIENT_OBSERVABLES = ("t90",)
 
 
@@ -128,6 +135,29 @@ def base_reach(a: DriveAnalysis, delta_s: float) -> str:
         return (f"the flow reaches the base: the layer (DEM delta_u {dem:.3g} d, calibrated delta_s {delta_s:.3g} d) "
                 f"comes within {WALL_EXCLUSION:g} d of the base of the {a.spec.depth:.3g} d bed")
     return ""
+
+
+def dem_creep(a: DriveAnalysis, delta_s: float) -> Measured:
+    """The DEM's creep length of drive ``a`` (``creep_length`` of each of its steady-window samples below the
+    calibrated ``delta_s``): the mean and its standard error."""
+    return _mean_err([creep_length(s.depth, s.u_x, delta_s, a.spec.depth) for s in a.samples], a.samples_how)
+
+
+def short_bed(a: DriveAnalysis, delta_s: float) -> str:
+    """Why drive ``a``'s bed is too shallow for its layer's rows, or "": its depth is short of the calibrated
+    ``delta_s`` plus CREEP_LENGTHS_TO_BASE of the DEM's own creep lengths (``dem_creep``), so the base constrains the
+    creep; where the DEM measures none, of the sizing's assumed creep length (dem.sizing.CREEP_LENGTH), and the note
+    says so."""
+    ell = dem_creep(a, delta_s).value
+    which = ""
+    if not np.isfinite(ell):
+        ell, which = CREEP_LENGTH, ", the sizing's assumed creep length: the DEM's is not measured"
+    need = delta_s + CREEP_LENGTHS_TO_BASE * ell
+    if a.spec.depth >= need:
+        return ""
+    return (f"the bed ({a.spec.depth:.3g} d) is shorter than delta_s + {CREEP_LENGTHS_TO_BASE:g} creep lengths "
+            f"({delta_s:.3g} + {CREEP_LENGTHS_TO_BASE:g} x {ell:.3g} = {need:.3g} d{which}): the base constrains the "
+            "creep")
 
 
 def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
@@ -196,7 +226,7 @@ def dem_observables(a: DriveAnalysis, delta_s: float) -> dict[str, Measured]:
     samples, how = a.samples, a.samples_how
     out["delta_u"] = _mean_err([depth_at_fraction(s.depth.to_numpy(), s.u_x.to_numpy(), s.u_x.iloc[0])
                                 for s in samples], how)
-    out["creep_length"] = _mean_err([creep_length(s.depth, s.u_x, delta_s, a.spec.depth) for s in samples], how)
+    out["creep_length"] = dem_creep(a, delta_s)
     if len(a.plates) >= 2:
         out["t90"] = _mean_err([t90(p.t, getattr(p, resp)) for p in a.plates], f"spread over {len(a.plates)} seeds")
     else:
@@ -271,10 +301,12 @@ def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
     return abs(t90(t, np.interp(t, series.t, series[a.response])) - t90(t, np.interp(t, coarse.t, coarse[a.response])))
 
 
-def _not_scored(obs: str, model: SceneModel, base: str, end_value: float, steady_value: float) -> str:
+def _not_scored(obs: str, model: SceneModel, base: str, shallow: str, end_value: float, steady_value: float) -> str:
     """Why a row is not scored, or "" (see the module's docstring)."""
     if base and (obs in LAYER_OBSERVABLES or model.half_space):
         return "not scored: " + base + (" (the model's bed is a half-space)" if model.half_space else "")
+    if shallow and obs in LAYER_OBSERVABLES:
+        return "not scored: " + shallow
     if obs in TRANSIENT_OBSERVABLES and not model.transient_calibrated:
         return (f"not predicted: {model.key}'s time scale is assumed (t0 one local inertial time), not calibrated, "
                 "so its transient is no prediction")
@@ -317,7 +349,7 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
     half = n_replicates // 2
     delta_s = next(iter(predictions.values())).steady.delta_s
     dem = dem_observables(a, delta_s)
-    base = base_reach(a, delta_s)
+    base, shallow = base_reach(a, delta_s), short_bed(a, delta_s)
     slip = slipping(a)
     for model in models:
         pred: Prediction | None = predictions.get(model.key)
@@ -355,8 +387,8 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
             combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
             note = ((slip if obs in PLATE_OBSERVABLES else "")
                     or (beyond.get(model.key, "") if obs in STEADY_OBSERVABLES else "")
-                    or (_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"]) if not windowed
-                        else _not_scored("", model, base, end_value, asymptote))
+                    or (_not_scored(obs, model, base, shallow, end_value, central[f"{a.response}_inf"])
+                        if not windowed else _not_scored("", model, base, shallow, end_value, asymptote))
                     or _unmeasurable(measured, lo, hi, combined))
             rows.append(score_row(
                 drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,

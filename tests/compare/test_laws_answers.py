@@ -1,5 +1,6 @@
 """Independent answers for the growth law's window and fit (compare.laws ``growth_window`` and ``growth``, which
-reads the layer depths in the window and fits their log-log slope), on made-up drives: a drive is a
+reads the layer depths in the window and fits their log-log slope), for the laws fitted as a line across drives, and
+for the drives the layer's laws read, on made-up drives: a drive is a
 SimpleNamespace carrying only what these functions read (the DEM's shear-wave transit time, whose
 TRANSITS_BEFORE_COMPARISON transits are the elastic start, and record length ``t_end``, the calibrated ``t_s`` and
 ``nu_g``), a track only its layer times and depths; no record is read and no solver runs.
@@ -13,14 +14,37 @@ What is checked, and how the answers are found without the module:
   delta/sqrt(nu_g t) over the window's readings, both written out here (the exponent also by numpy.polyfit on the
   logs, for float32 input);
 * the window includes both its ends; only positive, finite depths count; MIN_POINTS (imported) readings are enough
-  and one fewer is not measurable, with the count in the reason; readings all at one time have no exponent.
+  and one fewer is not measurable, with the count in the reason; readings all at one time have no exponent;
+* a line across drives (the creep length against p_w, the steady layer against delta_s) is weighted by each drive's
+  seed-spread error: each made-up drive's bootstrap is two resamples at y -+ h, whose standard deviation (ddof 1) is
+  h sqrt(2), so h = sd/sqrt(2) gives it the error sd (BOOTSTRAP_FEW_SEEDS seeds: no few-seed correction); the answers
+  are numpy.polyfit's weighted by 1/sd with its unscaled covariance, the chi-square written out, the lack-of-fit
+  probability scipy's chi-square survival function;
+* the steady layer's and the creep's laws leave out a drive whose bed is short of delta_s + CREEP_LENGTHS_TO_BASE
+  creep lengths, on an exactly exponential creep.
 """
 from types import SimpleNamespace
 
 import numpy as np
+import pandas as pd
 import pytest
 from granstokes.compare.drive import TRANSITS_BEFORE_COMPARISON
-from granstokes.compare.laws import GROWTH_END, MIN_DECADES, MIN_POINTS, Window, growth, growth_window
+from granstokes.compare.laws import (
+    BOOTSTRAP_FEW_SEEDS,
+    GROWTH_END,
+    LAWS,
+    MIN_DECADES,
+    MIN_POINTS,
+    Window,
+    _drives,
+    _law_row,
+    _Sources,
+    growth,
+    growth_window,
+)
+from granstokes.compare.rows import LACK_OF_FIT_P, critical
+from granstokes.compare.scorecard import CREEP_LENGTHS_TO_BASE
+from scipy import stats
 
 NU_G = 0.3
 #: the fits' window, given explicitly (the window's own rules are tested apart)
@@ -132,3 +156,116 @@ def test_readings_all_at_one_time_have_no_exponent():
     out = growth(track(np.full(MIN_POINTS + 1, 0.5), np.linspace(1.0, 2.0, MIN_POINTS + 1)), drive(t_s=2.0),
                  window=FIT)
     assert np.isnan(out["exponent"])
+
+
+P_W = np.array([5.0, 7.0, 10.0, 14.0, 20.0, 28.0])
+LOG_SD = np.array([0.05, 0.08, 0.04, 0.10, 0.06, 0.05])   # each drive's error of ln(creep length)
+Z = np.array([0.9, -1.4, 0.3, 1.6, -1.2, 0.4])            # each drive's deviation from the line, in its errors
+
+
+def _law(name, quantity=""):
+    return next(law for law in LAWS if law.name == name and law.quantity.startswith(quantity))
+
+
+def _row_of(law, drives, full, lo, hi, predicted):
+    """compare.laws' row of ``law`` for the model "local" from the DEM's tracks ``full``, its two resamples ``lo``
+    and ``hi`` and the model's tracks ``predicted`` (each a list over ``drives``)."""
+    labels = [dc.label for dc in drives]
+    src = _Sources(dict(zip(labels, full)), [dict(zip(labels, lo)), dict(zip(labels, hi))],
+                   {(k, "local"): tr for k, tr in zip(labels, predicted)}, {},
+                   dict.fromkeys(labels, BOOTSTRAP_FEW_SEEDS))
+    return _law_row(law, "local", drives, src, True)
+
+
+def _hand_line(x, y, sd):
+    """(slope, offset), their unscaled errors and chi2 of the weighted line, by numpy."""
+    coef, cov = np.polyfit(x, y, 1, w=1 / sd, cov="unscaled")
+    return coef, np.sqrt(np.diag(cov)), float(np.sum(((y - np.polyval(coef, x)) / sd) ** 2))
+
+
+def _creep_drives(creep):
+    drives = [SimpleNamespace(label=f"p{p:g}", dem=SimpleNamespace(spec=SimpleNamespace(p_w=p))) for p in P_W]
+    h = LOG_SD / np.sqrt(2)
+    tracks = lambda c: [SimpleNamespace(creep=float(v)) for v in c]  # noqa: E731
+    return drives, tracks(creep), tracks(creep * np.exp(-h)), tracks(creep * np.exp(h))
+
+
+def test_creep_lengths_on_a_power_law_give_the_weighted_slope_its_scaled_error_and_chi2_per_dof():
+    """ln creep = ln(2 p_w^0.3) + Z sd over six drives: the DEM's slope and error are the weighted fit's, the error
+    scaled by sqrt(chi2/dof) (here 1.7 > 1), dof 6 - 2 = 4; the model's exact power law gives 0.3 on the same
+    weights; sigma and the verdict at Student-t's quantile with 4 dof."""
+    drives, full, lo, hi = _creep_drives(2 * P_W**0.3 * np.exp(Z * LOG_SD))
+    row = _row_of(_law("creep_length_scaling"), drives, full, lo, hi, _creep_drives(2 * P_W**0.3)[1])
+    (slope, _), (slope_err, _), chi2 = _hand_line(np.log(P_W), np.log(2 * P_W**0.3) + Z * LOG_SD, LOG_SD)
+    assert chi2 / 4 == pytest.approx(1.713, abs=1e-3)
+    err = slope_err * np.sqrt(chi2 / 4)
+    assert row["chi2_dof"] == pytest.approx(chi2 / 4, rel=1e-9) and row["dof"] == pytest.approx(4)
+    assert row["dem"] == pytest.approx(slope, rel=1e-9) and row["dem_err"] == pytest.approx(err, rel=1e-9)
+    assert row["predicted"] == pytest.approx(0.3, rel=1e-9) and row["predicted_err"] == 0
+    assert row["sigma"] == pytest.approx((slope - 0.3) / err, rel=1e-9)
+    assert row["verdict"] == ("consistent" if abs(slope - 0.3) / err <= critical(4) else "disagrees") == "consistent"
+    assert row["choices"][0]["chi2_dof"] == row["chi2_dof"] and row["n_drives"] == 6
+
+
+def test_creep_lengths_on_a_step_are_not_a_line():
+    """Creep lengths 2 below p_w = 12 and 4 above, each to 4-10 %: the weighted line leaves chi2/dof = 12.6 (p = 3e-10),
+    improbable below LACK_OF_FIT_P: 'not measurable: not a line' with chi2/dof and p, no DEM slope quoted."""
+    step = np.where(P_W < 12, 2.0, 4.0)
+    drives, full, lo, hi = _creep_drives(step)
+    row = _row_of(_law("creep_length_scaling"), drives, full, lo, hi, _creep_drives(2 * P_W**0.3)[1])
+    *_, chi2 = _hand_line(np.log(P_W), np.log(step), LOG_SD)
+    p = stats.chi2.sf(chi2, 4)
+    assert p < LACK_OF_FIT_P and chi2 / 4 == pytest.approx(12.57, abs=0.01)
+    assert row["verdict"] == "not measurable"
+    assert row["note"] == f"not measurable: not a line (chi2/dof = {chi2 / 4:.3g}, p = {p:.2g})"
+    assert row["chi2_dof"] == pytest.approx(chi2 / 4, rel=1e-9) and np.isnan(row["dem"]) and np.isnan(row["sigma"])
+
+
+def test_the_steady_layer_s_slope_and_offset_carry_each_choice_s_chi2_per_dof():
+    """delta_05 = 0.7 delta_s + 4.5 and delta_50 = 0.7 delta_s + 1, each with its own deviations, the other depths
+    unmeasured: the slope and offset rows read delta_05 (the primary), the offset's error sqrt(1/S_w + x_m^2/S_xx)
+    scaled by sqrt(chi2/dof) = sqrt(1.72); delta_50's entry has its own chi2/dof (0.38: no scaling), the unmeasured
+    choices none."""
+    delta_s = np.array([4.0, 6.0, 9.0, 12.0, 16.0, 20.0])
+    sd = np.array([0.3, 0.4, 0.3, 0.5, 0.4, 0.6])
+    depth = {"delta_05": 0.7 * delta_s + 4.5 + sd * Z,
+             "delta_50": 0.7 * delta_s + 1.0 + sd * np.array([-0.5, 0.2, 0.6, -0.9, 0.1, 0.4])}
+    drives = [SimpleNamespace(label=f"d{k}", scales=SimpleNamespace(delta_s=x)) for k, x in enumerate(delta_s)]
+
+    def tracks(shift):
+        return [SimpleNamespace(steady_depth=lambda e, k=k: depth[e][k] + shift[k] if e in depth else np.nan)
+                for k in range(len(delta_s))]
+
+    model = [SimpleNamespace(steady_depth=lambda e, x=x: 0.7 * x + 3.0) for x in delta_s]
+    hand = {e: _hand_line(delta_s, y, sd) for e, y in depth.items()}
+    for quantity, k in (("slope", 0), ("offset", 1)):
+        row = _row_of(_law("delta_s_scaling", quantity), drives, tracks(0 * sd), tracks(-sd / np.sqrt(2)),
+                      tracks(sd / np.sqrt(2)), model)
+        coef, errors, chi2 = hand["delta_05"]
+        assert row["dem"] == pytest.approx(coef[k], rel=1e-9)
+        assert row["dem_err"] == pytest.approx(errors[k] * np.sqrt(chi2 / 4), rel=1e-9)
+        assert row["predicted"] == pytest.approx((0.7, 3.0)[k], rel=1e-9)
+        chi2_dof = {c["estimator"]: c["chi2_dof"] for c in row["choices"]}
+        assert chi2_dof["delta_05"] == pytest.approx(hand["delta_05"][2] / 4, abs=1e-9) == row["chi2_dof"]
+        assert chi2_dof["delta_50"] == pytest.approx(hand["delta_50"][2] / 4, abs=1e-9)
+        assert all(np.isnan(chi2_dof[e]) for e in ("delta_10", "delta_20", "moment"))
+        delta_50 = next(c for c in row["choices"] if c["estimator"] == "delta_50")
+        assert hand["delta_50"][2] / 4 < 1 and delta_50["dem_err"] == pytest.approx(hand["delta_50"][1][k], rel=1e-9)
+
+
+def test_a_drive_whose_bed_is_short_of_the_creep_is_left_out_of_the_laws_that_read_the_layer():
+    """Two drives with creep length 3 exactly below delta_s = 7 (u = exp(-depth/3)): the bed must hold
+    7 + 5 x 3 = 22 d; the 21.5 d bed is left out of the steady layer's and the creep's laws, kept in the others."""
+    depth = np.arange(0.0, 40.0, 0.5)
+    sample = pd.DataFrame({"depth": depth, "u_x": np.exp(-depth / 3.0)})
+    need = 7.0 + CREEP_LENGTHS_TO_BASE * 3.0
+
+    def dc(bed):
+        dem = SimpleNamespace(spec=SimpleNamespace(depth=bed, kind="stress"), samples=(sample, sample),
+                              samples_how="spread over 2 seeds")
+        return SimpleNamespace(predictions=(None,), base="", dem=dem, scales=SimpleNamespace(delta_s=7.0))
+
+    deep, short = dc(need + 0.5), dc(need - 0.5)
+    assert _drives([deep, short], None, layer=True) == [deep]
+    assert _drives([deep, short], "stress") == [deep, short]
+    assert {law.name for law in LAWS if law.layer} == {"delta_s_scaling", "creep_length_scaling"}

@@ -43,7 +43,7 @@ from granstokes.compare.scorecard import (
 from scipy import stats
 
 T = np.arange(21.0)               # the DEM's output times
-BED = 20.0                        # the bed's depth [d]
+BED = 22.0                        # the bed's depth [d]: deeper than DELTA_S + 5 of the seeds' creep lengths
 DEPTH = np.arange(0.0, BED + 0.25, 0.5)
 DELTA_S = 7.0                     # the calibrated delta_s: the creep zone is [7, BED - WALL_EXCLUSION]
 LABEL = "stress-1"
@@ -333,7 +333,7 @@ def test_a_drive_reaching_the_base_leaves_its_layer_rows_and_every_half_space_ro
     still = pd.DataFrame({"depth": DEPTH, "u_x": np.ones_like(DEPTH)})  # u never falls to 5 % of u_w
     rows, _, _ = _score(_drive(steady_profile=still), {"local": _model_side(), "paper": _model_side()},
                         models=[_model("local"), _model("paper", half_space=True)])
-    base = "the flow reaches the base: u stays above 5 % of u_w down to the base of the 20 d bed"
+    base = f"the flow reaches the base: u stays above 5 % of u_w down to the base of the {BED:g} d bed"
     local, paper = _by(rows, "local"), _by(rows, "paper")
     assert local.note.to_dict() == {"u_w_inf": "", "delta_u": "not scored: " + base,
                                     "creep_length": "not scored: " + base, "t90": ""}
@@ -559,3 +559,47 @@ def test_a_model_beyond_the_calibrated_inertial_number_extrapolates_its_steady_r
     steady = rows.observable.isin(STEADY_OBSERVABLES)
     assert (rows[steady].note == note).all() and (~rows[steady].scored).all()
     assert rows[~steady].scored.all() and set(rows[~steady].observable) == {"t90"}
+
+
+def test_a_bed_shorter_than_delta_s_and_five_measured_creep_lengths_leaves_its_layer_rows_unscored():
+    """The seeds' creep lengths 2.4, 3.0, 2.7 (mean 2.7) below DELTA_S = 7: the bed must hold 7 + 5 x 2.7 = 20.5 d. A
+    bed 0.1 d short of that has its layer rows (delta_u, creep_length) kept, not scored, the note giving the sum;
+    the plate's rows are scored; a bed 0.1 d deeper has every row scored."""
+    from granstokes.compare.scorecard import CREEP_LENGTHS_TO_BASE, LAYER_OBSERVABLES, short_bed
+    ell = (2.4 + 3.0 + 2.7) / 3
+    need = DELTA_S + CREEP_LENGTHS_TO_BASE * ell
+    assert CREEP_LENGTHS_TO_BASE == 5 and need == pytest.approx(20.5)
+    predictions, spreads = _model_side()
+    for depth, short in ((need - 0.1, True), (need + 0.1, False)):
+        a = _drive()
+        a.spec = NS(depth=depth)  # the creep zone [DELTA_S, depth - WALL_EXCLUSION] still lies in the exponential tail
+        rows, _, _ = score(a, [_model("local")], {"local": predictions}, {"local": spreads}, 5)
+        layer = rows.observable.isin(LAYER_OBSERVABLES)
+        assert set(rows[layer].observable) == {"delta_u", "creep_length"}
+        assert rows[~layer].scored.all() and rows[layer].scored.all() != short
+        if short:
+            why = (f"the bed ({depth:.3g} d) is shorter than delta_s + 5 creep lengths (7 + 5 x 2.7 = 20.5 d): the "
+                   "base constrains the creep")
+            assert short_bed(a, DELTA_S) == why
+            assert (rows[layer].note == "not scored: " + why).all() and set(rows[layer].verdict) == {"not scored"}
+            # the unscored rows keep the DEM's numbers: the creep length is the seeds' mean
+            assert rows[rows.observable == "creep_length"].dem.iloc[0] == pytest.approx(ell)
+        else:
+            assert short_bed(a, DELTA_S) == ""
+
+
+def test_without_a_measured_creep_length_the_depth_rule_falls_back_on_the_sizing_s_and_says_so():
+    """Seeds whose speed is flat below delta_s (no e-folding: creep_length NaN): the bed must hold DELTA_S + 5 x 2.5
+    (dem.sizing's assumed creep length) = 19.5 d; 19.4 d falls short, 19.6 d holds it."""
+    from granstokes.compare.scorecard import short_bed
+    from granstokes.dem.sizing import CREEP_LENGTH
+    flat = pd.DataFrame({"depth": DEPTH, "u_x": np.where(DEPTH <= 5.0, 1 - DEPTH / 5.0, 0.01)})
+    need = DELTA_S + 5 * CREEP_LENGTH
+    assert need == pytest.approx(19.5)
+    a = _drive(samples=(flat, flat, flat))
+    a.spec = NS(depth=need - 0.1)
+    assert short_bed(a, DELTA_S) == (
+        "the bed (19.4 d) is shorter than delta_s + 5 creep lengths (7 + 5 x 2.5 = 19.5 d, the sizing's assumed creep "
+        "length: the DEM's is not measured): the base constrains the creep")
+    a.spec = NS(depth=need + 0.1)
+    assert short_bed(a, DELTA_S) == ""
