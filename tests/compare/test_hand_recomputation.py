@@ -5,7 +5,6 @@ import os
 import re
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -32,12 +31,12 @@ def test_the_note_s_hand_recomputation_finds_the_committed_report_s_numbers(caps
         dem, dem_err = namespace["reported"](observable, label)
         assert math.isclose(value, dem, rel_tol=1e-5) and math.isclose(err, dem_err, rel_tol=1e-4), (label, observable)
     law = namespace["law"]
-    assert len(namespace["clear"]) >= 6
-    assert math.isclose(namespace["slope"], law["slope"], rel_tol=1e-5)
-    assert math.isclose(namespace["offset"], law["offset"], rel_tol=1e-5, abs_tol=1e-6)
-    for name, offset in namespace["family"].items():  # the estimator family's choices, each by hand
-        assert math.isclose(offset, namespace["offsets"][name], rel_tol=1e-5), name
-    assert namespace["family"]["delta_05"] > namespace["family"]["delta_50"]  # the offset depends on the threshold
+    assert len(namespace["short"]) == len(namespace["clear"]) - law["n_drives"]  # the depth rule, by hand
+    offsets = [namespace["family"][k] for k in ("delta_05", "delta_10", "delta_20", "delta_50")]
+    assert offsets == sorted(offsets, reverse=True)  # the offset falls with the threshold: a creep tail
+    reported = next(r for r in namespace["METRICS"]["laws"]
+                    if r["law"] == "delta_s_scaling" and r["model"] == "paper" and r["quantity"].startswith("offset"))
+    assert abs(namespace["family"]["delta_05"] - reported["dem"]) < reported["dem_err"]
     printed = capsys.readouterr().out
     assert printed.count("by hand") == 7
 
@@ -46,19 +45,20 @@ def test_the_note_s_hand_recomputation_finds_the_committed_report_s_numbers(caps
 def test_today_s_compare_on_the_committed_tables_finds_the_hand_numbers():
     """The same numbers from today's code: each drive's tables read back (compare.tables.read_drive), the steady
     response and its error from the plate records (compare.plate through plate_estimates), the steady layer of every
-    drive clear of the base from the DEM's samples (compare.scorecard.dem_observables): equal to the note's numpy."""
-    from granstokes.compare.scorecard import dem_observables
+    drive from the DEM's samples (compare.scorecard.dem_observables) and the depth rule (compare.scorecard.short_bed):
+    equal to the note's numpy."""
+    from granstokes.compare.scorecard import dem_observables, short_bed
     from granstokes.compare.tables import read_drive
 
     namespace = _hand_recomputation()
+    drives = namespace["METRICS"]["drives"]
     for (observable, label), (value, err) in namespace["by_hand"].items():
         a = read_drive(namespace["drive_folder"](label))
-        measured = dem_observables(a, delta_s=namespace["METRICS"]["drives"][label]["delta_s"])[observable]
+        measured = dem_observables(a, delta_s=drives[label]["delta_s"])[observable]
         assert math.isclose(measured.value, value, rel_tol=1e-9) and math.isclose(measured.err, err, rel_tol=1e-9)
-    today = []
-    for label, hand in zip(namespace["clear"], namespace["delta_u"]):
+    for label in namespace["clear"]:
         a = read_drive(namespace["drive_folder"](label))
-        today.append(dem_observables(a, delta_s=namespace["METRICS"]["drives"][label]["delta_s"])["delta_u"].value)
-        assert math.isclose(today[-1], hand, rel_tol=1e-9), label
-    slope, offset = np.polyfit(namespace["delta_s"], today, 1)
-    assert math.isclose(slope, namespace["slope"], rel_tol=1e-9)
+        delta_s = drives[label]["delta_s"]
+        today = dem_observables(a, delta_s=delta_s)["delta_u"].value
+        assert math.isclose(today, namespace["steady_delta_u"](label), rel_tol=1e-9), label
+        assert bool(short_bed(a, delta_s)) == (label in namespace["short"]), label
