@@ -101,7 +101,9 @@ def measured(e: dict) -> bool:
 
 
 def describe(e: dict) -> str:
-    return Choice(e["estimator"], e["reference"], e["from_transits"]).describe()
+    """An entry's choice in words: its own ``words`` where its family names them (the oscillating plate's cycles,
+    compare.oscillation.CycleChoice), else its Choice's."""
+    return e.get("words") or Choice(e["estimator"], e["reference"], e["from_transits"]).describe()
 
 
 def systematic(entries: list[dict]) -> float:

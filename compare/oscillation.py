@@ -17,7 +17,10 @@ Observables of a drive (``OBSERVABLES``; the imposed wall value is A sin(omega t
   regains RESPONSE_FRACTION of its half-cycle peak, over the DEM's yielded depth (both sides: a displacement).
 DEM values are the mean over the beds with their spread / sqrt(n), n - 1 degrees of freedom (one bed: the cycles as
 blocks, cycles - 1); a row's dof is its combined error's (compare.rows.effective_dof: the model's errors have
-infinitely many), and its verdict the Student-t test at that dof (compare.rows.verdict).  A model's band
+infinitely many), and its verdict the Student-t test at that dof (compare.rows.verdict).  A drive whose beds are not
+in one periodic state (``unsettled``: a bed jams, drifts or sits in another state than the others) keeps its rows,
+unscored.  The laws in omega (``laws``) are measured over each law's family of estimator choices (``LAW_FAMILIES``),
+the same on the DEM and the models, from the per-choice rows (``choice_rows``).  A model's band
 is its numerical error (Richardson, n_cells/2) and the calibration's, sqrt(J C J^T) with J from solves at each
 calibrated parameter shifted (compare.band) and C the calibration's replicates' covariance (NGF: A's variance too).
 Conventions: DEM units (d, rho_p, g); mu > 0 where the bed resists a plate moving in +x.
@@ -32,6 +35,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from granstokes.continuum import oscillation as osc
+from granstokes.continuum.crossing import LAYER_FRACTIONS, depth_at_fraction
 from granstokes.continuum.ngf import NonlocalFluidity
 from granstokes.continuum.richardson import richardson
 from granstokes.continuum.rules import YieldRule
@@ -45,6 +49,7 @@ from granstokes.lib.validate import require
 from . import phase
 from .band import Sensitivity
 from .drive import TRANSITS_BEFORE_COMPARISON, DriveSpec, drive_specs
+from .families import Choice, entry, family_note, headline, systematic
 from .plate import SLIP_MAX
 from .rows import LACK_OF_FIT_P, band, effective_dof, law_row, score_row, sigma
 
@@ -71,6 +76,43 @@ def unit(drive: DriveSpec, observable: str) -> str:
     if observable == "response_amplitude":
         return "sqrt(g d)" if drive.response == "u_w" else "1"
     return OBSERVABLES[observable]
+
+
+@dataclass(frozen=True)
+class CycleChoice:
+    """One estimator of a law's observable over the cycles (compare.families' Choice for the oscillating plate):
+    ``estimator`` "fundamental" (the lag of the first harmonics) or "peak" (the lag of the phase-averaged response's
+    peak, compare.phase.peak_lag); "edge" (the yielded depth: the cycle's mean depth where |mu| reaches mu_s) or a
+    LAYER_FRACTIONS key (where the fundamental's amplitude of the velocity profile falls to that fraction of the
+    reference speed's); ``reference`` the speed it is read against: "plate" (u_w) or "contact" (u_c, the grains
+    touching the plate; a model does not slip, its u_c is its u_w), "" for the stress edge; ``skip`` the start-up
+    cycles discarded."""
+
+    estimator: str
+    reference: str
+    skip: int = SKIP
+
+    def describe(self) -> str:
+        """'the first harmonic's lag against the contact layer's speed, after 1 cycle'."""
+        whose = {"plate": "the plate's", "contact": "the contact layer's"}.get(self.reference, "")
+        what = {"fundamental": f"the first harmonic's lag against {whose} speed",
+                "peak": f"the peak's lag against {whose} speed", "edge": "the depth where |mu| reaches mu_s"}.get(
+            self.estimator) or (f"the depth where the speed's amplitude falls to "
+                                f"{100 * LAYER_FRACTIONS[self.estimator]:g} % of {whose}")
+        return f"{what}, after {self.skip} cycle{'' if self.skip == 1 else 's'}"
+
+
+#: each law's observable measured over a family of choices, identically on the DEM and on the models, the primary
+#: (the scorecard's row) first: the cycles kept (the start-up's one, or two), the speed the response is read
+#: against (a slipping plate's or its contact layer's), and the estimator (the lag of the first harmonic or of the
+#: peak; the stress edge or the velocity's depth at half and a fifth of the reference speed: not at 5 %, which in
+#: the committed study lies 14 to 24 d deep in beds of 28 d, where the base, not the frequency, sets it)
+LAW_FAMILIES = {
+    "phase_lag": (CycleChoice("fundamental", "plate"), CycleChoice("fundamental", "plate", SKIP + 1),
+                  CycleChoice("fundamental", "contact"), CycleChoice("peak", "plate")),
+    "yielded_depth": (CycleChoice("edge", ""), CycleChoice("edge", "", SKIP + 1), CycleChoice("delta_50", "plate"),
+                      CycleChoice("delta_50", "contact"), CycleChoice("delta_20", "plate")),
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,50 +154,113 @@ def dem_record(folder: Path, drive: DriveSpec) -> Record:
                   n * step)
 
 
+def _speed(reference: str) -> str:
+    """The plate record's column of the speed a choice reads against."""
+    return "u_w" if reference == "plate" else "u_c"
+
+
+def estimates(rec: Record, drive: DriveSpec, mu_s: float) -> dict:
+    """Every LAW_FAMILIES choice on one record: (observable, choice) -> (value, stderr over the cycles, its degrees of
+    freedom); the error NaN where only the beds' spread gives one (the peak, the depths).  The lag against the
+    contact layer: under an imposed stress, of u_c behind the stress; under an imposed speed, of mu_w behind u_c."""
+    p, w, out = rec.plate, drive.load.omega, {}
+    for c in LAW_FAMILIES["phase_lag"]:
+        if c.estimator == "peak":
+            out["phase_lag", c] = (phase.peak_lag(p.t, p[drive.response], w, c.skip, rec.interval), np.nan, np.nan)
+            continue
+        stress = drive.response == "u_w"
+        response = _speed(c.reference) if stress else drive.response
+        reference = None if stress or c.reference == "plate" else p[_speed(c.reference)]
+        value, err, n = phase.lag(p.t, p[response], w, c.skip, rec.interval, reference)
+        out["phase_lag", c] = (value, err, n - 1)
+    for c in LAW_FAMILIES["yielded_depth"]:
+        if c.estimator == "edge":
+            grid = phase.phase_profile(rec.profiles, w, "mu", skip=c.skip)["mean"]
+            edge = phase.yielded_depth(grid.columns.to_numpy(float), grid.to_numpy(), mu_s)
+            value = float(np.nanmean(edge)) if len(edge) else np.nan
+        else:
+            amplitude = phase.amplitude_profile(rec.velocity, w, "u", c.skip)
+            speed = phase.harmonic(p.t, p[_speed(c.reference)], w, c.skip, rec.interval).amplitude
+            value = depth_at_fraction(amplitude.index.to_numpy(float), amplitude.to_numpy(), speed,
+                                      LAYER_FRACTIONS[c.estimator])
+        out["yielded_depth", c] = (value, np.nan, np.nan)
+    return out
+
+
 def observables(rec: Record, drive: DriveSpec, mu_s: float, depth_scale: float | None = None) -> dict:
     """Every observable of one record (value, stderr over its cycles or half-cycles and its degrees of freedom,
-    blocks - 1), the phase-averaged zones and the plate's loop; ``depth_scale``: the remobilization strain's length
-    (default: this record's yielded depth)."""
+    blocks - 1; the lag and the yielded depth: their families' primary ``estimates``), the estimates, the
+    phase-averaged zones, the plate's loop and the response's fundamental (a complex amplitude);
+    ``depth_scale``: the remobilization strain's length (default: this record's yielded depth)."""
     p, w = rec.plate, drive.load.omega
     h = phase.harmonic(p.t, p[drive.response], w, SKIP, rec.interval)
     grid = phase.phase_profile(rec.profiles, w, "mu", skip=SKIP)
-    depths = grid["mean"].columns.to_numpy(float)
-    yielded = phase.yielded_depth(depths, grid["mean"].to_numpy(), mu_s)
-    edge = float(np.nanmean(yielded)) if len(yielded) else np.nan
+    yielded = phase.yielded_depth(grid["mean"].columns.to_numpy(float), grid["mean"].to_numpy(), mu_s)
+    found = estimates(rec, drive, mu_s)
+    edge = found["yielded_depth", LAW_FAMILIES["yielded_depth"][0]]
     work = phase.dissipation(p.t, p.u_w, p.tau_w, w, SKIP)
     strain = phase.remobilization_strain(p.t, p.x_w, p.u_w, p[drive.response], w,
-                                         depth_scale or edge, RESPONSE_FRACTION, SKIP)
+                                         depth_scale or edge[0], RESPONSE_FRACTION, SKIP)
     loop = phase.phase_average(p.t, p.u_w, w, skip=SKIP).assign(
         tau_w=phase.phase_average(p.t, p.tau_w, w, skip=SKIP)["mean"])
     velocity = phase.phase_profile(rec.velocity, w, "u", skip=SKIP)["mean"]
     return {"values": {"response_amplitude": (h.amplitude, h.amplitude_err, h.n_cycles - 1),
-                       "phase_lag": (phase.phase_lag(h), h.phase_err, h.n_cycles - 1),
-                       "yielded_depth": (edge, np.nan, np.nan),
+                       "phase_lag": found["phase_lag", LAW_FAMILIES["phase_lag"][0]],
+                       "yielded_depth": edge,
                        "dissipation": (work["value"], work["stderr"], len(work["values"]) - 1),
                        "remobilization_strain": (strain["value"], strain["stderr"], len(strain["values"]) - 1)},
-            "zones": grid["mean"], "yielded": pd.Series(yielded, index=grid["mean"].index), "loop": loop,
-            "velocity": velocity,
-            "n_cycles": h.n_cycles}
+            "estimates": found, "zones": grid["mean"], "yielded": pd.Series(yielded, index=grid["mean"].index),
+            "loop": loop, "velocity": velocity, "n_cycles": h.n_cycles,
+            "fundamental": h.amplitude * np.exp(1j * h.phase)}
 
 
 @dataclass(frozen=True, eq=False)
 class DemOscillation:
     """A drive's DEM side: its beds' records, per observable the beds' mean and error (``values``: name -> (value,
-    err, how, dof)), the beds' zones averaged, the yielded depth over the phase, the loop, the phase-averaged velocity
+    err, how, dof)) and per law choice the same (``estimates``: (observable, CycleChoice) -> (value, err, how,
+    dof)), the beds' zones averaged, the yielded depth over the phase, the loop, the phase-averaged velocity
     profiles (mean over the beds and its error, their spread / sqrt(n)), the slip (``_slip``, mean over the beds);
-    the periodic-state check per bed."""
+    ``beds``: each bed's periodic state (``_beds``)."""
 
     drive: DriveSpec
     records: tuple[Record, ...]
     values: dict
+    estimates: dict
     zones: pd.DataFrame
     yielded: pd.Series
     loop: pd.DataFrame
     velocity: pd.DataFrame
     velocity_err: pd.DataFrame
     slip: float
-    stationary: list
+    beds: tuple[dict, ...]
     n_cycles: int
+
+
+def _over_beds(per: list[tuple]) -> tuple:
+    """(value, err, how, dof) from each bed's (value, err, dof): the beds' mean and spread / sqrt(n) with n - 1
+    degrees of freedom (n the beds with a value); one bed: its own error, its cycles as blocks."""
+    v = np.array([b[0] for b in per], dtype=float)
+    if len(v) >= MIN_BEDS:
+        n = int(np.isfinite(v).sum())
+        return (float(np.nanmean(v)), float(np.nanstd(v, ddof=1) / np.sqrt(n)),
+                f"spread over {len(v)} beds (std/sqrt(n))", n - 1)
+    _, err, dof = per[0]
+    return float(v[0]), float(err), "one bed: its cycles as blocks", dof
+
+
+def _beds(drive: DriveSpec, records, fundamentals) -> tuple[dict, ...]:
+    """Each bed's periodic state: compare.phase.periodicity of its response (``cycles``, ``change``, ``periodic``),
+    its ``fundamental`` over the kept cycles and ``same_state``: whether it is within PERIODIC_TOLERANCE
+    (``phase.change``) of another bed's (None without another bed's to compare).  A bed jammed while the others
+    flow is in another state; two flowing beds and a jammed one leave the flowing ones in one state (not against the
+    mean of the other two, which the jammed one drags)."""
+    out = []
+    for k, r in enumerate(records):
+        check = phase.periodicity(r.plate.t, r.plate[drive.response], drive.load.omega, SKIP, r.interval)
+        apart = [x for j, z in enumerate(fundamentals) if j != k and np.isfinite(x := phase.change(z, fundamentals[k]))]
+        out.append({**check, "fundamental": fundamentals[k],
+                    "same_state": bool(min(apart) <= phase.PERIODIC_TOLERANCE) if apart else None})
+    return tuple(out)
 
 
 def analyse_dem(drive: DriveSpec, records: list[Record], mu_s: float) -> DemOscillation:
@@ -163,16 +268,8 @@ def analyse_dem(drive: DriveSpec, records: list[Record], mu_s: float) -> DemOsci
     first = [observables(r, drive, mu_s) for r in records]
     scale = float(np.nanmean([o["values"]["yielded_depth"][0] for o in first]))
     per = [observables(r, drive, mu_s, scale) for r in records]
-    values = {}
-    for name in OBSERVABLES:
-        v = np.array([o["values"][name][0] for o in per], dtype=float)
-        if len(v) >= MIN_BEDS:
-            n = int(np.isfinite(v).sum())
-            values[name] = (float(np.nanmean(v)), float(np.nanstd(v, ddof=1) / np.sqrt(n)),
-                            f"spread over {len(v)} beds (std/sqrt(n))", n - 1)
-        else:
-            _, err, dof = per[0]["values"][name]
-            values[name] = (float(v[0]), float(err), "one bed: its cycles as blocks", dof)
+    values = {name: _over_beds([o["values"][name] for o in per]) for name in OBSERVABLES}
+    found = {key: _over_beds([o["estimates"][key] for o in per]) for key in per[0]["estimates"]}
     zones = sum(_on_depths(o["zones"], per[0]["zones"].columns) for o in per) / len(per)
     yielded = sum(o["yielded"] for o in per) / len(per)
     loop = sum(o["loop"][["phase", "mean", "tau_w"]] for o in per) / len(per)
@@ -180,11 +277,30 @@ def analyse_dem(drive: DriveSpec, records: list[Record], mu_s: float) -> DemOsci
     frame = lambda a: pd.DataFrame(a, index=per[0]["velocity"].index, columns=per[0]["velocity"].columns)
     velocity = frame(beds.mean(axis=0))
     velocity_err = frame(beds.std(axis=0, ddof=1) / np.sqrt(len(per)) if len(per) >= MIN_BEDS else np.nan * beds[0])
-    checks = [phase.stationarity(r.plate.t, r.plate[drive.response], drive.load.omega, SKIP) for r in records]
     slip = float(np.mean([_slip(r.plate, drive.load.omega) for r in records]))
-    stationary = [c["steady"] if np.isfinite(c["z"]) else None for c in checks]  # None: fewer than 3 cycles
-    return DemOscillation(drive, tuple(records), values, zones, yielded, loop, velocity, velocity_err, slip, stationary,
-                          min(o["n_cycles"] for o in per))
+    return DemOscillation(drive, tuple(records), values, found, zones, yielded, loop, velocity, velocity_err, slip,
+                          _beds(drive, records, [o["fundamental"] for o in per]), min(o["n_cycles"] for o in per))
+
+
+def unsettled(dem: DemOscillation) -> str:
+    """The beds that are not in one periodic state, in words ("" when none): a bed jams (its response's amplitude
+    falls below 1 - PERIODIC_TOLERANCE of its first kept cycle's by its last), is not periodic (its fundamental
+    moves otherwise by more than PERIODIC_TOLERANCE), or is in another state than the other beds."""
+    n, response_unit = len(dem.beds), unit(dem.drive, "response_amplitude")
+    response_unit = "" if response_unit == "1" else f" {response_unit}"
+    out = []
+    for k, b in enumerate(dem.beds, start=1):
+        if b["periodic"] is False:
+            c = b["cycles"]
+            a0, a1, p0, p1 = c.amplitude.iloc[0], c.amplitude.iloc[-1], c.phase.iloc[0], c.phase.iloc[-1]
+            what = "jams" if a1 < (1 - phase.PERIODIC_TOLERANCE) * a0 else "is not periodic"
+            out.append(f"bed {k} of {n} {what} (response amplitude {a0:.3g} -> {a1:.3g}{response_unit}, phase "
+                       f"{p0:+.2f} -> {p1:+.2f} rad over the kept cycles {c.cycle.iloc[0]} to {c.cycle.iloc[-1]})")
+        elif b["same_state"] is False:
+            others = ", ".join(f"{abs(o['fundamental']):.3g}" for o in dem.beds if o is not b)
+            out.append(f"bed {k} of {n} is in another state than the others (response amplitude "
+                       f"{abs(b['fundamental']):.3g}{response_unit} against {others})")
+    return "; ".join(out)
 
 
 def _slip(plate: pd.DataFrame, omega: float) -> float:
@@ -252,11 +368,13 @@ def _rule(drive: DriveSpec, material: Material) -> YieldRule:
 
 @dataclass(frozen=True, eq=False)
 class OscPrediction:
-    """A model's side of a drive: per observable (predicted, numerical error, calibration sd), and the zones,
-    yielded depth over the phase, loop and phase-averaged velocity profiles of its central solution."""
+    """A model's side of a drive: per observable and per law choice (``estimates``, keyed as the DEM's) its
+    (predicted, numerical error, calibration sd), and the zones, yielded depth over the phase, loop and
+    phase-averaged velocity profiles of its central solution."""
 
     model: str
     values: dict
+    estimates: dict
     zones: pd.DataFrame
     yielded: pd.Series
     loop: pd.DataFrame
@@ -264,33 +382,39 @@ class OscPrediction:
 
 
 def predict(dem: DemOscillation, setup: ModelSetup, model: str) -> OscPrediction:
-    """The model's observables on the DEM's rows and depths: central (``setup.numerics``), on n_cells/2 (the
-    numerical error, |fine - coarse|/3) and the calibration's sd by compare.band (the shifted solves on n_cells/2,
-    like the coarse central one: the discretisation's bias cancels in the differences)."""
+    """The model's observables and law choices on the DEM's rows and depths: central (``setup.numerics``), on
+    n_cells/2 (the numerical error, |fine - coarse|/3) and the calibration's sd by compare.band (the shifted solves
+    on n_cells/2, like the coarse central one: the discretisation's bias cancels in the differences)."""
     drive, depths = dem.drive, dem.zones.columns.to_numpy(float)
     scale = dem.values["yielded_depth"][0]
     coarse_numerics = replace(setup.numerics, n_cells=setup.numerics.n_cells // 2)
 
-    def run(material, A, numerics):
+    def run(material, A, numerics) -> dict:
         rec = model_record(drive, material, model, A, depths, numerics, dem.velocity.columns.to_numpy(float))
         return observables(rec, drive, material.mu_s, scale)
 
+    def flat(o: dict) -> dict:
+        """Every observable and law choice of one solve: its key -> (value, ...)."""
+        return {**o["values"], **o["estimates"]}
+
     A = setup.ngf_A if model == "ngf" else None
-    fine = run(setup.material, A, setup.numerics)
-    coarse = run(setup.material, A, coarse_numerics)["values"]
+    central_solve = run(setup.material, A, setup.numerics)
+    fine, coarse = flat(central_solve), flat(run(setup.material, A, coarse_numerics))
     central = {**{k: getattr(setup.material, k) for k in PARAMETERS}, **({"A": A} if model == "ngf" else {})}
     cov = setup.covariance.copy()
     if model == "ngf":
         cov.loc["A", "A"] = setup.ngf_A_err ** 2
-    sens = Sensitivity.of(lambda q: run(replace(setup.material, **{k: q[k] for k in PARAMETERS}), q.get("A"),
-                                        coarse_numerics)["values"], central, cov)
-    values = {}
-    for o in OBSERVABLES:
-        difference = partial(_difference, o)
-        s_cal = sens.sd_of(lambda j, o=o: sens.shifted[j][o][0], coarse[o][0], difference=difference)
-        values[o] = (fine["values"][o][0], float(richardson(0.0, difference(fine["values"][o][0], coarse[o][0]))),
-                     s_cal)
-    return OscPrediction(model, values, fine["zones"], fine["yielded"], fine["loop"], fine["velocity"])
+    sens = Sensitivity.of(lambda q: flat(run(replace(setup.material, **{k: q[k] for k in PARAMETERS}), q.get("A"),
+                                             coarse_numerics)), central, cov)
+
+    def side(key) -> tuple[float, float, float]:
+        difference = partial(_difference, key if isinstance(key, str) else key[0])
+        s_cal = sens.sd_of(lambda j: sens.shifted[j][key][0], coarse[key][0], difference=difference)
+        return fine[key][0], float(richardson(0.0, difference(fine[key][0], coarse[key][0]))), s_cal
+
+    o = central_solve
+    return OscPrediction(model, {k: side(k) for k in OBSERVABLES}, {k: side(k) for k in o["estimates"]}, o["zones"],
+                         o["yielded"], o["loop"], o["velocity"])
 
 
 def _difference(observable: str, a: float, b: float) -> float:
@@ -298,15 +422,23 @@ def _difference(observable: str, a: float, b: float) -> float:
     return float(phase.wrap(a - b)) if observable == "phase_lag" else a - b
 
 
-def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model: str, note: str) -> dict:
+def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model: str, note: str,
+         choice: CycleChoice | None = None) -> dict:
+    """The row of ``observable`` (measured by ``choice``: a law choice's row, None: the scorecard's) of a drive and
+    a model; ``note``: why the model has no prediction (pred None)."""
     drive = dem.drive
-    v, err, how, dof = dem.values[observable]
-    p, num, s_cal = pred.values[observable] if pred is not None else (np.nan, np.nan, np.nan)
+    v, err, how, dof = dem.values[observable] if choice is None else dem.estimates[observable, choice]
+    p, num, s_cal = (np.nan, np.nan, np.nan) if pred is None else (
+        pred.values[observable] if choice is None else pred.estimates[observable, choice])
     if pred is not None:
-        note = _scene(dem, observable) or _unmeasurable(dem, observable) or _unpredicted(p, num, s_cal)
+        plate = observable in PLATE_OBSERVABLES if choice is None else choice.reference == "plate"
+        censored = observable in CENSORED and (choice is None or choice.estimator == "edge")
+        note = _scene(dem, plate) or _unmeasurable(dem, v, err, censored) or _unpredicted(p, num, s_cal)
     elif not note.startswith("not predicted"):
         note = f"not predicted: {note}"
     scored = not note
+    how_chosen = {} if choice is None else {"estimator": choice.estimator, "reference": choice.reference,
+                                            "skip": choice.skip}
     return score_row(
         drive=drive.label, observable=observable, unit=unit(drive, observable), dem=v, dem_err=err, dem_how=how,
         model=model, model_label=LABELS[model], predicted=float(p), band=band(p, float(np.hypot(num, s_cal))),
@@ -314,33 +446,41 @@ def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model
         if scored else np.nan, dof=effective_dof((err, num, s_cal), (dof, np.inf, np.inf)), note=note, blind=True,
         kind=drive.load.kind, omega=drive.load.omega,
         omega_ts=drive.omega_ts, amplitude=drive.load.amplitude, phase_lag=dem.values["phase_lag"][0],
-        phase_lag_predicted=pred.values["phase_lag"][0] if pred is not None else np.nan)
+        phase_lag_predicted=pred.values["phase_lag"][0] if pred is not None else np.nan, **how_chosen)
 
 
 #: the plate's observables (read off its speed and force), which a slipping plate falsifies
 PLATE_OBSERVABLES = ("response_amplitude", "phase_lag", "dissipation")
+#: the observables read over the yielded depth, which the base censors when the edge reaches it
+CENSORED = ("yielded_depth", "remobilization_strain")
 
 
-def _scene(dem: DemOscillation, observable: str) -> str:
+def _scene(dem: DemOscillation, plate: bool) -> str:
     """Why the scene cannot support a row against the rigid-plastic models, or "": a period shorter than
     TRANSITS_BEFORE_COMPARISON shear-wave transits over the bed (the bed answers elastically within a cycle, as the
-    Stokes drives before their comparison starts), or, for the plate's observables, a plate that slips by more than
-    SLIP_MAX against the grains touching it.  A drive whose tables carry no transit time is not checked for it."""
+    Stokes drives before their comparison starts); a bed not in one periodic state (``unsettled``: it jams or
+    drifts within the kept cycles, or is in another state than the other beds, so the cycles' and the beds' mean
+    is no state's: the drive's rows are kept, unscored, and the report counts it); or, for a row read off the
+    plate's speed or force (``plate``), a plate that slips by more than SLIP_MAX against the grains touching it.
+    A drive whose tables carry no transit time is not checked for it."""
     transits = dem.drive.load.period / dem.drive.transit_time
     if transits < TRANSITS_BEFORE_COMPARISON:
         return (f"not scored: the plate's period spans {transits:.2g} shear-wave transits of the bed (fewer than "
                 f"{TRANSITS_BEFORE_COMPARISON:g}): an elastic response, which rigid-plastic models do not have")
-    if observable in PLATE_OBSERVABLES and dem.slip > SLIP_MAX:
+    if beds := unsettled(dem):
+        return f"not scored: {beds}"
+    if plate and dem.slip > SLIP_MAX:
         return (f"not scored: the plate slips {dem.slip:.0%} against the grains touching it (more than "
                 f"{SLIP_MAX:.0%}), so its speed and force are not the bed's")
     return ""
 
 
-def _unmeasurable(dem: DemOscillation, observable: str) -> str:
-    v, err, *_ = dem.values[observable]
-    if not (np.isfinite(v) and np.isfinite(err) and err > 0):
+def _unmeasurable(dem: DemOscillation, value: float, err: float, censored: bool) -> str:
+    """Why the DEM gives no number to score, or "": no value or no error, or (``censored``: a row read over the
+    yielded depth) an edge that reaches the deepest plane at some phase."""
+    if not (np.isfinite(value) and np.isfinite(err) and err > 0):
         return "not measurable: no error (fewer than two beds or whole cycles after the start-up)"
-    if observable in ("yielded_depth", "remobilization_strain") and np.nanmax(dem.yielded) >= dem.zones.columns.max():
+    if censored and np.nanmax(dem.yielded) >= dem.zones.columns.max():
         return ("not measurable: at some phase the bed yields down to its deepest plane (the edge is censored by the "
                 "base)")
     return ""
@@ -358,68 +498,106 @@ def _unpredicted(predicted: float, numerical: float, calibration_sd: float) -> s
 
 def scorecard(dems, predictions: dict, setup: ModelSetup, ngf_note: str) -> pd.DataFrame:
     """Every drive x model x observable (predictions: (drive label, model) -> OscPrediction, or why not)."""
+    return _table(dems, predictions, setup, ngf_note, [(o, None) for o in OBSERVABLES])
+
+
+def choice_rows(dems, predictions: dict, setup: ModelSetup, ngf_note: str) -> pd.DataFrame:
+    """Every drive x model x law choice (LAW_FAMILIES): the scorecard's row of the choice's observable measured by
+    it (with its estimator, reference and skip), scored by the same rules but for the slip, which falsifies only a
+    choice read against the plate's speed."""
+    return _table(dems, predictions, setup, ngf_note, [(o, c) for o, family in LAW_FAMILIES.items() for c in family])
+
+
+def _table(dems, predictions: dict, setup: ModelSetup, ngf_note: str, keys) -> pd.DataFrame:
     rows = []
     for d in dems:
         for m in LABELS:
             p = predictions.get((d.drive.label, m))
             note = (p if isinstance(p, str) else "") if m in setup.models else ngf_note
-            rows += [_row(d, p if isinstance(p, OscPrediction) else None, o, m, note) for o in OBSERVABLES]
+            rows += [_row(d, p if isinstance(p, OscPrediction) else None, o, m, note, c) for o, c in keys]
     return pd.DataFrame(rows)
 
 
-def laws(rows: pd.DataFrame) -> pd.DataFrame:
-    """How the yielded depth and the phase lag scale with omega, per drive kind, amplitude and model: n in
-    yielded_depth ~ (omega t_s)^n and s in phase_lag = a + s ln(omega t_s), weighted least squares with the DEM's
-    errors (the model's slope on the same weights, its error from the per-drive bands taken as independent);
-    drives not measurable are left out.
+#: the laws in omega: name -> (the observable, what it fits, the observable's transform)
+LAWS = {"yielded_depth_exponent": ("yielded_depth", "n in yielded_depth ~ (omega t_s)^n", np.log),
+        "phase_lag_slope": ("phase_lag", "s in phase_lag = a + s ln(omega t_s) [rad]", lambda v: v)}
 
-    Lack of fit: chi2, the DEM's weighted squared residuals about its line, has n - 2 degrees of freedom over n
-    drives; the row quotes chi2_dof = chi2/(n - 2).  When chi2.sf(chi2, n - 2) < LACK_OF_FIT_P the DEM is not on a
-    line (a step, a bend) and no slope is quoted: the row is "not measurable: not a line" with chi2/dof and p.
-    Otherwise, when chi2_dof > 1 the scatter about the line exceeds the errors and the DEM slope's error is scaled by
-    sqrt(chi2_dof).  The slope has n - 2 degrees of freedom (the row's dof combines them with the model's error,
-    which has infinitely many).  The weights come from few beds (the per-bed spread of 3 beds has 2 degrees of
-    freedom): each weight is itself uncertain, so chi2 is heavier-tailed than a chi-square and the test flags a
-    true line more often than LACK_OF_FIT_P (five drives of three beds: 15 % of the time, simulated; there the 1 %
-    quantile of chi2_dof is about 18, not 3.8); a chi2_dof in the hundreds is a step, not noise in the weights."""
+
+def laws(rows: pd.DataFrame) -> pd.DataFrame:
+    """How the yielded depth and the phase lag scale with omega, per drive kind, amplitude and model, over each
+    law's family of choices (LAW_FAMILIES; ``rows``: ``choice_rows``): per choice (``_fit``) n in yielded_depth ~
+    (omega t_s)^n or s in phase_lag = a + s ln(omega t_s) on its scored drives, its entry (compare.families.entry,
+    with its skip, chi2_dof, n_drives, window and words).  The row's numbers are its headline choice's (the primary
+    when measured: the scorecard's lag and yielded depth), ``systematic`` the family's spread, and the verdict
+    "depends on the estimator" when the measured choices split (compare.families.family_note)."""
     out = []
     for (kind, amp, model), g in rows[rows.scored].groupby(["kind", "amplitude", "model"]):
-        for law, obs, fx, fy in (("yielded_depth_exponent", "yielded_depth", np.log, np.log),
-                                 ("phase_lag_slope", "phase_lag", np.log, lambda v: v)):
-            s = g[(g.observable == obs) & (g.dem > 0 if obs == "yielded_depth" else g.dem.notna())]
-            s = s[s.predicted > 0] if obs == "yielded_depth" else s
-            # one estimator per law: no family of choices (compare.families holds the Stokes drives')
-            base = {"law": law, "kind": kind, "amplitude": amp, "model": model, "n_drives": len(s), "unit": "1",
-                    "choices": [], "systematic": np.nan,
-                    "window": f"omega t_s in [{s.omega_ts.min():.3g}, {s.omega_ts.max():.3g}]" if len(s) else "",
-                    "quantity": "n in yielded_depth ~ (omega t_s)^n" if obs == "yielded_depth"
-                    else "s in phase_lag = a + s ln(omega t_s) [rad]"}
-            unfit = {"dem": np.nan, "dem_err": np.nan, "predicted": np.nan, "predicted_err": np.nan, "sigma": np.nan}
-            if len(s) < 3:
-                out.append(law_row(**base, **unfit, dof=np.nan, chi2_dof=np.nan,
-                                   note=f"not measurable: {len(s)} measurable drive(s), a slope and its error need 3"))
-                continue
-            x = fx(s.omega_ts.to_numpy())
-            scale = s.dem.to_numpy() if obs == "yielded_depth" else 1.0
-            dem_sd = s.dem_err.to_numpy() / scale
-            model_scale = s.predicted.to_numpy() if obs == "yielded_depth" else 1.0
-            model_sd = np.hypot(s.numerical_err, s.calibration_sd).to_numpy() / model_scale
-            w = 1 / dem_sd ** 2
-            y = fy(s.dem.to_numpy())
-            dem_slope, dem_err = _weighted_slope(x, y, w, dem_sd)
-            dof = len(s) - 2
-            chi2 = _chi2(x, y, w, dem_slope)
-            p = float(stats.chi2.sf(chi2, dof))
-            if p < LACK_OF_FIT_P:
-                out.append(law_row(**base, **unfit, dof=dof, chi2_dof=chi2 / dof,
-                                   note=f"not measurable: not a line (chi2/dof = {chi2 / dof:.3g}, p = {p:.2g})"))
-                continue
-            dem_err *= np.sqrt(max(chi2 / dof, 1.0))
-            pred_slope, pred_err = _weighted_slope(x, fy(s.predicted.to_numpy()), w, model_sd)
-            out.append(law_row(**base, dem=dem_slope, dem_err=dem_err, predicted=pred_slope, predicted_err=pred_err,
-                               sigma=sigma(dem_slope - pred_slope, dem_err, pred_err),
-                               dof=effective_dof((dem_err, pred_err), (dof, np.inf)), chi2_dof=chi2 / dof, note=""))
+        for law, (obs, quantity, _) in LAWS.items():
+            family = LAW_FAMILIES[obs]
+            entries = []
+            for c in family:
+                s = g[(g.observable == obs) & (g.estimator == c.estimator) & (g.reference == c.reference)
+                      & (g.skip == c.skip)]
+                fit = _fit(law, s)
+                entries.append({**entry(Choice(c.estimator, c.reference, None), fit["dem"], fit["dem_err"],
+                                        fit["predicted"], fit["predicted_err"], fit["note"], fit["dof"]),
+                                "skip": c.skip, "chi2_dof": fit["chi2_dof"], "n_drives": fit["n_drives"],
+                                "window": fit["window"], "words": c.describe()})
+            h = headline(entries)
+            e = entries[h]
+            window = e["window"] if not h else (f"the primary choice ({family[0].describe()}) is not measurable; "
+                                                f"shown: {family[h].describe()}: {e['window']}")
+            split = family_note(entries)
+            note = e["note"] or split
+            out.append(law_row(law=law, quantity=quantity, unit="1", kind=kind, model=model, dem=e["dem"],
+                               dem_err=e["dem_err"], predicted=e["predicted"], predicted_err=e["predicted_err"],
+                               sigma=e["sigma"] if note in ("", split) else np.nan, dof=e["dof"],
+                               chi2_dof=e["chi2_dof"], n_drives=e["n_drives"], window=window, note=note,
+                               choices=entries, systematic=systematic(entries), amplitude=amp))
     return pd.DataFrame(out)
+
+
+def _fit(law: str, s: pd.DataFrame) -> dict:
+    """One choice of ``law`` over its scored drives ``s``: weighted least squares with the DEM's errors (the model's
+    slope on the same weights, its error from the per-drive bands taken as independent); the depth's drives with
+    no yielded layer on either side are left out.
+
+    Lack of fit: chi2, the DEM's weighted squared residuals about its line, has n - 2 degrees of freedom over n
+    drives; the fit quotes chi2_dof = chi2/(n - 2).  When chi2.sf(chi2, n - 2) < LACK_OF_FIT_P the DEM is not on a
+    line (a step, a bend) and no slope is quoted: "not measurable: not a line" with chi2/dof and p.  Otherwise,
+    when chi2_dof > 1 the scatter about the line exceeds the errors and the DEM slope's error is scaled by
+    sqrt(chi2_dof).  The slope has n - 2 degrees of freedom (its dof combines them with the model's error, which
+    has infinitely many).  The weights come from few beds (the per-bed spread of 3 beds has 2 degrees of freedom):
+    each weight is itself uncertain, so chi2 is heavier-tailed than a chi-square and the test flags a true line
+    more often than LACK_OF_FIT_P (five drives of three beds: 15 % of the time, simulated; there the 1 % quantile of
+    chi2_dof is about 18, not 3.8); a chi2_dof in the hundreds is a step, not noise in the weights."""
+    obs, _, fy = LAWS[law]
+    if obs == "yielded_depth":
+        s = s[(s.dem > 0) & (s.predicted > 0)]
+    s = s[s.dem.notna()]
+    out = {"dem": np.nan, "dem_err": np.nan, "predicted": np.nan, "predicted_err": np.nan, "dof": np.nan,
+           "chi2_dof": np.nan, "n_drives": len(s),
+           "window": f"omega t_s in [{s.omega_ts.min():.3g}, {s.omega_ts.max():.3g}]" if len(s) else ""}
+    if len(s) < 3:
+        return {**out, "note": f"not measurable: {len(s)} measurable drive(s), a slope and its error need 3"}
+    x = np.log(s.omega_ts.to_numpy())
+    scale = s.dem.to_numpy() if obs == "yielded_depth" else 1.0
+    dem_sd = s.dem_err.to_numpy() / scale
+    model_scale = s.predicted.to_numpy() if obs == "yielded_depth" else 1.0
+    model_sd = np.hypot(s.numerical_err, s.calibration_sd).to_numpy() / model_scale
+    w = 1 / dem_sd ** 2
+    y = fy(s.dem.to_numpy())
+    dem_slope, dem_err = _weighted_slope(x, y, w, dem_sd)
+    dof = len(s) - 2
+    chi2 = _chi2(x, y, w, dem_slope)
+    p = float(stats.chi2.sf(chi2, dof))
+    if p < LACK_OF_FIT_P:
+        return {**out, "dof": dof, "chi2_dof": chi2 / dof,
+                "note": f"not measurable: not a line (chi2/dof = {chi2 / dof:.3g}, p = {p:.2g})"}
+    dem_err *= np.sqrt(max(chi2 / dof, 1.0))
+    pred_slope, pred_err = _weighted_slope(x, fy(s.predicted.to_numpy()), w, model_sd)
+    return {**out, "dem": dem_slope, "dem_err": dem_err, "predicted": pred_slope, "predicted_err": pred_err,
+            "dof": effective_dof((dem_err, pred_err), (dof, np.inf)), "chi2_dof": chi2 / dof, "note": ""}
 
 
 def _weighted_slope(x, y, w, sd) -> tuple[float, float]:
@@ -448,6 +626,7 @@ class OscillationComparison:
     predictions: dict
     rows: pd.DataFrame
     laws: pd.DataFrame
+    choices: pd.DataFrame
 
 
 def predict_unit(dem: DemOscillation, setup: ModelSetup, model: str):
@@ -488,5 +667,6 @@ def conclude(dem, dems: list[DemOscillation], setup: ModelSetup, ngf_note: str, 
     rows = scorecard(dems, predictions, setup, ngf_note)
     source = (f"NGF's A = {setup.ngf_A:.3g} +- {setup.ngf_A_err:.2g} from {ngf_from}" if setup.ngf_A is not None
               else ngf_note)
+    choices = choice_rows(dems, predictions, setup, ngf_note)
     return OscillationComparison(tuple(sorted({str(d.run) for d, _ in dem})), setup, calibration, source,
-                                 tuple(dems), predictions, rows, laws(rows))
+                                 tuple(dems), predictions, rows, laws(choices), choices)

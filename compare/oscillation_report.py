@@ -15,9 +15,11 @@ import numpy as np  # noqa: E402
 
 from .drive import TRANSITS_BEFORE_COMPARISON  # noqa: E402
 from .experiment import CSV_FLOAT, DRIVES, SCORECARD, FigureFile, Section, table  # noqa: E402
-from .oscillation import LABELS, RESPONSE_FRACTION, SKIP, OscillationComparison, OscPrediction  # noqa: E402
+from .oscillation import LABELS, RESPONSE_FRACTION, SKIP, OscillationComparison, OscPrediction, unsettled  # noqa: E402
+from .phase import PERIODIC_TOLERANCE  # noqa: E402
 from .plate import SLIP_MAX  # noqa: E402
 from .report import display_label, slug  # noqa: E402
+from .rows import UNSCORED  # noqa: E402
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, plain_log, suptitle  # noqa: E402
 from .words import MODEL_WORDS, fmt, fmt_band, words  # noqa: E402
 
@@ -37,6 +39,13 @@ DEFINITIONS = {
                    "error, a law's slope n_drives - 2)"),
     "cycles": ("-", f"estimates on the whole cycles after the first {SKIP} (the start-up); DEM errors: the beds' "
                     "spread"),
+    "periodic state": ("1", f"a bed is periodic when its response's first harmonic moves by at most "
+                            f"{PERIODIC_TOLERANCE:g} of its larger amplitude from its first to its last kept cycle, "
+                            "and in the drive's state when it lies that close to another bed's; a drive with a bed "
+                            "that is not keeps its rows, unscored"),
+    "systematic": ("as the law", "half the range of DEM - model over a law's measured estimator choices (the cycles "
+                                 "kept, the plate's or the contact layer's speed, the first harmonic or the peak; the "
+                                 "stress edge or the velocity's depths)"),
 }
 TITLES = {"map": "The oscillating plate across frequencies", "zones": "Static and dynamic zones over a cycle",
           "profiles": "Velocity profiles at fixed phase", "loops": "The plate's loops"}
@@ -64,7 +73,9 @@ def metrics(c: OscillationComparison) -> dict:
                             "amplitude": dr.load.amplitude, "amplitude_of": "mu_w" if dr.load.kind == "stress"
                             else "u_w", "p_w": dr.load.p_w, "t_s": dr.t_s, "period": dr.load.period,
                             "depth": dr.depth, "seeds": len(d.records), "whole_cycles": d.n_cycles, "slip": d.slip,
-                            "periodic": d.stationary,
+                            "periodic": [b["periodic"] for b in d.beds],
+                            "periodic_change": [b["change"] for b in d.beds],
+                            "same_state": [b["same_state"] for b in d.beds], "unsettled": unsettled(d),
                             **{k: {"dem": v[0], "dem_err": v[1]} for k, v in d.values.items()}}
     return {"drives": drives, "ngf": c.ngf_source,
             "calibration": {"source": c.calibration_source, "mu_s": c.setup.material.mu_s,
@@ -77,8 +88,8 @@ def verdict(c: OscillationComparison) -> str:
 
 
 def verdict_parts(c: OscillationComparison) -> list[str]:
-    """The verdict's sentences: per model, the observables' agreement; the history effect (the laws in omega have
-    their own, ``law_sentences``)."""
+    """The verdict's sentences: per model, the observables' agreement; the history effect; the drives whose beds are
+    not in one periodic state (the laws in omega have their own, ``law_sentences``)."""
     r, parts = c.rows, []
     for m in LABELS:
         s = r[(r.model == m) & r.scored]
@@ -95,20 +106,71 @@ def verdict_parts(c: OscillationComparison) -> list[str]:
         parts.append(f"History: after a reversal the DEM needs a strain of {h.dem.min():.2g} to {h.dem.max():.2g} to "
                      f"remobilize, local mu(I) {h.predicted.min():.2g} to {h.predicted.max():.2g}; the DEM's is larger "
                      f"beyond its error in {len(shows)} of {len(h)} drives (sigma up to {h.sigma.max():.1f}).")
-    return parts
+    return parts + states_sentences(c)
+
+
+def states_sentences(c: OscillationComparison) -> list[str]:
+    """The drives with a bed that jams, drifts or sits in another state than the others (compare.oscillation
+    ``unsettled``), counted and named with how many of their beds: their rows are kept, not scored (the drives'
+    page and the findings' scene give each bed's numbers)."""
+    shown = names(c)
+    bad = [(d, sum(_settled(b) is False for b in d.beds)) for d in c.drives if unsettled(d)]
+    if not bad:
+        return []
+    listed = ", ".join(f"{shown.get(d.drive.label, d.drive.label)} ({k} of {len(d.beds)} beds)" for d, k in bad)
+    return [f"Periodic state: in {len(bad)} of {len(c.drives)} drives a bed jams, drifts or sits in another state "
+            f"than the others (its first harmonic moves by more than {PERIODIC_TOLERANCE:g} of its amplitude over "
+            f"the kept cycles, or lies that far from every other bed's): {listed}; their rows are kept, not scored."]
 
 
 def law_sentences(c: OscillationComparison) -> list[str]:
-    """The laws in omega in words: per law, drive kind and amplitude, the DEM's value and each model's."""
+    """The laws in omega in words: per law, drive kind and amplitude, the DEM's value and each model's with the
+    family's systematic spread and the fit's chi2/dof; a law that is not a line says so (the lag is then compared
+    frequency by frequency, ``lag_sentences``)."""
     parts = []
-    measured = c.laws[c.laws.verdict != "not measurable"] if len(c.laws) else c.laws
-    for (_, kind, amp), g in measured.groupby(["law", "kind", "amplitude"], sort=False):
-        err = g.dem_err.iloc[0]
+    if c.laws.empty:  # no model scored: no law
+        return parts
+    for (_, kind, amp), g in c.laws.groupby(["law", "kind", "amplitude"], sort=False):
+        head = (f"{words(g.law.iloc[0])}, {g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}, "
+                f"{g.n_drives.iloc[0]} drives)")
+        measured = g[~g.verdict.isin(UNSCORED)]
+        if measured.empty:
+            parts.append(f"{head}: {g.note.iloc[0].removeprefix('not measurable: ')}.")
+            continue
+        err = measured.dem_err.iloc[0]
         models = ", ".join(f"{MODEL_WORDS.get(r.model, r.model)} {fmt(r.predicted, err).split(' ± ')[0]} "
                            f"({r.verdict}, {r.sigma:+.1f} sigma at {r.dof:.2g} degrees of freedom)"
-                           for r in g.itertuples())
-        parts.append(f"{words(g.law.iloc[0])}, {g.quantity.iloc[0]} (imposed {kind}, amplitude {amp:.3g}, "
-                     f"{g.n_drives.iloc[0]} drives): DEM {fmt(g.dem.iloc[0], err)}; {models}.")
+                           for r in measured.itertuples())
+        r = measured.iloc[0]
+        parts.append(f"{head}: DEM {fmt(r.dem, err)} (chi2/dof {r.chi2_dof:.2g}; systematic {fmt(r.systematic)} over "
+                     f"{len(r.choices)} estimator choices); {models}.")
+    return parts
+
+
+def lag_sentences(c: OscillationComparison) -> list[str]:
+    """The lag compared frequency by frequency, per model: at each omega t_s, the drives whose lag agrees and those
+    whose lag disagrees (with sigma), and how many are not scored."""
+    shown, parts = names(c), []
+    lag = c.rows[c.rows.observable == "phase_lag"]
+    for m in LABELS:
+        rows = lag[lag.model == m]
+        if not rows.scored.any():
+            continue
+        said = []
+        for w, g in rows.groupby("omega_ts"):
+            s = g[g.scored]
+            if s.empty:
+                said.append(f"at omega t_s = {w:.3g}, none of its {len(g)} drive(s) scored")
+                continue
+            agree = ", ".join(shown.get(x, x) for x in s[s.verdict == "consistent"].drive)
+            differ = ", ".join(f"{shown.get(r.drive, r.drive)} ({r.sigma:+.1f} sigma)"
+                               for r in s[s.verdict == "disagrees"].itertuples())
+            text = (f"at omega t_s = {w:.3g}, agrees for {(s.verdict == 'consistent').sum()} of {len(s)} scored "
+                    f"drives" + (f" ({agree})" if agree else ""))
+            text += f", disagrees for {differ}" if differ else ""
+            text += f", {len(g) - len(s)} not scored" if len(g) > len(s) else ""
+            said.append(text)
+        parts.append(f"The lag frequency by frequency, {MODEL_WORDS.get(m, m)}: " + "; ".join(said) + ".")
     return parts
 
 
@@ -313,16 +375,20 @@ def sections(c: OscillationComparison, m: dict) -> list[Section]:
             for r in c.rows.itertuples()]
     laws = [[html.escape(words(r.law)), html.escape(r.quantity), html.escape(r.kind), fmt(r.amplitude),
              html.escape(MODEL_WORDS.get(r.model, r.model)), fmt(r.dem, r.dem_err), fmt(r.predicted, r.predicted_err),
-             _sigma(r.sigma), html.escape(r.verdict), html.escape(r.note.removeprefix(r.verdict + ": "))]
+             _sigma(r.sigma), fmt(r.chi2_dof), fmt(r.systematic), str(len(r.choices)), html.escape(r.verdict),
+             html.escape(r.note.removeprefix(r.verdict + ": "))]
             for r in c.laws.itertuples()]
     drives = [[html.escape(shown.get(label, label)), d["kind"], fmt(d["amplitude"]), fmt(d["omega"]),
                fmt(d["omega_ts"]), str(d["seeds"]), str(d["whole_cycles"]), f"{100 * d['slip']:.1f} %",
-               ", ".join({True: "yes", False: "no", None: "untested"}[s] for s in d["periodic"])]
+               ", ".join("untested" if p is None else f"{x:.2f}" for p, x in zip(d["periodic"], d["periodic_change"])),
+               html.escape(d["unsettled"] or "every bed periodic, in one state")]
               for label, d in m["drives"].items()]
     cal = m["calibration"]
-    return [Section("The laws in omega", "<ul>" + "".join(f"<li>{html.escape(p)}</li>" for p in law_sentences(c))
+    said = law_sentences(c) + lag_sentences(c)
+    return [Section("The laws in omega", "<ul>" + "".join(f"<li>{html.escape(p)}</li>" for p in said)
                     + "</ul>" + table(["law", "quantity", "kind", "amplitude", "model", "DEM", "predicted", "sigma",
-                                       "verdict", "note"], laws), "laws"),
+                                       "chi2/dof", "systematic", "estimator choices", "verdict", "note"], laws),
+                    "laws"),
             Section("Calibration", f"<p>Calibration: {html.escape(c.calibration_source)} (mu_s = {fmt(cal['mu_s'])}, "
                     f"mu_d = {fmt(cal['mu_d'])}, I0 = {fmt(cal['I0_dem'])} in the DEM convention, phi = "
                     f"{fmt(cal['phi'])}); {html.escape(c.ngf_source)}. Units: {html.escape(m['units'])}; "
@@ -330,8 +396,11 @@ def sections(c: OscillationComparison, m: dict) -> list[Section]:
             Section("The scorecard", table(["drive", "observable", "DEM", "model", "predicted", "95 % band", "sigma",
                                             "verdict", "note"], rows), "scorecard", SCORECARD),
             Section("The drives", table(["drive", "kind", "amplitude", "omega", "omega t_s", "beds", "whole cycles",
-                                         "slip rms(u_c - u_w)/rms(u_w)", "periodic (per bed: no trend of the cycles' "
-                                         "amplitudes; untested below 3 cycles)"], drives), "drives", DRIVES)]
+                                         "slip rms(u_c - u_w)/rms(u_w)", "per bed: the change of its first harmonic "
+                                         "from its first to its last kept cycle over the larger amplitude (periodic: "
+                                         f"at most {PERIODIC_TOLERANCE:g}; untested below 2 cycles)",
+                                         "the beds' periodic state (not scored otherwise)"], drives), "drives",
+                    DRIVES)]
 
 
 def names(c: OscillationComparison) -> dict:
@@ -340,22 +409,30 @@ def names(c: OscillationComparison) -> dict:
     return {x: display_label(x, labels) for x in labels}
 
 
-def _periodic(stationary: list) -> bool | None:
-    """Every bed periodic (True), one bed not (False), no bed tested (None)."""
-    return False if any(s is False for s in stationary) else (None if all(s is None for s in stationary) else True)
+def _periodic(settled: list) -> bool | None:
+    """Every bed in the drive's periodic state (True), one bed not (False), no bed tested (None)."""
+    return False if any(s is False for s in settled) else (None if all(s is None for s in settled) else True)
+
+
+def _settled(bed: dict) -> bool | None:
+    """A bed periodic and in the state of another (False when either fails, None when neither could be tested)."""
+    tests = (bed["periodic"], bed["same_state"])
+    return False if False in tests else (None if all(t is None for t in tests) else True)
 
 
 def scene(c: OscillationComparison) -> list[dict]:
     """Each drive's scene checks in compare.findings' terms: the plate's slip (at most SLIP_MAX), the beds'
-    periodic state, and the shear wave's transits per period (at least TRANSITS_BEFORE_COMPARISON, as a Stokes
-    drive's comparison starts after them; unknown where the run recorded no transit time)."""
+    periodic state (compare.oscillation.unsettled: no bed jams, drifts or sits in another state than the others),
+    and the shear wave's transits per period (at least TRANSITS_BEFORE_COMPARISON, as a Stokes drive's comparison
+    starts after them; unknown where the run recorded no transit time)."""
     out = []
     for d in c.drives:
         dr = d.drive
         out.append({"check": "slip", "drive": dr.label, "holds": bool(d.slip <= SLIP_MAX),
                     "detail": f"slip {d.slip * 100:.1f} %"})
-        out.append({"check": "periodic", "drive": dr.label, "holds": _periodic(d.stationary),
-                    "detail": f"{sum(s is False for s in d.stationary)} of {len(d.stationary)} beds not periodic"})
+        settled = [_settled(b) for b in d.beds]
+        out.append({"check": "periodic", "drive": dr.label, "holds": _periodic(settled),
+                    "detail": unsettled(d) or f"{len(settled)} beds periodic, in one state"})
         transits = dr.load.period / dr.transit_time if np.isfinite(dr.transit_time) and dr.transit_time > 0 else np.nan
         out.append({"check": "transit", "drive": dr.label,
                     "holds": bool(transits >= TRANSITS_BEFORE_COMPARISON) if np.isfinite(transits) else None,

@@ -19,7 +19,12 @@ sample sees a harmonic attenuated by sinc(omega interval/2) and delayed by inter
 
 Lag.  The response's lag behind the imposed sine is imposed phase - response phase, in (-pi, pi]: > 0 when
 the response peaks after the imposed value (a Newtonian Stokes layer: the speed lags an imposed stress by
-pi/4, the friction leads an imposed speed by pi/4, lag -pi/4).
+pi/4, the friction leads an imposed speed by pi/4, lag -pi/4).  ``lag`` measures it against another record
+(the grains' speed instead of the imposed one), ``peak_lag`` from the phase-averaged response's peak.
+
+Periodic state.  A record is periodic when the fundamental of its last kept cycle is that of its first within
+PERIODIC_TOLERANCE (``periodicity``): a test on the change over the kept cycles, which a bed that jams fails
+whatever the number of cycles (a trend test over three cycle means has one degree of freedom and passes anything).
 """
 from __future__ import annotations
 
@@ -29,14 +34,18 @@ import numpy as np
 import pandas as pd
 from scipy import integrate, stats
 
-from .plate import TREND_SIGMA, no_trend
-
 #: fewest whole cycles that give an error (their spread)
 MIN_CYCLES = 2
 #: phase bins per cycle of the phase averages
 PHASE_BINS = 24
 #: relative slack for times that fall on a cycle's boundary up to rounding
 ROUNDING = 1e-9
+#: a record is periodic when the fundamental of its last kept cycle is within this fraction of the larger amplitude
+#: of its first's (``change``): its amplitude neither halves nor doubles, its phase turns by less than 2 arcsin(1/4)
+#: = 29 degrees.  A bed's mean over its cycles describes none of them beyond that.  Against the DEM's noise: the
+#: committed oscillating study's flowing beds change by up to 0.44 over their three kept cycles (imposed stress,
+#: omega t_s >= 1; 0.28 under an imposed speed); the bed that jams, its amplitude falling from 1.59 to 0.12, by 0.98
+PERIODIC_TOLERANCE = 0.5
 
 
 def wrap(phase):
@@ -99,6 +108,13 @@ class Harmonic:
         return value - half, value + half
 
 
+def _cycle_fits(t, y, omega: float, blocks, interval: float) -> np.ndarray:
+    """(mean, amplitude, phase) of each block's fit, the ``interval`` average undone (amplitude / sinc(omega
+    interval/2), phase + omega interval/2); phases not wrapped."""
+    scale, shift = np.array([1.0, 1 / np.sinc(omega * interval / (2 * np.pi)), 1.0]), [0, 0, omega * interval / 2]
+    return np.array([_fit(t[b], y[b], omega) for b in blocks]).reshape(-1, 3) * scale + shift
+
+
 def harmonic(t, y, omega: float, skip: int = 1, interval: float = 0.0) -> Harmonic:
     """The fundamental of y(t) on the whole cycles after ``skip``, errors from the per-cycle fits; ``interval``:
     the samples are averages over the interval ending at each (the attenuation and delay are undone)."""
@@ -109,24 +125,76 @@ def harmonic(t, y, omega: float, skip: int = 1, interval: float = 0.0) -> Harmon
     n = len(blocks)
     if n == 0:
         return Harmonic(*[np.nan] * 6, n_cycles=0, note=f"no whole cycle after the first {skip}")
-    kept = np.concatenate(blocks)
-    # undo the moving average: amplitude / sinc(omega interval/2), phase + omega interval/2
-    scale, shift = np.array([1.0, 1 / np.sinc(omega * interval / (2 * np.pi)), 1.0]), [0, 0, omega * interval / 2]
-    mean, amplitude, phase = _fit(t[kept], y[kept], omega) * scale + shift
+    mean, amplitude, phase = _cycle_fits(t, y, omega, [np.concatenate(blocks)], interval)[0]
     amplitude, phase, mean = float(amplitude), float(wrap(phase)), float(mean)
     if n < MIN_CYCLES:
         return Harmonic(amplitude, phase, mean, np.nan, np.nan, np.nan, n,
                         f"{n} whole cycle after the first {skip}: an error needs {MIN_CYCLES}")
-    per = np.array([_fit(t[b], y[b], omega) for b in blocks]) * scale + shift
+    per = _cycle_fits(t, y, omega, blocks, interval)
     per[:, 2] = wrap(per[:, 2] - phase)  # about the estimate: a phase near +-pi does not split
     m_err, a_err, p_err = (per.std(axis=0, ddof=1) / np.sqrt(n)).tolist()
     return Harmonic(amplitude, phase, mean, a_err, p_err, m_err, n)
+
+
+def cycle_harmonics(t, y, omega: float, skip: int = 1, interval: float = 0.0) -> pd.DataFrame:
+    """The fundamental of each whole cycle after ``skip`` (``harmonic``'s per-cycle fits): cycle, amplitude, phase
+    in (-pi, pi] and mean."""
+    t, y = _finite(t, y)
+    blocks = cycles(t, omega, skip)
+    per = _cycle_fits(t, y, omega, list(blocks.values()), interval)
+    return pd.DataFrame({"cycle": list(blocks), "amplitude": per[:, 1], "phase": wrap(per[:, 2]), "mean": per[:, 0]})
 
 
 def phase_lag(response: Harmonic, imposed_phase: float = 0.0) -> float:
     """The response's lag behind the imposed sine in (-pi, pi] (> 0: it peaks later); its error is the
     response's phase_err."""
     return float(wrap(imposed_phase - response.phase))
+
+
+def lag(t, response, omega: float, skip: int = 1, interval: float = 0.0, reference=None) -> tuple[float, float, int]:
+    """The lag of the response's fundamental behind the ``reference``'s (a second record on the same samples; None:
+    the imposed sine, phase 0), in (-pi, pi], on the whole cycles after ``skip``: (value, standard error, whole
+    cycles).  The error is the spread of the per-cycle lags about the value over sqrt(n) (against the imposed sine:
+    the response's phase_err)."""
+    if reference is None:
+        h = harmonic(t, response, omega, skip, interval)
+        return phase_lag(h), h.phase_err, h.n_cycles
+    t, y, r = _finite(t, response, reference)
+    hy, hr = harmonic(t, y, omega, skip, interval), harmonic(t, r, omega, skip, interval)
+    value = phase_lag(hy, hr.phase)
+    if hy.n_cycles < MIN_CYCLES:
+        return value, np.nan, hy.n_cycles
+    per = wrap(cycle_harmonics(t, r, omega, skip, interval).phase - cycle_harmonics(t, y, omega, skip, interval).phase
+               - value)
+    return value, float(np.std(per, ddof=1) / np.sqrt(len(per))), hy.n_cycles
+
+
+def peak_lag(t, y, omega: float, skip: int = 1, interval: float = 0.0, bins: int = PHASE_BINS) -> float:
+    """The lag of the response's peak behind the imposed sine's (omega t = pi/2), in (-pi, pi]: the vertex of the
+    parabola through the phase average's (``phase_average``, ``bins``) largest bin and the two beside it, each at
+    the mean phase of its samples (not the bin's centre: samples on a grid aligned with the bins sit off it), less
+    the delay omega interval/2 of samples averaged over the ``interval`` ending at each.  Not the fundamental's: a
+    response that rises fast after a reversal and then saturates peaks elsewhere than its first harmonic."""
+    t = np.asarray(t, dtype=float)
+    m = phase_average(t, y, omega, bins, skip)["mean"].to_numpy()
+    at = phase_average(t, np.mod(omega * t, 2 * np.pi), omega, bins, skip)["mean"].to_numpy()
+    j = int(np.nanargmax(m))
+    near = [(j - 1) % bins, j, (j + 1) % bins]
+    dx, dy = wrap(at[near] - at[j]), m[near]
+    vertex = 0.0
+    if np.all(np.isfinite(dx) & np.isfinite(dy)):
+        a, b, _ = np.polyfit(dx, dy, 2)
+        vertex = float(np.clip(-b / (2 * a), dx[0], dx[2])) if a < 0 else 0.0
+    return float(wrap(at[j] + vertex - omega * interval / 2 - np.pi / 2))
+
+
+def amplitude_profile(df: pd.DataFrame, omega: float, value: str, skip: int = 1) -> pd.Series:
+    """The fundamental's amplitude of ``value`` at each depth of a long table (columns t, depth, ``value``), fitted
+    on the whole cycles after ``skip``, by increasing depth."""
+    kept = np.concatenate([np.zeros(0, int), *cycles(df.t, omega, skip).values()])
+    rows = df.iloc[kept]
+    return pd.Series({d: _fit(g.t.to_numpy(float), g[value].to_numpy(float), omega)[1]
+                      for d, g in rows.groupby("depth")}, dtype=float).sort_index()
 
 
 def _binned(t, y, omega: float, bins: int, skip: int, by=None) -> pd.DataFrame:
@@ -238,20 +306,21 @@ def remobilization_strain(t, x_w, u_w, response, omega: float, depth: float, fra
     return _over_blocks(strains)
 
 
-def stationarity(t, y, omega: float, skip: int = 1) -> dict:
-    """The periodic-state check of a record: the amplitude of each whole cycle after ``skip`` (cycle, amplitude),
-    the slope of amplitude against cycle number with its standard error, z = slope/stderr and the ``limit`` |z|
-    may reach without drift (the Student-t quantile with n_cycles - 2 degrees of freedom of ``plate.trend``);
-    steady: |z| <= limit (False with fewer than 3 cycles)."""
-    t, y = _finite(t, y)
-    blocks = cycles(t, omega, skip)
-    cycle = np.array(list(blocks), dtype=float)
-    amplitude = np.array([_fit(t[b], y[b], omega)[1] for b in blocks.values()])
-    out = {"cycle": cycle, "amplitude": amplitude, "slope": np.nan, "stderr": np.nan, "z": np.nan,
-           "limit": np.nan}
-    if len(cycle) >= 3:
-        fit = stats.linregress(cycle, amplitude)
-        out.update(slope=float(fit.slope), stderr=float(fit.stderr), z=float(fit.slope / fit.stderr),
-                   limit=float(stats.t.isf(stats.norm.sf(TREND_SIGMA), len(cycle) - 2)))
-    out["steady"] = no_trend(out)
+def change(first: complex, last: complex) -> float:
+    """How far a fundamental moved, as complex amplitudes a e^(i phase): |last - first| / the larger of |first|,
+    |last|; 0 for the same, 2 for opposite phases (0 when both are zero)."""
+    larger = max(abs(first), abs(last))
+    return float(abs(last - first) / larger) if larger > 0 else 0.0
+
+
+def periodicity(t, y, omega: float, skip: int = 1, interval: float = 0.0) -> dict:
+    """The periodic-state check of a record: its per-cycle fundamentals (``cycle_harmonics``: cycle, amplitude,
+    phase), the ``change`` from the first kept cycle's to the last's and ``periodic``: change <=
+    PERIODIC_TOLERANCE (None, untested, with fewer than 2 whole cycles after ``skip``)."""
+    per = cycle_harmonics(t, y, omega, skip, interval)
+    out = {"cycles": per, "change": np.nan, "periodic": None}
+    if len(per) >= 2:
+        z = per.amplitude.to_numpy() * np.exp(1j * per.phase.to_numpy())
+        out["change"] = change(z[0], z[-1])
+        out["periodic"] = bool(out["change"] <= PERIODIC_TOLERANCE)
     return out

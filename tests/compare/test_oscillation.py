@@ -81,8 +81,9 @@ def test_rows_and_drives_carry_the_frequency_amplitude_and_lag(scored, tmp_path)
     dem, same, _, setup = scored
     label = dem.drive.label
     rows = osc.scorecard([dem], {(label, "local"): same}, setup, "no NGF amplitude given")
+    choices = osc.choice_rows([dem], {(label, "local"): same}, setup, "no NGF amplitude given")
     comparison = osc.OscillationComparison(("runs/p20",), setup, "test", "no NGF", (dem,),
-                                           {(label, "local"): same}, rows, osc.laws(rows))
+                                           {(label, "local"): same}, rows, osc.laws(choices), choices)
     m = OscillatingPlate.write(comparison, tmp_path)
     keys = {"drive", "observable", "unit", "dem", "dem_err", "model", "predicted", "band", "sigma", "verdict",
             "scored", "note", "omega", "amplitude", "phase_lag"}
@@ -107,15 +108,17 @@ def test_rows_and_drives_carry_the_frequency_amplitude_and_lag(scored, tmp_path)
 
 
 def test_laws_fit_a_power_of_omega():
-    """A yielded depth ~ omega^-1/2 and a lag linear in ln omega are recovered by the law's fit."""
+    """A yielded depth ~ omega^-1/2 and a lag linear in ln omega, the same for every estimator choice, are recovered
+    by the law's fit."""
     omega_ts = np.array([0.1, 0.3, 1.0, 3.0, 10.0])
     rows = []
     for w in omega_ts:
         for obs, dem, pred in (("yielded_depth", 8 * w ** -0.5, 8 * w ** -0.4), ("phase_lag", 0.2 + 0.1 * np.log(w),
                                                                                      0.2 + 0.1 * np.log(w))):
-            rows.append({"kind": "speed", "amplitude": 2.0, "model": "local", "scored": True, "observable": obs,
-                         "omega_ts": w, "dem": dem, "dem_err": 0.01 * abs(dem) + 1e-3, "predicted": pred,
-                         "numerical_err": 0.0, "calibration_sd": 0.0})
+            rows += [{"kind": "speed", "amplitude": 2.0, "model": "local", "scored": True, "observable": obs,
+                      "estimator": c.estimator, "reference": c.reference, "skip": c.skip, "omega_ts": w, "dem": dem,
+                      "dem_err": 0.01 * abs(dem) + 1e-3, "predicted": pred, "numerical_err": 0.0,
+                      "calibration_sd": 0.0} for c in osc.LAW_FAMILIES[obs]]
     laws = osc.laws(pd.DataFrame(rows)).set_index("law")
     assert laws.loc["yielded_depth_exponent", "dem"] == pytest.approx(-0.5, abs=1e-9)
     assert laws.loc["yielded_depth_exponent", "predicted"] == pytest.approx(-0.4, abs=1e-9)

@@ -1,7 +1,7 @@
-"""Independent answers for the oscillating plate's rows and laws (compare.oscillation ``scorecard``, ``_row``,
-``_unmeasurable``, ``_difference``, ``laws``, ``_weighted_slope``), on synthetic DEM sides and model sides: no record
-is read and no solver runs (the real DriveSpec, DemOscillation, OscPrediction and ModelSetup, carrying made-up
-numbers).
+"""Independent answers for the oscillating plate's rows and laws (compare.oscillation ``scorecard``, ``choice_rows``,
+``_row``, ``_unmeasurable``, ``_difference``, ``laws``, ``_weighted_slope``, ``_beds``, ``unsettled``; the report's
+words), on synthetic DEM sides and model sides: no record is read and no solver runs (the real DriveSpec,
+DemOscillation, OscPrediction and ModelSetup, carrying made-up numbers).
 
 What is checked, and how the answers are found without the module:
 
@@ -24,7 +24,14 @@ What is checked, and how the answers are found without the module:
   out (no yielded layer on either side), n_drives, the window and the "need 3" rows.  Lack of fit: chi2 = the
   weighted squared residuals about the polyfit line, by hand; chi2/dof above 1 scales the DEM slope's error by its
   square root, a step in the lag (chi2's p-value, scipy's chi2.sf, below 0.01) is "not a line" with no slope; a
-  slope has n - 2 degrees of freedom.
+  slope has n - 2 degrees of freedom;
+* estimator families: a law row carries each choice's fit (polyfit by hand), ``systematic`` = half the range of
+  DEM - model over the measured choices, the primary's numbers, and "depends on the estimator" when the choices
+  split; a primary that is not a line leaves the row to the first measured choice; a slipping plate leaves only the
+  choices read against the plate's speed unscored;
+* the periodic state: beds built cycle by cycle (a jam 1.6 -> 0.12, a bed creeping at 0.03 beside two at 2.0) give
+  every row of their drive the note written out here; the report's sentences (the lag frequency by frequency, the
+  count of such drives) and its scene check, written out.
 """
 from pathlib import Path
 
@@ -69,25 +76,39 @@ def _welch(dem_err, dem_dof, *exact):
     return total ** 2 / (dem_err ** 4 / dem_dof)
 
 
-def _dem(drive: DriveSpec, values: dict, deepest_edge: float = 6.0, slip: float = 0.0) -> osc.DemOscillation:
-    """A DEM side with ``values`` (observable -> (value, err, how, dof); the others 1 +- 0.1 over 4 beds) and a
-    yielded edge over the phase reaching ``deepest_edge`` (one phase bin without data: NaN)."""
+def _family(values: dict, chosen: dict | None) -> dict:
+    """Every law choice (osc.LAW_FAMILIES) with its observable's ``values`` unless ``chosen`` gives its own."""
+    return {(o, c): (chosen or {}).get((o, c), values[o]) for o, family in osc.LAW_FAMILIES.items() for c in family}
+
+
+def _dem(drive: DriveSpec, values: dict, deepest_edge: float = 6.0, slip: float = 0.0, chosen: dict | None = None,
+         beds: tuple = ()) -> osc.DemOscillation:
+    """A DEM side with ``values`` (observable -> (value, err, how, dof); the others 1 +- 0.1 over 4 beds), each law
+    choice the same as its observable unless ``chosen`` says otherwise ((observable, choice) -> (value, err, how,
+    dof)), a yielded edge over the phase reaching ``deepest_edge`` (one phase bin without data: NaN) and ``beds``'
+    periodic states."""
     values = {o: values.get(o, (1.0, 0.1, BEDS4, 3)) for o in osc.OBSERVABLES}
     zones = pd.DataFrame(np.zeros((4, len(PLANES))), columns=pd.Index(PLANES, name="depth"))
     yielded = pd.Series([0.5 * deepest_edge, deepest_edge, np.nan, 0.0])
     empty = pd.DataFrame()
-    return osc.DemOscillation(drive, (), values, zones, yielded, empty, empty, empty, slip, [], 3)
+    return osc.DemOscillation(drive, (), values, _family(values, chosen), zones, yielded, empty, empty, empty, slip,
+                              beds, 3)
 
 
-def _prediction(values: dict, model: str = "local") -> osc.OscPrediction:
-    """A model side with ``values`` (observable -> (predicted, numerical error, calibration sd); the others 1)."""
+def _prediction(values: dict, model: str = "local", chosen: dict | None = None) -> osc.OscPrediction:
+    """A model side with ``values`` (observable -> (predicted, numerical error, calibration sd); the others 1) and its
+    law choices (as ``_dem``'s)."""
     values = {o: values.get(o, (1.0, 0.01, 0.01)) for o in osc.OBSERVABLES}
     empty = pd.DataFrame()
-    return osc.OscPrediction(model, values, empty, pd.Series(dtype=float), empty, empty)
+    return osc.OscPrediction(model, values, _family(values, chosen), empty, pd.Series(dtype=float), empty, empty)
 
 
 def _rows(dems, predictions, setup=None, ngf_note=NGF_NOTE) -> pd.DataFrame:
     return osc.scorecard(dems, predictions, setup or osc.ModelSetup(None, None), ngf_note)
+
+
+def _choices(dems, predictions, setup=None, ngf_note=NGF_NOTE) -> pd.DataFrame:
+    return osc.choice_rows(dems, predictions, setup or osc.ModelSetup(None, None), ngf_note)
 
 
 # --- the scorecard's rows --------------------------------------------------------------------------------------
@@ -272,7 +293,7 @@ def _law_rows() -> pd.DataFrame:
                                  "phase_lag": (L_DEM[i], L_DEM_ERR[i], "how", 2)}))
         predictions[drive.label, "local"] = _prediction({"yielded_depth": (Y_MODEL[i], Y_NUM[i], Y_CAL[i]),
                                                          "phase_lag": (L_MODEL[i], L_NUM[i], L_CAL[i])})
-    return _rows(dems, predictions)
+    return _choices(dems, predictions)
 
 
 def test_laws_are_weighted_least_squares_slopes_against_an_independent_fit():
@@ -328,7 +349,7 @@ def _lag_law(lags, errors, model_lags):
         drive = _drive(f"speed-{i}", w)
         dems.append(_dem(drive, {"phase_lag": (lags[i], errors[i], "spread over 3 beds (std/sqrt(n))", 2)}))
         predictions[drive.label, "local"] = _prediction({"phase_lag": (model_lags[i], 0.005, 0.01)})
-    return osc.laws(_rows(dems, predictions)).set_index("law").loc["phase_lag_slope"]
+    return osc.laws(_choices(dems, predictions)).set_index("law").loc["phase_lag_slope"]
 
 
 def test_a_lag_on_a_step_is_not_a_line_and_quotes_no_slope():
@@ -385,7 +406,7 @@ def test_a_law_needs_three_measurable_drives():
                                  "phase_lag": (0.2 - 0.05 * np.log(w), 0.02, "how", 2)}))
         predictions[drive.label, "local"] = _prediction({"yielded_depth": (0.0, 0.01, 0.01),
                                                          "phase_lag": (0.1 - 0.08 * np.log(w), 0.006, 0.008)})
-    laws = osc.laws(_rows(dems, predictions)).set_index("law")
+    laws = osc.laws(_choices(dems, predictions)).set_index("law")
     y, p = laws.loc["yielded_depth_exponent"], laws.loc["phase_lag_slope"]
     assert y.n_drives == 0 and y.window == "" and y.verdict == "not measurable"
     assert y.note == "not measurable: 0 measurable drive(s), a slope and its error need 3"
@@ -403,7 +424,7 @@ def test_a_law_needs_three_measurable_drives():
     assert stats.norm.ppf(0.975) < p.sigma < stats.t.ppf(0.975, 25 / 16)
     assert p.verdict == "consistent"
     # two drives: the lag's law is not measurable either
-    two = osc.laws(_rows(dems[:2], {k: v for k, v in predictions.items() if k[0] != dems[2].drive.label}))
+    two = osc.laws(_choices(dems[:2], {k: v for k, v in predictions.items() if k[0] != dems[2].drive.label}))
     two = two.set_index("law").loc["phase_lag_slope"]
     assert two.n_drives == 2 and two.verdict == "not measurable"
     # floats, also in a table where no law is measured (no None a report's number formats would choke on)
@@ -434,3 +455,184 @@ def test_a_period_under_three_transits_is_elastic_and_a_slipping_plate_s_rows_ar
     assert (~local.scored[plate_side]).all() and local.scored[["yielded_depth", "remobilization_strain"]].all()
     assert local.note["phase_lag"] == ("not scored: the plate slips 20% against the grains touching it (more than 5%), "
                                       "so its speed and force are not the bed's")
+
+
+# --- the estimator families -------------------------------------------------------------------------------------
+
+def _lag_choices(primary, peak, model, errors):
+    """Six speed drives at OMEGA_TS whose lag is ``primary`` for every choice but the peak's (``peak``), the model's
+    ``model`` for every choice (its errors 0.005 and 0.01); 3 beds each (2 dof)."""
+    lag = osc.LAW_FAMILIES["phase_lag"]
+    dems, predictions = [], {}
+    for i, w in enumerate(OMEGA_TS):
+        drive = _drive(f"speed-{i}", w)
+        dems.append(_dem(drive, {"phase_lag": (primary[i], errors[i], "how", 2)},
+                         chosen={("phase_lag", c): (peak[i], errors[i], "how", 2) for c in lag
+                                 if c.estimator == "peak"}))
+        predictions[drive.label, "local"] = _prediction({"phase_lag": (model[i], 0.005, 0.01)})
+    return dems, predictions
+
+
+def test_a_law_row_carries_its_family_and_depends_on_the_estimator_when_the_choices_split():
+    """The lag of six speed drives: every choice on the model's line but the peak's, whose slope is -0.3 against the
+    model's -0.2.  The row's numbers are the primary's (the first harmonic against the plate's speed, after 1 cycle,
+    consistent), its four choices each carry their fit (polyfit by hand), ``systematic`` is half the range of DEM -
+    model over them, and the verdict "depends on the estimator" names both sides."""
+    x = np.log(OMEGA_TS)
+    err = np.full(6, 0.01)
+    primary, peak, model = 0.05 - 0.2 * x + 0.8 * OFFSETS, 0.05 - 0.3 * x + 0.8 * OFFSETS, 0.05 - 0.2 * x
+    r = osc.laws(_choices(*_lag_choices(primary, peak, model, err))).set_index("law").loc["phase_lag_slope"]
+    slopes = {}
+    for name, y in (("primary", primary), ("peak", peak)):
+        (slope, _), cov = np.polyfit(x, y, 1, w=1 / err, cov="unscaled")
+        slopes[name] = (slope, np.sqrt(cov[0, 0]))
+    model_slope = np.polyfit(x, model, 1)[0]  # equal weights: the model's slope on the DEM's
+    model_err = np.hypot(0.005, 0.01) / np.sqrt(np.sum((x - x.mean()) ** 2))
+    assert [(c["estimator"], c["reference"], c["skip"]) for c in r.choices] == [
+        ("fundamental", "plate", 1), ("fundamental", "plate", 2), ("fundamental", "contact", 1), ("peak", "plate", 1)]
+    for c in r.choices:
+        dem, dem_err = slopes["peak" if c["estimator"] == "peak" else "primary"]
+        assert c["dem"] == pytest.approx(dem, rel=1e-10) and c["dem_err"] == pytest.approx(dem_err, rel=1e-10)
+        assert c["predicted"] == pytest.approx(model_slope, rel=1e-10)
+        assert c["predicted_err"] == pytest.approx(model_err, rel=1e-10)
+        assert c["sigma"] == pytest.approx((dem - model_slope) / np.hypot(dem_err, model_err), rel=1e-9)
+        assert c["dof"] > 4 and c["n_drives"] == 6 and c["chi2_dof"] < 1 and c["note"] == ""
+    assert abs(r.choices[0]["sigma"]) < stats.t.ppf(0.975, r.choices[0]["dof"])  # the model's line
+    assert r.choices[3]["sigma"] < -stats.t.ppf(0.975, r.choices[3]["dof"])  # -0.3 against -0.2
+    assert r.systematic == pytest.approx(abs(slopes["primary"][0] - slopes["peak"][0]) / 2, rel=1e-10)
+    assert r.dem == pytest.approx(slopes["primary"][0], rel=1e-10) and r.sigma == r.choices[0]["sigma"]
+    assert r.verdict == "depends on the estimator"
+    assert r.note.startswith("depends on the estimator: 3 of 4 measured choices consistent (the first harmonic's lag "
+                             "against the plate's speed, after 1 cycle ")
+    assert "1 disagree (the peak's lag against the plate's speed, after 1 cycle -" in r.note
+    assert "the first harmonic's lag against the plate's speed, after 2 cycles" in r.note
+
+
+def test_a_primary_choice_that_is_not_a_line_leaves_the_row_to_the_first_measured_choice():
+    """The primary lag steps (not a line, as the scorecard's step test); the peak's is a line: the row's numbers
+    are the peak's and its window says the primary is not measurable; the primary's entry keeps its "not a line"."""
+    x = np.log(OMEGA_TS)
+    err = np.full(6, 0.01)
+    step, line = np.where(OMEGA_TS < 2, -0.1, -0.6), 0.05 - 0.2 * x + 0.8 * OFFSETS
+    dems, predictions = _lag_choices(step, line, -0.2 * x, err)
+    r = osc.laws(_choices(dems, predictions)).set_index("law").loc["phase_lag_slope"]
+    assert [c["note"].startswith("not measurable: not a line") for c in r.choices] == [True, True, True, False]
+    assert r.dem == pytest.approx(np.polyfit(x, line, 1, w=1 / err)[0], rel=1e-10)
+    assert r.window == ("the primary choice (the first harmonic's lag against the plate's speed, after 1 cycle) is "
+                        "not measurable; shown: the peak's lag against the plate's speed, after 1 cycle: "
+                        "omega t_s in [0.1, 30]")
+    assert r.verdict == "consistent" and np.isnan(r.systematic)  # one measured choice: no spread
+
+
+def test_a_slipping_plate_leaves_the_contact_layer_s_choices_scored():
+    """A plate slipping 4 SLIP_MAX: the choices read against the plate's speed are not scored, those read against
+    the contact layer's speed and the stress edge are (a slip does not move the grains' speed or the stresses)."""
+    from granstokes.compare.plate import SLIP_MAX
+    rows = _choices([_dem(_drive("slips", 1.0), {}, slip=4 * SLIP_MAX)],
+                    {("runs/p20/slips", "local"): _prediction({})})
+    local = rows[rows.model == "local"]
+    assert len(local) == sum(len(f) for f in osc.LAW_FAMILIES.values())
+    for r in local.itertuples():
+        assert r.scored == (r.reference != "plate"), (r.observable, r.estimator, r.reference)
+        if r.reference == "plate":
+            assert r.note.startswith("not scored: the plate slips 20% against the grains touching it")
+
+
+def _plate(amplitudes, phase_, per_cycle: int = 48) -> pd.DataFrame:
+    """A stress drive's plate record at omega = 1: cycle k's speed u_w = amplitudes[k] sin(t + phase_)."""
+    t = np.arange(len(amplitudes) * per_cycle + 1) * 2 * np.pi / per_cycle
+    k = np.minimum(np.arange(len(t)) // per_cycle, len(amplitudes) - 1)
+    return pd.DataFrame({"t": t, "u_w": np.asarray(amplitudes)[k] * np.sin(t + phase_)})
+
+
+def test_a_drive_whose_bed_jams_or_sits_in_another_state_keeps_its_rows_unscored():
+    """Three beds of a stress drive at omega = 1 (4 cycles, the first the start-up): bed 1 jams (1.60, 0.14, 0.12
+    over the kept cycles), beds 2 and 3 flow at 2.0.  Every row of the drive, scorecard and law choices, says "not
+    scored: bed 1 of 3 jams (...)" with the first and last kept cycles' amplitude and phase; a second drive whose
+    bed 2 creeps at 0.03 throughout, its others at 2.0, is "in another state"; a drive of periodic beds is scored."""
+    drive = _drive("stress-1", 2.0, "stress", 0.45)  # omega = omega_ts / T_S = 1
+    jam = [_plate([2.0, 1.6, 0.14, 0.12], 0.3), _plate([2.0] * 4, 0.3), _plate([2.0] * 4, 0.3)]
+    creep = [_plate([2.0] * 4, 0.3), _plate([0.03] * 4, 0.3), _plate([2.0] * 4, 0.3)]
+    mean_jam = np.mean([1.6, 0.14, 0.12]) * np.exp(0.3j)  # a bed's fundamental over its kept cycles
+    beds = {}
+    for name, plates, fundamentals in (("jam", jam, [mean_jam, 2 * np.exp(0.3j), 2 * np.exp(0.3j)]),
+                                       ("creep", creep, [2 * np.exp(0.3j), 0.03 * np.exp(0.3j), 2 * np.exp(0.3j)]),
+                                       ("flow", creep[:1] * 3, [2 * np.exp(0.3j)] * 3)):
+        records = [osc.Record(p, pd.DataFrame(), pd.DataFrame()) for p in plates]
+        beds[name] = osc._beds(drive, records, fundamentals)
+    assert [b["periodic"] for b in beds["jam"]] == [False, True, True]
+    assert beds["jam"][0]["change"] == pytest.approx(1 - 0.12 / 1.6, abs=1e-12)
+    assert [b["same_state"] for b in beds["creep"]] == [True, False, True]
+    # the jammed bed's mean 0.62 is also 0.69 of 2 away from the others': its note says it jams (the first reason)
+    assert [b["same_state"] for b in beds["jam"]] == [False, True, True]
+    said = {"jam": "not scored: bed 1 of 3 jams (response amplitude 1.6 -> 0.12 sqrt(g d), phase +0.30 -> +0.30 "
+                   "rad over the kept cycles 1 to 3)",
+            "creep": "not scored: bed 2 of 3 is in another state than the others (response amplitude 0.03 sqrt(g d) "
+                     "against 2, 2)",
+            "flow": ""}
+    for name, note in said.items():
+        dem = _dem(drive, {}, beds=beds[name])
+        prediction = {(drive.label, "local"): _prediction({})}
+        for rows in (_rows([dem], prediction), _choices([dem], prediction)):
+            local = rows[rows.model == "local"]
+            assert (local.note == note).all(), name
+            assert (local.scored == (note == "")).all(), name
+
+
+# --- the report's words -----------------------------------------------------------------------------------------
+
+def _comparison(dems, predictions) -> osc.OscillationComparison:
+    setup = osc.ModelSetup(None, None)
+    rows, choices = _rows(dems, predictions, setup), _choices(dems, predictions, setup)
+    return osc.OscillationComparison(("runs/p20",), setup, "", "", tuple(dems), predictions, rows, osc.laws(choices),
+                                     choices)
+
+
+def test_the_report_says_frequency_by_frequency_which_drives_lag_agrees_and_counts_the_unsettled_drives():
+    """Four speed drives at omega t_s = 1 (two: one agrees, one 0.5 rad off its model), 3 (one agrees) and 10 (its
+    bed 2 in another state: not scored).  The lag's sentence names them per frequency with their sigma; the
+    periodic-state sentence counts 1 of 4 drives and quotes its note; the scene's periodic check fails for it
+    alone, with that note as its detail."""
+    from granstokes.compare import oscillation_report as report
+    drives = [_drive("a", 1.0), _drive("b", 1.0), _drive("c", 3.0), _drive("d", 10.0)]
+    odd = ({"periodic": True, "change": 0.1, "fundamental": 2.0 + 0j, "same_state": True},
+           {"periodic": True, "change": 0.1, "fundamental": 0.03 + 0j, "same_state": False})
+    dems = [_dem(d, {"phase_lag": (0.6 if d.name == "b" else 0.1, 0.05, BEDS4, 3)}, beds=odd if d.name == "d" else ())
+            for d in drives]
+    c = _comparison(dems, {(d.label, "local"): _prediction({"phase_lag": (0.1, 0.01, 0.01)}) for d in drives})
+    b_sigma = 0.5 / np.sqrt(0.05 ** 2 + 2 * 0.01 ** 2)
+    assert report.lag_sentences(c) == [
+        f"The lag frequency by frequency, local mu(I): at omega t_s = 1, agrees for 1 of 2 scored drives (p20: a), "
+        f"disagrees for p20: b (+{b_sigma:.1f} sigma); at omega t_s = 3, agrees for 1 of 1 scored drives (p20: c); "
+        f"at omega t_s = 10, none of its 1 drive(s) scored."]
+    said = ("bed 2 of 2 is in another state than the others (response amplitude 0.03 against 2)")
+    assert report.states_sentences(c) == [
+        "Periodic state: in 1 of 4 drives a bed jams, drifts or sits in another state than the others (its first "
+        "harmonic moves by more than 0.5 of its amplitude over the kept cycles, or lies that far from every other "
+        "bed's): p20: d (1 of 2 beds); their rows are kept, not scored."]
+    assert report.states_sentences(c)[0] in report.verdict_parts(c)
+    periodic = {s["drive"]: s for s in report.scene(c) if s["check"] == "periodic"}
+    assert periodic["runs/p20/d"]["holds"] is False and periodic["runs/p20/d"]["detail"] == said
+    assert periodic["runs/p20/a"]["holds"] is None  # no bed's state known (the synthetic drive has none)
+
+
+def test_the_law_sentences_give_the_family_s_spread_and_say_when_a_law_is_not_a_line():
+    """The six speed drives' lag on a line (choices split as above) reads with its chi2/dof, its systematic and
+    its 4 choices; a lag that steps for every choice reads "not a line" with its chi2/dof."""
+    from granstokes.compare import oscillation_report as report
+    x = np.log(OMEGA_TS)
+    err = np.full(6, 0.01)
+    line, peak = 0.05 - 0.2 * x + 0.8 * OFFSETS, 0.05 - 0.3 * x + 0.8 * OFFSETS
+    c = _comparison(*_lag_choices(line, peak, 0.05 - 0.2 * x, err))
+    r = c.laws.set_index("law").loc["phase_lag_slope"]
+    lag = next(p for p in report.law_sentences(c) if p.startswith("lag of the response"))
+    assert lag.startswith("lag of the response against the frequency (slope in ln omega t_s), s in phase_lag = a + "
+                          "s ln(omega t_s) [rad] (imposed speed, amplitude 2, 6 drives): DEM ")
+    assert f"(chi2/dof {r.chi2_dof:.2g}; systematic {r.systematic:.4g} over 4 estimator choices)" in lag
+    assert "local mu(I)" in lag and "(depends on the estimator, " in lag
+    step = np.where(OMEGA_TS < 2, -0.1, -0.6)
+    c = _comparison(*_lag_choices(step, step, -0.2 * x, err))
+    r = c.laws.set_index("law").loc["phase_lag_slope"]
+    lag = next(p for p in report.law_sentences(c) if p.startswith("lag of the response"))
+    assert lag.endswith(f"(imposed speed, amplitude 2, 6 drives): not a line (chi2/dof = {r.chi2_dof:.3g}, "
+                        f"p = {stats.chi2.sf(r.chi2_dof * 4, 4):.2g}).")

@@ -2,15 +2,16 @@
 make a whole cycle (a non-integer number of samples per period, the one-step slack and ROUNDING); the harmonic's
 per-cycle errors and Student-t interval; phase averages and a Stokes-layer profile on sparse samples (empty bins);
 yielded depths on curved profiles; remobilisation strains of plates whose reversals, friction and displacement are
-known; the periodic-state check on three and two cycles; the dissipation's per-cycle loop areas.
+known; the periodic-state check at its amplitude and phase edges, on one and two cycles; the lag against a second
+record, the peak's lag and the amplitude profile; the dissipation's per-cycle loop areas.
 
 How the answers are independent: every record is a sum of sinusoids (or a plate snapping at a reversal) whose
 per-cycle amplitude, phase and mean are chosen by the test, sampled uniformly over whole periods, where least
 squares and the trapezoid rule are exact; the expected values are those closed forms (loop area
 pi u tau cos(lag)/omega; strain U (1 - cos chi)/omega/depth with chi = lag + arcsin(level)), counts of samples by
 integer arithmetic, and the documented statistics done here in plain numpy (error = std(ddof=1)/sqrt(n),
-Student-t quantiles from scipy.stats, the least-squares line of amplitude against cycle).  Nothing expected is
-computed by compare.phase; its constants (ROUNDING, PHASE_BINS) and plate.TREND_SIGMA are imported.
+Student-t quantiles from scipy.stats, the change of complex amplitudes written out).  Nothing expected is
+computed by compare.phase; its constants (ROUNDING, PHASE_BINS, PERIODIC_TOLERANCE) are imported.
 """
 from __future__ import annotations
 
@@ -20,8 +21,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from granstokes.compare import phase
-from granstokes.compare.phase import PHASE_BINS, ROUNDING
-from granstokes.compare.plate import TREND_SIGMA
+from granstokes.compare.phase import PERIODIC_TOLERANCE, PHASE_BINS, ROUNDING
 from scipy import stats
 
 OMEGA = 2.0
@@ -314,21 +314,125 @@ def test_remobilization_to_the_full_peak_stops_at_the_peak_sample():
     assert got["values"] == pytest.approx([U * (1 - np.cos(170.5 * step)) / OMEGA / DEPTH] * 9, rel=1e-4)
 
 
-def test_stationarity_of_three_cycles_is_the_hand_least_squares_line():
-    """Amplitudes 1.0, 1.5, 1.7 in cycles 2-4 (skip=2; the start-up cycles 0-1 differ): slope 0.35, residuals
-    (-0.05, 0.1, -0.05), stderr sqrt(0.015/1/2); the limit is the Student-t quantile at 1 dof of the normal tail
-    beyond TREND_SIGMA."""
-    amp = np.array([3.0, 0.2, 1.0, 1.5, 1.7, 1.7])
-    t, k = _uniform(5, 32)
-    got = phase.stationarity(t, 0.1 + amp[k] * np.sin(OMEGA * t + 0.4), OMEGA, skip=2)
-    stderr, limit = np.sqrt(0.015 / 1 / 2), stats.t.isf(stats.norm.sf(TREND_SIGMA), 1)
-    assert list(got["cycle"]) == [2, 3, 4] and got["amplitude"] == pytest.approx([1.0, 1.5, 1.7], abs=1e-12)
-    assert (got["slope"], got["stderr"], got["z"]) == pytest.approx((0.35, stderr, 0.35 / stderr), abs=1e-9)
-    assert got["limit"] == pytest.approx(limit, rel=1e-12) and got["steady"] == (0.35 / stderr <= limit)
+def _per_cycle(amplitudes, phases, per_cycle: int = 32, mean: float = 0.1):
+    """Whole cycles 0..n-1 sampled uniformly, cycle k a sine of amplitude ``amplitudes[k]`` and phase
+    ``phases[k]``: each cycle's fit is exactly its own (least squares on a whole cycle's uniform samples)."""
+    t, k = _uniform(len(amplitudes), per_cycle)
+    k = np.minimum(k, len(amplitudes) - 1)
+    return t, mean + np.asarray(amplitudes)[k] * np.sin(OMEGA * t + np.asarray(phases)[k])
 
 
-def test_stationarity_of_two_cycles_has_no_slope_and_is_not_steady():
-    t, k = _uniform(3, 32)
-    got = phase.stationarity(t, np.array([1.0, 1.0, 2.0, 2.0])[k] * np.sin(OMEGA * t), OMEGA)
-    assert list(got["cycle"]) == [1, 2] and got["amplitude"] == pytest.approx([1.0, 2.0], abs=1e-12)
-    assert np.isnan([got["slope"], got["stderr"], got["z"], got["limit"]]).all() and got["steady"] is False
+def _hand_change(a0, q0, a1, q1) -> float:
+    """|a1 e^(i q1) - a0 e^(i q0)| / max(a0, a1), written out."""
+    return np.hypot(a1 * np.cos(q1) - a0 * np.cos(q0), a1 * np.sin(q1) - a0 * np.sin(q0)) / max(a0, a1)
+
+
+@pytest.mark.parametrize(("last", "periodic"), [(1 - PERIODIC_TOLERANCE + 1e-6, True),
+                                                (1 - PERIODIC_TOLERANCE - 1e-6, False)])
+def test_the_periodic_state_s_amplitude_edge_is_the_tolerance(last, periodic):
+    """Amplitudes 3 (the start-up, skipped), 1.0, 0.2, ``last`` at one phase: the change from the first kept cycle
+    to the last is 1 - last (the middle cycle does not count), just inside or just outside PERIODIC_TOLERANCE."""
+    t, y = _per_cycle([3.0, 1.0, 0.2, last], [0.4] * 4)
+    got = phase.periodicity(t, y, OMEGA)
+    assert list(got["cycles"].cycle) == [1, 2, 3]
+    assert got["cycles"].amplitude.to_numpy() == pytest.approx([1.0, 0.2, last], abs=1e-12)
+    assert got["cycles"].phase.to_numpy() == pytest.approx([0.4] * 3, abs=1e-12)
+    assert got["change"] == pytest.approx(_hand_change(1.0, 0.4, last, 0.4), abs=1e-12)
+    assert got["change"] == pytest.approx(1 - last, abs=1e-12) and got["periodic"] is periodic
+
+
+@pytest.mark.parametrize(("turn", "periodic"), [(2 * np.arcsin(PERIODIC_TOLERANCE / 2) - 1e-6, True),
+                                                (2 * np.arcsin(PERIODIC_TOLERANCE / 2) + 1e-6, False)])
+def test_the_periodic_state_s_phase_edge_is_a_turn_of_two_arcsin_half_the_tolerance(turn, periodic):
+    """One amplitude, the phase turning by ``turn`` from the first kept cycle (2) to the last (4; skip 2): the
+    change is 2 sin(turn/2), the tolerance's edge at turn = 2 arcsin(tolerance/2) (29 degrees at 0.5)."""
+    t, y = _per_cycle([0.5, 0.5, 0.8, 0.8, 0.8], [0.0, 0.0, -1.0, -1.0 + turn / 3, -1.0 + turn])
+    got = phase.periodicity(t, y, OMEGA, skip=2)
+    assert list(got["cycles"].cycle) == [2, 3, 4]
+    assert got["change"] == pytest.approx(_hand_change(0.8, -1.0, 0.8, -1.0 + turn), abs=1e-12)
+    assert got["change"] == pytest.approx(2 * np.sin(turn / 2), abs=1e-12) and got["periodic"] is periodic
+
+
+def test_the_periodic_state_of_one_kept_cycle_is_untested_and_of_two_is_tested():
+    t, y = _per_cycle([1.0, 1.0], [0.0, 0.0])
+    one = phase.periodicity(t, y, OMEGA)
+    assert len(one["cycles"]) == 1 and one["periodic"] is None and np.isnan(one["change"])
+    t, y = _per_cycle([1.0, 1.0, 2.0], [0.0, 0.0, 0.0])
+    two = phase.periodicity(t, y, OMEGA)
+    assert two["change"] == pytest.approx(0.5, abs=1e-12) and two["periodic"] is True  # 1 -> 2: half of 2
+
+
+def test_change_is_the_distance_of_two_complex_amplitudes_over_the_larger():
+    assert phase.change(1.0, -1.0) == pytest.approx(2.0)  # opposite phases
+    assert phase.change(2.0, 1.0) == pytest.approx(0.5) and phase.change(1.0, 2.0) == pytest.approx(0.5)
+    assert phase.change(3j, 4.0) == pytest.approx(5.0 / 4.0)  # |4 - 3i| = 5 over the larger 4
+    assert phase.change(0.0, 0.0) == 0.0
+
+
+def test_the_lag_against_a_reference_is_the_difference_of_the_two_fits_phases_with_the_per_cycle_spread():
+    """Response and reference with per-cycle phases (cycles 1-3 kept): whole-record fits are the means of the
+    per-cycle complex amplitudes (uniform whole cycles), the lag is wrap(reference's phase - response's), and its
+    error the spread of the per-cycle lags wrap(q_r - q_y) about it over sqrt(3)."""
+    a_y, q_y = np.array([1.0, 1.0, 1.2, 0.9]), np.array([0.0, 0.3, 0.2, 0.4])
+    a_r, q_r = np.array([2.0, 2.0, 2.0, 2.1]), np.array([0.0, 1.1, 1.3, 1.0])
+    t, y = _per_cycle(a_y, q_y)
+    _, r = _per_cycle(a_r, q_r, mean=-0.2)
+    z_y, z_r = np.mean(a_y[1:] * np.exp(1j * q_y[1:])), np.mean(a_r[1:] * np.exp(1j * q_r[1:]))
+    expected = np.angle(z_r) - np.angle(z_y)
+    per = (q_r[1:] - q_y[1:]) - expected
+    value, err, n = phase.lag(t, y, OMEGA, reference=r)
+    assert n == 3 and value == pytest.approx(expected, abs=1e-12)
+    assert err == pytest.approx(np.std(per, ddof=1) / np.sqrt(3), rel=1e-9)
+    # against the imposed sine: minus the response's phase, the harmonic's error
+    value, err, n = phase.lag(t, y, OMEGA)
+    h = phase.harmonic(t, y, OMEGA)
+    assert value == pytest.approx(-np.angle(z_y), abs=1e-12) and err == h.phase_err and n == 3
+
+
+def test_the_peak_s_lag_on_a_bin_centre_is_exact_and_undoes_the_averaging_delay():
+    """A response whose phase-averaged peak falls on the centre of bin 8 (17 pi/24), sampled symmetrically about
+    the bins' centres (20 samples a bin, half a step off its edges): sin(omega t - lag) with lag = 17 pi/24 - pi/2
+    = 5 pi/24, read exactly (the bins beside it are equal: the parabola's vertex is the centre).  The same response
+    averaged over the interval ending at each sample peaks omega interval/2 later: with the interval given, the lag
+    is the same."""
+    t, _ = _uniform(5, 24 * 20)
+    t = t[:-1] + PERIOD / (24 * 20) / 2
+    lag = 5 * np.pi / 24
+    assert phase.peak_lag(t, np.sin(OMEGA * t - lag), OMEGA) == pytest.approx(lag, abs=1e-12)
+    interval = PERIOD / 24  # the delay omega interval/2 = pi/24: the peak moves half a bin
+    late = lag - np.pi / 24  # whose delayed peak is again on bin 8's centre
+    delayed = np.sin(OMEGA * (t - interval / 2) - late)
+    assert phase.peak_lag(t, delayed, OMEGA, interval=interval) == pytest.approx(late, abs=1e-12)
+
+
+def test_the_peak_s_lag_reads_the_bins_where_their_samples_are():
+    """Four samples a bin on the bins' edges (the plate record's grid of 96 a period): a bin's samples sit 1.5/4 of
+    a bin from its start, an eighth of a bin (0.033 rad) before its centre; the peak of sin(omega t - 0.4) is read
+    within 1e-3 rad (a parabola through three points of a cosine 0.26 rad apart), not 0.033 early."""
+    t, _ = _uniform(5, 96)
+    assert phase.peak_lag(t, np.sin(OMEGA * t - 0.4), OMEGA) == pytest.approx(0.4, abs=1e-3)
+
+
+def test_the_peak_s_lag_differs_from_the_fundamental_s_for_a_response_with_a_second_harmonic():
+    """sin(psi) + 0.3 sin(2 psi), psi = omega t - 0.3: the first harmonic lags by 0.3 exactly; the peak is where
+    cos psi + 0.6 cos 2 psi = 0, i.e. 1.2 c^2 + c - 0.6 = 0 with c = cos psi: psi* = arccos((-1 + sqrt(3.88))/2.4)
+    = 1.155, the lag psi* + 0.3 - pi/2 = -0.116 (to 0.01: a parabola through three bins of a non-sinusoidal
+    peak)."""
+    t, _ = _uniform(5, 96)
+    psi = OMEGA * t - 0.3
+    y = np.sin(psi) + 0.3 * np.sin(2 * psi)
+    peak = np.arccos((-1 + np.sqrt(1 + 4 * 1.2 * 0.6)) / 2.4)
+    assert phase.peak_lag(t, y, OMEGA) == pytest.approx(peak + 0.3 - np.pi / 2, abs=0.01)
+    assert phase.lag(t, y, OMEGA)[0] == pytest.approx(0.3, abs=1e-12)
+
+
+def test_the_amplitude_profile_is_each_depth_s_first_harmonic_over_the_kept_cycles():
+    """Two depths whose amplitudes change after the start-up cycle: the profile reads the kept cycles' (1.5 at
+    depth 1, 0.25 at depth 3), sorted by depth."""
+    t, k = _uniform(4, 24)
+    rows = []
+    for depth, start, kept in ((3.0, 9.0, 0.25), (1.0, 0.1, 1.5)):
+        amplitude = np.where(k == 0, start, kept)
+        rows.append(pd.DataFrame({"t": t, "depth": depth, "u": 0.2 + amplitude * np.sin(OMEGA * t - depth)}))
+    got = phase.amplitude_profile(pd.concat(rows, ignore_index=True), OMEGA, "u")
+    assert list(got.index) == [1.0, 3.0] and got.to_numpy() == pytest.approx([1.5, 0.25], abs=1e-12)
