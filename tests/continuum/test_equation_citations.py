@@ -74,6 +74,7 @@ def _lookup_keys(tree: ast.AST, path: Path) -> set[int]:
     return keys
 
 
+@pytest.mark.slow
 def test_the_source_cites_no_label():
     found = {}
     for path in (p for top in SOURCES for p in (ROOT / top).rglob("*.py")):

@@ -204,6 +204,7 @@ def test_velocity_form_mesh_order_is_two(quick_stress):
     assert order == pytest.approx(2.0, abs=0.1)
 
 
+@pytest.mark.slow
 def test_velocity_form_default_reaches_the_target(quick_stress):
     """The default's u_w is within TARGET of the Richardson-extrapolated reference, and so is each
     part of its error: the mesh's (the tight run on the same mesh against the reference, measured
