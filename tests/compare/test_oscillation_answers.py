@@ -636,3 +636,40 @@ def test_the_law_sentences_give_the_family_s_spread_and_say_when_a_law_is_not_a_
     lag = next(p for p in report.law_sentences(c) if p.startswith("lag of the response"))
     assert lag.endswith(f"(imposed speed, amplitude 2, 6 drives): not a line (chi2/dof = {r.chi2_dof:.3g}, "
                         f"p = {stats.chi2.sf(r.chi2_dof * 4, 4):.2g}).")
+
+
+def test_a_choice_row_reads_the_model_s_estimate_for_that_choice():
+    """The model predicts the peak's lag 0.3 (+- 0.01, 0.02) and 1.0 for its scorecard lag: the peak choice's row
+    carries 0.3 and sigma (1 - 0.3)/sqrt(0.1^2 + 0.01^2 + 0.02^2) against the DEM's 1 +- 0.1."""
+    peak = next(c for c in osc.LAW_FAMILIES["phase_lag"] if c.estimator == "peak")
+    pred = _prediction({}, chosen={("phase_lag", peak): (0.3, 0.01, 0.02)})
+    rows = _choices([_dem(_drive("peak", 1.0), {})], {("runs/p20/peak", "local"): pred})
+    r = rows[(rows.model == "local") & (rows.observable == "phase_lag") & (rows.estimator == "peak")].iloc[0]
+    assert r.predicted == 0.3 and r.scored
+    assert r.sigma == pytest.approx(0.7 / np.sqrt(0.1 ** 2 + 0.01 ** 2 + 0.02 ** 2), rel=1e-12)
+
+
+def test_an_edge_at_the_deepest_plane_censors_only_the_edge_s_choices():
+    """The yielded edge reaches the deepest plane: the yielded depth's choices read off the edge are not measurable,
+    those read at a speed fraction (delta_50, delta_20) are scored."""
+    rows = _choices([_dem(_drive("deep", 1.0), {}, deepest_edge=PLANES.max())],
+                    {("runs/p20/deep", "local"): _prediction({})})
+    depth = rows[(rows.model == "local") & (rows.observable == "yielded_depth")]
+    assert len(depth) == len(osc.LAW_FAMILIES["yielded_depth"])
+    for r in depth.itertuples():
+        assert r.scored == (r.estimator != "edge"), r.estimator
+        if r.estimator == "edge":
+            assert r.note.startswith("not measurable: at some phase the bed yields down to its deepest plane")
+
+
+def test_a_period_of_exactly_three_transits_and_a_slip_of_exactly_slip_max_are_scored():
+    """The edges belong to the scored side: transits = TRANSITS_BEFORE_COMPARISON and slip = SLIP_MAX."""
+    from granstokes.compare.drive import TRANSITS_BEFORE_COMPARISON
+    from granstokes.compare.plate import SLIP_MAX
+    period = 2 * np.pi / (1.0 / T_S)
+    transit = period / TRANSITS_BEFORE_COMPARISON
+    assert period / transit == TRANSITS_BEFORE_COMPARISON  # exact in floating point, checked here
+    rows = _rows([_dem(_drive("edge", 1.0, transit_time=transit), {}, slip=SLIP_MAX)],
+                 {("runs/p20/edge", "local"): _prediction(MODEL)})
+    local = rows[rows.model == "local"]
+    assert local.scored.all() and (local.note == "").all()

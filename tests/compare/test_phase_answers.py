@@ -436,3 +436,116 @@ def test_the_amplitude_profile_is_each_depth_s_first_harmonic_over_the_kept_cycl
         rows.append(pd.DataFrame({"t": t, "depth": depth, "u": 0.2 + amplitude * np.sin(OMEGA * t - depth)}))
     got = phase.amplitude_profile(pd.concat(rows, ignore_index=True), OMEGA, "u")
     assert list(got.index) == [1.0, 3.0] and got.to_numpy() == pytest.approx([1.5, 0.25], abs=1e-12)
+
+
+def test_cycle_harmonics_by_default_keeps_cycles_after_the_first_with_no_average_undone():
+    """Cycles of amplitudes 3, 1, 0.5, 0.8 and phases 0.1-0.4 about a mean 0.7: the defaults (skip 1, no interval)
+    give cycles 1-3 with their own amplitude, phase and mean (the mean column, not the amplitude)."""
+    t, y = _per_cycle([3.0, 1.0, 0.5, 0.8], [0.1, 0.2, 0.3, 0.4], mean=0.7)
+    got = phase.cycle_harmonics(t, y, OMEGA)
+    assert list(got.cycle) == [1, 2, 3]
+    assert got.amplitude.to_numpy() == pytest.approx([1.0, 0.5, 0.8], abs=1e-12)
+    assert got.phase.to_numpy() == pytest.approx([0.2, 0.3, 0.4], abs=1e-12)
+    assert got["mean"].to_numpy() == pytest.approx([0.7] * 3, abs=1e-12)
+
+
+def test_the_periodic_state_s_cycles_undo_the_averaging_interval():
+    """Samples averaged over an interval of 0.4 period ending at each: a sin(omega t + q) reads a sinc(0.4) sin(omega
+    t + q - 0.4 pi); the per-cycle fundamentals are the unaveraged a and q again."""
+    width = 0.4
+    t, y = _per_cycle([2.0, 1.0, 1.0], [0.5 - width * np.pi] * 3)
+    y = y * np.sin(width * np.pi) / (width * np.pi)
+    got = phase.periodicity(t, y, OMEGA, interval=width * PERIOD)
+    assert got["cycles"].amplitude.to_numpy() == pytest.approx([1.0, 1.0], abs=1e-12)
+    assert got["cycles"].phase.to_numpy() == pytest.approx([0.5, 0.5], abs=1e-12)
+    assert got["change"] == pytest.approx(0.0, abs=1e-12) and got["periodic"] is True
+
+
+def _lag_records(interval: float):
+    """Response and reference sampled as averages over ``interval`` (phases delayed by omega interval/2) with
+    per-cycle lags q_r - q_y near pi/2 (cycles 0-3): the unaveraged phases, the two records and t."""
+    delay = OMEGA * interval / 2
+    q_y = np.array([0.0, 0.2, -0.1, 0.1])
+    q_r = q_y + np.array([0.0, 1.45, 1.70, 1.55])
+    t, y = _per_cycle([1.0] * 4, q_y - delay)
+    _, r = _per_cycle([1.5] * 4, q_r - delay, mean=0.3)
+    return q_y, q_r, t, y, r
+
+
+def test_the_lag_against_a_reference_undoes_both_records_averaging_and_spreads_the_cycles_about_it():
+    """Lags near pi/2 (1.45, 1.70, 1.55) and a delay omega interval/2 = pi - 0.05: value and error are those of the
+    unaveraged records, wrap(angle(mean z_r) - angle(mean z_y)) and std(ddof=1)/sqrt(3) of the per-cycle lags about
+    it (a delay left on one record, or the value added instead of removed, would wrap some cycles' lags by 2 pi)."""
+    interval = 2 * (np.pi - 0.05) / OMEGA
+    q_y, q_r, t, y, r = _lag_records(interval)
+    expected = np.angle(np.mean(np.exp(1j * q_r[1:]))) - np.angle(np.mean(np.exp(1j * q_y[1:])))
+    per = (q_r[1:] - q_y[1:]) - expected
+    value, err, n = phase.lag(t, y, OMEGA, interval=interval, reference=r)
+    assert n == 3 and value == pytest.approx(expected, abs=1e-12)
+    assert err == pytest.approx(np.std(per, ddof=1) / np.sqrt(3), rel=1e-9)
+
+
+def test_the_lag_against_a_reference_on_two_kept_cycles_has_an_error():
+    """skip 2 leaves cycles 2 and 3 (MIN_CYCLES): the error is the two lags' spread about the value over root 2."""
+    q_y, q_r, t, y, r = _lag_records(0.0)
+    expected = np.angle(np.mean(np.exp(1j * q_r[2:]))) - np.angle(np.mean(np.exp(1j * q_y[2:])))
+    value, err, n = phase.lag(t, y, OMEGA, skip=2, reference=r)
+    assert n == 2 and value == pytest.approx(expected, abs=1e-12)
+    assert err == pytest.approx(np.std((q_r[2:] - q_y[2:]) - expected, ddof=1) / np.sqrt(2), rel=1e-9)
+
+
+def _centred_cycles(z) -> tuple[np.ndarray, np.ndarray]:
+    """Cycle k of 5 a sine of complex amplitude z[k] (|z| sin(omega t + angle z)), 20 samples a bin at the bins'
+    centres +- half steps (no sample on a cycle's edge)."""
+    t, _ = _uniform(5, 24 * 20)
+    t = t[:-1] + PERIOD / (24 * 20) / 2
+    k = np.floor(t / PERIOD).astype(int)
+    z = np.asarray(z)[k]
+    return t, np.abs(z) * np.sin(OMEGA * t + np.angle(z))
+
+
+def test_the_peak_s_lag_averages_the_cycles_after_skip():
+    """Cycles 2-4 lag by 6 pi/24 (a bin centre's lag), cycle 1 such that the mean complex amplitude of cycles 1-4 is
+    4/4 e^(-i 5 pi/24): by default (skip 1) the peak lags 5 pi/24, with skip 2 by 6 pi/24, both exactly."""
+    l1, l2 = 5 * np.pi / 24, 6 * np.pi / 24
+    z1 = 4 * np.exp(-1j * l1) - 3 * np.exp(-1j * l2)
+    t, y = _centred_cycles([5.0, z1, np.exp(-1j * l2), np.exp(-1j * l2), np.exp(-1j * l2)])
+    assert phase.peak_lag(t, y, OMEGA) == pytest.approx(l1, abs=1e-12)
+    assert phase.peak_lag(t, y, OMEGA, skip=2) == pytest.approx(l2, abs=1e-12)
+
+
+def test_the_peak_s_lag_before_a_bin_centre_is_read_before_it():
+    """sin(omega t - lag) with the peak 0.05 rad before bin 8's centre: the parabola's vertex lies left of the
+    centre, the lag read within 1e-3 (not clipped to the centre, 0.05 off)."""
+    lag = 5 * np.pi / 24 - 0.05
+    t, y = _centred_cycles([np.exp(-1j * lag)] * 5)
+    assert phase.peak_lag(t, y, OMEGA) == pytest.approx(lag, abs=1e-3)
+
+
+def test_the_peak_s_lag_beside_an_empty_bin_is_the_largest_bin_s_phase():
+    """Samples at the centres of every bin but bin 9: the largest bin (8) has no neighbour on its right, so no
+    parabola: the lag is bin 8's centre less pi/2 (5 pi/24), though the sine peaks 0.05 later."""
+    bins = np.array([b for b in range(PHASE_BINS) if b != 9])
+    t = ((np.arange(5)[:, None] * PHASE_BINS + bins[None, :] + 0.5) * PERIOD / PHASE_BINS).ravel()
+    lag = 5 * np.pi / 24 + 0.05
+    assert phase.peak_lag(t, np.sin(OMEGA * t - lag), OMEGA) == pytest.approx(5 * np.pi / 24, abs=1e-12)
+
+
+def test_the_peak_s_lag_reads_the_bins_phases_on_the_cycles_after_skip():
+    """One sample a bin; cycles 0-1 sampled a quarter bin after the bins' centres, cycles 2-4 on them: with skip 2
+    the bins' phases are the centres, and sin(omega t - 5 pi/24) peaks on bin 8's centre: the lag is 5 pi/24 (the
+    early cycles' phases, a sixteenth of a bin off over cycles 1-4, are not read)."""
+    b = np.arange(5 * PHASE_BINS)
+    t = (b + 0.5 + np.where(b < 2 * PHASE_BINS, 0.25, 0.0)) * PERIOD / PHASE_BINS
+    lag = 5 * np.pi / 24
+    assert phase.peak_lag(t, np.sin(OMEGA * t - lag), OMEGA, skip=2) == pytest.approx(lag, abs=1e-12)
+
+
+def test_the_amplitude_profile_fits_the_cycles_after_skip():
+    """One depth, same phase, amplitudes 5, 1.5, 0.9, 0.9 over cycles 0-3: over cycles 1-3 (the default) the fit's
+    amplitude is their mean 1.1 (uniform whole cycles), over cycles 2-3 (skip 2) 0.9."""
+    t, k = _uniform(4, 24)
+    amplitude = np.array([5.0, 1.5, 0.9, 0.9])[np.minimum(k, 3)]
+    df = pd.DataFrame({"t": t, "depth": 2.0, "u": amplitude * np.sin(OMEGA * t + 0.3)})
+    assert phase.amplitude_profile(df, OMEGA, "u").to_numpy() == pytest.approx([1.1], abs=1e-12)
+    assert phase.amplitude_profile(df, OMEGA, "u", skip=2).to_numpy() == pytest.approx([0.9], abs=1e-12)
