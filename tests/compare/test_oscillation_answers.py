@@ -302,6 +302,8 @@ def test_laws_are_weighted_least_squares_slopes_against_an_independent_fit():
     Both slopes have n - 2 degrees of freedom (2 and 4)."""
     laws = osc.laws(_law_rows())
     assert len(laws) == 2 and set(laws.model) == {"local"}  # NGF's rows are not scored: no law
+    # a law in omega has no window start in transits: its choices say so (None), not the Stokes default
+    assert all(c["from_transits"] is None for choices in laws.choices for c in choices)
     laws = laws.set_index("law")
     x = np.log(OMEGA_TS)
     k = slice(0, 4)  # the yielded layers of both sides
