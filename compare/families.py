@@ -86,7 +86,7 @@ FAMILIES = {
 
 
 def entry(choice: Choice, dem: float, dem_err: float, predicted: float, predicted_err: float, note: str,
-          dof: float = np.inf) -> dict:
+          dof: float) -> dict:
     """One choice's entry in a law row's ``choices``: the choice, the DEM's and the model's values and errors,
     ``sigma`` when ``note`` (why the choice has no sigma) is empty, else NaN, and the degrees of freedom of its
     combined error (its verdict's threshold: compare.rows.critical)."""

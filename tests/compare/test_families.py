@@ -173,9 +173,9 @@ def test_systematic_is_half_the_range_of_the_difference_over_measured_choices():
     """Differences 0.1, -0.3 and one unmeasured choice: systematic (0.1 - (-0.3))/2 = 0.2; one measured: NaN; the
     family of one consistent (|sigma| 1) and one disagreeing (sigma -3) choice depends on the estimator, of two
     disagreeing ones does not."""
-    ok = entry(Choice("delta_50"), 1.1, 0.1, 1.0, 0.0, "")
-    bad = entry(Choice("delta_05"), 0.7, 0.1, 1.0, 0.0, "")
-    off = entry(Choice("moment"), np.nan, np.nan, 1.0, 0.0, "not measurable: no window")
+    ok = entry(Choice("delta_50"), 1.1, 0.1, 1.0, 0.0, "", np.inf)
+    bad = entry(Choice("delta_05"), 0.7, 0.1, 1.0, 0.0, "", np.inf)
+    off = entry(Choice("moment"), np.nan, np.nan, 1.0, 0.0, "not measurable: no window", np.inf)
     assert systematic([ok, bad, off]) == pytest.approx(0.2)
     assert np.isnan(systematic([ok, off]))
     assert family_note([ok, bad, off]).startswith(f"{ESTIMATOR_DEPENDENT}: 1 of 2 measured choices consistent")
@@ -190,8 +190,9 @@ def test_the_family_panel_draws_each_measured_choice_and_the_systematic_beside_t
     from granstokes.compare.rows import Z95
     from matplotlib.figure import Figure
 
-    choices = [entry(Choice("delta_05"), 0.2, 0.01, 0.5, 0.0, ""), entry(Choice("delta_50"), 0.5, 0.02, 0.5, 0.0, ""),
-               entry(Choice("moment"), np.nan, np.nan, np.nan, 0.0, "not measurable: no window")]
+    choices = [entry(Choice("delta_05"), 0.2, 0.01, 0.5, 0.0, "", np.inf),
+               entry(Choice("delta_50"), 0.5, 0.02, 0.5, 0.0, "", np.inf),
+               entry(Choice("moment"), np.nan, np.nan, np.nan, 0.0, "not measurable: no window", np.inf)]
     rows = pd.DataFrame([{"law": "delta_growth_exponent", "kind": "stress", "model": "local", "dem": 0.2,
                           "dem_err": 0.01, "choices": choices, "systematic": systematic(choices)}])
     ax = Figure().subplots()

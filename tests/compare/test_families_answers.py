@@ -48,9 +48,9 @@ def _e(choice, dem, predicted, sigma, dof=np.inf, note=""):
 
 
 def test_an_entry_with_a_note_has_no_sigma_and_is_not_measured():
-    e = entry(Choice("speed"), 2.0, 0.1, 1.0, 0.2, "not measurable: two drives")
+    e = entry(Choice("speed"), 2.0, 0.1, 1.0, 0.2, "not measurable: two drives", np.inf)
     assert np.isnan(e["sigma"]) and not measured(e)
-    assert entry(Choice("speed"), 2.0, 0.3, 1.0, 0.4, "")["sigma"] == pytest.approx(1.0 / 0.5, rel=1e-12)
+    assert entry(Choice("speed"), 2.0, 0.3, 1.0, 0.4, "", np.inf)["sigma"] == pytest.approx(1.0 / 0.5, rel=1e-12)
     assert not measured(_e(Choice("speed"), 1.0, 1.0, 1.5, note="not scored: slips"))
     assert not measured(_e(Choice("speed"), 1.0, 1.0, np.nan))
 

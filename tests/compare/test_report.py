@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from granstokes.compare.report import display_label, fmt, fmt_band, nearest_frame, suptitle
+from granstokes.compare.report import display_label, nearest_frame, suptitle
 from granstokes.compare.stokes_experiment import StokesDrives
+from granstokes.compare.words import fmt, fmt_band
 from granstokes.continuum.paper.report import write_continuum_report
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
