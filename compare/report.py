@@ -318,7 +318,7 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
     infinite-dof limit -+Z95 shaded and each scored row's own threshold -+t_0.975(dof) marked, each row's label in
     its verdict's colour."""
     rows, names = c.scorecard.rows, display_labels(c)
-    fig = Figure(figsize=(8.5, 0.32 * len(rows) + 2.0), layout="constrained")
+    fig = Figure(figsize=(10.0, 0.32 * len(rows) + 2.0), layout="constrained")
     ax = fig.subplots()
     y = np.arange(len(rows))
     scored = rows.scored.to_numpy(dtype=bool)
@@ -326,7 +326,7 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
     ax.barh(y, np.where(scored, np.clip(sigma, -SIGMA_CLIP, SIGMA_CLIP), 0.0),
             color=[MODEL_STYLE[m]["color"] for m in rows.model])
     for k in np.flatnonzero(~scored):
-        ax.text(0, k, f" {rows.verdict.iloc[k]} (see the row's note)", va="center", fontsize=7,
+        ax.text(-SIGMA_CLIP, k, f" {rows.verdict.iloc[k]} (see the row's note)", va="center", fontsize=7,
                 color=VERDICT_COLOUR[rows.verdict.iloc[k]])
     for k in np.flatnonzero(scored & (np.abs(sigma) > SIGMA_CLIP)):
         ax.text(np.sign(sigma[k]) * SIGMA_CLIP, k, f" {sigma[k]:+.0f} ", va="center", fontsize=7,
@@ -339,8 +339,9 @@ def sigma_figure(c: Comparison, out: Path) -> Path:
     for tick, verdict in zip(ax.get_yticklabels(), rows.verdict, strict=True):
         tick.set_color(VERDICT_COLOUR[verdict])
     ax.invert_yaxis()
-    ax.set(xlabel=f"sigma = (DEM - predicted) / combined standard error (bars clipped at +-{SIGMA_CLIP:g})",
-           title="scorecard: how far each prediction is from the DEM")
+    ax.set_xlim(-SIGMA_CLIP * 1.05, SIGMA_CLIP * 1.05)
+    ax.set_xlabel(f"sigma = (DEM - predicted) / combined error (bars clipped at +-{SIGMA_CLIP:g})", fontsize=8)
+    fig.suptitle("Scorecard: how far each prediction is from the DEM")
     handles = [Patch(color=MODEL_STYLE[m]["color"], label=label)
                for m, label in dict(zip(rows.model, rows.model_label, strict=True)).items()]
     handles += [Patch(color="0.88", label=f"|sigma| <= {Z95:.2f}: consistent at infinite dof"),
