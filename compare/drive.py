@@ -4,7 +4,7 @@ dem.config.Drive; this is the same drive once run, with what the run measured of
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -12,6 +12,7 @@ import numpy as np
 from granstokes.continuum.load import Load
 from granstokes.continuum.scene import BedScene
 from granstokes.dem import layout
+from granstokes.dem.contact import Contact, rigidity
 from granstokes.dem.sizing import sized_drives
 
 from .reader import ATOMS, DriveFolder
@@ -106,6 +107,23 @@ class DriveSpec:
         return cls(Path(r["run"]), r["name"], Load.from_record(r["load"], r["p_w"]), r["depth"], r["plate_mass"],
                    r["surface_offset"], int(r.get("steps", 0)), number("transit_time"), int(r.get("seeds", 0)),
                    int(r.get("grains", 0)), int(r.get("dimension", 0)), number("t_s"), number("duration"))
+
+
+def with_transit_time(drive: DriveSpec, grains: dict, p_grains: float) -> DriveSpec:
+    """``drive`` with its shear-wave transit time over the bed filled in where its record lacks it (tables written
+    before run.json held it): the bed's depth over its grains' contact shear-wave speed at the drive's p_w
+    (dem.contact.Contact.shear_wave_speed, as dem.sizing times it), ``grains`` the calibration's grains record, whose
+    rigidity kappa is stated at ``p_grains`` (one stiffness k_n at every pressure: dem.contact.rigidity; NaN: at the
+    drive's p_w, as compare.comparison.check_grains reads it)."""
+    if np.isfinite(drive.transit_time):
+        return drive
+    p_w = drive.load.p_w
+    p_grains = p_grains if np.isfinite(p_grains) else p_w
+    contact = Contact(grains["contact"], int(grains["dimension"]), p_w,
+                      rigidity(float(grains["kappa"]), grains["contact"], p_grains, p_w), float(grains["restitution"]),
+                      float(grains["mu_p"]), float(grains["kt_over_kn"]), float(grains["polydispersity"]),
+                      grains["pair_style"])
+    return replace(drive, transit_time=drive.depth / contact.shear_wave_speed)
 
 
 def _json_number(v: float):

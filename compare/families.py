@@ -6,7 +6,9 @@ A ``Choice`` names what reads the response and how:
 * ``estimator``: the layer's depth where u falls to each continuum.crossing.LAYER_FRACTIONS of the reference speed
   (delta_05, delta_10, delta_20, delta_50) or the velocity profile's first moment int u dy / u_ref ("moment"), both
   from continuum.crossing.layer_measures; "speed" (the plate's response under a held stress); "mu_w" (the plate's
-  friction under a held speed);
+  friction under a held speed); the time a speed takes to cover 90 % or 75 % of its change (RESPONSE_LEVELS); the
+  steady speed averaged over the record's final quarter or half (STEADY_WINDOWS); the creep length fitted over
+  one of compare.scorecard.CREEP_ZONES;
 * ``reference``: the speed it is read against: "plate" (u_w), or "contact" (the grains touching the plate: the DEM's
   u_c in the plate record, or its coarse-grained speed at the plate's contact plane for a steady profile; a
   continuum model does not slip, so its contact speed is its u_w).  The layer's depths over time are stored against
@@ -36,7 +38,9 @@ import numpy as np
 from granstokes.continuum.crossing import LAYER_FRACTIONS, U_FRACTION
 
 from .drive import TRANSITS_BEFORE_COMPARISON
+from .plate import STEADY_LAST
 from .rows import ESTIMATOR_DEPENDENT, sigma, verdict
+from .scorecard import CREEP_ZONE_OFFSET, CREEP_ZONES, T90_LEVEL
 
 #: the layer estimators: the depths at LAYER_FRACTIONS, smallest fraction (the deepest depth) first, and the moment
 LAYER_ESTIMATORS = (*sorted(LAYER_FRACTIONS, key=LAYER_FRACTIONS.get), "moment")
@@ -44,6 +48,17 @@ LAYER_ESTIMATORS = (*sorted(LAYER_FRACTIONS, key=LAYER_FRACTIONS.get), "moment")
 PRIMARY_ESTIMATOR = next(k for k, f in LAYER_FRACTIONS.items() if f == U_FRACTION)
 #: the windows' starts, in shear-wave transits over the bed
 FROM_TRANSITS = (1.0, TRANSITS_BEFORE_COMPARISON, 10.0)
+#: a response time: the fraction of the speed's change covered (compare.scorecard.t90's level)
+RESPONSE_LEVELS = {"t90": T90_LEVEL, "t75": 0.75}
+#: a steady speed: the mean over the record's final part from this fraction of it on (the final quarter:
+#: compare.plate.STEADY_LAST, the DEM's steady window)
+STEADY_WINDOWS = {"final quarter": STEADY_LAST, "final half": 0.5}
+#: words for the estimators that are not a layer depth, given whose speed or friction they read
+_WORDS = {"speed": "{whose} speed", "mu_w": "{whose} friction", "t90": "the time to 90 % of {whose} speed",
+          "t75": "the time to 75 % of {whose} speed", "final quarter": "{whose} speed over the record's final quarter",
+          "final half": "{whose} speed over the record's final half", "creep": "the creep length below delta_s",
+          "creep_deep": f"the creep length from {CREEP_ZONE_OFFSET:g} d below delta_s",
+          "creep_upper": "the creep length over the tail's upper half"}
 
 
 @dataclass(frozen=True)
@@ -55,8 +70,7 @@ class Choice:
     def describe(self) -> str:
         """'delta_05 of the plate's speed from 3 transits', 'the contact layer's speed'."""
         whose = "the plate's" if self.reference == "plate" else "the contact layer's"
-        text = {"speed": f"{whose} speed", "mu_w": f"{whose} friction", "creep": "the creep length"}.get(
-            self.estimator, f"{self.estimator} of {whose} speed")
+        text = _WORDS.get(self.estimator, "{estimator} of {whose} speed").format(whose=whose, estimator=self.estimator)
         if self.from_transits is None:
             return text
         return f"{text} from {self.from_transits:g} transit{'' if self.from_transits == 1 else 's'}"
@@ -77,11 +91,13 @@ FAMILIES = {
     # the steady layer: every depth against the speed at the plate's contact plane
     "steady layer": _family(Choice(PRIMARY_ESTIMATOR, "contact", None),
                             [Choice(e, "contact", None) for e in LAYER_ESTIMATORS]),
-    # a time to steady speed: the plate's and the contact layer's
-    "response time": _family(Choice("speed", "plate", None), [Choice("speed", "contact", None)]),
-    # the laws of one estimator
-    "steady speed": (Choice("speed", "plate", None),),
-    "creep": (Choice("creep", "contact", None),),
+    # a time to steady speed: to 90 % of the plate's and the contact layer's, to 75 % of the plate's
+    "response time": (Choice("t90", "plate", None), Choice("t90", "contact", None), Choice("t75", "plate", None)),
+    # the steady speed: the plate's over the final quarter and half, the contact layer's over the final quarter
+    "steady speed": (Choice("final quarter", "plate", None), Choice("final half", "plate", None),
+                     Choice("final quarter", "contact", None)),
+    # the creep length: the steady profile's tail (against the speed at the plate's contact plane) over each zone
+    "creep": tuple(Choice(zone, "contact", None) for zone in CREEP_ZONES),
 }
 
 

@@ -53,9 +53,9 @@ calibration's replicates linearly (compare.band.Sensitivity: the same estimate o
 each parameter shifted), band = predicted -+ 1.96 s_cal, sigma = (dem - predicted)/sqrt(dem_err^2 + s_cal^2) and
 each choice's verdict is at Student-t's quantile of its Welch-Satterthwaite dof (compare.rows).
 
-Scenes: a drive whose plate slips (compare.scorecard.slipping) is left out of every law that reads the plate, a drive
-whose bed is short of delta_s + CREEP_LENGTHS_TO_BASE of its measured creep lengths (compare.scorecard.short_bed) of
-every law that reads the steady layer (delta_s_scaling, creep_length_scaling).  A law the data cannot decide (a
+Scenes: a drive whose plate slips (compare.scorecard.slipping) or whose bed is short of delta_s +
+CREEP_LENGTHS_TO_BASE of its measured creep lengths (compare.scorecard.short_bed) is left out of every law, as its
+scorecard rows are not scored.  A law the data cannot decide (a
 window the elastic start covers, too short or outside the model's regime, too few points or drives, a model without
 the quantity) is ``not measurable`` with the reason, never a number fitted on noise.
 """
@@ -74,10 +74,21 @@ from granstokes.continuum.steady import steady_wall_speed
 
 from .band import STEP
 from .drive import TRANSITS_BEFORE_COMPARISON
-from .families import FAMILIES, LAYER_ESTIMATORS, PRIMARY_ESTIMATOR, Choice, entry, family_note, headline, systematic
+from .families import (
+    FAMILIES,
+    LAYER_ESTIMATORS,
+    PRIMARY_ESTIMATOR,
+    RESPONSE_LEVELS,
+    STEADY_WINDOWS,
+    Choice,
+    entry,
+    family_note,
+    headline,
+    systematic,
+)
 from .plate import STEADY_LAST
 from .rows import LAW_KEYS, effective_dof, law_row, not_a_line
-from .scorecard import creep_length, short_bed, slipping, t90
+from .scorecard import CREEP_ZONES, creep_length, short_bed, slipping, t90
 
 #: the growth window ends at this many t_s (the paper's self-similar regime holds to t~ of order 1)
 GROWTH_END = 0.5
@@ -107,17 +118,16 @@ class Track:
     """One drive seen by one source: the primary layer depth ``delta`` (families.PRIMARY_ESTIMATOR) and the other
     LAYER_ESTIMATORS the source has (``layers``) at times ``t_layer``, the plate's u_w and mu_w and the contact
     layer's ``u_c`` (None: a source that does not slip, whose contact layer moves with the plate) at times ``t``, and
-    the steady values (the record's final quarter for the DEM, the steady state for a model): u_w, the primary depth
-    ``delta_inf`` and the others (``steady_layers``), the creep length."""
+    the steady layer (the record's final quarter for the DEM, the steady state for a model): the primary depth
+    ``delta_inf``, the others (``steady_layers``) and the creep lengths (a steady speed: ``steady_speed``)."""
 
     t_layer: np.ndarray
     delta: np.ndarray
     t: np.ndarray
     u_w: np.ndarray
     mu_w: np.ndarray
-    u_w_inf: float
     delta_inf: float
-    creep: float
+    creep: dict          # compare.scorecard.CREEP_ZONES -> the steady profile's creep length over that zone
     layers: dict = field(default_factory=dict)
     steady_layers: dict = field(default_factory=dict)
     u_c: np.ndarray | None = None
@@ -146,7 +156,7 @@ class Seeds:
     t_layer: np.ndarray
     layers: dict         # estimator -> (seeds, layer times): the LAYER_ESTIMATORS the layer table holds
     steady: dict         # estimator -> per seed (every LAYER_ESTIMATORS, from the steady-window profiles)
-    creep: np.ndarray    # per seed
+    creep: dict          # CREEP_ZONES -> per seed
 
     @classmethod
     def of(cls, dc) -> Seeds:
@@ -160,10 +170,11 @@ class Seeds:
         delta_s = dc.scales.delta_s if dc.scales is not None else np.nan
         measures = [layer_measures(s.depth, s.u_x, s.u_x.iloc[0]) for s in a.samples]
         steady = {k: np.array([m[k] for m in measures]) for k in LAYER_ESTIMATORS}
-        creep = np.array([creep_length(s.depth, s.u_x, delta_s, a.spec.depth) for s in a.samples])
+        creep = {z: np.array([creep_length(s.depth, s.u_x, delta_s, a.spec.depth, z) for s in a.samples])
+                 for z in CREEP_ZONES}
         if len(a.samples) != len(a.plates):  # blocks of one seed's window: one value for the seed
             steady = {k: np.array([np.nanmean(v)]) for k, v in steady.items()}
-            creep = np.array([np.nanmean(creep)])
+            creep = {z: np.array([np.nanmean(v)]) for z, v in creep.items()}
         return cls(t, plate["u_w"], plate["tau_w"], plate["p"], plate["u_c"], table.index.to_numpy(dtype=float),
                    layers, steady, creep)
 
@@ -171,20 +182,20 @@ class Seeds:
         """The seed-mean track over the seeds ``pick`` (indices, repeats allowed)."""
         pick = np.asarray(pick)
         u, tau, p = self.u_w[pick].mean(axis=0), self.tau_w[pick].mean(axis=0), self.p[pick].mean(axis=0)
-        last = self.t >= self.t[0] + STEADY_LAST * (self.t[-1] - self.t[0])
         with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # a layer time no picked seed resolved
             mu = np.where(p > 0, tau / p, np.nan)
             layers = {k: np.nanmean(v[pick], axis=0) for k, v in self.layers.items()}
             steady = {k: float(np.nanmean(v[pick])) for k, v in self.steady.items()}
+            creep = {z: float(np.nanmean(v[pick])) for z, v in self.creep.items()}
         primary = layers.pop(PRIMARY_ESTIMATOR, np.full(len(self.t_layer), np.nan))
-        return Track(self.t_layer, primary, self.t, u, mu, float(u[last].mean()), steady.pop(PRIMARY_ESTIMATOR),
-                     float(np.nanmean(self.creep[pick])), layers, steady, self.u_c[pick].mean(axis=0))
+        return Track(self.t_layer, primary, self.t, u, mu, steady.pop(PRIMARY_ESTIMATOR),
+                     creep, layers, steady, self.u_c[pick].mean(axis=0))
 
 
 def model_track(pred, dc) -> Track:
     """A model's track of drive ``dc``: continuum.crossing.layer_measures of its profiles (the DEM's estimators), its
-    series, its u_w averaged over the DEM's steady window, and its steady profile's layer and creep length."""
+    series, and its steady profile's layer and creep lengths."""
     prof = pred.profiles.sort_values(["t", "depth"])
     t_all, depth, u = (prof[k].to_numpy(dtype=float) for k in ("t", "depth", "u"))
     times, first = np.unique(t_all, return_index=True)
@@ -193,12 +204,9 @@ def model_track(pred, dc) -> Track:
     st = pred.steady
     steady = layer_measures(st.y, st.u, st.u_w)
     delta_s = dc.scales.delta_s if dc.scales is not None else np.nan
-    t = dc.dem.series.t.to_numpy()
-    last = t[t >= t[0] + STEADY_LAST * (t[-1] - t[0])]  # the DEM's steady window: the plate value like with like
-    u_w = float(np.mean(np.interp(last, pred.series.t, pred.series.u_w)))
     return Track(times, layers.pop(PRIMARY_ESTIMATOR), pred.series.t.to_numpy(),
-                 pred.series.u_w.to_numpy(), pred.series.mu_w.to_numpy(), u_w, st.delta_u,
-                 creep_length(st.y, st.u, delta_s, dc.dem.spec.depth), layers,
+                 pred.series.u_w.to_numpy(), pred.series.mu_w.to_numpy(), st.delta_u,
+                 {z: creep_length(st.y, st.u, delta_s, dc.dem.spec.depth, z) for z in CREEP_ZONES}, layers,
                  {k: v for k, v in steady.items() if k != PRIMARY_ESTIMATOR})
 
 
@@ -420,8 +428,6 @@ class Law:
     family: tuple[Choice, ...]          # compare.families: the primary choice first
     window: object = None               # (dc, choice, DEM track, model track) -> Window; None: no window to choose
     transient: bool = True              # it reads the response over time (a model needs a calibrated time scale)
-    plate: bool = True                  # it reads the plate's speed or friction: a drive whose plate slips is left out
-    layer: bool = False                 # it reads the steady layer: a drive whose bed is too shallow is left out
 
     @property
     def across(self) -> bool:
@@ -527,19 +533,29 @@ def _scale(dc, name):
     return getattr(dc.scales, name) if dc.scales is not None else np.nan
 
 
-def _ratio_exact(tr, dc):
-    sc = dc.scales
-    return (tr.u_w_inf / sc.U) / steady_wall_speed(sc.material.friction, sc.mu_w) if sc is not None else np.nan
+def steady_speed(tr: Track, dc, choice: Choice) -> float:
+    """``tr``'s speed (the choice's reference) averaged over the DEM's output times in the record's final part
+    (families.STEADY_WINDOWS): a model over the DEM's window, like with like."""
+    t = dc.dem.series.t.to_numpy()
+    last = t[t >= t[0] + STEADY_WINDOWS[choice.estimator] * (t[-1] - t[0])]
+    return float(np.mean(np.interp(last, tr.t, tr.speed(choice.reference))))
 
 
-def _ratio_asymp(tr, dc):
-    sc = dc.scales
-    return (tr.u_w_inf / sc.U) / float(uwall_asymp(sc.material.friction, sc.mu_w_tilde)) if sc is not None else np.nan
+def _ratio_exact(u, sc):
+    return (u / sc.U) / steady_wall_speed(sc.material.friction, sc.mu_w)
+
+
+def _ratio_asymp(u, sc):
+    return (u / sc.U) / float(uwall_asymp(sc.material.friction, sc.mu_w_tilde))
 
 
 def _steady_window(ratio):
-    """A per-drive steady ratio over the record's final quarter (the DEM's steady window)."""
-    return lambda tr, dc, choice, window: {"r": ratio(tr, dc), "window": [STEADY_LAST * dc.dem.t_end, dc.dem.t_end]}
+    """A per-drive ratio of the steady speed (``steady_speed``) to the paper's law over its window."""
+    def estimate(tr, dc, choice, window):
+        t0, t1 = float(dc.dem.series.t.iloc[0]), float(dc.dem.series.t.iloc[-1])
+        r = ratio(steady_speed(tr, dc, choice), dc.scales) if dc.scales is not None else np.nan
+        return {"r": r, "window": [t0 + STEADY_WINDOWS[choice.estimator] * (t1 - t0), t1]}
+    return estimate
 
 
 def _growth_laws(kind: str) -> tuple[Law, ...]:
@@ -561,11 +577,12 @@ LAWS = (
     Law("mu_w_decay_exponent", "n in mu_w - mu_s ~ t^n", "1", "speed", _mean_of(decay, "exponent"),
         FAMILIES["friction"], _DECAY_WINDOW),
     Law("delta_s_scaling", "slope of delta_u against delta_s", "1", None, Across(*_DELTA_S, "linear_slope"),
-        FAMILIES["steady layer"], transient=False, plate=False, layer=True),
+        FAMILIES["steady layer"], transient=False),
     Law("delta_s_scaling", "offset of delta_u against delta_s", "d", None, Across(*_DELTA_S, "offset"),
-        FAMILIES["steady layer"], transient=False, plate=False, layer=True),
+        FAMILIES["steady layer"], transient=False),
     Law("t_s_collapse", "slope of log t90 against log t_s", "1", "stress",
-        Across(lambda tr, dc, choice: _scale(dc, "t_s"), lambda tr, dc, choice: t90(tr.t, tr.speed(choice.reference)),
+        Across(lambda tr, dc, choice: _scale(dc, "t_s"),
+               lambda tr, dc, choice: t90(tr.t, tr.speed(choice.reference), RESPONSE_LEVELS[choice.estimator]),
                "a t90 and a t_s"), FAMILIES["response time"]),
     Law("t_mud_scaling", "slope of log t~_mud against log u~_w", "1", "speed",
         Across(lambda tr, dc, choice: dc.dem.spec.load.u_w / _scale(dc, "U"),
@@ -576,17 +593,18 @@ LAWS = (
     Law("steady_speed_law", f"u~_w^inf / {eq('Uwall_asymp', named=True)}", "1", "stress",
         _mean_of(_steady_window(_ratio_asymp), "r"), FAMILIES["steady speed"], transient=False),
     Law("creep_length_scaling", "slope of log creep length against log p_w", "1", None,
-        Across(lambda tr, dc, choice: dc.dem.spec.p_w, lambda tr, dc, choice: tr.creep, "a creep length"),
-        FAMILIES["creep"], transient=False, plate=False, layer=True),
+        Across(lambda tr, dc, choice: dc.dem.spec.p_w, lambda tr, dc, choice: tr.creep[choice.estimator],
+               "a creep length"),
+        FAMILIES["creep"], transient=False),
 )
 
 
-def _drives(compared, kind, plate: bool = False, layer: bool = False):
-    """The drives a law reads: predicted, their flow clear of the base, of the law's kind, (``plate``: a law that
-    reads the plate) their plate gripping (compare.scorecard.slipping) and (``layer``: a law that reads the steady
-    layer) their bed deep enough for the creep (compare.scorecard.short_bed)."""
+def _drives(compared, kind):
+    """The drives a law reads: predicted, their flow clear of the base, of the law's kind, their plate gripping
+    (compare.scorecard.slipping) and their bed deep enough for the creep (compare.scorecard.short_bed): the scene
+    rules of the scorecard's rows."""
     return [dc for dc in compared if dc.predictions and not dc.base and (kind is None or dc.dem.spec.kind == kind)
-            and not (plate and slipping(dc.dem)) and not (layer and short_bed(dc.dem, dc.scales.delta_s))]
+            and not slipping(dc.dem) and not short_bed(dc.dem, dc.scales.delta_s)]
 
 
 def _few_seeds(n: int) -> float:
@@ -747,6 +765,6 @@ def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFra
     usable = _drives(compared, None)
     src = _Sources.of(usable, resamples, seed)
     calibrated = {p.model: p.transient_calibrated for dc in usable for p in dc.predictions}
-    rows = [_law_row(law, model, _drives(compared, law.kind, law.plate, law.layer), src, calibrated[model])
+    rows = [_law_row(law, model, _drives(compared, law.kind), src, calibrated[model])
             for law in LAWS for model in calibrated]
     return pd.DataFrame(rows, columns=list(dict.fromkeys([*LAW_KEYS, *(k for r in rows for k in r)])))

@@ -431,9 +431,8 @@ def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model
     p, num, s_cal = (np.nan, np.nan, np.nan) if pred is None else (
         pred.values[observable] if choice is None else pred.estimates[observable, choice])
     if pred is not None:
-        plate = observable in PLATE_OBSERVABLES if choice is None else choice.reference == "plate"
         censored = observable in CENSORED and (choice is None or choice.estimator == "edge")
-        note = _scene(dem, plate) or _unmeasurable(dem, v, err, censored) or _unpredicted(p, num, s_cal)
+        note = _scene(dem) or _unmeasurable(dem, v, err, censored) or _unpredicted(p, num, s_cal)
     elif not note.startswith("not predicted"):
         note = f"not predicted: {note}"
     scored = not note
@@ -449,19 +448,18 @@ def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model
         phase_lag_predicted=pred.values["phase_lag"][0] if pred is not None else np.nan, **how_chosen)
 
 
-#: the plate's observables (read off its speed and force), which a slipping plate falsifies
-PLATE_OBSERVABLES = ("response_amplitude", "phase_lag", "dissipation")
 #: the observables read over the yielded depth, which the base censors when the edge reaches it
 CENSORED = ("yielded_depth", "remobilization_strain")
 
 
-def _scene(dem: DemOscillation, plate: bool) -> str:
-    """Why the scene cannot support a row against the rigid-plastic models, or "": a period shorter than
+def _scene(dem: DemOscillation) -> str:
+    """Why the scene cannot support the drive's rows against the rigid-plastic models, or "": a period shorter than
     TRANSITS_BEFORE_COMPARISON shear-wave transits over the bed (the bed answers elastically within a cycle, as the
     Stokes drives before their comparison starts); a bed not in one periodic state (``unsettled``: it jams or
     drifts within the kept cycles, or is in another state than the other beds, so the cycles' and the beds' mean
-    is no state's: the drive's rows are kept, unscored, and the report counts it); or, for a row read off the
-    plate's speed or force (``plate``), a plate that slips by more than SLIP_MAX against the grains touching it.
+    is no state's: the drive's rows are kept, unscored, and the report counts it); or a plate that slips by more
+    than SLIP_MAX against the grains touching it (its speed and force are not the bed's, and every model's plate
+    grips: the rows read against the contact layer's speed are kept as choices, unscored, as in the Stokes drives).
     A drive whose tables carry no transit time is not checked for it."""
     transits = dem.drive.load.period / dem.drive.transit_time
     if transits < TRANSITS_BEFORE_COMPARISON:
@@ -469,7 +467,7 @@ def _scene(dem: DemOscillation, plate: bool) -> str:
                 f"{TRANSITS_BEFORE_COMPARISON:g}): an elastic response, which rigid-plastic models do not have")
     if beds := unsettled(dem):
         return f"not scored: {beds}"
-    if plate and dem.slip > SLIP_MAX:
+    if dem.slip > SLIP_MAX:
         return (f"not scored: the plate slips {dem.slip:.0%} against the grains touching it (more than "
                 f"{SLIP_MAX:.0%}), so its speed and force are not the bed's")
     return ""

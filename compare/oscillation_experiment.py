@@ -9,10 +9,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 from granstokes.dem.sizing import makespan
 
 from . import calibrate, oscillation_report, oscillation_tables
 from .comparison import check_grains, run_grains
+from .drive import with_transit_time
 from .experiment import Experiment
 from .oscillation import analyse_dem, conclude, dem_side, predict_unit, setup_of
 
@@ -85,7 +87,10 @@ class OscillatingPlate(Experiment):
 
     def _prepare(self, dem):
         setup, ngf_note = setup_of(self.independent, self.ngf_from)
-        dems = [analyse_dem(d, records, setup.material.mu_s) for d, records in dem]
+        cal = self.independent
+        p_cal = float(cal.info.get("protocol", {}).get("p", np.nan))
+        dems = [analyse_dem(with_transit_time(d, cal.grains, p_cal), records, setup.material.mu_s)
+                for d, records in dem]
         return dem, dems, setup, ngf_note
 
     def _units(self, dem, setup) -> list:

@@ -26,15 +26,17 @@ the Welch-Satterthwaite degrees of freedom of that combined error (the band's an
 verdict "consistent" when |sigma| <= t_0.975(dof) (compare.rows.verdict).
 
 Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where
-the plate slips by more than SLIP_MAX against the grains touching it (``slipping``), its plate observables; where a
-model's steady wall inertial number lies beyond the calibration's largest I (``extrapolated``), its steady rows; where
-the drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose
-bed is a half-space; where the bed is shorter than delta_s + CREEP_LENGTHS_TO_BASE of the DEM's own creep lengths
-(``short_bed``; the sizing's assumed creep length where the DEM measures none), its layer observables (the base
-constrains the creep); where a model is not yet steady over the DEM's final quarter (the record is shorter than the
-model's time scale), that model's steady profile rows (delta_u, creep_length).  A row is ``blind`` only when mu(I)
-comes from an independent calibration and the model's own parameter was not fitted on that drive; only scored blind
-rows count for a model (``tally``), and models are ranked over the rows they share.
+the plate slips by more than SLIP_MAX against the grains touching it (``slipping``), every row of the drive (the
+plate's speed and friction are not the bed's, and every model's plate grips); where the bed is shorter than delta_s +
+CREEP_LENGTHS_TO_BASE of the DEM's own creep lengths (``short_bed``; the sizing's assumed creep length where the DEM
+measures none), every row of the drive (the base constrains the creep, which carries part of the plate's speed and
+sets the layer's depth); where a model's steady wall inertial number lies beyond the calibration's largest I
+(``extrapolated``), its steady rows; where the drive's flow reaches the base (``base_reach``), its layer observables,
+and every row of a model whose bed is a half-space; where a model is not yet steady over the DEM's final quarter
+(the record is shorter than the model's time scale), that model's steady profile rows (delta_u, creep_length).  A
+row is ``blind`` only when mu(I) comes from an independent calibration and the model's own parameter was not fitted
+on that drive; only scored blind rows count for a model (``tally``), and models are ranked over the rows they
+share.
 """
 from __future__ import annotations
 
@@ -75,8 +77,8 @@ CREEP_LENGTHS_TO_BASE = CREEP_LENGTHS
 TRANSIENT_OBSERVABLES = ("t90",)
 
 
-def t90(t, y) -> float:
-    """First time the running mean (T90_WINDOW of the record) has covered 90 % of the change from the
+def t90(t, y, level: float = T90_LEVEL) -> float:
+    """First time the running mean (T90_WINDOW of the record) has covered ``level`` (90 %) of the change from the
     first to the final-tenth value, interpolated linearly between output times (continuum.crossing);
     the running mean keeps DEM noise from triggering it."""
     y = pd.Series(np.asarray(y, dtype=float)).interpolate(limit_direction="both")
@@ -86,14 +88,26 @@ def t90(t, y) -> float:
     if final == start:
         return np.nan
     remaining = 1 - (smooth - start) / (final - start)  # 1 at the start, 0 at the final value
-    return crossing_depth(t, remaining, 1 - T90_LEVEL)
+    return crossing_depth(t, remaining, 1 - level)
 
 
-def creep_length(depth, u, delta_s: float, bed_depth: float) -> float:
-    """e-folding length of u below delta_s (least squares of ln u); 0 when u vanishes there (rigid),
-    nan when fewer than 3 points lie in [delta_s, bed_depth - WALL_EXCLUSION]."""
+#: the creep's fit zones (the creep law's estimator family, compare.families): the tail below delta_s to the base's
+#: WALL_EXCLUSION ("creep", the scorecard's), that tail from CREEP_ZONE_OFFSET below delta_s (clear of the yield
+#: surface's rounding) and its upper half (clear of the base's no-slip)
+CREEP_ZONE_OFFSET = 2.0
+CREEP_ZONES = {
+    "creep": lambda delta_s, bottom: (delta_s, bottom),
+    "creep_deep": lambda delta_s, bottom: (delta_s + CREEP_ZONE_OFFSET, bottom),
+    "creep_upper": lambda delta_s, bottom: (delta_s, (delta_s + bottom) / 2),
+}
+
+
+def creep_length(depth, u, delta_s: float, bed_depth: float, zone: str = "creep") -> float:
+    """e-folding length of u below delta_s (least squares of ln u over the CREEP_ZONES ``zone``, by default
+    [delta_s, bed_depth - WALL_EXCLUSION]); 0 when u vanishes there (rigid), nan when fewer than 3 points lie in it."""
     depth, u = np.asarray(depth, dtype=float), np.asarray(u, dtype=float)
-    zone = (depth >= delta_s) & (depth <= bed_depth - WALL_EXCLUSION)
+    top, bottom = CREEP_ZONES[zone](delta_s, bed_depth - WALL_EXCLUSION)
+    zone = (depth >= top) & (depth <= bottom)
     if zone.sum() < 3:
         return np.nan
     moving = zone & (u > 0)
@@ -144,7 +158,7 @@ def dem_creep(a: DriveAnalysis, delta_s: float) -> Measured:
 
 
 def short_bed(a: DriveAnalysis, delta_s: float) -> str:
-    """Why drive ``a``'s bed is too shallow for its layer's rows, or "": its depth is short of the calibrated
+    """Why drive ``a``'s bed is too shallow for its rows, or "": its depth is short of the calibrated
     ``delta_s`` plus CREEP_LENGTHS_TO_BASE of the DEM's own creep lengths (``dem_creep``), so the base constrains the
     creep; where the DEM measures none, of the sizing's assumed creep length (dem.sizing.CREEP_LENGTH), and the note
     says so."""
@@ -170,13 +184,10 @@ def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
 PRESSURE_TOLERANCE = 0.1
 
 
-#: the observables read off the plate (its speed, its friction, their transient), which a slipping plate falsifies
-PLATE_OBSERVABLES = ("u_w_inf", "mu_w_inf", "t90")
-
-
 def slipping(a: DriveAnalysis) -> str:
-    """Why drive ``a``'s plate observables are not scored, or "": the grains touching the plate lag it by more than
-    SLIP_MAX of its speed, so the plate's speed is not the bed's and its friction is a wall's, not the material's."""
+    """Why drive ``a``'s rows are not scored, or "": the grains touching the plate lag it by more than SLIP_MAX of its
+    speed, so the plate's speed is not the bed's, its friction is a wall's, not the material's, and the bed is driven
+    by a boundary no model has (every model's plate grips)."""
     value = a.slip["value"]
     if not value > SLIP_MAX:
         return ""
@@ -301,12 +312,10 @@ def _t90_numerical(series: pd.DataFrame, a: DriveAnalysis) -> float:
     return abs(t90(t, np.interp(t, series.t, series[a.response])) - t90(t, np.interp(t, coarse.t, coarse[a.response])))
 
 
-def _not_scored(obs: str, model: SceneModel, base: str, shallow: str, end_value: float, steady_value: float) -> str:
+def _not_scored(obs: str, model: SceneModel, base: str, end_value: float, steady_value: float) -> str:
     """Why a row is not scored, or "" (see the module's docstring)."""
     if base and (obs in LAYER_OBSERVABLES or model.half_space):
         return "not scored: " + base + (" (the model's bed is a half-space)" if model.half_space else "")
-    if shallow and obs in LAYER_OBSERVABLES:
-        return "not scored: " + shallow
     if obs in TRANSIENT_OBSERVABLES and not model.transient_calibrated:
         return (f"not predicted: {model.key}'s time scale is assumed (t0 one local inertial time), not calibrated, "
                 "so its transient is no prediction")
@@ -350,7 +359,7 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
     delta_s = next(iter(predictions.values())).steady.delta_s
     dem = dem_observables(a, delta_s)
     base, shallow = base_reach(a, delta_s), short_bed(a, delta_s)
-    slip = slipping(a)
+    scene = slipping(a) or (f"not scored: {shallow}" if shallow else "")
     for model in models:
         pred: Prediction | None = predictions.get(model.key)
         if pred is None:
@@ -385,10 +394,10 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
                     edges.append(max(abs(lo2 - lo), abs(hi2 - hi)) / abs(hi - lo))
             band_sd = (hi - lo) / (2 * Z95)
             combined = np.sqrt(measured.err**2 + band_sd**2 + numerical**2)
-            note = ((slip if obs in PLATE_OBSERVABLES else "")
+            note = (scene
                     or (beyond.get(model.key, "") if obs in STEADY_OBSERVABLES else "")
-                    or (_not_scored(obs, model, base, shallow, end_value, central[f"{a.response}_inf"])
-                        if not windowed else _not_scored("", model, base, shallow, end_value, asymptote))
+                    or (_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"])
+                        if not windowed else _not_scored("", model, base, end_value, asymptote))
                     or _unmeasurable(measured, lo, hi, combined))
             rows.append(score_row(
                 drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,

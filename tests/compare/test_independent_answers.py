@@ -521,7 +521,7 @@ def _layer_track(L_of_t, times, depth=np.linspace(0.0, 60.0, 3001)):
     from scipy.special import erfc
     rows = [layer_measures(depth, 2.0 * erfc(depth / L_of_t(t)), 2.0) for t in times]
     delta = {k: np.array([r[k] for r in rows]) for k in rows[0]}
-    track = Track(times, delta["delta_05"], times, np.ones_like(times), np.ones_like(times), 1.0, np.nan, np.nan)
+    track = Track(times, delta["delta_05"], times, np.ones_like(times), np.ones_like(times), np.nan, {})
     return delta, track
 
 

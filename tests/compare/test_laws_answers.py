@@ -42,8 +42,9 @@ from granstokes.compare.laws import (
     growth,
     growth_window,
 )
+from granstokes.compare.plate import SLIP_MAX
 from granstokes.compare.rows import LACK_OF_FIT_P, critical
-from granstokes.compare.scorecard import CREEP_LENGTHS_TO_BASE
+from granstokes.compare.scorecard import CREEP_LENGTHS_TO_BASE, CREEP_ZONES
 from scipy import stats
 
 NU_G = 0.3
@@ -186,7 +187,7 @@ def _hand_line(x, y, sd):
 def _creep_drives(creep):
     drives = [SimpleNamespace(label=f"p{p:g}", dem=SimpleNamespace(spec=SimpleNamespace(p_w=p))) for p in P_W]
     h = LOG_SD / np.sqrt(2)
-    tracks = lambda c: [SimpleNamespace(creep=float(v)) for v in c]  # noqa: E731
+    tracks = lambda c: [SimpleNamespace(creep=dict.fromkeys(CREEP_ZONES, float(v))) for v in c]  # noqa: E731
     return drives, tracks(creep), tracks(creep * np.exp(-h)), tracks(creep * np.exp(h))
 
 
@@ -253,19 +254,43 @@ def test_the_steady_layer_s_slope_and_offset_carry_each_choice_s_chi2_per_dof():
         assert hand["delta_50"][2] / 4 < 1 and delta_50["dem_err"] == pytest.approx(hand["delta_50"][1][k], rel=1e-9)
 
 
-def test_a_drive_whose_bed_is_short_of_the_creep_is_left_out_of_the_laws_that_read_the_layer():
+def test_a_drive_whose_bed_is_short_of_the_creep_or_whose_plate_slips_is_left_out_of_every_law():
     """Two drives with creep length 3 exactly below delta_s = 7 (u = exp(-depth/3)): the bed must hold
-    7 + 5 x 3 = 22 d; the 21.5 d bed is left out of the steady layer's and the creep's laws, kept in the others."""
+    7 + 5 x 3 = 22 d; the 21.5 d bed is left out of every law (of every kind), as is a deep bed whose plate slips
+    2 SLIP_MAX."""
     depth = np.arange(0.0, 40.0, 0.5)
     sample = pd.DataFrame({"depth": depth, "u_x": np.exp(-depth / 3.0)})
     need = 7.0 + CREEP_LENGTHS_TO_BASE * 3.0
 
     def dc(bed):
         dem = SimpleNamespace(spec=SimpleNamespace(depth=bed, kind="stress"), samples=(sample, sample),
-                              samples_how="spread over 2 seeds")
+                              samples_how="spread over 2 seeds", slip={"value": 0.0})
         return SimpleNamespace(predictions=(None,), base="", dem=dem, scales=SimpleNamespace(delta_s=7.0))
 
     deep, short = dc(need + 0.5), dc(need - 0.5)
-    assert _drives([deep, short], None, layer=True) == [deep]
-    assert _drives([deep, short], "stress") == [deep, short]
-    assert {law.name for law in LAWS if law.layer} == {"delta_s_scaling", "creep_length_scaling"}
+    assert _drives([deep, short], None) == [deep] and _drives([deep, short], "stress") == [deep]
+    assert _drives([deep, short], "speed") == []
+    slipping = dc(need + 0.5)
+    slipping.dem.slip = {"value": 2 * SLIP_MAX}
+    assert _drives([deep, slipping], None) == [deep]
+
+
+def test_a_steady_speed_is_the_mean_over_the_dem_s_final_quarter_or_half_of_the_chosen_speed():
+    """The DEM's output times 0, 1, ..., 100; a track whose plate speed is t and whose contact layer moves at t/2:
+    the plate over the final quarter (t >= 75) averages 87.5, over the final half 75, the contact layer over the
+    final quarter 43.75; a model's track (no contact speed: it does not slip) reads its plate speed for both,
+    interpolated onto the DEM's times from its own (every 0.5)."""
+    from granstokes.compare.families import FAMILIES
+    from granstokes.compare.laws import steady_speed
+    dc = SimpleNamespace(dem=SimpleNamespace(series=pd.DataFrame({"t": np.arange(101.0)})))
+    t = np.arange(101.0)
+    dem = SimpleNamespace(t=t, speed=lambda ref: t / 2 if ref == "contact" else t)
+    quarter, half, contact = FAMILIES["steady speed"]
+    assert (quarter.estimator, quarter.reference, half.estimator, contact.reference) == (
+        "final quarter", "plate", "final half", "contact")
+    assert steady_speed(dem, dc, quarter) == pytest.approx(87.5)
+    assert steady_speed(dem, dc, half) == pytest.approx(75.0)
+    assert steady_speed(dem, dc, contact) == pytest.approx(43.75)
+    fine = np.arange(0.0, 100.5, 0.5)
+    model = SimpleNamespace(t=fine, speed=lambda ref: fine)
+    assert steady_speed(model, dc, contact) == steady_speed(model, dc, quarter) == pytest.approx(87.5)

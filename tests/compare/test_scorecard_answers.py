@@ -527,21 +527,20 @@ def test_the_headline_calls_an_exact_tie_a_tie():
         "(median |sigma| 0.5); the DEM does not separate local model and ngf model and paper model (a tie).")
 
 
-def test_a_slipping_plate_s_observables_are_not_scored_and_the_layer_s_are():
-    """The grains touching the plate lag it by 12 % (> SLIP_MAX): the plate's steady speed and t90 are kept, not
-    scored, their note naming the slip; the layer's rows (read off the grains) are scored as before. At SLIP_MAX
-    exactly the plate grips."""
-    from granstokes.compare.scorecard import PLATE_OBSERVABLES, SLIP_MAX
+def test_a_slipping_plate_leaves_every_row_of_its_drive_unscored():
+    """The grains touching the plate lag it by 12 % (> SLIP_MAX): every row of the drive (the plate's steady speed
+    and t90, the layer's depth and creep) is kept, not scored, its note naming the slip. At SLIP_MAX exactly the
+    plate grips and every row is scored."""
+    from granstokes.compare.scorecard import SLIP_MAX
     models = [_model("local")]
     predictions, spreads = _model_side()
     for slip, slipped in ((0.12, True), (SLIP_MAX, False)):
         rows, _, _ = score(_drive(slip=slip), models, {"local": predictions}, {"local": spreads}, 5)
-        plate_rows = rows[rows.observable.isin(PLATE_OBSERVABLES)]
-        assert len(plate_rows) == 2 and (~plate_rows.scored).all() == slipped
+        assert len(rows) == 4 and rows.scored.all() != slipped
+        assert set(rows.observable) == {"u_w_inf", "t90", "delta_u", "creep_length"}
         if slipped:
-            assert (plate_rows.note == "not scored: the plate slips 12% against the grains touching it (more than "
-                                      "5%), so its speed and friction are not the bed's").all()
-        assert rows[~rows.observable.isin(PLATE_OBSERVABLES)].scored.all()
+            assert (rows.note == "not scored: the plate slips 12% against the grains touching it (more than "
+                                 "5%), so its speed and friction are not the bed's").all()
 
 
 def test_a_model_beyond_the_calibrated_inertial_number_extrapolates_its_steady_rows():
@@ -561,10 +560,10 @@ def test_a_model_beyond_the_calibrated_inertial_number_extrapolates_its_steady_r
     assert rows[~steady].scored.all() and set(rows[~steady].observable) == {"t90"}
 
 
-def test_a_bed_shorter_than_delta_s_and_five_measured_creep_lengths_leaves_its_layer_rows_unscored():
+def test_a_bed_shorter_than_delta_s_and_five_measured_creep_lengths_leaves_every_row_unscored():
     """The seeds' creep lengths 2.4, 3.0, 2.7 (mean 2.7) below DELTA_S = 7: the bed must hold 7 + 5 x 2.7 = 20.5 d. A
-    bed 0.1 d short of that has its layer rows (delta_u, creep_length) kept, not scored, the note giving the sum;
-    the plate's rows are scored; a bed 0.1 d deeper has every row scored."""
+    bed 0.1 d short of that has every row (the layer's and the plate's) kept, not scored, the note giving the sum;
+    a bed 0.1 d deeper has every row scored."""
     from granstokes.compare.scorecard import CREEP_LENGTHS_TO_BASE, LAYER_OBSERVABLES, short_bed
     ell = (2.4 + 3.0 + 2.7) / 3
     need = DELTA_S + CREEP_LENGTHS_TO_BASE * ell
@@ -575,13 +574,13 @@ def test_a_bed_shorter_than_delta_s_and_five_measured_creep_lengths_leaves_its_l
         a.spec = NS(depth=depth)  # the creep zone [DELTA_S, depth - WALL_EXCLUSION] still lies in the exponential tail
         rows, _, _ = score(a, [_model("local")], {"local": predictions}, {"local": spreads}, 5)
         layer = rows.observable.isin(LAYER_OBSERVABLES)
-        assert set(rows[layer].observable) == {"delta_u", "creep_length"}
-        assert rows[~layer].scored.all() and rows[layer].scored.all() != short
+        assert set(rows[layer].observable) == {"delta_u", "creep_length"} and len(rows[~layer]) == 2
+        assert rows.scored.all() != short
         if short:
             why = (f"the bed ({depth:.3g} d) is shorter than delta_s + 5 creep lengths (7 + 5 x 2.7 = 20.5 d): the "
                    "base constrains the creep")
             assert short_bed(a, DELTA_S) == why
-            assert (rows[layer].note == "not scored: " + why).all() and set(rows[layer].verdict) == {"not scored"}
+            assert (rows.note == "not scored: " + why).all() and set(rows.verdict) == {"not scored"}
             # the unscored rows keep the DEM's numbers: the creep length is the seeds' mean
             assert rows[rows.observable == "creep_length"].dem.iloc[0] == pytest.approx(ell)
         else:

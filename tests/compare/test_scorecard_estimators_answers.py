@@ -150,3 +150,39 @@ def test_t90_of_one_seed_carries_the_running_mean_s_half_width_with_infinite_dof
     assert m.value == pytest.approx(2.0 + 1.9, rel=1e-12)
     assert m.err == pytest.approx(0.5 * T90_WINDOW * (11.0 - 2.0), rel=1e-12)
     assert m.dof == np.inf
+
+
+def test_the_creep_zones_read_each_part_of_a_two_slope_tail():
+    """A tail that e-folds over 2 d from delta_s = 4 to 8 and over 4 d below, to a bed of 30 (the zone's bottom
+    30 - WALL_EXCLUSION): "creep_upper" fits [4, (4 + bottom)/2], "creep_deep" [6, bottom], "creep" [4, bottom];
+    each is the least-squares slope of ln u over its own points, by numpy; on one exponential every zone gives its
+    length."""
+    from granstokes.compare.scorecard import CREEP_ZONE_OFFSET, CREEP_ZONES
+    bed, delta_s = 30.0, 4.0
+    depth = np.arange(0.0, bed + 0.25, 0.25)
+    ln_u = np.where(depth <= 8.0, -(depth - delta_s) / 2.0, -2.0 - (depth - 8.0) / 4.0)
+    bottom = bed - WALL_EXCLUSION
+    zones = {"creep": (delta_s, bottom), "creep_deep": (delta_s + CREEP_ZONE_OFFSET, bottom),
+             "creep_upper": (delta_s, (delta_s + bottom) / 2)}
+    assert set(CREEP_ZONES) == set(zones) and CREEP_ZONE_OFFSET == 2.0
+    for zone, (top, low) in zones.items():
+        inside = (depth >= top) & (depth <= low)
+        hand = -1 / np.polyfit(depth[inside], ln_u[inside], 1)[0]
+        assert creep_length(depth, np.exp(ln_u), delta_s, bed, zone) == pytest.approx(hand, rel=1e-9)
+    lengths = [creep_length(depth, np.exp(ln_u), delta_s, bed, z) for z in ("creep_upper", "creep", "creep_deep")]
+    assert 2.0 < lengths[0] < lengths[1] < lengths[2] < 4.0  # the deeper the zone, the more of the 4 d tail
+    single = np.exp(-(depth - delta_s) / 3.0)
+    for zone in CREEP_ZONES:
+        assert creep_length(depth, single, delta_s, bed, zone) == pytest.approx(3.0, rel=1e-9)
+
+
+def test_a_response_time_at_any_level_on_a_ramp_is_that_fraction_of_the_ramp():
+    """A speed at 0 to t = 20, rising linearly to 1 at t = 300, flat to t = 400 (4001 output times): the running mean
+    over T90_WINDOW of the record (+-10) is exact on the ramp more than 10 from its kinks and 0 or 1 on the flats, so
+    the time to 90 % is 20 + 0.9 x 280 = 272 and to 75 % 20 + 0.75 x 280 = 230, to half an output step (a running
+    window of an even 200 points is centred half a step early)."""
+    t = np.linspace(0.0, 400.0, 4001)
+    y = np.clip((t - 20.0) / 280.0, 0.0, 1.0)
+    assert T90_WINDOW * 400.0 / 2 == pytest.approx(10.0)
+    assert t90(t, y) == pytest.approx(20.0 + T90_LEVEL * 280.0, abs=0.05 + 1e-9)
+    assert t90(t, y, 0.75) == pytest.approx(230.0, abs=0.05 + 1e-9)

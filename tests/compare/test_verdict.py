@@ -74,12 +74,12 @@ def test_a_drive_whose_layer_reaches_the_base_is_flagged_and_its_layer_rows_unsc
     assert "reaches the base" in deep and "10.4 d" in deep
     assert "reaches the base" in base_reach(_drive(5.0), delta_s=10.5)  # the calibrated layer reaches it
     assert "stays above 5 %" in base_reach(_drive(40.0), delta_s=9.0)
-    assert _not_scored("delta_u", LOCAL, deep, "", 1.0, 1.0).startswith("not scored: the flow reaches the base")
-    assert _not_scored("u_w_inf", LOCAL, deep, "", 1.0, 1.0) == ""
-    assert "half-space" in _not_scored("t90", PAPER, deep, "", 1.0, 1.0)
-    short = _not_scored("u_w_inf", LOCAL, "", "", 0.9, 1.0)
+    assert _not_scored("delta_u", LOCAL, deep, 1.0, 1.0).startswith("not scored: the flow reaches the base")
+    assert _not_scored("u_w_inf", LOCAL, deep, 1.0, 1.0) == ""
+    assert "half-space" in _not_scored("t90", PAPER, deep, 1.0, 1.0)
+    short = _not_scored("u_w_inf", LOCAL, "", 0.9, 1.0)
     assert "-10%" in short and "shorter than the model's time scale" in short
-    assert _not_scored("t90", LOCAL, "", "", 0.9, 1.0) == ""
+    assert _not_scored("t90", LOCAL, "", 0.9, 1.0) == ""
 
 
 def test_an_exact_tie_is_called_a_tie_and_a_model_without_shared_rows_is_named():
@@ -100,8 +100,8 @@ def test_a_fit_with_a_non_finite_value_or_interval_is_a_failed_fit():
 
 
 def test_a_model_at_rest_in_its_steady_state_is_judged_without_dividing_by_zero():
-    assert _not_scored("u_w_inf", LOCAL, "", "", 0.0, 0.0) == ""
-    moving = _not_scored("u_w_inf", LOCAL, "", "", 0.2, 0.0)
+    assert _not_scored("u_w_inf", LOCAL, "", 0.0, 0.0) == ""
+    moving = _not_scored("u_w_inf", LOCAL, "", 0.2, 0.0)
     assert "still moves" in moving and "nan" not in moving
 
 
