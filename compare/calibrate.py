@@ -106,3 +106,10 @@ def load(path: str | Path) -> Calibration:
                        {k: np.asarray(v, dtype=float) for k, v in replicates.items()}, points, PLANE_SHEAR,
                        str(path), float(doc.get("rms_mu", np.nan)), grains=doc["grains"],
                        info={k: doc[k] for k in ("provenance", "protocol", "published") if k in doc})
+
+
+def calibrated_range(cal: Calibration) -> tuple[float, float]:
+    """The range of I (DEM convention) the calibration measured (its points): a model beyond it extrapolates the
+    fitted law (compare.scorecard.extrapolated); NaNs when the calibration holds no points."""
+    measured = cal.points["I"].to_numpy(dtype=float)
+    return (float(measured.min()), float(measured.max())) if len(measured) else (np.nan, np.nan)

@@ -39,7 +39,7 @@ from .laws import laws as paper_laws
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings, standard_error
-from .scorecard import Scorecard, base_reach, extrapolated, headline, scene_checks, score
+from .scorecard import Scorecard, base_reach, extrapolated, headline, scene_checks, score, wall_I
 
 #: continuum output times per drive (log-spaced from t_end/PREDICTION_SPAN to t_end, plus the snapshots)
 PREDICTION_TIMES, PREDICTION_SPAN = 60, 300
@@ -381,8 +381,7 @@ def prepare(dem: DemSide, independent: Calibration | None) -> tuple[ModelSide, d
     models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if ngf else [])
     if ngf:
         replicates = replicates.assign(A=_amplitude_samples(fluidity, len(replicates)))
-    measured = cal.points["I"].to_numpy(dtype=float)
-    calibrated_I = (float(measured.min()), float(measured.max())) if len(measured) else (np.nan, np.nan)
+    calibrated_I = calibrate.calibrated_range(cal)
     side = ModelSide(material, tuple(models), failure, replicates, {"ngf": fluidity.drive} if ngf else {},
                      independent is not None, calibrated_I)
     return side, {"pairs": pairs, "calibration": cal, "calibration_source": source, "phi_bulk": phi,
@@ -426,7 +425,7 @@ def model_drive(a: DriveAnalysis, side: ModelSide) -> tuple:
     spreads = {p.model: spread(a, m, side.material, side.replicates, p.series.t.to_numpy())
                for m, p in zip(side.models, preds)}
     I0 = convert_I(side.material.I0, side.material.I_convention, "dem")
-    beyond = {p.model: extrapolated(float(side.material.friction.I_of_mu(p.steady.mu_w, I0)), side.calibrated_I)
+    beyond = {p.model: extrapolated(wall_I(side.material.friction, [p.steady.mu_w], I0), side.calibrated_I)
               for p in preds}
     rows, edges, bands = score(a, side.models, {p.model: p for p in preds}, spreads, len(side.replicates),
                                side.fitted_on, side.independent, beyond)
@@ -445,7 +444,7 @@ def conclude(dem: DemSide, side: ModelSide, kept: dict, results: list, settings:
                         float(np.max(edges)) if edges else np.nan, bands)
     return Comparison(dem, compared, kept["pairs"], kept["calibration"], kept["calibration_source"], side.replicates,
                       side.material, kept["phi_bulk"], card, kept["fluidity"], settings,
-                      kept["law_test"], paper_laws(compared))
+                      kept["law_test"], paper_laws(compared, side.calibrated_I))
 
 
 def _fit_fluidity(drives: list[DriveAnalysis], material: Material) -> FluidityFit | None:

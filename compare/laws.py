@@ -70,6 +70,7 @@ import pandas as pd
 from granstokes.continuum.closed_forms import uwall_asymp
 from granstokes.continuum.crossing import layer_measures
 from granstokes.continuum.paper.equations import eq
+from granstokes.continuum.rheology import convert_I
 from granstokes.continuum.steady import steady_wall_speed
 
 from .band import STEP
@@ -88,7 +89,7 @@ from .families import (
 )
 from .plate import STEADY_LAST
 from .rows import LAW_KEYS, effective_dof, law_row, not_a_line
-from .scorecard import CREEP_ZONES, creep_length, short_bed, slipping, t90
+from .scorecard import CREEP_ZONES, creep_length, extrapolated, initial_state, short_bed, slipping, t90, wall_I
 
 #: the growth window ends at this many t_s (the paper's self-similar regime holds to t~ of order 1)
 GROWTH_END = 0.5
@@ -638,10 +639,11 @@ class _Sources:
     predicted: dict
     shifted: dict
     seeds: dict                         # each drive's number of seeds
+    calibrated_I: tuple                 # the calibration's range of I (DEM convention): a model beyond extrapolates
     dem: dict = field(default_factory=dict)
 
     @classmethod
-    def of(cls, usable, resamples: int, seed: int) -> _Sources:
+    def of(cls, usable, resamples: int, seed: int, calibrated_I=(np.nan, np.nan)) -> _Sources:
         rng = np.random.default_rng(seed)
         seeds = {dc.label: Seeds.of(dc) for dc in usable}
         full = {label: s.track(np.arange(len(s.u_w))) for label, s in seeds.items()}
@@ -651,7 +653,8 @@ class _Sources:
         predicted = {(dc.label, p.model): model_track(p, dc) for dc in usable for p in dc.predictions}
         shifted = {(dc.label, key): [model_track(p, dc) for p in sens.shifted]
                    for dc in usable for key, sens in dc.sensitivity.items()}
-        return cls(full, replicas, predicted, shifted, {label: len(s.u_w) for label, s in seeds.items()})
+        return cls(full, replicas, predicted, shifted, {label: len(s.u_w) for label, s in seeds.items()},
+                   tuple(calibrated_I))
 
     def dem_estimate(self, law: Law, choice: Choice, drives, windows: dict) -> _DemLaw:
         """The DEM's estimate of a law that is a mean over drives: its error the bootstrap's standard deviation,
@@ -717,7 +720,9 @@ def _choice(law: Law, choice: Choice, drives, model: str, src: _Sources) -> tupl
         estimate = partial(law.estimate, drives=drives, choice=choice, windows=windows)
     predicted, model_text = estimate([src.predicted[(dc.label, model)] for dc in drives])
     note = ""
-    if not np.isfinite(dem.value):
+    if beyond := _extrapolating(law, drives, model, windows, src, src.calibrated_I):
+        note = beyond
+    elif not np.isfinite(dem.value):
         note = dem.text
     elif dem.lack:
         note = dem.lack
@@ -738,8 +743,31 @@ def _choice(law: Law, choice: Choice, drives, model: str, src: _Sources) -> tupl
             dem.text if np.isfinite(value) else "")
 
 
-def _law_row(law: Law, model: str, drives, src: _Sources, calibrated: bool) -> dict:
-    """The row of ``law`` for ``model``: its family's entries, the headline numbers and the family's verdict."""
+def _extrapolating(law: Law, drives, model: str, windows: dict, src: _Sources, calibrated_I) -> str:
+    """Why ``model``'s side of ``law`` rests on mu(I) beyond the calibration, or "": on some drive its wall inertial
+    number (DEM convention) exceeds the calibration's largest measured I (compare.scorecard.extrapolated): over the
+    law's window on that drive for a law of the transient (its whole record where the law has no window), in its
+    steady state for a law of the steady state (an unknown calibrated range is not checked)."""
+    if not np.isfinite(calibrated_I[1]):
+        return ""
+    for dc in drives:
+        friction = dc.scales.material.friction
+        I0 = convert_I(dc.scales.material.I0, dc.scales.material.I_convention, "dem")
+        if law.transient:
+            tr, w = src.predicted[(dc.label, model)], windows.get(dc.label)
+            usable = w is not None and not w.why and np.isfinite(w.t0)
+            inside = (tr.t >= w.t0) & (tr.t <= w.t1) if usable else tr.t > 0
+            I = wall_I(friction, tr.mu_w[inside], I0)
+        else:
+            I = wall_I(friction, [p.steady.mu_w for p in dc.predictions if p.model == model], I0)
+        if why := extrapolated(I, calibrated_I):
+            return f"{why} ({dc.label})"
+    return ""
+
+
+def _law_row(law: Law, model: str, drives, src: _Sources, calibrated: bool, start: str = "") -> dict:
+    """The row of ``law`` for ``model``: its family's entries, the headline numbers and the family's verdict;
+    ``start`` what the model's transient starts from (Prediction.initial)."""
     measured = [_choice(law, c, drives, model, src) for c in law.family]
     entries = [e for e, _ in measured]
     h = headline(entries)
@@ -756,15 +784,18 @@ def _law_row(law: Law, model: str, drives, src: _Sources, calibrated: bool) -> d
                    dem_err=e["dem_err"], predicted=e["predicted"], predicted_err=e["predicted_err"],
                    sigma=e["sigma"] if note in ("", split) else np.nan, dof=e["dof"], chi2_dof=e["chi2_dof"],
                    n_drives=len(drives), window=window, note=note, choices=entries, systematic=systematic(entries),
-                   kind=law.kind or "all")
+                   kind=law.kind or "all",
+                   initial_state=initial_state(start) if law.transient else "")
 
 
-def laws(compared, resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFrame:
-    """Every law x model row (compare.rows.LAW_KEYS) over the drives ``compared``
-    (comparison.DriveComparison)."""
+
+def laws(compared, calibrated_I=(np.nan, np.nan), resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFrame:
+    """Every law x model row (compare.rows.LAW_KEYS) over the drives ``compared`` (comparison.DriveComparison);
+    ``calibrated_I`` the calibration's range of I (DEM convention; unknown: not checked)."""
     usable = _drives(compared, None)
-    src = _Sources.of(usable, resamples, seed)
+    src = _Sources.of(usable, resamples, seed, calibrated_I)
     calibrated = {p.model: p.transient_calibrated for dc in usable for p in dc.predictions}
-    rows = [_law_row(law, model, _drives(compared, law.kind), src, calibrated[model])
+    starts = {p.model: p.initial for dc in usable for p in dc.predictions}
+    rows = [_law_row(law, model, _drives(compared, law.kind), src, calibrated[model], starts[model])
             for law in LAWS for model in calibrated]
     return pd.DataFrame(rows, columns=list(dict.fromkeys([*LAW_KEYS, *(k for r in rows for k in r)])))

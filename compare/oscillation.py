@@ -37,6 +37,7 @@ import pandas as pd
 from granstokes.continuum import oscillation as osc
 from granstokes.continuum.crossing import LAYER_FRACTIONS, depth_at_fraction
 from granstokes.continuum.ngf import NonlocalFluidity
+from granstokes.continuum.rheology import convert_I
 from granstokes.continuum.richardson import richardson
 from granstokes.continuum.rules import YieldRule
 from granstokes.continuum.scales import Material
@@ -46,12 +47,13 @@ from scipy import stats
 
 from granstokes.lib.validate import require
 
-from . import phase
+from . import calibrate, phase
 from .band import Sensitivity
 from .drive import TRANSITS_BEFORE_COMPARISON, DriveSpec, drive_specs
 from .families import Choice, entry, family_note, headline, systematic
 from .plate import SLIP_MAX
 from .rows import LACK_OF_FIT_P, band, effective_dof, law_row, score_row, sigma
+from .scorecard import extrapolated, wall_I
 
 OBSERVABLES = {"response_amplitude": None, "phase_lag": "rad", "yielded_depth": "d",
                "dissipation": "rho_p g d^2 per plate area", "remobilization_strain": "1"}
@@ -330,6 +332,7 @@ class ModelSetup:
     ngf_A: float | None = None
     ngf_A_err: float = 0.0
     numerics: SceneNumerics = NUMERICS
+    calibrated_I: tuple = (np.nan, np.nan)  # the calibration's range of I (DEM convention): beyond it, extrapolated
 
     @property
     def models(self) -> tuple[str, ...]:
@@ -423,16 +426,17 @@ def _difference(observable: str, a: float, b: float) -> float:
 
 
 def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model: str, note: str,
-         choice: CycleChoice | None = None) -> dict:
+         choice: CycleChoice | None = None, beyond: str = "") -> dict:
     """The row of ``observable`` (measured by ``choice``: a law choice's row, None: the scorecard's) of a drive and
-    a model; ``note``: why the model has no prediction (pred None)."""
+    a model; ``note``: why the model has no prediction (pred None); ``beyond``: why its prediction extrapolates the
+    calibration (``_beyond``), or ""."""
     drive = dem.drive
     v, err, how, dof = dem.values[observable] if choice is None else dem.estimates[observable, choice]
     p, num, s_cal = (np.nan, np.nan, np.nan) if pred is None else (
         pred.values[observable] if choice is None else pred.estimates[observable, choice])
     if pred is not None:
         censored = observable in CENSORED and (choice is None or choice.estimator == "edge")
-        note = _scene(dem) or _unmeasurable(dem, v, err, censored) or _unpredicted(p, num, s_cal)
+        note = _scene(dem) or beyond or _unmeasurable(dem, v, err, censored) or _unpredicted(p, num, s_cal)
     elif not note.startswith("not predicted"):
         note = f"not predicted: {note}"
     scored = not note
@@ -512,8 +516,22 @@ def _table(dems, predictions: dict, setup: ModelSetup, ngf_note: str, keys) -> p
         for m in LABELS:
             p = predictions.get((d.drive.label, m))
             note = (p if isinstance(p, str) else "") if m in setup.models else ngf_note
-            rows += [_row(d, p if isinstance(p, OscPrediction) else None, o, m, note, c) for o, c in keys]
+            pred = p if isinstance(p, OscPrediction) else None
+            beyond = _beyond(d, pred, setup) if pred is not None else ""
+            rows += [_row(d, pred, o, m, note, c, beyond) for o, c in keys]
     return pd.DataFrame(rows)
+
+
+def _beyond(dem: DemOscillation, pred: OscPrediction, setup: ModelSetup) -> str:
+    """Why a model's rows of a drive rest on mu(I) beyond the calibration, or "": the largest wall friction of its
+    cycle (the phase-averaged |tau_w|/p_w of its loop) lies at an inertial number (DEM convention) beyond the
+    calibration's largest (compare.scorecard.extrapolated; mu_w at or above mu_d: infinitely far; an unknown
+    calibrated range is not checked)."""
+    if not np.isfinite(setup.calibrated_I[1]):
+        return ""
+    m = setup.material
+    mu = np.abs(pred.loop.tau_w.to_numpy(dtype=float)) / dem.drive.load.p_w
+    return extrapolated(wall_I(m.friction, mu, convert_I(m.I0, m.I_convention, "dem")), setup.calibrated_I)
 
 
 #: the laws in omega: name -> (the observable, what it fits, the observable's transform)
@@ -655,7 +673,8 @@ def setup_of(cal, ngf_from: str | Path | None) -> tuple[ModelSetup, str]:
         ngf = json.loads(Path(ngf_from).read_text()).get("ngf") or {}
         require("A" in ngf, "--ngf-from", "a Stokes report's metrics.json with an NGF fit", str(ngf_from))
         ngf_A, ngf_err, ngf_note = float(ngf["A"]), float(ngf.get("A_err", 0.0)), ""
-    return ModelSetup(cal.material(), reps.cov(), ngf_A, ngf_err), ngf_note
+    setup = ModelSetup(cal.material(), reps.cov(), ngf_A, ngf_err, calibrated_I=calibrate.calibrated_range(cal))
+    return setup, ngf_note
 
 
 def conclude(dem, dems: list[DemOscillation], setup: ModelSetup, ngf_note: str, predicted: list, calibration: str,

@@ -195,13 +195,30 @@ def slipping(a: DriveAnalysis) -> str:
             "so its speed and friction are not the bed's")
 
 
+def initial_state(start: str) -> str:
+    """What a transient row says of its model's start (``start``: Prediction.initial): no model starts from the DEM
+    bed's measured stresses tau(y, 0), which the plate's loading leaves anywhere between rest and yield."""
+    return f"the model starts from {start or 'its own initial state'}, not from the DEM bed's measured tau(y, 0)"
+
+
+def wall_I(friction, mu_w, I0: float) -> float:
+    """The largest wall inertial number (I0's convention) of the wall frictions ``mu_w``: eq. (2.1) inverted, infinite
+    at or above mu_d (the law's asymptote: no finite I reaches it)."""
+    mu = np.asarray(mu_w, dtype=float)
+    mu = mu[np.isfinite(mu)]
+    if not len(mu):
+        return np.nan
+    below = mu < friction.mu_d
+    return float(np.max(friction.I_of_mu(mu[below], I0))) if below.all() else np.inf
+
+
 def extrapolated(I_wall: float, calibrated: tuple[float, float]) -> str:
     """Why a model's steady rows are not scored, or "": its steady wall inertial number ``I_wall`` (DEM convention,
     the profile's largest) lies beyond the largest I the calibration measured, so the prediction rests on the fitted
     law outside its data (an unknown ``calibrated`` range is not checked)."""
     if not I_wall > calibrated[1]:
         return ""
-    return (f"not scored: extrapolated: the model's steady wall inertial number I = {I_wall:.3g} (DEM convention) lies "
+    return (f"not scored: extrapolated: the model's wall inertial number I = {I_wall:.3g} (DEM convention) lies "
             f"beyond the calibration's largest, {calibrated[1]:.3g}")
 
 
@@ -406,7 +423,8 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
                 sigma=sigma(measured.value - value, measured.err, band_sd, numerical),
                 dof=effective_dof((measured.err, band_sd, numerical), (measured.dof, np.inf, np.inf)), note=note,
                 blind=independent and fitted_on.get(model.key) != a.label,
-                asymptote=asymptote if windowed else np.nan))
+                asymptote=asymptote if windowed else np.nan,
+                initial_state=initial_state(pred.initial) if obs in TRANSIENT_OBSERVABLES else ""))
     return pd.DataFrame(rows), float(np.max(edges)) if edges else np.nan, bands
 
 

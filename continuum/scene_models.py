@@ -108,6 +108,7 @@ class Prediction:
     profiles: pd.DataFrame    # t, depth, u, mu
     steady: Steady
     transient_calibrated: bool = True  # False: the model's time scale was assumed, not measured (SceneModel)
+    initial: str = ""                  # the state its transient starts from (SceneModel.initial)
 
 
 # --- local mu(I) on the DEM's scene ------------------------------------------------------------------
@@ -197,7 +198,8 @@ class SceneModel:
     load, times, numerics)`` -> Transient at its ``numerics`` (the comparison's); ``parameter``: the name of its own
     fitted parameter (beyond the material), and ``factory`` builds the model at another value of it (uncertainty
     propagation); ``half_space``: the model's bed has no base; ``transient_calibrated``: False when the model's own
-    time scale is assumed rather than calibrated (its transient is then not a prediction)."""
+    time scale is assumed rather than calibrated (its transient is then not a prediction); ``initial``: the state its
+    transient starts from, in words (none starts from a DEM bed's measured stresses)."""
 
     key: str
     label: str
@@ -209,6 +211,7 @@ class SceneModel:
     factory: Callable | None = None
     half_space: bool = False
     transient_calibrated: bool = True
+    initial: str = ""
 
     def at(self, values) -> SceneModel:
         """This model with its own parameter taken from ``values`` (a mapping), if it has one."""
@@ -218,7 +221,7 @@ class SceneModel:
         times = np.asarray(times, dtype=float)
         tr = self.transient(material, scene, load, times, self.numerics)
         return Prediction(self.key, self.label, tr.series(), tr.profiles(), self.steady(material, scene, load),
-                          self.transient_calibrated)
+                          self.transient_calibrated, self.initial)
 
     def estimated(self, material: Material, scene: BedScene, load: Load, times, numerics=None) -> Transient:
         """The transient at ``numerics`` (default: the model's) with the errors of u_w, mu_w and delta_u from a
@@ -232,9 +235,9 @@ class SceneModel:
 
 
 LOCAL = SceneModel("local", "local mu(I), velocity form on the DEM scene", local_steady, _local_transient,
-                   VELOCITY_NUMERICS)
+                   VELOCITY_NUMERICS, initial="a bed at rest, rigid below yield: the load reaches every depth at once")
 PAPER = SceneModel("paper", "paper's model (stress diffusion, tau = mu_s p at t = 0)", _paper_steady, _paper_transient,
-                   half_space=True)
+                   half_space=True, initial="tau = mu_s p at every depth, eq. (2.7)")
 
 
 def ngf_model(A: float, boundary: str = "neumann", t0_hat: float = 1.0) -> SceneModel:
@@ -245,4 +248,5 @@ def ngf_model(A: float, boundary: str = "neumann", t0_hat: float = 1.0) -> Scene
     return SceneModel("ngf", f"nonlocal fluidity (NGF), A = {A:.3g}", partial(_ngf_steady, fl),
                       partial(_ngf_transient, fl), NGF_NUMERICS,
                       {"A": A, "boundary": fl.boundary, "t0_hat": fl.t0_hat}, "A",
-                      partial(ngf_model, boundary=boundary, t0_hat=t0_hat), transient_calibrated=False)
+                      partial(ngf_model, boundary=boundary, t0_hat=t0_hat), transient_calibrated=False,
+                      initial="a bed at rest with its resting fluidity")

@@ -31,7 +31,8 @@ def test_the_note_s_hand_recomputation_finds_the_committed_report_s_numbers(caps
         dem, dem_err = namespace["reported"](observable, label)
         assert math.isclose(value, dem, rel_tol=1e-5) and math.isclose(err, dem_err, rel_tol=1e-4), (label, observable)
     law = namespace["law"]
-    assert len(namespace["short"]) == len(namespace["clear"]) - law["n_drives"]  # the depth rule, by hand
+    assert len(namespace["kept"]) == law["n_drives"]  # the depth and grip rules, by hand
+    assert len(namespace["short"]) + len(namespace["slipping"]) + law["n_drives"] == len(namespace["clear"])
     offsets = [namespace["family"][k] for k in ("delta_05", "delta_10", "delta_20", "delta_50")]
     assert offsets == sorted(offsets, reverse=True)  # the offset falls with the threshold: a creep tail
     reported = next(r for r in namespace["METRICS"]["laws"]

@@ -15,7 +15,7 @@ from granstokes.compare.rows import LAW_KEYS
 from granstokes.continuum.crossing import layer_measures
 from granstokes.continuum.load import Load
 from granstokes.continuum.scales import Material, Scales
-from granstokes.continuum.scene_models import Prediction, Steady
+from granstokes.continuum.scene_models import LOCAL, Prediction, Steady
 from scipy.special import erfc
 
 MATERIAL = Material(mu_s=0.3, mu_d=0.7, I0=0.3, phi=0.8)
@@ -61,7 +61,7 @@ def drive(p_w: float = 10.0, mu_w: float = 0.45, seeds: int = 4, k: float = 1.0,
                          "u": np.concatenate([profile(ti, k, 1.0) for ti in model_t]), "mu": mu_w})
     model_u = u_inf * np.sqrt(np.minimum(model_t / scales.t_s, 1.0))
     pred = Prediction("local", "synthetic", pd.DataFrame({"t": model_t, "u_w": model_u, "mu_w": mu_w, "delta_u": 0.0}),
-                      prof, Steady(Y, steady_u, u_inf, mu_w, scales.delta_s))
+                      prof, Steady(Y, steady_u, u_inf, mu_w, scales.delta_s), initial=LOCAL.initial)
     return DriveComparison(a, scales, (pred,), "")
 
 
@@ -75,7 +75,13 @@ def row(table: pd.DataFrame, law: str, quantity_starts: str = "", kind: str = "s
 
 def test_every_law_has_a_row_with_every_key():
     table = laws([drive()], resamples=20)
-    assert list(table.columns) == list(dict.fromkeys([*LAW_KEYS, "kind"]))
+    assert list(table.columns) == list(dict.fromkeys([*LAW_KEYS, "kind", "initial_state"]))
+    # every transient law says what the model starts from (local mu(I): a bed at rest), the steady laws nothing
+    transient = {law.name for law in LAWS if law.transient}
+    for r in table.itertuples():
+        assert r.initial_state == ("the model starts from a bed at rest, rigid below yield: the load reaches every "
+                                   "depth at once, not from the DEM bed's measured tau(y, 0)"
+                                   if r.law in transient else ""), r.law
     assert {(law.name, law.quantity, law.kind or "all") for law in LAWS} == set(zip(table.law, table.quantity,
                                                                                     table.kind))
     for r in table.itertuples():

@@ -174,7 +174,7 @@ def _row_of(law, drives, full, lo, hi, predicted):
     labels = [dc.label for dc in drives]
     src = _Sources(dict(zip(labels, full)), [dict(zip(labels, lo)), dict(zip(labels, hi))],
                    {(k, "local"): tr for k, tr in zip(labels, predicted)}, {},
-                   dict.fromkeys(labels, BOOTSTRAP_FEW_SEEDS))
+                   dict.fromkeys(labels, BOOTSTRAP_FEW_SEEDS), (np.nan, np.nan))
     return _law_row(law, "local", drives, src, True)
 
 

@@ -98,7 +98,7 @@ def _model_side(asymptote=1.0, plateau=0.98, rise=9.0, delta_u=6.0, ell=3.0, rep
     """A model's central Prediction and its spread (replicates' steady states, Sensitivity)."""
     if series is None:
         series = pd.DataFrame({"t": T, response: _ramp(T, rise, plateau)})
-    pred = NS(steady=_steady(asymptote, delta_u, ell, response), series=series)
+    pred = NS(steady=_steady(asymptote, delta_u, ell, response), series=series, initial="rest")
     steadies = [_steady(v, d, e, response) for v, d, e in
                 zip(replicates["value"], replicates["delta_u"], replicates["ell"])]
     shifted = tuple(NS(series=pd.DataFrame({"t": [0.0, rise + dr, T[-1]], response: [0.0, plateau + dp, plateau + dp]}))
@@ -549,7 +549,7 @@ def test_a_model_beyond_the_calibrated_inertial_number_extrapolates_its_steady_r
     calibration's largest I exactly, and with no calibrated range, nothing is extrapolated."""
     from granstokes.compare.scorecard import STEADY_OBSERVABLES, extrapolated
     note = extrapolated(0.8, (0.005, 0.55))
-    assert note == ("not scored: extrapolated: the model's steady wall inertial number I = 0.8 (DEM convention) lies "
+    assert note == ("not scored: extrapolated: the model's wall inertial number I = 0.8 (DEM convention) lies "
                     "beyond the calibration's largest, 0.55")
     assert extrapolated(0.55, (0.005, 0.55)) == "" and extrapolated(0.8, (np.nan, np.nan)) == ""
     predictions, spreads = _model_side()
