@@ -29,7 +29,7 @@ from .experiment import CSV_FLOAT, DRIVES, SCORECARD, FigureFile, Section, table
 from .laws import GROWTH_END
 from .metrics import metrics  # noqa: F401  (the experiment's report module renders its metrics too)
 from .rows import UNSCORED, Z95, critical, tally
-from .scorecard import MODEL_UNSTEADY, T90_WINDOW
+from .scorecard import MODEL_UNSTEADY, T90_WINDOW, short_bed
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, figure_legend, plain_log, suptitle
 from .words import MODEL_WORDS, VERDICT_COLOUR, fmt, fmt_band, fmt_cell, words
 
@@ -700,7 +700,8 @@ def _record(dc: DriveComparison, models: list[str]) -> tuple[bool, str]:
 
 def scene(c: Comparison) -> list[dict]:
     """Each drive's scene checks in compare.findings' terms: the plate's slip and the stresses' balance (the
-    scorecard's scene checks), the base (compare.scorecard.base_reach), the elastic start against the growth window
+    scorecard's scene checks), the base (compare.scorecard.base_reach), the bed's depth (compare.scorecard.short_bed),
+    the elastic start against the growth window
     (it must end before GROWTH_END t_s) and the record (the DEM steady in it, every model steady by its end)."""
     out = []
     by_check = {"slip at the plate": "slip", "bulk CG tau - plate <tau_w>": "stresses",
@@ -713,6 +714,9 @@ def scene(c: Comparison) -> list[dict]:
     for dc in c.drives:
         spec = dc.dem.spec
         out.append({"check": "base", "drive": dc.label, "holds": not dc.base, "detail": dc.base})
+        if dc.scales is not None:
+            short = short_bed(dc.dem, dc.scales.delta_s)
+            out.append({"check": "depth", "drive": dc.label, "holds": not short, "detail": short})
         if dc.scales is not None and np.isfinite(spec.compared_from):
             ratio = spec.compared_from / dc.scales.t_s
             out.append({"check": "transit", "drive": dc.label, "holds": bool(ratio < GROWTH_END),

@@ -91,12 +91,16 @@ def test_the_scene_names_the_drives_that_fail_and_whether_the_evidence_s_drive_i
     scene = [{"check": "slip", "drive": "runs/p5/a", "holds": False, "detail": "slip 9 %"},
              {"check": "slip", "drive": "runs/p10/b", "holds": True, "detail": "slip 2 %"},
              {"check": "base", "drive": "runs/p5/a", "holds": True, "detail": ""},
-             {"check": "base", "drive": "runs/p10/b", "holds": True, "detail": ""}]
+             {"check": "base", "drive": "runs/p10/b", "holds": True, "detail": ""},
+             {"check": "depth", "drive": "runs/p5/a", "holds": True, "detail": ""},
+             {"check": "depth", "drive": "runs/p10/b", "holds": False, "detail": "the bed (26 d) is shorter"}]
     (f,) = fd.findings(card, None, scene, names={"runs/p5/a": "p5: a"})
-    assert {s.check.key: s.text() for s in f.scene if s.check.key != "slip"} == {
+    assert {s.check.key: s.text() for s in f.scene if s.check.key not in ("slip", "depth")} == {
         "transit": "the elastic transit: not known", "record": "the record's length: not known",
         "base": "the base: holds"}
-    assert fd.scene_text(f) == (f"the plate slips by more than {SLIP_MAX * 100:g} % in 1 of 2 drives (p5: a: slip "
+    assert fd.scene_text(f) == ("the bed is shorter than delta_s + 5 of its measured creep lengths in 1 of 2 drives "
+                                "(runs/p10/b: the bed (26 d) is shorter); "
+                                f"the plate slips by more than {SLIP_MAX * 100:g} % in 1 of 2 drives (p5: a: slip "
                                 "9 %), the evidence's drive among them; the base: holds in every drive; the elastic "
                                 "transit, the record's length: not known")
     slip = next(s for s in f.scene if s.check.key == "slip")
