@@ -29,7 +29,7 @@ from .experiment import CSV_FLOAT, DRIVES, SCORECARD, FigureFile, Section, table
 from .laws import GROWTH_END
 from .metrics import metrics  # noqa: F401  (the experiment's report module renders its metrics too)
 from .rows import UNSCORED, Z95, critical, tally
-from .scorecard import MODEL_UNSTEADY, T90_WINDOW, short_bed
+from .scorecard import MODEL_UNSTEADY, T90_WINDOW, depth_needed
 from .style import DEM_COLOUR, DRIVE_MARKERS, MODEL_STYLE, figure_legend, plain_log, suptitle
 from .words import MODEL_WORDS, VERDICT_COLOUR, fmt, fmt_band, fmt_cell, words
 
@@ -715,8 +715,9 @@ def scene(c: Comparison) -> list[dict]:
         spec = dc.dem.spec
         out.append({"check": "base", "drive": dc.label, "holds": not dc.base, "detail": dc.base})
         if dc.scales is not None:
-            short = short_bed(dc.dem, dc.scales.delta_s)
-            out.append({"check": "depth", "drive": dc.label, "holds": not short, "detail": short})
+            need = depth_needed(dc.dem, dc.scales.delta_s)[0]
+            out.append({"check": "depth", "drive": dc.label, "holds": bool(spec.depth >= need),
+                        "detail": f"bed {spec.depth:.3g} d, needs {need:.3g} d"})
         if dc.scales is not None and np.isfinite(spec.compared_from):
             ratio = spec.compared_from / dc.scales.t_s
             out.append({"check": "transit", "drive": dc.label, "holds": bool(ratio < GROWTH_END),

@@ -157,18 +157,23 @@ def dem_creep(a: DriveAnalysis, delta_s: float) -> Measured:
     return _mean_err([creep_length(s.depth, s.u_x, delta_s, a.spec.depth) for s in a.samples], a.samples_how)
 
 
-def short_bed(a: DriveAnalysis, delta_s: float) -> str:
-    """Why drive ``a``'s bed is too shallow for its rows, or "": its depth is short of the calibrated
-    ``delta_s`` plus CREEP_LENGTHS_TO_BASE of the DEM's own creep lengths (``dem_creep``), so the base constrains the
-    creep; where the DEM measures none, of the sizing's assumed creep length (dem.sizing.CREEP_LENGTH), and the note
-    says so."""
+def depth_needed(a: DriveAnalysis, delta_s: float) -> tuple[float, float, bool]:
+    """The depth drive ``a``'s bed needs for its creep: delta_s + CREEP_LENGTHS_TO_BASE creep lengths, the DEM's own
+    (``dem_creep``) or, where the DEM measures none, the sizing's assumed one (dem.sizing.CREEP_LENGTH): (that
+    depth, the creep length, whether it is the assumed one)."""
     ell = dem_creep(a, delta_s).value
-    which = ""
-    if not np.isfinite(ell):
-        ell, which = CREEP_LENGTH, ", the sizing's assumed creep length: the DEM's is not measured"
-    need = delta_s + CREEP_LENGTHS_TO_BASE * ell
+    assumed = not np.isfinite(ell)
+    ell = CREEP_LENGTH if assumed else ell
+    return delta_s + CREEP_LENGTHS_TO_BASE * ell, ell, assumed
+
+
+def short_bed(a: DriveAnalysis, delta_s: float) -> str:
+    """Why drive ``a``'s bed is too shallow for its rows, or "": its depth is short of ``depth_needed`` (the base
+    constrains the creep); the note says when the creep length is the sizing's assumed one."""
+    need, ell, assumed = depth_needed(a, delta_s)
     if a.spec.depth >= need:
         return ""
+    which = ", the sizing's assumed creep length: the DEM's is not measured" if assumed else ""
     return (f"the bed ({a.spec.depth:.3g} d) is shorter than delta_s + {CREEP_LENGTHS_TO_BASE:g} creep lengths "
             f"({delta_s:.3g} + {CREEP_LENGTHS_TO_BASE:g} x {ell:.3g} = {need:.3g} d{which}): the base constrains the "
             "creep")
