@@ -1,7 +1,7 @@
-"""``granstokes predict``: the local mu(I) or the nonlocal fluidity (NGF) prediction of a DEM scene, in
-DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rho_p)).
+"""``granstokes predict``: the local mu(I), the nonlocal fluidity (NGF) or the elasto-plastic mu(I) prediction of a
+DEM scene, in DEM units (d = rho_p = g = 1), I0 in the DEM convention (I = |du/dy| d/sqrt(p/rho_p)).
 
-    granstokes predict --model local|ngf --mu-s A --mu-d B --I0 C [--A L] --phi F --p-w P --depth H
+    granstokes predict --model local|ngf|elastic --mu-s A --mu-d B --I0 C [--A L] [--G S] --phi F --p-w P --depth H
                        (--mu-w M | --u-w U) (--steady | --times T1 T2 ...) [--plate-mass m] [--json]
 
 The models are continuum.scene_models' (the ones compare/ scores), on the scene (continuum.scene.BedScene) under
@@ -13,6 +13,9 @@ the load (continuum.load.Load):
   regularised with YieldRule.for_layer (eps = EPS_FRACTION U/delta_s); errors Richardson's |x_N - x_N/2|/3
   (SceneModel.estimated, continuum.richardson, second order in space; the regularisation's own creep is not in
   it).
+* ``--model elastic --G S``: continuum.elastic, the velocity form with an elastic shear stress of modulus G (rho_p g
+  d), from a stress-free bed at rest; its steady state is local mu(I)'s (closed form); errors Richardson's from
+  N/2 cells.
 * ``--model ngf``: continuum.ngf (steady: Chebyshev, errors the change from n/2 points; transient:
   from rest on the solver's default numerics, errors Richardson from N/2 cells).  g is given at the nodes y (for
   the transient, ln g interpolated linearly from the cell centres).
@@ -35,7 +38,7 @@ import numpy as np
 
 from granstokes.lib.validate import finite, require
 
-MODELS = ("local", "ngf")
+MODELS = ("local", "ngf", "elastic")
 BOUNDARIES = ("neumann", "dirichlet")
 STEADY_LAYER = "delta_s [d]: the steady yield depth, where tau/p falls to mu_s"
 
@@ -52,6 +55,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--I0", type=float, required=True,
                    help="I0 > 0 of the Jop law, DEM convention (I = |du/dy| d/sqrt(p/rho_p))")
     p.add_argument("--A", type=float, help="nonlocal amplitude A >= 0 (ngf only; the length is A d)")
+    p.add_argument("--G", type=float, help="the bed's shear modulus G > 0 (rho_p g d; elastic only)")
     p.add_argument("--phi", type=float, required=True, help="solid fraction in (0, 1)")
     p.add_argument("--p-w", type=float, required=True, help="plate pressure p_w > 0 (rho_p g d)")
     p.add_argument("--depth", type=float, required=True, help="bed depth H > 0 (d)")
@@ -107,11 +111,19 @@ def _model(args, material):
     """The scene model (continuum.scene_models), its load, and the numerics of its transient here."""
     from .ngf import NonlocalFluidity, mu_max
     from .scene import SceneNumerics
-    from .scene_models import LOCAL, ngf_model
+    from .scene_models import LOCAL, elastic_model, ngf_model
 
-    if args.model == "local":
+    if args.model != "elastic":
+        require(args.G is None, "--G", "given only with --model elastic", args.G)
+    if args.model in ("local", "elastic"):
         require(args.A is None, "--A", "given only with --model ngf", args.A)
+    if args.model == "local":
         return LOCAL, _load(args, args.p_w, material.mu_d), LOCAL.numerics
+    if args.model == "elastic":
+        require(args.G is not None and finite(args.G) and args.G > 0, "--G",
+                "a finite shear modulus > 0 (rho_p g d), required with --model elastic", args.G)
+        model = elastic_model(args.G)
+        return model, _load(args, args.p_w, material.mu_d), model.numerics
     require(args.A is not None, "--A", "a finite number >= 0, required with --model ngf", args.A)
     require(finite(args.A) and args.A >= 0, "--A", "a finite number >= 0", args.A)
     require(args.boundary in BOUNDARIES, "--boundary", f"one of {BOUNDARIES}", args.boundary)
@@ -137,15 +149,15 @@ def predict(args) -> dict:
            "I_convention": "dem: I = |du/dy| d/sqrt(p/rho_p)",
            "parameters": {"mu_s": m.mu_s, "mu_d": m.mu_d, "I0": m.I0, "phi": m.phi, "p_w": load.p_w,
                           "depth": scene.depth, "plate_mass": scene.plate_mass, **load.imposed}}
-    if args.model == "ngf":
-        out["parameters"].update({k: model.parameters[k] for k in ("A", "boundary", "t0_hat")})
+    if args.model != "local":
+        out["parameters"].update(model.parameters)
     if args.steady:
         st = model.steady(material, scene, load, estimate=True)
         out.update({"u_w": st.u_w, "mu_w": st.mu_w, "u_w_err": st.u_w_err, "mu_w_err": st.mu_w_err,
                     "delta_s": st.delta_s, "layer": STEADY_LAYER, "y": st.y.tolist(), "u": st.u.tolist()})
         if st.g is not None:
             out["g"] = st.g.tolist()
-        out["method"] = ("closed form (continuum.steady) scaled with continuum.scales" if args.model == "local" else
+        out["method"] = ("closed form (continuum.steady) scaled with continuum.scales" if args.model != "ngf" else
                          f"Chebyshev collocation, {STEADY_INTERVALS} intervals per piece; errors: change from n/2")
         return out
     t = check_times(args.times, "--times")
@@ -153,6 +165,8 @@ def predict(args) -> dict:
     if args.model == "local":
         out["method"] = (f"velocity form (continuum.velocity), eps = {EPS_FRACTION:g} U/delta_s; "
                          "errors: Richardson from N/2")
+    elif args.model == "elastic":
+        out["method"] = "elasto-plastic velocity form (continuum.elastic), TR-BDF2; errors: Richardson from N/2"
     else:
         out["g"] = [gk.tolist() for gk in tr.g]
         out["method"] = "finite volumes (u, ln g), scipy Radau; errors: Richardson from N/2"

@@ -12,7 +12,9 @@ imposed) and the output times:
   eq. (2.7)), scaled with continuum.scales.Scales; its steady state is the exact one of the semi-infinite bed
   (eq. (2.10));
 * ``ngf_model(A)``: nonlocal granular fluidity (continuum.ngf) with amplitude A, Neumann walls, t0 = one local
-  inertial time; transient from a bed at rest, steady state by Chebyshev collocation.
+  inertial time; transient from a bed at rest, steady state by Chebyshev collocation;
+* ``elastic_model(G)``: elasto-plastic mu(I) (continuum.elastic) with the bed's shear modulus G: the transient from
+  a stress-free bed at rest, the load carried down by an elastic wave; its steady state is local mu(I)'s.
 
 ``Steady``: a model's steady state (u_w, mu_w, delta_s, the depth profile y, u; NGF's fluidity g).  ``Transient``: its
 transient at the output times (u at the depths y, mu_w, mu; NGF's g), ``SceneModel.estimated`` with Richardson's
@@ -35,6 +37,7 @@ from granstokes.lib.validate import require
 
 from . import ngf
 from .crossing import depth_at_fraction
+from .elastic import ELASTIC_NUMERICS, solve_elastic
 from .load import Load
 from .richardson import REFINEMENT, richardson
 from .rules import YieldRule
@@ -250,3 +253,20 @@ def ngf_model(A: float, boundary: str = "neumann", t0_hat: float = 1.0) -> Scene
                       {"A": A, "boundary": fl.boundary, "t0_hat": fl.t0_hat}, "A",
                       partial(ngf_model, boundary=boundary, t0_hat=t0_hat), transient_calibrated=False,
                       initial="a bed at rest with its resting fluidity")
+
+
+# --- elasto-plastic mu(I) on the DEM's scene ------------------------------------------------------------
+
+def _elastic_transient(G: float, material: Material, scene: BedScene, load: Load, times,
+                       numerics: SceneNumerics) -> Transient:
+    sol = solve_elastic(material, scene, load, times, G, numerics=numerics)
+    mu = np.array([np.interp(sol.y, sol.y_face, m) for m in sol.mu])
+    return Transient(np.asarray(times, dtype=float), sol.y, sol.u, sol.mu_w, mu)
+
+
+def elastic_model(G: float) -> SceneModel:
+    """Elasto-plastic mu(I) with the bed's shear modulus G (rho_p g d; the model's one parameter, measured on the
+    calibration's packing, never on a drive); its steady state is local mu(I)'s (``local_steady``)."""
+    return SceneModel("elastic", f"elasto-plastic mu(I), G = {G:.3g}", local_steady, partial(_elastic_transient, G),
+                      ELASTIC_NUMERICS, {"G": G}, "G", elastic_model,
+                      initial="a stress-free bed at rest: the load travels down as an elastic wave")

@@ -195,7 +195,29 @@ def test_predict_ngf_json(capsys):
     assert {"model", "u_w", "mu_w", "y", "u", "g", "units", "I_convention", "u_w_err"} <= set(out)
 
 
+@pytest.mark.slow
+def test_predict_elastic_steady_is_local_and_its_transient_carries_errors(capsys):
+    """The elastic model's steady state is local mu(I)'s closed form (whatever G); its transient at an imposed speed
+    gives mu_w with Richardson's error, smaller than the distance to the steady value, and the model's G."""
+    assert run_predict(_args("--model", "local", *SCENE_ARGS, "--mu-w", "0.43", "--steady", "--json")) == 0
+    local = json.loads(capsys.readouterr().out)
+    assert run_predict(_args("--model", "elastic", "--G", "2400", *SCENE_ARGS, "--mu-w", "0.43", "--steady",
+                             "--json")) == 0
+    elastic = json.loads(capsys.readouterr().out)
+    assert elastic["u_w"] == local["u_w"] and elastic["parameters"]["G"] == 2400.0
+    assert run_predict(_args("--model", "elastic", "--G", "2400", *SCENE_ARGS, "--u-w", "3", "--times", "1", "10",
+                             "--json")) == 0
+    out = json.loads(capsys.readouterr().out)
+    steady = Scales.for_speed(MAT, P_W, 3.0).mu_w
+    assert out["mu_w"][0] > out["mu_w"][1] > steady  # the friction falls towards the steady one
+    assert all(0 < e < abs(m - steady) for e, m in zip(out["mu_w_err"], out["mu_w"]))
+
+
 @pytest.mark.parametrize("argv, name", [
+    (["--model", "elastic", *SCENE_ARGS, "--mu-w", "0.43", "--steady"], "--G"),
+    (["--model", "elastic", "--G", "-5", *SCENE_ARGS, "--mu-w", "0.43", "--steady"], "--G"),
+    (["--model", "local", "--G", "100", *SCENE_ARGS, "--mu-w", "0.43", "--steady"], "--G"),
+    (["--model", "elastic", "--G", "100", "--A", "1", *SCENE_ARGS, "--mu-w", "0.43", "--steady"], "--A"),
     (["--model", "ngf", *SCENE_ARGS, "--mu-w", "0.43", "--steady"], "--A"),
     (["--model", "local", "--A", "0.5", *SCENE_ARGS, "--mu-w", "0.43", "--steady"], "--A"),
     (["--model", "ngf", "--A", "-1", *SCENE_ARGS, "--mu-w", "0.43", "--steady"], "--A"),
