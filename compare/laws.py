@@ -436,6 +436,11 @@ class Law:
         return isinstance(self.estimate, Across)
 
 
+#: why a law has no drive to read
+NO_DRIVE = ("no drive of this kind holds the scene rules (a plate that grips, a bed of delta_s + 5 measured creep "
+            "lengths, the flow clear of the base)")
+
+
 def _mean_of(per_drive, key):
     def estimate(tracks, drives, choice, windows):
         out = [per_drive(tr, dc, choice, windows.get(dc.label)) for tr, dc in zip(tracks, drives)]
@@ -445,7 +450,7 @@ def _mean_of(per_drive, key):
             for o, dc in zip(out, drives):
                 reasons.setdefault(o.get("why", ""), []).append(dc.label)
             why = "; ".join(f"{', '.join(names)}: {why}" for why, names in reasons.items() if why)
-            return np.nan, "not measurable: " + (why or "no drive of this kind")
+            return np.nan, "not measurable: " + (why or NO_DRIVE)
         used = [o["window"] for o in kept if "window" in o]
         text = f"{len(kept)} of {len(out)} drive(s)"
         if used:
@@ -794,8 +799,9 @@ def laws(compared, calibrated_I=(np.nan, np.nan), resamples: int = SEED_RESAMPLE
     ``calibrated_I`` the calibration's range of I (DEM convention; unknown: not checked)."""
     usable = _drives(compared, None)
     src = _Sources.of(usable, resamples, seed, calibrated_I)
-    calibrated = {p.model: p.transient_calibrated for dc in usable for p in dc.predictions}
-    starts = {p.model: p.initial for dc in usable for p in dc.predictions}
+    predicted = [p for dc in compared for p in dc.predictions]  # every model, though no drive hold the rules
+    calibrated = {p.model: p.transient_calibrated for p in predicted}
+    starts = {p.model: p.initial for p in predicted}
     rows = [_law_row(law, model, _drives(compared, law.kind), src, calibrated[model], starts[model])
             for law in LAWS for model in calibrated]
     return pd.DataFrame(rows, columns=list(dict.fromkeys([*LAW_KEYS, *(k for r in rows for k in r)])))

@@ -1,6 +1,7 @@
 """The paper's laws (compare.laws) on synthetic drives whose answers are known."""
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -212,3 +213,16 @@ def test_the_bootstrap_over_few_seeds_is_corrected_to_the_sample_s_standard_erro
     p = pre.dem * first / first.mean()
     assert pre.dem_err == pytest.approx(abs(p[0] - p[1]) / 2, rel=0.15)
     assert pre.dof == 1 and pre.kind == "stress" and np.isnan(pre.chi2_dof)
+
+
+def test_with_no_drive_holding_the_scene_rules_every_law_is_still_a_row_and_not_measured():
+    """The one drive's plate slips 20 %: every law of every kind keeps its row for the model, none measured, the
+    stress laws saying that no drive holds the scene rules."""
+    dc = drive()
+    dc = replace(dc, dem=replace(dc.dem, slip={"value": 0.2}))
+    table = laws([dc], resamples=5)
+    assert {(law.name, law.quantity, law.kind or "all") for law in LAWS} == set(zip(table.law, table.quantity,
+                                                                                    table.kind))
+    assert not table.verdict.isin(["consistent", "disagrees"]).any() and set(table.model) == {"local"}
+    assert (row(table, "u_w_sqrt_t").note == "not measurable: no drive of this kind holds the scene rules (a plate "
+            "that grips, a bed of delta_s + 5 measured creep lengths, the flow clear of the base)")
