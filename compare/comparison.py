@@ -6,7 +6,8 @@ calibration.json of ``granstokes dem calibrate``) mu(I) and phi come from that i
 measurement and the drives are a blind test; only with ``fit_on_drives`` is mu(I) fitted on the drives' own
 steady windows instead (``Comparison.calibration.kind`` and ``calibration_source`` say so: a fit, not a
 prediction, and no row of it is blind).  A calibration that does not determine its law
-(``Calibration.failure``) predicts nothing; an NGF amplitude at its search bound gives no NGF rows.  An independent
+(``Calibration.failure``) predicts nothing; an NGF amplitude at its search bound gives no NGF rows; a calibration
+that measured the bed's shear modulus (its ``elasticity``) adds the elasto-plastic model.  An independent
 calibration's band carries its transfer error to the drives (``transfer_sd``: how far the drives' own steady (mu, I)
 pairs lie from the plane-shear law beyond their errors; ``with_transfer``).  compare.metrics and compare.report only
 render it.  DEM units throughout; I in the DEM convention.
@@ -22,7 +23,7 @@ import pandas as pd
 from granstokes.continuum.calibration import Calibration, mu_law
 from granstokes.continuum.rheology import convert_I
 from granstokes.continuum.scales import Material, Scales
-from granstokes.continuum.scene_models import LOCAL, PAPER, Prediction, SceneModel, ngf_model
+from granstokes.continuum.scene_models import LOCAL, PAPER, Prediction, SceneModel, elastic_model, ngf_model
 from granstokes.dem.calibrate import grains_difference
 from granstokes.dem.layout import RUN_JSON
 from scipy import stats
@@ -229,18 +230,32 @@ def law_test(pairs: pd.DataFrame, cal: Calibration) -> dict:
     return out
 
 
-#: the seed of the transfer error's fixed order over the replicates (``with_transfer``)
-TRANSFER_SEED = 1
+#: the seeds of the fixed orders of the transfer error's and the shear modulus' samples over the replicates
+TRANSFER_SEED, MODULUS_SEED = 1, 2
+
+
+def quantile_draws(n: int, seed: int, dof: float = np.inf) -> np.ndarray:
+    """n draws of a standard error's distribution for the propagation: Student-t's (the normal's at infinite dof)
+    quantiles at (k + 1/2)/n, in a fixed shuffled order (``seed``: any half of the replicates holds both signs)."""
+    q = (np.arange(n) + 0.5) / n
+    values = stats.norm.ppf(q) if not np.isfinite(dof) else stats.t.ppf(q, dof)
+    return values[np.random.default_rng(seed).permutation(n)]
 
 
 def with_transfer(replicates: pd.DataFrame, sd: float) -> pd.DataFrame:
     """``replicates`` with mu_s and mu_d shifted together (the law moved as a whole, as the drives' pairs move from
-    it) by ``sd`` times the standard normal's quantiles at (k + 1/2)/n, in a fixed shuffled order (TRANSFER_SEED:
-    any half of the replicates holds both signs): the calibration band then carries the transfer error, the
-    replicates' covariance sd^2 more in mu_s, mu_d and their covariance."""
-    n = len(replicates)
-    shift = sd * stats.norm.ppf((np.arange(n) + 0.5) / n)[np.random.default_rng(TRANSFER_SEED).permutation(n)]
+    it) by ``sd`` times normal draws (``quantile_draws``, TRANSFER_SEED): the calibration band then carries the
+    transfer error, the replicates' covariance sd^2 more in mu_s, mu_d and their covariance."""
+    shift = sd * quantile_draws(len(replicates), TRANSFER_SEED)
     return replicates.assign(mu_s=replicates.mu_s + shift, mu_d=replicates.mu_d + shift)
+
+
+def with_modulus(replicates: pd.DataFrame, elasticity: dict) -> pd.DataFrame:
+    """``replicates`` with the bed's shear modulus G (calibration.json's ``elasticity``: G, its standard error and
+    its dof over the seeds) drawn by ``quantile_draws`` (MODULUS_SEED), independent of the material's replicates: G
+    is measured on the calibration's packing at rest, apart from the law."""
+    draws = quantile_draws(len(replicates), MODULUS_SEED, float(elasticity.get("G_dof", np.inf)))
+    return replicates.assign(G=float(elasticity["G"]) + float(elasticity["G_err"]) * draws)
 
 
 def early_exponents(a: DriveAnalysis) -> dict:
@@ -381,6 +396,10 @@ def prepare(dem: DemSide, independent: Calibration | None) -> tuple[ModelSide, d
     models = [LOCAL, PAPER] + ([ngf_model(fluidity.A)] if ngf else [])
     if ngf:
         replicates = replicates.assign(A=_amplitude_samples(fluidity, len(replicates)))
+    elasticity = getattr(cal, "elasticity", None) if independent is not None and not failure else None
+    if elasticity:  # the bed's shear modulus, measured with the calibration: the elasto-plastic model
+        models.append(elastic_model(float(elasticity["G"])))
+        replicates = with_modulus(replicates, elasticity)
     calibrated_I = calibrate.calibrated_range(cal)
     side = ModelSide(material, tuple(models), failure, replicates, {"ngf": fluidity.drive} if ngf else {},
                      independent is not None, calibrated_I)

@@ -67,7 +67,8 @@ SAMPLES_PER_PERIOD = 96
 #: continuum.oscillation's defaults verify the solver to 1e-4)
 NUMERICS = SceneNumerics(n_cells=80, rtol=1e-4, atol=1e-7)
 #: the models compared (continuum.oscillation.MODELS) and their labels
-LABELS = {"local": "local mu(I), velocity form on the DEM scene", "ngf": "nonlocal fluidity (NGF)"}
+LABELS = {"local": "local mu(I), velocity form on the DEM scene", "ngf": "nonlocal fluidity (NGF)",
+          "elastic": "elasto-plastic mu(I), the bed's measured G"}
 PARAMETERS = ("mu_s", "mu_d", "I0", "phi")
 #: beds whose spread is the DEM's error (one bed: its cycles as blocks)
 MIN_BEDS = 2
@@ -324,8 +325,9 @@ def _on_depths(zones: pd.DataFrame, depths) -> pd.DataFrame:
 
 @dataclass(frozen=True)
 class ModelSetup:
-    """What every prediction shares: the calibrated material, the replicates' covariance of PARAMETERS (+ A), NGF's
-    amplitude (None: no NGF rows) and its standard error, the numerics."""
+    """What every prediction shares: the calibrated material, the replicates' covariance of PARAMETERS, NGF's
+    amplitude (None: no NGF rows) and the bed's shear modulus (None: no elasto-plastic rows) with their standard
+    errors, the numerics."""
 
     material: Material
     covariance: pd.DataFrame
@@ -333,23 +335,33 @@ class ModelSetup:
     ngf_A_err: float = 0.0
     numerics: SceneNumerics = NUMERICS
     calibrated_I: tuple = (np.nan, np.nan)  # the calibration's range of I (DEM convention): beyond it, extrapolated
+    elastic_G: float | None = None
+    elastic_G_err: float = 0.0
 
     @property
     def models(self) -> tuple[str, ...]:
-        return ("local", "ngf") if self.ngf_A is not None else ("local",)
+        return ("local", *(m for m in ("ngf", "elastic") if self.own(m) is not None))
+
+    def own(self, model: str) -> tuple[str, float, float] | None:
+        """A model's own parameter beyond the material (name, value, standard error): NGF's A, the elasto-plastic
+        model's G; None for local mu(I) or a model without one."""
+        value, err, name = {"ngf": (self.ngf_A, self.ngf_A_err, "A"),
+                            "elastic": (self.elastic_G, self.elastic_G_err, "G")}.get(model, (None, 0.0, ""))
+        return None if value is None else (name, float(value), float(err))
 
 
-def model_record(drive: DriveSpec, material: Material, model: str, A: float | None, depths,
+def model_record(drive: DriveSpec, material: Material, model: str, own: float | None, depths,
                  numerics: SceneNumerics, velocity_depths=None) -> Record:
-    """A model's solution of ``drive`` as a Record: sampled SAMPLES_PER_PERIOD times a period over the DEM's
-    duration, mu (sign as the DEM's) at the DEM's profile depths, u at ``velocity_depths`` (default: those)."""
+    """A model's solution of ``drive`` as a Record (``own``: its own parameter, NGF's A or the elasto-plastic G):
+    sampled SAMPLES_PER_PERIOD times a period over the DEM's duration, mu (sign as the DEM's) at the DEM's profile
+    depths, u at ``velocity_depths`` (default: those)."""
     load = drive.load
     n = int(round(SAMPLES_PER_PERIOD * (drive.duration / load.period)))
     t = np.linspace(0.0, drive.duration, n + 1)[1:]
     scene = BedScene(drive.depth, plate_mass=drive.plate_mass)
     sol = osc.solve_oscillating(material, scene, load, t, model=model, rule=_rule(drive, material),
-                                fluidity=NonlocalFluidity(A=A) if model == "ngf" else None, numerics=numerics,
-                                error_estimate=False)
+                                fluidity=NonlocalFluidity(A=own) if model == "ngf" else None,
+                                G=own if model == "elastic" else None, numerics=numerics, error_estimate=False)
     u_w = sol.u_w
     x_w = np.concatenate([[0.0], np.cumsum(0.5 * (u_w[1:] + u_w[:-1]) * np.diff(t))]) + u_w[0] * t[0] / 2
     mu = -np.array([np.interp(depths, sol.y_mu, m) for m in sol.mu])
@@ -392,22 +404,23 @@ def predict(dem: DemOscillation, setup: ModelSetup, model: str) -> OscPrediction
     scale = dem.values["yielded_depth"][0]
     coarse_numerics = replace(setup.numerics, n_cells=setup.numerics.n_cells // 2)
 
-    def run(material, A, numerics) -> dict:
-        rec = model_record(drive, material, model, A, depths, numerics, dem.velocity.columns.to_numpy(float))
+    def run(material, value, numerics) -> dict:
+        rec = model_record(drive, material, model, value, depths, numerics, dem.velocity.columns.to_numpy(float))
         return observables(rec, drive, material.mu_s, scale)
 
     def flat(o: dict) -> dict:
         """Every observable and law choice of one solve: its key -> (value, ...)."""
         return {**o["values"], **o["estimates"]}
 
-    A = setup.ngf_A if model == "ngf" else None
-    central_solve = run(setup.material, A, setup.numerics)
-    fine, coarse = flat(central_solve), flat(run(setup.material, A, coarse_numerics))
-    central = {**{k: getattr(setup.material, k) for k in PARAMETERS}, **({"A": A} if model == "ngf" else {})}
+    own = setup.own(model)
+    name, value = (own[0], own[1]) if own is not None else ("", None)
+    central_solve = run(setup.material, value, setup.numerics)
+    fine, coarse = flat(central_solve), flat(run(setup.material, value, coarse_numerics))
+    central = {**{k: getattr(setup.material, k) for k in PARAMETERS}, **({name: value} if own is not None else {})}
     cov = setup.covariance.copy()
-    if model == "ngf":
-        cov.loc["A", "A"] = setup.ngf_A_err ** 2
-    sens = Sensitivity.of(lambda q: flat(run(replace(setup.material, **{k: q[k] for k in PARAMETERS}), q.get("A"),
+    if own is not None:
+        cov.loc[name, name] = own[2] ** 2
+    sens = Sensitivity.of(lambda q: flat(run(replace(setup.material, **{k: q[k] for k in PARAMETERS}), q.get(name),
                                              coarse_numerics)), central, cov)
 
     def side(key) -> tuple[float, float, float]:
@@ -512,8 +525,9 @@ def choice_rows(dems, predictions: dict, setup: ModelSetup, ngf_note: str) -> pd
 
 def _table(dems, predictions: dict, setup: ModelSetup, ngf_note: str, keys) -> pd.DataFrame:
     rows = []
+    listed = [m for m in LABELS if m in setup.models or m == "ngf"]  # NGF's rows say why it is not predicted
     for d in dems:
-        for m in LABELS:
+        for m in listed:
             p = predictions.get((d.drive.label, m))
             note = (p if isinstance(p, str) else "") if m in setup.models else ngf_note
             pred = p if isinstance(p, OscPrediction) else None
@@ -673,7 +687,9 @@ def setup_of(cal, ngf_from: str | Path | None) -> tuple[ModelSetup, str]:
         ngf = json.loads(Path(ngf_from).read_text()).get("ngf") or {}
         require("A" in ngf, "--ngf-from", "a Stokes report's metrics.json with an NGF fit", str(ngf_from))
         ngf_A, ngf_err, ngf_note = float(ngf["A"]), float(ngf.get("A_err", 0.0)), ""
-    setup = ModelSetup(cal.material(), reps.cov(), ngf_A, ngf_err, calibrated_I=calibrate.calibrated_range(cal))
+    elasticity = getattr(cal, "elasticity", None) or {}
+    setup = ModelSetup(cal.material(), reps.cov(), ngf_A, ngf_err, calibrated_I=calibrate.calibrated_range(cal),
+                       elastic_G=elasticity.get("G"), elastic_G_err=float(elasticity.get("G_err", 0.0)))
     return setup, ngf_note
 
 

@@ -91,7 +91,7 @@ def verdict_parts(c: OscillationComparison) -> list[str]:
     """The verdict's sentences: per model, the observables' agreement; the history effect; the drives whose beds are
     not in one periodic state (the laws in omega have their own, ``law_sentences``)."""
     r, parts = c.rows, []
-    for m in LABELS:
+    for m in (m for m in LABELS if (r.model == m).any()):
         s = r[(r.model == m) & r.scored]
         if not len(s):
             note = r[r.model == m].note.iloc[0] if len(r[r.model == m]) else ""

@@ -9,7 +9,7 @@ from matplotlib.ticker import LogFormatter
 DEM_COLOUR = "C0"
 DRIVE_MARKERS = "o^vD<>"            # the drives' points where several share a panel (all in DEM blues)
 MODEL_STYLE = {"local": dict(color="#7b3294", ls="-"), "paper": dict(color="#e08214", ls="--"),
-               "ngf": dict(color="#8c510a", ls="-.")}
+               "ngf": dict(color="#8c510a", ls="-."), "elastic": dict(color="#1b7837", ls=":")}
 
 
 def wrap(text: str, width_in: float, fontsize: float = 12) -> str:

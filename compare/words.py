@@ -94,7 +94,7 @@ LAW_WORDS = {
 }
 
 #: a model in words (the rows' ``model`` key; its long label is the scorecard's ``model_label``)
-MODEL_WORDS = {"local": "local mu(I)", "paper": "the paper's model", "ngf": "NGF"}
+MODEL_WORDS = {"local": "local mu(I)", "paper": "the paper's model", "ngf": "NGF", "elastic": "elasto-plastic mu(I)"}
 
 
 def words(name: str, quantity: str = "") -> str:

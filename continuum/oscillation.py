@@ -2,7 +2,8 @@
 with omega > 0 (continuum.load): tau_w(t) = mu_w p_w sin(omega t) or u_w(t) = u_w sin(omega t), from a bed at rest.
 
 Models: the local velocity form (continuum.velocity.VelocityProblem; the rule's mu(I) or a constant viscosity,
-``Newtonian``) and NGF (continuum.ngf.FluidityProblem), both problems whose rate reads the load's wall value at time
+``Newtonian``), NGF (continuum.ngf.FluidityProblem) and elasto-plastic mu(I) (continuum.elastic.ElasticProblem,
+shear modulus G), all problems whose rate reads the load's wall value at time
 t (``Load.wall``), integrated through the method registry (continuum.integrators; scipy's Radau by default,
 ``OSCILLATION_NUMERICS``).  ``solve_oscillating`` samples given times; ``periodic_state`` marches cycle by cycle to
 the periodic state.  Signs: sigma_xy < 0 under a plate moving in +x; ``mu`` = sigma_xy/p (signed); ``mu_w`` is the
@@ -20,6 +21,7 @@ import numpy as np
 
 from granstokes.lib.validate import finite, require
 
+from .elastic import ElasticProblem
 from .integrators import integrate
 from .load import Load
 from .ngf import FluidityProblem, NonlocalFluidity
@@ -30,7 +32,7 @@ from .scene import BedScene, SceneNumerics
 from .solver import check_times
 from .velocity import VelocityProblem
 
-MODELS = ("local", "ngf")
+MODELS = ("local", "ngf", "elastic")
 #: the oscillating plate's numerics: 200 cells of the graded mesh, scipy's Radau at rtol 1e-6 (the verification's,
 #: docs/oscillation.md; compare.oscillation takes coarser ones)
 OSCILLATION_NUMERICS = SceneNumerics(n_cells=200)
@@ -84,10 +86,24 @@ def _ngf(material, scene, load, numerics, fluidity) -> _Model:
     return _Model(problem, problem.atol, problem.yc, sample)
 
 
+def _elastic(material, scene, load, numerics, G) -> _Model:
+    problem = ElasticProblem(material, scene, load, numerics.mesh(), G)
+
+    def sample(x, t):
+        s = problem.stress(x)
+        mu_w = load.mu_w * load.wave(t) if load.kind == "stress" else -s[0] / load.p_w
+        return problem.nodes(x, t), s / problem.p_face, mu_w
+
+    return _Model(problem, numerics.atol, problem.y[:-1] + problem.h / 2, sample)
+
+
 def _model(material: Material, scene: BedScene, load: Load, numerics: SceneNumerics, *, model, rule, fluidity,
-           law) -> _Model:
+           law, G=None) -> _Model:
     require(model in MODELS, "model", f"one of {MODELS}", model)
     require(load.oscillating, "load", "an oscillating load (omega > 0)", load)
+    if model == "elastic":
+        require(G is not None, "G", "the bed's shear modulus for model 'elastic'", G)
+        return _elastic(material, scene, load, numerics, G)
     if model == "local":
         require(fluidity is None, "fluidity", "None for the local model", fluidity)
         return _local(material, scene, load, numerics, rule, law)
@@ -172,12 +188,13 @@ def _estimate(run: _Model, fine, coarse_run: _Model, coarse):
 
 def solve_oscillating(material: Material, scene: BedScene, load: Load, times, *, model: str = "local",
                       rule: YieldRule = YieldRule(), fluidity: NonlocalFluidity | None = None, law=None,
-                      numerics: SceneNumerics = OSCILLATION_NUMERICS,
+                      G: float | None = None, numerics: SceneNumerics = OSCILLATION_NUMERICS,
                       error_estimate: bool = True) -> OscillatingSolution:
     """The oscillating plate from a bed at rest, sampled at ``times``: the local velocity form (``rule``'s mu(I),
-    or ``law``, e.g. Newtonian) or NGF (``fluidity``); ``error_estimate``: rerun on n_cells/2 (else zeros)."""
+    or ``law``, e.g. Newtonian), NGF (``fluidity``) or elasto-plastic mu(I) (shear modulus ``G``);
+    ``error_estimate``: rerun on n_cells/2 (else zeros)."""
     t = check_times(times)
-    options = dict(model=model, rule=rule, fluidity=fluidity, law=law)
+    options = dict(model=model, rule=rule, fluidity=fluidity, law=law, G=G)
     run = _model(material, scene, load, numerics, **options)
     states, nfev = _march(run, numerics, t)
     fine = _samples(run, t, states)
@@ -193,8 +210,9 @@ def solve_oscillating(material: Material, scene: BedScene, load: Load, times, *,
 
 def periodic_state(material: Material, scene: BedScene, load: Load, *, model: str = "local",
                    rule: YieldRule = YieldRule(), fluidity: NonlocalFluidity | None = None, law=None,
-                   numerics: SceneNumerics = OSCILLATION_NUMERICS, error_estimate: bool = True,
-                   tol: float = 1e-3, max_cycles: int = 60, phases: int = 32) -> PeriodicState:
+                   G: float | None = None, numerics: SceneNumerics = OSCILLATION_NUMERICS,
+                   error_estimate: bool = True, tol: float = 1e-3, max_cycles: int = 60,
+                   phases: int = 32) -> PeriodicState:
     """The periodic state, marched cycle by cycle from rest (the models as ``solve_oscillating``).
 
     Cycle n (time (n-1) T to n T, T = 2 pi/omega) is sampled at ``phases`` equally spaced phases,
@@ -205,7 +223,7 @@ def periodic_state(material: Material, scene: BedScene, load: Load, *, model: st
     require(isinstance(max_cycles, int) and max_cycles >= 2, "max_cycles", "an integer >= 2", max_cycles)
     require(isinstance(phases, int) and phases >= 4, "phases", "an integer >= 4", phases)
     require(finite(tol) and tol > 0, "tol", "a finite number > 0", tol)
-    options = dict(model=model, rule=rule, fluidity=fluidity, law=law)
+    options = dict(model=model, rule=rule, fluidity=fluidity, law=law, G=G)
     run = _model(material, scene, load, numerics, **options)
     t, fine, changes, nfev = _cycles(run, load, numerics, phases, tol, max_cycles)
     cycles = len(changes) + 1
