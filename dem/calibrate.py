@@ -682,7 +682,6 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
         done = completed_points(out, plan)[0] if resume else ()
         announce(plan.summary(out))
         announce(f"  {plan.cost_estimate(jobs, np, done)}")
-    fit_message = state.get("message", "").split(MODULUS_MESSAGE)[0]
     state["status"], state["message"] = "running", ""
 
     def save():  # the cells' entries are theirs (written by the tasks under the lock)
@@ -711,21 +710,19 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
         if stopped:
             key, o = stopped[0]
             raise (RunError if o.status == "failed" else Interrupted)(f"{key}: {o.message}")
-        if keep_fit:
-            if plan.modulus_seeds:
-                doc = json.loads((out / layout.CALIBRATION_JSON).read_text())
-                _write_elasticity(plan, out, state, doc)
-            state["message"] = fit_message
-        else:
+        if not keep_fit:
             cal = _fit_and_write(plan, out, state)
-            checks = [state["points"][plan.key(k, seed)]["checks"] for k, seed in plan.tasks()]
-            n_out, n_gas = sum(not c["passed"] for c in checks), sum(not c["dense_ok"] for c in checks)
-            state["message"] = (f"mu_s = {cal.mu_s:.4g}, mu_d = {cal.mu_d:.4g}, I0 = {cal.I0_dem:.4g}"
-                                + (f"; {n_out} point(s) failed a check and were left out" if n_out else "")
-                                + (f" ({n_gas} not dense)" if n_gas else ""))
+        elif plan.modulus_seeds:
+            _write_elasticity(plan, out, state, json.loads((out / layout.CALIBRATION_JSON).read_text()))
+        doc = json.loads((out / layout.CALIBRATION_JSON).read_text())
+        checks = [state["points"][plan.key(k, seed)]["checks"] for k, seed in plan.tasks()]
+        n_out, n_gas = sum(not c["passed"] for c in checks), sum(not c["dense_ok"] for c in checks)
+        state["message"] = (f"mu_s = {doc['mu_s']:.4g}, mu_d = {doc['mu_d']:.4g}, I0 = {doc['I0']:.4g}"
+                            + (f"; {n_out} point(s) failed a check and were left out" if n_out else "")
+                            + (f" ({n_gas} not dense)" if n_gas else ""))
         state["status"] = "complete"
         if plan.modulus_seeds:
-            e = json.loads((out / layout.CALIBRATION_JSON).read_text())["elasticity"]
+            e = doc["elasticity"]
             state["message"] += (f"{MODULUS_MESSAGE}{e['G']:.4g} +- {e['G_err']:.2g} ({e['G_dof']} dof), c_s = "
                                  f"{e['c_s']:.3g} +- {e['c_s_err']:.2g}, G/G_affine = {e['G_over_affine']:.2f}")
     except RunError as exc:

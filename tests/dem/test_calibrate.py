@@ -188,7 +188,7 @@ def smoke(tmp_path_factory):
 def test_smoke_calibration_files_follow_the_contract(smoke):
     doc = json.loads((smoke / layout.CALIBRATION_JSON).read_text())
     for key in ("mu_s", "mu_d", "I0", "I_convention", "ci95", "linear", "phi", "replicates", "grains", "provenance",
-                "excluded", "not_dense", "finite_size"):
+                "excluded", "not_dense", "finite_size", "elasticity"):
         assert key in doc
     assert doc["I_convention"] == "dem" and set(doc["ci95"]) == {"mu_s", "mu_d", "I0"}
     assert set(doc["linear"]) >= {"mu_1", "b", "ci95"} and set(doc["phi"]) >= {"phi_max", "a", "ci95"}
@@ -200,6 +200,11 @@ def test_smoke_calibration_files_follow_the_contract(smoke):
     for name in ("mu_s", "mu_d", "I0"):
         lo, hi = doc["ci95"][name]
         assert lo <= doc[name] <= hi
+    # the shear modulus (dem.modulus): the preset's one seed and the next two, errors over them, below the affine bound
+    e = doc["elasticity"]
+    assert e["seeds"] == [1, 2, 3] and e["G_dof"] == 2 and len(e["per_seed"]) == 3 and e["convention"].startswith("G =")
+    assert 0 < e["G"] < e["G_affine"] and e["c_s"] == pytest.approx(math.sqrt(e["G"] / e["phi"]))
+    assert (smoke / layout.MODULUS_PNG).is_file() and (layout.modulus_dir(smoke, 3) / layout.STATIC_CSV).is_file()
     points = pd.read_csv(smoke / layout.POINTS_CSV)
     assert tuple(points.columns) == layout.POINT_COLUMNS and len(points) == 4
 

@@ -196,6 +196,7 @@ def test_resume_of_a_finished_calibration_runs_only_its_missing_modulus_cells(tm
     seed_1 = modulus.analyse_cell(tmp_path / "s1", plan.modulus, 1)
     state = json.loads((out / layout.CALIBRATION_STATE).read_text())
     shear_cells = state["points"]
+    state["status"], state["message"] = "interrupted", "interrupted by SIGKILL; continue with --resume"
     state["modulus"] = {"modulus/seed-1": {"status": "complete", "wall_time": 3.0, "steps": 1000, "record": seed_1},
                         "modulus/seed-2": {"status": "running"}}
     (out / layout.CALIBRATION_STATE).write_text(json.dumps(state))
@@ -215,7 +216,9 @@ def test_resume_of_a_finished_calibration_runs_only_its_missing_modulus_cells(tm
     assert json.dumps(new, indent=2, default=str) == original and list(json.loads(original)) == list(new)
     assert (out / layout.POINTS_CSV).read_bytes() == points_before
     stored = json.loads((out / layout.CALIBRATION_STATE).read_text())
-    assert stored["points"] == shear_cells and stored["status"] == "complete" and "G = " in stored["message"]
+    assert stored["points"] == shear_cells and stored["status"] == "complete"
+    assert stored["message"].startswith("mu_s = 0.2743, mu_d = 0.7013, I0 = 0.2376; 5 point(s) failed a check")
+    assert f"; G = {e['G']:.4g} +- " in stored["message"]
     assert e["seeds"] == [1, 2, 3] and e["G_dof"] == 2
     G = [s["G"] for s in e["per_seed"]]
     assert np.allclose(G, [1000.0, 2000.0, 3000.0], rtol=0.01)
