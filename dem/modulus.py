@@ -7,41 +7,44 @@ the same insertion and compression until the contact part of P_yy reaches p, ``s
    still colliding, and at fixed volume that stress vanishes as they settle (measured on the disks at p = 20: P_yy
    49 -> 0).  ``fix deform/pressure`` on L_y alone (no shear) then holds sigma_yy = p with the normalised gain
    ``relax_gain`` = RELAX_I sqrt(p/rho_p)/d: from an unjammed state it compresses at the inertial number RELAX_I
-   (quasi-static, 45x slower than the compression), and at p it corrects P_yy - p over a time 1/(gain M/p) of
-   several transits (M ~ 0.1 k_n/d^(D-2), measured), so it neither rings nor unjams the packing.  It ends when |P_yy -
+   (quasi-static, 45x slower than the compression), and at p it corrects P_yy - p over a time 1/(gain M/p), M the
+   uniaxial modulus: several transits if M ~ 0.1 k_n/d^(D-2) (a guess from the compression's last step; the cells'
+   P_yy settles at p without ringing or unjamming).  It ends when |P_yy -
    p| < P_TOL p and the kinetic energy per grain is below KE_STATIC p d^D/kappa (the contact energy scale), checked
    every RELAX_CHECK transits, at most RELAX_MAX_STRAIN of compression.  Then L_y is held, a viscous drag
    (``fix viscous``, rate 1/transit) drains what still moves (rattlers, slow modes) for REST_TRANSITS, and the cell
    rests undamped for SETTLE_TRANSITS: that state is the static packing (``static.csv``: phi, Z, P_yy, tau, kinetic
-   energy).  Which packing it is matters: on the same grains a fast recompression (I ~ 2e-2) gave phi 0.800 and a
-   third of the G of this one (phi 0.812); a frictional packing's G follows its contact network (Agnolin & Roux,
-   PRE 76, 061304, 2007), so the protocol is fixed here and stated in calibration.json.
+   energy).  Which packing it is matters: on the disks at p = 20 (seed 1) quenching the compressed packing with a
+   viscous drag before a slow recompression gave phi 0.792-0.796 and G = 3400-5500, against phi 0.805 and G = 13200
+   here; a frictional packing's G follows its contact network (Agnolin & Roux, PRE 76, 061304, 2007), so the protocol
+   is fixed here and stated in calibration.json.
 2. *Oscillatory simple shear of the box tilt* at fixed L_y: ``fix deform 1 xy wiggle A T remap v``,
    gamma(t) = xy/L_y = gamma_0 sin(omega t), the velocity profile of the rate at t = 0 given first
    (``comm_modify vel yes``), CYCLES periods at each of the two AMPLITUDES, the smaller first (the first cycle of each
    is its start-up, dropped).  The period is TRANSITS transits of the cell (its width) at SPEED_FRACTION of the
-   contacts' speed d sqrt(k_t/m): quasi-static (the measured c_s is 0.2-0.5 of that speed, so >= 50 transits).
+   contacts' speed d sqrt(k_t/m): quasi-static (the measured c_s is ~0.4 of that speed: ~100 transits at c_s).
    Why L_y and not sigma_yy is held while it oscillates: in an isotropic linear solid simple shear changes sigma_yy
-   only at second order (gamma_0^2 ~ 1e-10 here), and the controller would add its own response at omega to the
+   only at second order (gamma_0^2 <= 4e-12 here), and the controller would add its own response at omega to the
    measured stress (its time constant is a few transits, so at the period it would shift G'' most); with L_y held
    the imposed strain is exactly known.  The packing's fabric couples sigma_yy to shear at first order (measured:
-   |sigma_yy first harmonic|/gamma_0 = ``normal_coupling``, ~0.2-0.5 G); holding sigma_yy instead would lower G by
-   coupling^2/M, ~1-2 % on the disks.
+   |sigma_yy first harmonic|/gamma_0 = ``normal_coupling``, 0.1-0.4 G); holding sigma_yy instead would lower G by
+   coupling^2/M (M the uniaxial modulus, not measured: a few % at most if M is 3-5 G).
 
-**Measured.** tau = -P_xy from ``compute pressure`` with ``compute temp/deform`` (as dem.shear; the kinetic part is
-~1e-10 of it here), gamma = xy/L_y from the box.  Each cycle after the first: least squares of tau(t) and gamma(t) on
-[1, t, sin omega t, cos omega t] (the linear term takes a slow drift of the static stress); the complex amplitudes
-give G* = tau_hat/gamma_hat = G' + i G'' (storage and loss moduli).  A seed's G' is the mean over its cycles (their
-spread: ``cycle_err``).  Over seeds: mean and standard error with n - 1 degrees of freedom (``G_dof``).
+**Measured.** tau = -P_xy from ``compute pressure`` with ``compute temp/deform`` (as dem.shear; the grains barely
+move: it is the contacts' stress), gamma = xy/L_y from the box.  Each cycle after the first: least squares of tau(t)
+and gamma(t) on [1, t, sin omega t, cos omega t] (the linear term takes a slow drift of the static stress); the
+complex amplitudes give G* = tau_hat/gamma_hat = G' + i G'' (storage and loss moduli).  A seed's G' is the mean over
+its cycles (their spread: ``cycle_err``).  Over seeds: mean and standard error, n - 1 degrees of freedom (``G_dof``).
 
 **Amplitudes.** gamma_0 kappa = AMPLITUDES (kappa = k_n/(p d) for Hooke: a contact's overlap is d/kappa): the
 contacts' tangential displacement is a fraction of the one that makes a mean contact slide (mu_p f_n/k_t ~ 1.75
 d/kappa), and gamma_0 is below 5 % of the yield strain mu_s p/G (recorded: ``linearity.gamma_0_over_yield``).
-Linearity: the same seeds at 10x the amplitude give G' within error (``linearity``: per-seed ratio, its mean and
-standard error, z of ratio - 1).  G is the smaller amplitude's.
+Linearity: the same seeds at 10x the amplitude (``linearity``: the per-seed ratio of G', its mean and standard error,
+whether it is 1 within Student-t's 95 %, and the softening it implies at gamma_0 if it grows linearly with the
+amplitude, as the contacts' microslip does).  G is the smaller amplitude's.
 
 **Wave speed.** c_s = sqrt(G/(phi rho_p)), phi the static packing's; its error propagated from G's and phi's
-(independent: phi's relative error is ~1e-3 of G's).
+(independent: phi's relative error is a few % of G's).
 
 **Affine estimate** (``affine_modulus``): every contact strained with the mean strain (Voigt), Hooke normal and
 tangential springs, contact directions isotropic, the branch vector one mean diameter d:
@@ -396,13 +399,19 @@ def modulus_figure(records, path: Path, title: str) -> Path:
         lo, hi = (p.min(), p.max()) if len(p) else (0.0, 1.0)
         pad = max(0.25 * (hi - lo), 0.3 * hi)
         ax.set_xlim(max(0.0, lo - pad), hi + pad)
-        ax.legend(fontsize=7, loc="lower right")
+        # G lies at 0.2-0.3 of G_aff, c_s at about half of the affine speed: the legends fill the gaps
+        ax.legend(fontsize=7, loc="center" if ax is ax_g else "lower right")
     ax_g.set_ylabel(r"shear modulus $G$ [$\rho_p g d$]")
     ax_c.set_ylabel(r"shear-wave speed $c_s$ [$\sqrt{g d}$]")
-    first = e[0] if e else {}
-    fig.suptitle(f"{title}\n" + (f"gamma_0 = {first['gamma_0']:.2g}, omega = {first['omega']:.3g} (period "
-                                 f"{first['period_over_transit']:.0f} transits at c_s), {len(first['seeds'])} seeds, "
-                                 f"errors over seeds ({first['G_dof']} dof)" if first else ""), fontsize=9)
+    if e:
+        g0 = sorted({x["gamma_0"] for x in e})
+        amplitude = f"{g0[0]:.2g}" if len(g0) == 1 else f"{g0[0]:.2g}-{g0[-1]:.2g}"
+        transits = sorted(round(x["period_over_transit"]) for x in e)
+        period = f"{transits[0]}" if len(transits) == 1 else f"{transits[0]}-{transits[-1]}"
+        seeds = sorted({len(x["seeds"]) for x in e})
+        title += (f"\ngamma_0 = {e[0]['protocol']['gamma_0_kappa'][0]:g}/kappa ({amplitude}), period {period} transits "
+                  f"at c_s, {'/'.join(map(str, seeds))} seeds, errors over seeds ({seeds[0] - 1} dof)")
+    fig.suptitle(title, fontsize=9)
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return Path(path)
