@@ -92,9 +92,10 @@ FINITE_SIZE_START = 5.0
 #: and series grow with the steps), from the smoke calibration's cells (2.1e5 at 3.4e5 steps) and the quick
 #: preset's (3.2e5 at 7.7e5 steps); bench/dem_costs.py measures a calibration's folder against the estimate
 CELL_BYTES, CELL_BYTES_PER_STEP = 1.2e5, 0.26
-#: bytes of a modulus cell's folder (its log, static line and two oscillation series of CYCLES x SAMPLES_PER_CYCLE
-#: rows each), measured on the disks' and spheres' cells
-MODULUS_BYTES = 3.5e5
+#: bytes of a modulus cell's folder: a fixed part (the two oscillation series of CYCLES x SAMPLES_PER_CYCLE rows, the
+#: script, the log's other runs) and one per check of its rest (each a LAMMPS run's summary in the log); the committed
+#: calibrations' 12 cells held 0.35-1.1 MB, 0.6-1.5 of this estimate (their steps: 0.7-1.3 of modulus_steps)
+MODULUS_BYTES, MODULUS_BYTES_PER_CHECK = 1.2e5, 2.5e3
 #: the strain a modulus cell's rest recompresses at its gain: the compression's last check overshoots p while the
 #: grains still collide, and at rest that packing loses its stress; measured 0.02-0.03 (disks p = 20, spheres p = 10)
 MODULUS_REST_STRAIN = 0.03
@@ -150,6 +151,13 @@ class CalibrationPlan:
         cell = self.modulus
         rest = round(MODULUS_REST_STRAIN / cell.relax_gain / self.dt)
         return round(SQUEEZE_TIME / self.dt) + cell.expected_steps(self.compress_steps + rest)
+
+    @property
+    def modulus_bytes(self) -> float:
+        """A modulus cell's expected folder size (MODULUS_BYTES, MODULUS_BYTES_PER_CHECK)."""
+        cell = self.modulus
+        checks = MODULUS_REST_STRAIN / cell.relax_gain / self.dt / cell.relax_check
+        return MODULUS_BYTES + MODULUS_BYTES_PER_CHECK * checks
 
     def modulus_seconds(self, speed: Throughput | None = None) -> float:
         """Expected LAMMPS wall time of one modulus cell alone at one rank (the shear cells' rate per grain-step)."""
@@ -218,7 +226,8 @@ class CalibrationPlan:
         each and CELL_BYTES_PER_STEP)."""
         left = [(k, dbl) for k, seed, dbl in self.cells() if self.key(k, seed, dbl) not in done]
         disk = sum(CELL_BYTES + CELL_BYTES_PER_STEP * (self.steps(k, dbl) + self.compress_steps) for k, dbl in left)
-        disk += MODULUS_BYTES * sum(self.modulus_key(s) not in done for s in self.modulus_seeds)
+        left_modulus = sum(self.modulus_key(s) not in done for s in self.modulus_seeds)
+        disk += self.modulus_bytes * left_modulus if left_modulus else 0.0
         return Estimate().plus("calibration", self.cost_seconds(jobs, np_, done, speed) + FIT_SECONDS, disk)
 
     def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
