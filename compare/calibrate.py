@@ -82,7 +82,8 @@ def fit(pairs: pd.DataFrame, wall_exclusion: float = WALL_EXCLUSION, I_min: floa
 
 
 def load(path: str | Path) -> Calibration:
-    """A calibration.json written by ``granstokes dem calibrate`` (its points.csv beside it)."""
+    """A calibration.json written by ``granstokes dem calibrate`` (its points.csv beside it); its ``elasticity``
+    (G, c_s of the static packing, dem.modulus) when it has one, else None."""
     path = Path(path)
     require(path.is_file(), "--calibration", "a calibration.json written by granstokes dem calibrate", str(path))
     try:
@@ -105,7 +106,8 @@ def load(path: str | Path) -> Calibration:
                         "phi_max": tuple(ph["ci95"]["phi_max"]), "phi_slope": tuple(ph["ci95"]["a"])},
                        {k: np.asarray(v, dtype=float) for k, v in replicates.items()}, points, PLANE_SHEAR,
                        str(path), float(doc.get("rms_mu", np.nan)), grains=doc["grains"],
-                       info={k: doc[k] for k in ("provenance", "protocol", "published") if k in doc})
+                       info={k: doc[k] for k in ("provenance", "protocol", "published") if k in doc},
+                       elasticity=doc.get("elasticity"))
 
 
 def calibrated_range(cal: Calibration) -> tuple[float, float]:

@@ -86,6 +86,7 @@ class Calibration:
     wall_exclusion: float | None = None
     I_min: float | None = None
     info: dict = field(default_factory=dict)
+    elasticity: dict | None = None  # calibration.json's "elasticity" (dem.modulus), None when it has none
 
     @property
     def is_prediction(self) -> bool:

@@ -22,12 +22,18 @@ Protocol (the config's ``[calibration]`` table, dem.config.Calibration; scene: d
   the excluded cells (``excluded``) and, with their kinetic fraction, those that are not dense (``not_dense``);
 * finite size (``finite_size`` of the table): at each of those points one more cell of twice the width,
   with the first seed and a start FINITE_SIZE_START times longer, compared with the same seed's cell of the
-  fit (``finite_size_record``); never fitted.
+  fit (``finite_size_record``); never fitted;
+* shear modulus (``modulus`` of the table, default on): per seed (the calibration's, at least dem.modulus.MIN_SEEDS)
+  the same cell at rest under sigma_yy = p, sheared at two small amplitudes (dem.modulus); calibration.json's
+  ``elasticity`` (G, c_s, the affine estimate, the linearity check) and DIR/modulus.png.
 
-Output (dem.layout): DIR/calibration.json, DIR/points.csv, DIR/state.json, DIR/I-K/seed-S/,
-DIR/finite-size/I-K/seed-S/.  Every cell (the doubled ones too) is a task of the project's executor
-(granstokes.lib.executor: ``jobs`` LAMMPS processes at once, longest first, a failed cell retried once);
-``resume`` reruns the unfinished ones (a cell restarts from its insertion: cells are short).
+Output (dem.layout): DIR/calibration.json, DIR/points.csv, DIR/state.json (``points``: the shear cells, ``modulus``:
+the modulus cells), DIR/I-K/seed-S/, DIR/finite-size/I-K/seed-S/, DIR/modulus/seed-S/, DIR/modulus.png.  Every cell
+(the doubled and modulus ones too) is a task of the project's executor (granstokes.lib.executor: ``jobs`` LAMMPS
+processes at once, longest first, a failed cell retried once); ``resume`` reruns the unfinished ones (a cell restarts
+from its insertion: cells are short).  A calibration whose fit is written (calibration.json, every shear cell
+complete) keeps it: a resume runs only the modulus cells it lacks (never a shear cell, nor their analysis and fit)
+and rewrites calibration.json with ``elasticity`` added, every other key as it was.
 """
 from __future__ import annotations
 
@@ -53,6 +59,7 @@ from granstokes.lib.toml_text import with_entries
 from granstokes.lib.validate import require
 
 from . import lammps_env, layout
+from . import modulus as modulus_cell
 from .config import Config, Grains, parse
 from .contact import Contact, mean_grain_volume
 from .estimate import Estimate, duration_text
@@ -85,6 +92,15 @@ FINITE_SIZE_START = 5.0
 #: and series grow with the steps), from the smoke calibration's cells (2.1e5 at 3.4e5 steps) and the quick
 #: preset's (3.2e5 at 7.7e5 steps); bench/dem_costs.py measures a calibration's folder against the estimate
 CELL_BYTES, CELL_BYTES_PER_STEP = 1.2e5, 0.26
+#: bytes of a modulus cell's folder: a fixed part (the two oscillation series of CYCLES x SAMPLES_PER_CYCLE rows, the
+#: script, the log's other runs) and one per check of its rest (each a LAMMPS run's summary in the log); the committed
+#: calibrations' 12 cells held 0.35-1.1 MB, 0.6-1.5 of this estimate (their steps: 0.7-1.3 of modulus_steps)
+MODULUS_BYTES, MODULUS_BYTES_PER_CHECK = 1.2e5, 2.5e3
+#: the strain a modulus cell's rest recompresses at its gain: the compression's last check overshoots p while the
+#: grains still collide, and at rest that packing loses its stress; measured 0.02-0.03 (disks p = 20, spheres p = 10)
+MODULUS_REST_STRAIN = 0.03
+#: where state.json's message gives the modulus after the fit's
+MODULUS_MESSAGE = "; G = "
 #: seconds of the fit and its bootstrap after the cells (1-2 s for 7-14 points x 1-3 seeds, measured)
 FIT_SECONDS = 2.0
 
@@ -112,6 +128,45 @@ class CalibrationPlan:
     @property
     def n_doubled(self) -> int:
         return _grains(self.doubled_config)
+
+    @property
+    def modulus(self) -> modulus_cell.ModulusCell | None:
+        """The modulus cells' oscillation (dem.modulus), None when the table leaves the modulus out."""
+        return modulus_cell.plan_cell(self.config, self.dt) if self.config.calibration.modulus else None
+
+    @property
+    def modulus_seeds(self) -> tuple[int, ...]:
+        """The modulus cells' seeds: the calibration's, completed to dem.modulus.MIN_SEEDS (none without modulus)."""
+        return modulus_cell.modulus_seeds(self.seeds) if self.config.calibration.modulus else ()
+
+    @staticmethod
+    def modulus_key(seed: int) -> str:
+        """state.json's key (under ``modulus``) of the modulus cell of ``seed``."""
+        return f"{layout.MODULUS}/seed-{seed}"
+
+    @property
+    def modulus_steps(self) -> int:
+        """A modulus cell's expected steps: the squeeze and compression, the rest's recompression
+        (MODULUS_REST_STRAIN at its gain), the drained and undamped rests, the oscillations."""
+        cell = self.modulus
+        rest = round(MODULUS_REST_STRAIN / cell.relax_gain / self.dt)
+        return round(SQUEEZE_TIME / self.dt) + cell.expected_steps(self.compress_steps + rest)
+
+    @property
+    def modulus_bytes(self) -> float:
+        """A modulus cell's expected folder size (MODULUS_BYTES, MODULUS_BYTES_PER_CHECK)."""
+        cell = self.modulus
+        checks = MODULUS_REST_STRAIN / cell.relax_gain / self.dt / cell.relax_check
+        return MODULUS_BYTES + MODULUS_BYTES_PER_CHECK * checks
+
+    def modulus_seconds(self, speed: Throughput | None = None) -> float:
+        """Expected LAMMPS wall time of one modulus cell alone at one rank (the shear cells' rate per grain-step)."""
+        speed = speed or measured()
+        return self.n_grains * self.modulus_steps / speed.rate(self.config.grains.dimension, "shear")
+
+    def keys(self) -> list[str]:
+        """Every cell's key: the shear cells' (``cells``), then the modulus cells'."""
+        return [self.key(*c) for c in self.cells()] + [self.modulus_key(s) for s in self.modulus_seeds]
 
     def tasks(self) -> list[tuple[int, int]]:
         """The fit's cells (point index, seed), longest first (smallest I), so that concurrent jobs finish together."""
@@ -161,7 +216,9 @@ class CalibrationPlan:
         speed, dim = speed or measured(), self.config.grains.dimension
         work = [self.task_seconds(k, dbl, speed) / speedup(self.n_doubled if dbl else self.n_grains, dim, np_)
                 for k, seed, dbl in self.cells() if self.key(k, seed, dbl) not in done]
-        return OVERHEAD + makespan(work, jobs, np_, contention=speed.contention)
+        work += [self.modulus_seconds(speed) / speedup(self.n_grains, dim, np_) for seed in self.modulus_seeds
+                 if self.modulus_key(seed) not in done]
+        return OVERHEAD + makespan(sorted(work, reverse=True), jobs, np_, contention=speed.contention)
 
     def estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
                  speed: Throughput | None = None) -> Estimate:
@@ -169,17 +226,21 @@ class CalibrationPlan:
         each and CELL_BYTES_PER_STEP)."""
         left = [(k, dbl) for k, seed, dbl in self.cells() if self.key(k, seed, dbl) not in done]
         disk = sum(CELL_BYTES + CELL_BYTES_PER_STEP * (self.steps(k, dbl) + self.compress_steps) for k, dbl in left)
+        left_modulus = sum(self.modulus_key(s) not in done for s in self.modulus_seeds)
+        disk += self.modulus_bytes * left_modulus if left_modulus else 0.0
         return Estimate().plus("calibration", self.cost_seconds(jobs, np_, done, speed) + FIT_SECONDS, disk)
 
     def cost_estimate(self, jobs: int = DEFAULT_JOBS, np_: int = DEFAULT_NP, done=(),
                       speed: Throughput | None = None) -> str:
         """One line: the calibration's size and its expected wall time on this machine."""
         speed = speed or measured()
-        if all(self.key(*cell) in done for cell in self.cells()):
+        if all(key in done for key in self.keys()):
             return "cost: none, every point is complete"
         left = " of what is left" if done else ""
         doubled = (f" and {len(self.finite_size)} finite-size cell(s) of {self.n_doubled}" if self.finite_size
                    else "")
+        if self.modulus_seeds:
+            doubled += f" and {len(self.modulus_seeds)} modulus cell(s) (~{count(self.modulus_steps)} steps each)"
         return (f"cost: {len(self.tasks())} cells of {self.n_grains} grains{doubled}, each compressing ~"
                 f"{count(self.compress_steps)} steps first; about "
                 f"{duration_text(self.cost_seconds(jobs, np_, done, speed))}{left} with {jobs} job(s) x {np_} rank(s) "
@@ -189,6 +250,8 @@ class CalibrationPlan:
         """One line: what the calibration measures, and where."""
         c = self.config.calibration
         doubled = f" (+ {len(self.finite_size)} cell(s) twice as wide)" if self.finite_size else ""
+        if self.modulus_seeds:
+            doubled += f" (+ the shear modulus, {len(self.modulus_seeds)} seeds)"
         shape = "disks" if self.config.grains.dimension == 2 else "spheres"
         return (f"dem calibrate: '{self.config.name}' grains ({self.config.grains.dimension}D {shape}), "
                 f"{len(self.points)} inertial numbers in [{c.I_min:g}, "
@@ -375,6 +438,72 @@ def _run_cell(out: Path, k: int, seed: int, doubled: bool, np_: int, launcher: s
     return Outcome(entry["status"], entry.get("message", ""))
 
 
+def run_modulus_cell(out: str, seed: int, np_: int, launcher: str | None, progress: bool, position: int) -> Outcome:
+    """The executor's task: the modulus cell of ``seed`` (dem.modulus) of the calibration folder ``out``; a complete
+    cell is re-analysed from its series when they are there (else its stored record stands).  Its entry in
+    state.json's ``modulus`` is written under the folder's lock; a cell stopped before its end restarts from its
+    insertion."""
+    out = Path(out)
+    plan = plan_calibration(parse((out / layout.CONFIG_TOML).read_text()))
+    cell, state_path, key = plan.modulus, out / layout.CALIBRATION_STATE, plan.modulus_key(seed)
+    d = layout.modulus_dir(out, seed)
+    old = json.loads(state_path.read_text()).get("modulus", {}).get(key, {})
+
+    def store(entry):
+        staging.update_json(state_path, lambda doc: doc.setdefault("modulus", {}).update({key: entry}))
+
+    def analysed(entry):
+        return {**entry, "record": {**modulus_cell.analyse_cell(d, cell, seed), "wall_time": entry.get("wall_time"),
+                                    "steps": entry.get("steps")}}
+
+    if old.get("status") == "complete":
+        series = [d / layout.STATIC_CSV] + [d / layout.modulus_series_csv(k) for k in range(len(cell.amplitudes))]
+        if all(f.is_file() for f in series):
+            store(analysed(old))
+        return Outcome("complete")
+    if d.exists():
+        with staging.locked(d):  # a cell left running by a stopped calibration elsewhere ends first
+            pass
+        shutil.rmtree(d)
+    d.mkdir(parents=True)
+    (d / layout.SHEAR_IN).write_text(modulus_cell.modulus_script(plan.config, cell, plan.n_grains, seed))
+    store({"status": "running", "started": _now()})
+    entry = {"status": "interrupted", "message": "continue with --resume"}
+    try:
+        with staging.locked(d):
+            info = _Lammps(np_, launcher, progress).run(layout.SHEAR_IN, d, plan, plan.modulus_steps, 0,
+                                                        f"modulus seed {seed}", position=position)
+            entry = analysed({"status": "complete", "wall_time": info["wall_time"], "steps": info["last_step"]})
+    except RunError as exc:
+        entry = {"status": "failed", "message": str(exc)}
+    except (Interrupted, KeyboardInterrupt):
+        pass
+    finally:
+        store(entry)
+    return Outcome(entry["status"], entry.get("message", ""))
+
+
+def elasticity_record(plan: CalibrationPlan, state: dict, mu_s: float) -> dict:
+    """calibration.json's ``elasticity`` from state.json's complete modulus cells (dem.modulus.elasticity), with
+    their cost and the code that analysed them."""
+    entries = [state["modulus"][plan.modulus_key(s)] for s in plan.modulus_seeds]
+    walls = [e.get("wall_time") or 0.0 for e in entries]
+    cost = {"lammps_cpu_seconds": sum(walls), "seconds_per_cell": walls,
+            "steps_per_cell": [e.get("steps") for e in entries], "n_grains": plan.n_grains}
+    per_seed = [{k: v for k, v in e["record"].items() if k not in ("wall_time", "steps")} for e in entries]
+    record = modulus_cell.elasticity(per_seed, plan.config, plan.modulus, mu_s, cost)
+    return {**record, "analysed_by": provenance()["git"]}
+
+
+def _write_elasticity(plan: CalibrationPlan, out: Path, state: dict, doc: dict) -> dict:
+    """``doc`` (calibration.json's content) with ``elasticity`` set, written, and modulus.png beside it."""
+    doc["elasticity"] = elasticity_record(plan, state, doc["mu_s"])
+    staging.write_json(out / layout.CALIBRATION_JSON, doc)
+    modulus_cell.modulus_figure([(plan.config.p_w, doc["elasticity"])], out / layout.MODULUS_PNG,
+                                f"{plan.config.name}: shear modulus of the static packing")
+    return doc["elasticity"]
+
+
 def not_dense(plan: CalibrationPlan, state: dict) -> list[dict]:
     """calibration.json's ``not_dense``: every cell of the fit that is not dense flow, with its indicator and
     the threshold (``kinetic_fraction``)."""
@@ -432,6 +561,8 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
            "protocol": plan.as_dict(), "cost": {"lammps_cpu_seconds": wall, "grain_steps": plan.grain_steps()},
            "law": cal.as_dict()["law"]}
     staging.write_json(out / layout.CALIBRATION_JSON, doc)
+    if plan.modulus_seeds:
+        _write_elasticity(plan, out, state, doc)
     return cal
 
 
@@ -512,26 +643,40 @@ def check_calibration(cfg: Config, out: str | Path, jobs: int = DEFAULT_JOBS, np
 
 
 def completed_points(out: str | Path, plan: CalibrationPlan) -> tuple[list[str], list[str]]:
-    """The keys of a calibration folder's complete cells (each point and seed, and the finite-size cells) and of
-    those left, in run order."""
-    points = json.loads((Path(out) / layout.CALIBRATION_STATE).read_text()).get("points", {})
+    """The keys of a calibration folder's complete cells (each point and seed, the finite-size cells, then the
+    modulus cells) and of those left, in run order."""
+    state = json.loads((Path(out) / layout.CALIBRATION_STATE).read_text())
+    entries = {**state.get("points", {}), **state.get("modulus", {})}
     done, left = [], []
-    for cell in plan.cells():
-        key = plan.key(*cell)
-        (done if points.get(key, {}).get("status") == "complete" else left).append(key)
+    for key in plan.keys():
+        (done if entries.get(key, {}).get("status") == "complete" else left).append(key)
     return done, left
+
+
+def fit_written(out: str | Path, plan: CalibrationPlan) -> bool:
+    """Whether a calibration folder's fit is written: calibration.json is there and every shear cell (the fit's and
+    the finite-size ones) is complete in state.json.  Such a calibration keeps its fit (``calibrate``)."""
+    out = Path(out)
+    if not ((out / layout.CALIBRATION_JSON).is_file() and (out / layout.CALIBRATION_STATE).is_file()):
+        return False
+    points = json.loads((out / layout.CALIBRATION_STATE).read_text()).get("points", {})
+    return all(points.get(plan.key(*c), {}).get("status") == "complete" for c in plan.cells())
 
 
 def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS, np: int = DEFAULT_NP,
               resume: bool = False, launcher: str | None = None, progress: bool = True,
               announce=None, executor: Executor | None = None) -> CalibrateResult:
-    """Run (or with ``resume`` continue: unfinished points rerun, finished ones re-analysed, then the
-    fit) the calibration of ``cfg`` into ``out`` on ``executor`` (default: a local one of ``jobs`` x ``np``
+    """Run (or with ``resume`` continue: unfinished cells rerun, finished ones re-analysed, then the fit and the
+    elasticity) the calibration of ``cfg`` into ``out`` on ``executor`` (default: a local one of ``jobs`` x ``np``
     slots); everything is validated before the folder is touched (``check_calibration``: ValueError /
-    LammpsNotFound, nothing written); ``announce(line)`` then receives a summary and the cost estimate."""
+    LammpsNotFound, nothing written); ``announce(line)`` then receives a summary and the cost estimate.  A resumed
+    calibration whose fit is written (``fit_written``) keeps it: only its modulus cells run (those not complete),
+    and calibration.json is rewritten with ``elasticity`` set, its other keys as they were (the result's
+    ``calibration`` is then None)."""
     plan = check_calibration(cfg, out, jobs, np, resume, launcher)
     out = Path(out)
     state_path = out / layout.CALIBRATION_STATE
+    keep_fit = resume and fit_written(out, plan)
     if resume:
         state = json.loads(state_path.read_text())
         state.setdefault("resumes", []).append(_now())
@@ -548,33 +693,47 @@ def calibrate(cfg: Config, text: str, out: str | Path, jobs: int = DEFAULT_JOBS,
         announce(f"  {plan.cost_estimate(jobs, np, done)}")
     state["status"], state["message"] = "running", ""
 
-    def save():
-        staging.update_json(state_path, lambda doc: doc.update({k: v for k, v in state.items() if k != "points"}
-                                                               | {"points": doc.get("points", {})}))
+    def save():  # the cells' entries are theirs (written by the tasks under the lock)
+        staging.update_json(state_path, lambda doc: doc.update(
+            {k: v for k, v in state.items() if k not in ("points", "modulus")} | {"points": doc.get("points", {})}))
 
     save()
-    tasks = [Task(plan.key(k, seed, doubled), run_finite_size_cell if doubled else run_cell,
-                  (str(out), k, seed, np, launcher, progress, i % jobs), cost=plan.task_seconds(k, doubled), ranks=np)
-             for i, (k, seed, doubled) in enumerate(plan.cells())]
+    tasks = [] if keep_fit else [
+        Task(plan.key(k, seed, doubled), run_finite_size_cell if doubled else run_cell,
+             (str(out), k, seed, np, launcher, progress, i % jobs), cost=plan.task_seconds(k, doubled), ranks=np)
+        for i, (k, seed, doubled) in enumerate(plan.cells())]
+    tasks += [Task(plan.modulus_key(seed), run_modulus_cell, (str(out), seed, np, launcher, progress, i % jobs),
+                   cost=plan.modulus_seconds(), ranks=np) for i, seed in enumerate(plan.modulus_seeds)]
     t0 = time.monotonic()
     cal, signum = None, None
     allow_lammps()
     try:
         with sigterm_interrupts():
-            outcomes = (executor or Executor(jobs * np)).run(tasks, stop=stop_all_lammps)
-        state["points"] = json.loads(state_path.read_text())["points"]
-        fit_cells = {plan.key(k, seed) for k, seed in plan.tasks()}  # a finite-size cell's failure is its record's
-        stopped = [(key, o) for key, o in outcomes.items() if o.status != "complete" and key in fit_cells]
+            outcomes = (executor or Executor(jobs * np)).run(tasks, stop=stop_all_lammps) if tasks else {}
+        stored = json.loads(state_path.read_text())
+        state["points"], state["modulus"] = stored["points"], stored.get("modulus", {})
+        # a finite-size cell's failure is its record's; the fit's and the modulus's cells must be complete
+        needed = {plan.modulus_key(seed) for seed in plan.modulus_seeds}
+        needed |= set() if keep_fit else {plan.key(k, seed) for k, seed in plan.tasks()}
+        stopped = [(key, o) for key, o in outcomes.items() if o.status != "complete" and key in needed]
         if stopped:
             key, o = stopped[0]
             raise (RunError if o.status == "failed" else Interrupted)(f"{key}: {o.message}")
-        cal = _fit_and_write(plan, out, state)
-        state["status"] = "complete"
+        if not keep_fit:
+            cal = _fit_and_write(plan, out, state)
+        elif plan.modulus_seeds:
+            _write_elasticity(plan, out, state, json.loads((out / layout.CALIBRATION_JSON).read_text()))
+        doc = json.loads((out / layout.CALIBRATION_JSON).read_text())
         checks = [state["points"][plan.key(k, seed)]["checks"] for k, seed in plan.tasks()]
         n_out, n_gas = sum(not c["passed"] for c in checks), sum(not c["dense_ok"] for c in checks)
-        state["message"] = (f"mu_s = {cal.mu_s:.4g}, mu_d = {cal.mu_d:.4g}, I0 = {cal.I0_dem:.4g}"
+        state["message"] = (f"mu_s = {doc['mu_s']:.4g}, mu_d = {doc['mu_d']:.4g}, I0 = {doc['I0']:.4g}"
                             + (f"; {n_out} point(s) failed a check and were left out" if n_out else "")
                             + (f" ({n_gas} not dense)" if n_gas else ""))
+        state["status"] = "complete"
+        if plan.modulus_seeds:
+            e = doc["elasticity"]
+            state["message"] += (f"{MODULUS_MESSAGE}{e['G']:.4g} +- {e['G_err']:.2g} ({e['G_dof']} dof), c_s = "
+                                 f"{e['c_s']:.3g} +- {e['c_s_err']:.2g}, G/G_affine = {e['G_over_affine']:.2f}")
     except RunError as exc:
         state["status"], state["message"] = "failed", str(exc)
     except (KeyboardInterrupt, Interrupted) as exc:

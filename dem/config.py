@@ -20,6 +20,7 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
     output = {plate = 0.02, thermo = 0.1, atoms = 1.0, contacts = 5.0, profiles = 0.5, restart = 2.0}
     prepare = {ke_per_grain = 1e-5, settle_ke_per_grain = 0.03}
     # mu(I) calibration by plane shear of the same grains at p = p_w (``granstokes dem calibrate``)
+    # (and the shear modulus of its static packing: modulus = false leaves it out)
     calibration = {I_min = 1e-3, I_max = 0.5, points = 8, seeds = [1, 2], width = 10.0, strain = 5.0}
 
 The drives and the ``material`` table (mu_s, mu_d, I0, I_convention, phi: no defaults, a scene's size
@@ -233,7 +234,8 @@ class Calibration:
     each seed an independent cell of width ``width`` d (square in 2D, cubic in 3D), sheared
     ``strain_start`` (discarded) then ``strain`` (measured), sampled every ``sample``.  ``finite_size``: some
     of the points' inertial numbers, at each of which one more cell of twice the width (first seed) checks
-    the cell size (dem.calibrate; not fitted)."""
+    the cell size (dem.calibrate; not fitted).  ``modulus``: the shear modulus G(p) and wave speed c_s of the cell's
+    static packing by oscillatory shear (dem.modulus; at least 3 seeds, the calibration's first)."""
 
     I_min: float = 5e-3
     I_max: float = 0.7
@@ -247,8 +249,10 @@ class Calibration:
     profile: float = 0.25
     I: tuple[float, ...] | None = None
     finite_size: tuple[float, ...] = ()
+    modulus: bool = True
 
     def __post_init__(self):
+        require(isinstance(self.modulus, bool), "calibration.modulus", "true or false", self.modulus)
         if self.I is not None:
             require(len(self.I) >= 3 and all(finite(v) and 0 < v <= 1.0 for v in self.I)
                     and all(a < b for a, b in zip(self.I, self.I[1:])), "calibration.I",

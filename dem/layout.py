@@ -18,6 +18,9 @@ Calibration folder (``granstokes dem calibrate``)::
     DIR/I-K/seed-S/                     in.lammps, log.lammps, series.csv (``SHEAR_SERIES_COLUMNS``), profile.txt
                                         (u_x in bins across L_y), blocks.csv (``BLOCK_COLUMNS``: block means)
     DIR/finite-size/I-K/seed-S/         the same files of a cell twice as wide (``FINITE_SIZE``: the finite-size check)
+    DIR/modulus/seed-S/                 the shear modulus's cell (dem.modulus): in.lammps, log.lammps, static.csv
+                                        (``STATIC_COLUMNS``), oscillation-K.csv (``MODULUS_SERIES_COLUMNS``)
+    DIR/modulus.png                     G and c_s against p with the affine estimate
 
 Atom types: ``BED`` grains (the coarse-grained material), ``BASE`` (frozen rough base), ``PLATE``
 (one rigid body).  Dump columns: ``ATOM_COLUMNS`` (atoms.dump, sorted by id) and ``CONTACT_COLUMNS``
@@ -44,6 +47,7 @@ SEGMENTS, RESTART_DIR = "segments", "restart"
 CALIBRATION_JSON, POINTS_CSV, CALIBRATION_STATE = "calibration.json", "points.csv", "state.json"
 SHEAR_SERIES_CSV, SHEAR_PROFILE_TXT, SHEAR_IN, BLOCKS_CSV = "series.csv", "profile.txt", "in.lammps", "blocks.csv"
 FINITE_SIZE = "finite-size"
+MODULUS, STATIC_CSV, MODULUS_PNG = "modulus", "static.csv", "modulus.png"
 
 # --- columns -------------------------------------------------------------------------------------
 PLATE_COLUMNS = ("step", "t", "x", "y", "u_x", "u_y", "f_x", "f_y", "u_c", "n_c")
@@ -55,6 +59,10 @@ GRAIN_COLUMNS = ("id", "type", "radius", "mass")
 POINT_COLUMNS = ("I", "I_err", "mu", "mu_err", "phi", "phi_err", "p", "strain", "seed")
 SHEAR_SERIES_COLUMNS = ("step", "t", "lx", "ly", "xy", "p_xx", "p_yy", "p_xy", "p_yy_kin", "phi", "T")
 BLOCK_COLUMNS = ("block", "tau", "p", "phi", "rate", "seed", "point")
+#: the modulus cell's oscillation series (ke: kinetic energy per grain, Z: contacts per grain) and its static packing
+#: before it (rattlers: the fraction of grains with fewer than 2 contacts)
+MODULUS_SERIES_COLUMNS = ("step", "t", "lx", "ly", "xy", "p_xx", "p_yy", "p_xy", "phi", "ke", "Z")
+STATIC_COLUMNS = ("step", "t", "ly", "p_xx", "p_yy", "p_xy", "phi", "Z", "rattlers", "ke")
 
 #: profile bin height in d (LAMMPS in-run chunk averages, profiles.csv)
 PROFILE_BIN = 1.0
@@ -75,6 +83,16 @@ def prepare_dir(run: Path, seed: int) -> Path:
 def point_dir(folder: Path, index: int, seed: int) -> Path:
     """Folder of calibration point ``index`` (0-based, increasing I) and seed."""
     return Path(folder) / f"I-{index}" / f"seed-{seed}"
+
+
+def modulus_dir(folder: Path, seed: int) -> Path:
+    """Folder of the calibration's modulus cell of ``seed``."""
+    return Path(folder) / MODULUS / f"seed-{seed}"
+
+
+def modulus_series_csv(k: int) -> str:
+    """The modulus cell's series at its ``k``-th amplitude."""
+    return f"oscillation-{k}.csv"
 
 
 def stage_key(seed: int, drive: str | None = None) -> str:

@@ -93,17 +93,19 @@ def test_finite_size_cells_are_planned_costed_and_resumed_but_not_fitted(tmp_pat
     assert plan.point(3, True).measure_steps == plan.points[3].measure_steps
     work = [plan.task_seconds(k, dbl) for k, _, dbl in plan.cells()]
     assert work == sorted(work, reverse=True) and plan.task_seconds(3, True) > 4 * plan.task_seconds(3)
-    assert plan.cost_seconds(jobs=1, speed=measured()) == pytest.approx(OVERHEAD + sum(work))
+    modulus = [plan.modulus_seconds()] * len(plan.modulus_seeds)  # the shear modulus's cells run beside them
+    assert plan.cost_seconds(jobs=1, speed=measured()) == pytest.approx(OVERHEAD + sum(work) + sum(modulus))
     assert "and 1 finite-size cell(s) of" in plan.cost_estimate()
     assert plan.as_dict()["finite_size"]["I"] == [pytest.approx(0.3)]
     key = plan.key(3, 1, True)
     assert key == "finite-size/I-3/seed-1" and key not in {plan.key(k, s) for k, s in plan.tasks()}
     fit_keys = {plan.key(k, s) for k, s in plan.tasks()}
-    assert plan.cost_estimate(done=fit_keys) != "cost: none, every point is complete"
-    assert plan.cost_estimate(done=fit_keys | {key}) == "cost: none, every point is complete"
+    modulus_keys = {plan.modulus_key(s) for s in plan.modulus_seeds}
+    assert plan.cost_estimate(done=fit_keys | modulus_keys) != "cost: none, every point is complete"
+    assert plan.cost_estimate(done=fit_keys | modulus_keys | {key}) == "cost: none, every point is complete"
     (tmp_path / layout.CALIBRATION_STATE).write_text(json.dumps({"points": {key: {"status": "complete"}}}))
     done, left = completed_points(tmp_path, plan)
-    assert done == [key] and sorted(left) == sorted(fit_keys)
+    assert done == [key] and sorted(left) == sorted(fit_keys | modulus_keys)
 
 
 def _synthetic_cell(folder, kinetic, n=600, rate=1.0, mu=0.4, p=20.0, seed=0):
@@ -186,7 +188,7 @@ def smoke(tmp_path_factory):
 def test_smoke_calibration_files_follow_the_contract(smoke):
     doc = json.loads((smoke / layout.CALIBRATION_JSON).read_text())
     for key in ("mu_s", "mu_d", "I0", "I_convention", "ci95", "linear", "phi", "replicates", "grains", "provenance",
-                "excluded", "not_dense", "finite_size"):
+                "excluded", "not_dense", "finite_size", "elasticity"):
         assert key in doc
     assert doc["I_convention"] == "dem" and set(doc["ci95"]) == {"mu_s", "mu_d", "I0"}
     assert set(doc["linear"]) >= {"mu_1", "b", "ci95"} and set(doc["phi"]) >= {"phi_max", "a", "ci95"}
@@ -198,6 +200,11 @@ def test_smoke_calibration_files_follow_the_contract(smoke):
     for name in ("mu_s", "mu_d", "I0"):
         lo, hi = doc["ci95"][name]
         assert lo <= doc[name] <= hi
+    # the shear modulus (dem.modulus): the preset's one seed and the next two, errors over them, below the affine bound
+    e = doc["elasticity"]
+    assert e["seeds"] == [1, 2, 3] and e["G_dof"] == 2 and len(e["per_seed"]) == 3 and e["convention"].startswith("G =")
+    assert 0 < e["G"] < e["G_affine"] and e["c_s"] == pytest.approx(math.sqrt(e["G"] / e["phi"]))
+    assert (smoke / layout.MODULUS_PNG).is_file() and (layout.modulus_dir(smoke, 3) / layout.STATIC_CSV).is_file()
     points = pd.read_csv(smoke / layout.POINTS_CSV)
     assert tuple(points.columns) == layout.POINT_COLUMNS and len(points) == 4
 

@@ -140,11 +140,15 @@ def test_a_calibration_runs_its_cells_longest_first_over_the_jobs():
     cp = plan_calibration(config.preset("smoke")[0])
     work = [cp.task_seconds(k, speed=SPEED) for k, _ in cp.tasks()]
     assert work == sorted(work, reverse=True) and len(work) == len(cp.points)
+    # the shear modulus's cells (dem.modulus: at least 3 seeds, the preset's one and the next two) among them
+    assert cp.modulus_seeds == (1, 2, 3) and cp.modulus_seconds(SPEED) > 0
+    work = sorted(work + [cp.modulus_seconds(SPEED)] * 3, reverse=True)
     assert cp.cost_seconds(jobs=1, speed=SPEED) == pytest.approx(OVERHEAD + sum(work))
     assert cp.cost_seconds(jobs=2, speed=SPEED) == pytest.approx(OVERHEAD + makespan(work, 2, contention=CONTENTION))
     assert cp.cost_seconds(jobs=2, speed=SPEED) < cp.cost_seconds(jobs=1, speed=SPEED)
-    assert cp.cost_estimate(done={cp.key(k, s) for k, s in cp.tasks()}, speed=SPEED) == \
-        "cost: none, every point is complete"
+    shear = {cp.key(k, s) for k, s in cp.tasks()}
+    assert cp.cost_estimate(done=shear, speed=SPEED) != "cost: none, every point is complete"
+    assert cp.cost_estimate(done=set(cp.keys()), speed=SPEED) == "cost: none, every point is complete"
 
 
 @pytest.mark.slow

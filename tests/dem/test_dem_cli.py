@@ -75,8 +75,8 @@ def test_calibrate_resume_reads_the_stored_config_and_counts_the_points(tmp_path
     assert main(["dem", "calibrate", "--resume", "--out", str(out), "--dry-run"]) == 0
     err = capsys.readouterr().err
     # run order: longest (smallest I) first
-    assert ("resume: 2 of 7 points complete (I-0/seed-1, I-3/seed-1); left: I-1/seed-1, I-2/seed-1, I-4/seed-1, "
-            "I-5/seed-1, I-6/seed-1") in err
+    assert ("resume: 2 of 10 points complete (I-0/seed-1, I-3/seed-1); left: I-1/seed-1, I-2/seed-1, I-4/seed-1, "
+            "I-5/seed-1, I-6/seed-1, modulus/seed-1, modulus/seed-2, modulus/seed-3") in err  # the shear modulus's last
     assert "of what is left" in err
 
 
