@@ -109,12 +109,14 @@ class DriveSpec:
                    int(r.get("grains", 0)), int(r.get("dimension", 0)), number("t_s"), number("duration"))
 
 
-def with_transit_time(drive: DriveSpec, grains: dict, p_grains: float) -> DriveSpec:
-    """``drive`` with its shear-wave transit time over the bed filled in where its record lacks it (tables written
-    before run.json held it): the bed's depth over its grains' contact shear-wave speed at the drive's p_w
-    (dem.contact.Contact.shear_wave_speed, as dem.sizing times it), ``grains`` the calibration's grains record, whose
-    rigidity kappa is stated at ``p_grains`` (one stiffness k_n at every pressure: dem.contact.rigidity; NaN: at the
-    drive's p_w, as compare.comparison.check_grains reads it)."""
+def with_transit_time(drive: DriveSpec, grains: dict, p_grains: float, elasticity: dict | None = None) -> DriveSpec:
+    """``drive`` with its shear-wave transit time over the bed: the bed's depth over the measured shear-wave speed
+    c_s of the calibration's packing where the calibration holds it (``elasticity``: dem.modulus); else the run's
+    own (the contacts' speed d sqrt(k_t/m), as dem.sizing times it), or, where the record lacks it (tables written
+    before run.json held it), that speed from the calibration's ``grains``, whose rigidity kappa is stated at
+    ``p_grains`` (one stiffness k_n at every pressure: dem.contact.rigidity; NaN: at the drive's p_w)."""
+    if elasticity:
+        return replace(drive, transit_time=drive.depth / float(elasticity["c_s"]))
     if np.isfinite(drive.transit_time):
         return drive
     p_w = drive.load.p_w

@@ -449,7 +449,7 @@ def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model
         pred.values[observable] if choice is None else pred.estimates[observable, choice])
     if pred is not None:
         censored = observable in CENSORED and (choice is None or choice.estimator == "edge")
-        note = _scene(dem) or beyond or _unmeasurable(dem, v, err, censored) or _unpredicted(p, num, s_cal)
+        note = _scene(dem, model) or beyond or _unmeasurable(dem, v, err, censored) or _unpredicted(p, num, s_cal)
     elif not note.startswith("not predicted"):
         note = f"not predicted: {note}"
     scored = not note
@@ -469,17 +469,22 @@ def _row(dem: DemOscillation, pred: OscPrediction | None, observable: str, model
 CENSORED = ("yielded_depth", "remobilization_strain")
 
 
-def _scene(dem: DemOscillation) -> str:
-    """Why the scene cannot support the drive's rows against the rigid-plastic models, or "": a period shorter than
-    TRANSITS_BEFORE_COMPARISON shear-wave transits over the bed (the bed answers elastically within a cycle, as the
-    Stokes drives before their comparison starts); a bed not in one periodic state (``unsettled``: it jams or
-    drifts within the kept cycles, or is in another state than the other beds, so the cycles' and the beds' mean
-    is no state's: the drive's rows are kept, unscored, and the report counts it); or a plate that slips by more
-    than SLIP_MAX against the grains touching it (its speed and force are not the bed's, and every model's plate
-    grips: the rows read against the contact layer's speed are kept as choices, unscored, as in the Stokes drives).
-    A drive whose tables carry no transit time is not checked for it."""
+#: the models with an elastic bed: the elastic regime of a fast cycle is theirs to predict
+ELASTIC_MODELS = ("elastic",)
+
+
+def _scene(dem: DemOscillation, model: str) -> str:
+    """Why the scene cannot support the drive's rows against ``model``, or "": for a rigid-plastic model (not in
+    ELASTIC_MODELS) a period shorter than TRANSITS_BEFORE_COMPARISON shear-wave transits over the bed (the bed answers
+    elastically within a cycle, as the Stokes drives before their comparison starts; the transit at the measured
+    shear-wave speed where the calibration holds it: compare.drive.with_transit_time); a bed not in one periodic
+    state (``unsettled``: it jams or drifts within the kept cycles, or is in another state than the other beds, so
+    the cycles' and the beds' mean is no state's: the drive's rows are kept, unscored, and the report counts it); or
+    a plate that slips by more than SLIP_MAX against the grains touching it (its speed and force are not the bed's,
+    and every model's plate grips: the rows read against the contact layer's speed are kept as choices, unscored, as
+    in the Stokes drives).  A drive whose tables carry no transit time is not checked for it."""
     transits = dem.drive.load.period / dem.drive.transit_time
-    if transits < TRANSITS_BEFORE_COMPARISON:
+    if transits < TRANSITS_BEFORE_COMPARISON and model not in ELASTIC_MODELS:
         return (f"not scored: the plate's period spans {transits:.2g} shear-wave transits of the bed (fewer than "
                 f"{TRANSITS_BEFORE_COMPARISON:g}): an elastic response, which rigid-plastic models do not have")
     if beds := unsettled(dem):

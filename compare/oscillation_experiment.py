@@ -89,7 +89,7 @@ class OscillatingPlate(Experiment):
         setup, ngf_note = setup_of(self.independent, self.ngf_from)
         cal = self.independent
         p_cal = float(cal.info.get("protocol", {}).get("p", np.nan))
-        dems = [analyse_dem(with_transit_time(d, cal.grains, p_cal), records, setup.material.mu_s)
+        dems = [analyse_dem(with_transit_time(d, cal.grains, p_cal, cal.elasticity), records, setup.material.mu_s)
                 for d, records in dem]
         return dem, dems, setup, ngf_note
 

@@ -2,7 +2,7 @@
 the bed's depth over d sqrt(k_t/m), worked out here for the committed disks (Hooke, kappa = 1e4 at p = 20, k_t/k_n =
 2/7, a disk of mass pi/4): c_s = sqrt(2e5 x 2/7 / (pi/4)) = 269.7, a 28 d bed crossed in 0.1038; at p_w = 40 with
 kappa stated at 20 the stiffness k_n is the same (dem.contact.rigidity), so is the time; a Hertz contact's k_n
-scales as kappa^1.5; a known transit time is kept."""
+scales as kappa^1.5; a known transit time is kept; a measured shear-wave speed replaces both."""
 import math
 from pathlib import Path
 
@@ -33,3 +33,12 @@ def test_a_missing_transit_time_is_the_depth_over_the_contact_shear_wave_speed()
         28.0 / math.sqrt(k_n * (2 / 7) / (math.pi / 4)), rel=1e-12)
     known = _drive(20.0, 0.5)
     assert with_transit_time(known, GRAINS, 20.0) is known
+
+
+def test_a_measured_shear_wave_speed_times_the_transit_whatever_the_record_says():
+    """A calibration that measured c_s = 118 (dem.modulus): the 28 d bed is crossed in 28/118, for a record with or
+    without its own (contact-speed) transit time."""
+    measured = {"G": 11277.0, "c_s": 118.0}
+    for transit in (np.nan, 0.1038):
+        assert with_transit_time(_drive(20.0, transit), GRAINS, 20.0, measured).transit_time == pytest.approx(
+            28.0 / 118.0, rel=1e-12)

@@ -107,7 +107,7 @@ def test_the_scene_names_the_drives_that_fail_and_whether_the_evidence_s_drive_i
     assert slip.holds is False and slip.evidence_fails and slip.failing == ("p5: a: slip 9 %",)
 
 
-@pytest.mark.parametrize("model", ["local", "paper", "ngf"])
+@pytest.mark.parametrize("model", ["local", "paper", "ngf", "elastic"])
 def test_every_law_and_observable_of_the_studies_belongs_to_exactly_one_effect(model):
     observables = [{"observable": o, "model": model} for o in OBSERVABLES]
     observables += [{"observable": o, "model": model, "kind": k, "omega_ts": w} for o in OSC_OBSERVABLES

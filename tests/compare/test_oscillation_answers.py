@@ -451,6 +451,12 @@ def test_a_period_under_three_transits_is_elastic_and_a_slipping_plate_s_rows_ar
             "have").all()
     held = _rows([_dem(_drive("fast", omega_ts, transit_time=period / 4), {})], predictions)
     assert held[held.model == "local"].scored.all()
+    # the elasto-plastic model has the elastic regime: its rows of the fast drive are scored, local mu(I)'s are not
+    both = {**predictions, ("runs/p20/fast", "elastic"): _prediction(MODEL, "elastic")}
+    elastic_setup = osc.ModelSetup(None, None, elastic_G=1e4)
+    fast = _rows([_dem(_drive("fast", omega_ts, transit_time=period / 2.5), {})], both, elastic_setup)
+    assert set(fast.model) == {"local", "ngf", "elastic"} and elastic_setup.models == ("local", "elastic")
+    assert fast[fast.model == "elastic"].scored.all() and not fast[fast.model == "local"].scored.any()
     slipping = _rows([_dem(_drive("fast", omega_ts, transit_time=period / 4), {}, slip=4 * SLIP_MAX)], predictions)
     local = slipping[slipping.model == "local"].set_index("observable")
     assert len(local) == 5 and (~local.scored).all()
