@@ -280,7 +280,7 @@ def test_killed_calibration_resumes_without_redoing_finished_points(tmp_path):
     import time
 
     text = SMOKE4.replace("I_min = 0.02", "I_min = 0.1").replace(
-        "width = 10.0\n", "width = 10.0\nfinite_size = [0.3]\n")
+        "width = 10.0\n", "width = 10.0\nfinite_size = [0.3]\nmodulus = false\n")  # the modulus's resume: test_modulus
     path = tmp_path / "fast.toml"
     path.write_text(text)
     out = tmp_path / "cal"
