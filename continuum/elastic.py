@@ -190,18 +190,14 @@ class ElasticSolution:
     @property
     def mu_w(self) -> np.ndarray:
         """tau_w/p_w at the requested times: imposed, or the stress the bed exerts on the plate."""
-        load = self.problem.load
-        tau = -self.s[:, 0] if load.kind == "speed" else np.broadcast_to(load.wall(self.t), self.t.shape)
-        return tau / load.p_w
+        return self.problem.load.plate_friction(self.t, self.s[:, 0])
 
     @cached_property
     def series(self) -> pd.DataFrame:
         """Every accepted step: t, u_w, mu_w."""
-        pr, load = self.problem, self.problem.load
-        s = pr.stress(self.step_x)
-        tau = -s[:, 0] if load.kind == "speed" else np.broadcast_to(load.wall(self.step_t), self.step_t.shape)
+        pr = self.problem
         return pd.DataFrame({"t": self.step_t, "u_w": pr.nodes(self.step_x, self.step_t)[:, 0],
-                             "mu_w": tau / load.p_w})
+                             "mu_w": pr.load.plate_friction(self.step_t, pr.stress(self.step_x)[:, 0])})
 
 
 def solve_elastic(material: Material, scene: BedScene, load: Load, times, G: float, *,

@@ -39,6 +39,13 @@ class Load:
         require(finite(self.omega) and self.omega >= 0, "omega", "a finite angular frequency >= 0 (0: held)",
                 self.omega)
 
+    def plate_friction(self, t, s_top) -> np.ndarray:
+        """tau_w/p_w at the time(s) ``t``: the imposed stress, or (an imposed speed) the stress the bed exerts on the
+        plate, -sigma_xy at its first face (``s_top``, one per time)."""
+        t = np.asarray(t, dtype=float)
+        tau = -np.asarray(s_top, dtype=float) if self.kind == "speed" else np.broadcast_to(self.wall(t), t.shape)
+        return tau / self.p_w
+
     @property
     def oscillating(self) -> bool:
         return self.omega > 0

@@ -175,8 +175,7 @@ class VelocitySolution:
     @property
     def mu_w(self) -> np.ndarray:
         """tau_w/p_w at the requested times: imposed, or the stress the bed exerts on the plate."""
-        tau = -self.s[:, 0] if self.imposed == "speed" else np.broadcast_to(self.load.wall(self.t), self.t.shape)
-        return tau / self.load.p_w
+        return self.load.plate_friction(self.t, self.s[:, 0])
 
     @cached_property
     def series(self) -> pd.DataFrame:
@@ -184,10 +183,9 @@ class VelocitySolution:
         problem, mu_s = self.problem, self.material.mu_s
         s = problem.stress(self.step_x, self.step_t)
         mu = np.abs(s) / problem.p_face
-        tau_plate = -s[:, 0] if self.imposed == "speed" else np.broadcast_to(self.load.wall(self.step_t),
-                                                                             self.step_t.shape)
-        mu_wall = tau_plate / self.load.p_w
-        return pd.DataFrame({"t": self.step_t, "u_w": problem.nodes(self.step_x, self.step_t)[:, 0], "tau_w": tau_plate,
+        mu_wall = self.load.plate_friction(self.step_t, s[:, 0])
+        return pd.DataFrame({"t": self.step_t, "u_w": problem.nodes(self.step_x, self.step_t)[:, 0],
+                             "tau_w": mu_wall * self.load.p_w,
                              "mu_w": mu_wall,
                              "delta": _layer_thickness(mu, self.y_face, mu_s, np.maximum(mu_wall, mu[:, 0])),
                              "yield_front": _yield_front(mu, self.y_face, mu_s)})

@@ -92,3 +92,15 @@ def test_the_jacobian_is_the_rate_s_derivative():
         numeric = np.column_stack([(problem.rate(x + h * e, 0.3) - problem.rate(x - h * e, 0.3)) / (2 * h)
                                    for e in np.eye(len(x))])
         assert np.allclose(dense, numeric, rtol=1e-5, atol=1e-5)
+
+
+def test_the_plate_s_friction_is_the_imposed_stress_or_the_bed_s_stress_on_it():
+    """continuum.load.Load.plate_friction, which every scene solution reads: an imposed stress tau_w = 0.4 x 20
+    sin(2 t) gives mu_w = 0.4 sin(2 t) whatever the bed; an imposed speed gives -sigma_xy(0+)/p_w."""
+    t = np.array([0.1, 0.5, 1.0])
+    stress = Load("stress", P_W, mu_w=0.4, omega=2.0)
+    assert np.allclose(stress.plate_friction(t, [9.0, 9.0, 9.0]), 0.4 * np.sin(2 * t), rtol=1e-15, atol=0)
+    held = Load("stress", P_W, mu_w=0.4)
+    assert np.allclose(held.plate_friction(t, [1.0, 2.0, 3.0]), 0.4, rtol=1e-15, atol=0)
+    speed = Load("speed", P_W, u_w=2.0)
+    assert np.allclose(speed.plate_friction(t, [-8.0, -9.0, -10.0]), [0.4, 0.45, 0.5], rtol=1e-15, atol=0)
