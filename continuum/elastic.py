@@ -41,6 +41,7 @@ from .scales import Material, pressure
 from .scene import BedScene, SceneNumerics
 from .solver import check_times
 from .stepper import FIRST_STEP, StepStats
+from .velocity import PlateReadings
 
 #: the elastic model's numerics: a mildly graded mesh (the wave crosses it at one speed), TR-BDF2
 ELASTIC_NUMERICS = SceneNumerics(n_cells=200, stretch=2.0, rtol=1e-4, atol=1e-7, method="tr-bdf2")
@@ -164,7 +165,7 @@ class ElasticProblem:
 
 
 @dataclass(frozen=True, eq=False)
-class ElasticSolution:
+class ElasticSolution(PlateReadings):
     """u at the nodes and sigma_xy at the faces at the requested times, the state after every accepted step;
     dimensional (the material's units)."""
 
@@ -177,20 +178,6 @@ class ElasticSolution:
     step_t: np.ndarray
     step_x: np.ndarray
     stats: StepStats
-
-    @property
-    def mu(self) -> np.ndarray:
-        """|sigma_xy|/p at the faces."""
-        return np.abs(self.s) / self.problem.p_face
-
-    @property
-    def u_w(self) -> np.ndarray:
-        return self.u[:, 0]
-
-    @property
-    def mu_w(self) -> np.ndarray:
-        """tau_w/p_w at the requested times: imposed, or the stress the bed exerts on the plate."""
-        return self.problem.load.plate_friction(self.t, self.s[:, 0])
 
     @cached_property
     def series(self) -> pd.DataFrame:

@@ -138,8 +138,27 @@ class VelocityProblem:
         return 1.0
 
 
+class PlateReadings:
+    """What a scene solution with u at the nodes (``u``: one row per time ``t``) and sigma_xy at the faces (``s``) of
+    its ``problem`` (``p_face``, ``load``) reads off the plate and the bed."""
+
+    @property
+    def mu(self) -> np.ndarray:
+        """|sigma_xy|/p at the faces."""
+        return np.abs(self.s) / self.problem.p_face
+
+    @property
+    def u_w(self) -> np.ndarray:
+        return self.u[:, 0]
+
+    @property
+    def mu_w(self) -> np.ndarray:
+        """tau_w/p_w at the requested times: imposed, or the stress the bed exerts on the plate."""
+        return self.problem.load.plate_friction(self.t, self.s[:, 0])
+
+
 @dataclass(frozen=True, eq=False)
-class VelocitySolution:
+class VelocitySolution(PlateReadings):
     """u at the nodes and sigma_xy at the faces at the requested times, the state after every accepted
     step (``step_t``, ``step_x``: the problem's unknowns), metadata.  Dimensional (the material's units);
     ``scales`` converts to the paper's variables."""
@@ -162,20 +181,6 @@ class VelocitySolution:
     @property
     def imposed(self) -> str:
         return self.problem.imposed
-
-    @property
-    def mu(self) -> np.ndarray:
-        """|sigma_xy|/p at the faces."""
-        return np.abs(self.s) / self.problem.p_face
-
-    @property
-    def u_w(self) -> np.ndarray:
-        return self.u[:, 0]
-
-    @property
-    def mu_w(self) -> np.ndarray:
-        """tau_w/p_w at the requested times: imposed, or the stress the bed exerts on the plate."""
-        return self.load.plate_friction(self.t, self.s[:, 0])
 
     @cached_property
     def series(self) -> pd.DataFrame:

@@ -414,11 +414,7 @@ def _run_cell(out: Path, k: int, seed: int, doubled: bool, np_: int, launcher: s
     if old.get("status") == "complete":
         store(analysed(old))
         return Outcome("complete")
-    if d.exists():
-        with staging.locked(d):  # a cell left running by a stopped calibration elsewhere ends first
-            pass
-        shutil.rmtree(d)
-    d.mkdir(parents=True)
+    _fresh(d)
     (d / layout.SHEAR_IN).write_text(shear_script(cfg, point, n, seed))
     store({"status": "running", "I_target": point.I, "started": _now()})
     entry = {"status": "interrupted", "I_target": point.I, "message": "continue with --resume"}
@@ -436,6 +432,15 @@ def _run_cell(out: Path, k: int, seed: int, doubled: bool, np_: int, launcher: s
     finally:
         store(entry)
     return Outcome(entry["status"], entry.get("message", ""))
+
+
+def _fresh(d: Path) -> None:
+    """An empty cell folder ``d``: a cell left running there by a stopped calibration elsewhere ends first."""
+    if d.exists():
+        with staging.locked(d):
+            pass
+        shutil.rmtree(d)
+    d.mkdir(parents=True)
 
 
 def run_modulus_cell(out: str, seed: int, np_: int, launcher: str | None, progress: bool, position: int) -> Outcome:
@@ -461,11 +466,7 @@ def run_modulus_cell(out: str, seed: int, np_: int, launcher: str | None, progre
         if all(f.is_file() for f in series):
             store(analysed(old))
         return Outcome("complete")
-    if d.exists():
-        with staging.locked(d):  # a cell left running by a stopped calibration elsewhere ends first
-            pass
-        shutil.rmtree(d)
-    d.mkdir(parents=True)
+    _fresh(d)
     (d / layout.SHEAR_IN).write_text(modulus_cell.modulus_script(plan.config, cell, plan.n_grains, seed))
     store({"status": "running", "started": _now()})
     entry = {"status": "interrupted", "message": "continue with --resume"}
