@@ -35,7 +35,7 @@ from . import calibrate
 from .analysis import DriveAnalysis, analyse_drive, mass_error
 from .band import Sensitivity
 from .checks import CROSSCHECK_MARGIN, lammps_crosscheck, width_check
-from .drive import drive_specs
+from .drive import drive_specs, with_transit_time
 from .laws import laws as paper_laws
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
@@ -366,6 +366,18 @@ def analyse(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True
         drives = tuple(replace(a, spec=replace(a.spec, run=rel[str(a.spec.run)])) for a in drives)
         checks = replace(checks, drive=drives[0].label)
     return DemSide(runs, grains, drives, checks, mass_error(drives[0]))
+
+
+def timed(dem: DemSide, independent: Calibration | None) -> DemSide:
+    """``dem`` with every drive's elastic start timed by the shear-wave speed the ``independent`` calibration
+    measured in its packing (compare.drive.with_transit_time), where it holds one; else as run (the contacts'
+    speed d sqrt(k_t/m), dem.sizing)."""
+    elasticity = getattr(independent, "elasticity", None)
+    if not elasticity:
+        return dem
+    p_cal = float(independent.info.get("protocol", {}).get("p", np.nan))
+    return replace(dem, drives=tuple(replace(a, spec=with_transit_time(a.spec, independent.grains, p_cal, elasticity))
+                                     for a in dem.drives))
 
 
 def prepare(dem: DemSide, independent: Calibration | None) -> tuple[ModelSide, dict]:

@@ -64,7 +64,9 @@ DEFINITIONS = {
                   "of the drive (grain-weighted over the samples)"),
     "tau_bulk": ("rho_p g d", "coarse-grained tau = -sigma_xy (contact + kinetic) averaged over the bulk in each frame "
                               "of the final 30 % of the drive, against the plate's <tau_w> over the same window"),
-    "elastic_start": ("sqrt(d/g)", f"transit_time = depth/c_s of the shear wave through the deposited bed (run.json); "
+    "elastic_start": ("sqrt(d/g)", "transit_time = depth/c_s of the shear wave through the bed, c_s measured in the "
+                                   "calibration's packing (its elasticity; without one the contacts' d sqrt(k_t/m), "
+                                   "run.json); "
                                    f"transients (the early exponents alpha) are compared from "
                                    f"{TRANSITS_BEFORE_COMPARISON:g} transits on"),
     "duration": ("sqrt(d/g)", "the DEM record's length (its last whole frame)"),

@@ -9,15 +9,20 @@ fast (its beds' offsets shrink faster: the law is then conservative, bench/RESUL
 observable and drive kind; its coefficients (``noise.csv``) are fitted by bench/dem_cost_noise.py on the
 committed studies (C_2 on the 2D disks, C_3 on the 3D spheres with the 2D exponents).  ``drive_errors``
 predicts a planned drive's errors (``granstokes study --dry-run``).
+
+An error target (``Target``, a study's ``[target]`` table) turns the law around: the beds a drive needs so that
+a stated difference of each observable is decided at a stated confidence, the mean of n beds tested at Student-t's
+quantile of n - 1 degrees of freedom (few beds pay twice: a larger error and a larger quantile).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from granstokes.continuum.steady import steady_wall_speed
+from scipy import stats
 
 NOISE_CSV = Path(__file__).with_name("noise.csv")
 #: the observable each drive kind scores (compare.scorecard), in the order printed
@@ -31,6 +36,10 @@ RESPONSES = ("u_w_inf", "mu_w_inf")
 UNITS = {"u_w_inf": "sqrt(g d)", "mu_w_inf": "", "delta_u": "d", "creep_length": "d", "t90": "sqrt(d/g)"}
 #: the exponent of seeds x area
 AVERAGING = 0.5
+#: a decision's confidence unless the target states one (two-sided)
+CONFIDENCE = 0.95
+#: the fewest beds a decision rests on (one degree of freedom), and the most a target may take unless it says
+MIN_BEDS, BEDS_MAX = 2, 12
 
 
 @dataclass(frozen=True)
@@ -120,3 +129,53 @@ def error_line(label: str, size: DriveSize, table: dict | None = None) -> str:
     area = f"{size.area:g} d" + ("" if size.dimension == 2 else f"^{size.dimension - 1}")
     return (f"  {label}: expected errors at {size.seeds} bed(s) x {area}, duration {size.duration:.4g}: "
             + ", ".join(parts))
+
+
+def relative(observable: str) -> bool:
+    """Whether a target states the observable's difference as a fraction of its expected scale (``SCALES``)."""
+    return SCALES[observable] != "one"
+
+
+@dataclass(frozen=True)
+class Target:
+    """The smallest difference of each observable a study must decide (``differences``: observable -> difference;
+    ``relative`` ones as a fraction of their expected scale, the others in their ``UNITS``) at ``confidence``
+    (two-sided), with at most ``beds_max`` beds a drive."""
+
+    differences: tuple  # (observable, difference) pairs
+    confidence: float = CONFIDENCE
+    beds_max: int = BEDS_MAX
+
+    def beds(self, size: DriveSize, table: dict | None = None) -> dict[str, int | None]:
+        """The beds each targeted observable the drive scores needs (None: more than ``beds_max``)."""
+        table = laws() if table is None else table
+        return {obs: beds_to_decide(table[(obs, size.kind)], size, diff, self.confidence, self.beds_max)
+                for obs, diff in self.differences if obs in SCORED[size.kind]}
+
+
+def beds_to_decide(law: NoiseLaw, size: DriveSize, difference: float, confidence: float = CONFIDENCE,
+                   beds_max: int = BEDS_MAX) -> int | None:
+    """The fewest beds n (at least MIN_BEDS) whose mean decides ``difference`` at ``confidence``: t(n - 1) err(n)
+    <= difference, err(n) the law's error at n beds (a fraction of the expected scale for a ``relative``
+    observable); None when ``beds_max`` beds do not."""
+    one = law.error(replace(size, seeds=1)) / (size.x(law.observable) if relative(law.observable) else 1.0)
+    for n in range(MIN_BEDS, beds_max + 1):
+        if stats.t.isf((1 - confidence) / 2, n - 1) * one * n ** -AVERAGING <= difference:
+            return n
+    return None
+
+
+def target_line(label: str, size: DriveSize, target: Target, run_beds: int, table: dict | None = None) -> str:
+    """What the target asks of one drive, as ``granstokes study`` prints it before running: the beds each targeted
+    observable needs, the drive's (the most of them) and its run's; an observable ``beds_max`` beds cannot decide is
+    named as such."""
+    needs, diffs = target.beds(size, table), dict(target.differences)
+    parts = [(f"{obs} {100 * diffs[obs]:g} % of {SCALES[obs]}" if relative(obs) else
+              f"{obs} {diffs[obs]:g} {UNITS[obs]}")
+             + (f": {n}" if n is not None else f": undecided within {target.beds_max}") for obs, n in needs.items()]
+    if not needs:
+        return f"  {label}: no targeted observable; {run_beds} bed(s) with its run"
+    undecided = [obs for obs, n in needs.items() if n is None]
+    own = (f"cannot decide {', '.join(undecided)} within {target.beds_max} beds" if undecided
+           else f"needs {max(needs.values())} bed(s)")
+    return f"  {label}: {own} ({'; '.join(parts)}); its run takes {run_beds}"

@@ -9,7 +9,7 @@ from pathlib import Path
 from granstokes.dem.sizing import count, makespan
 
 from . import calibrate, metrics, report, tables
-from .comparison import DemSide, analyse, check_grains, conclude, model_drive, prepare, run_grains
+from .comparison import DemSide, analyse, check_grains, conclude, model_drive, prepare, run_grains, timed
 from .experiment import Experiment
 from .profiles import CGSettings
 
@@ -94,14 +94,15 @@ class StokesDrives(Experiment):
         tables.write(result.dem, folder)
 
     def _prepare(self, dem: DemSide):
+        dem = timed(dem, self.independent)
         return dem, *prepare(dem, self.independent)
 
     def _units(self, dem, setup) -> list:
-        return list(dem.drives)
+        return list(setup[0].drives)
 
     def _predict(self, drive, setup):
         return model_drive(drive, setup[1])
 
     def _conclude(self, dem, setup, predicted):
-        _, side, kept = setup
-        return conclude(dem, side, kept, predicted, self.settings)
+        timed_dem, side, kept = setup
+        return conclude(timed_dem, side, kept, predicted, self.settings)

@@ -42,6 +42,23 @@ def final_line(record: dict, args) -> str:
     return f"study: {record['status']}{said} (see {out / 'study.json'})"
 
 
+def target_lines(sp) -> list[str]:
+    """The beds each scored drive needs for the study's error target (none without one), as the study plans them."""
+    target = sp.study.target
+    if target is None:
+        return []
+    from granstokes.compare import noise
+
+    from .plan import WIDE
+
+    table = noise.laws()
+    return [f"the error target: beds for a {target.confidence:.0%} decision (compare/noise.csv), at most "
+            f"{target.beds_max} a run:"] + [
+        noise.target_line(f"{label}, {d.drive.name}", noise.drive_size(r.plan, d, r.p_w), target,
+                          len(r.plan.config.seeds), table)
+        for label, r in sp.runs.items() if not label.endswith(WIDE) for d in r.plan.drives]
+
+
 def _cmd_study(args) -> int:
     from granstokes.dem import config as dem_config
     from granstokes.dem.calibrate import completed_points, grains_difference, material_table, plan_calibration
@@ -111,6 +128,8 @@ def _cmd_study(args) -> int:
     for line in sp.lines(args.jobs, out if args.resume else None):
         print(line, file=sys.stderr)
     print(f"  {sp.estimate(args.jobs, out if args.resume else None, calibration).line()}", file=sys.stderr)
+    for line in target_lines(sp):
+        print(line, file=sys.stderr)
     if args.dry_run:
         from granstokes.compare import noise
 

@@ -19,7 +19,14 @@ pressure in a box twice as wide).  ``omega_ts`` (a list of omega t_s) makes it a
 (Stokes' second problem): every drive's load is the amplitude of a sine, run at each frequency for ``cycles``
 periods (default 4), and the comparison is compare.oscillation's; ``ngf_from``: a Stokes report's metrics.json
 whose NGF amplitude A (fitted on a Stokes drive of the same grains) predicts the oscillating drives (else no NGF
-rows).  Unknown keys are errors.
+rows).  ``[target]``: the error a Stokes study needs (compare.noise.Target): per scored observable the smallest
+difference to decide (``u_w_inf``, ``mu_w_inf``, ``t90`` as a fraction of the expected u_w, mu_w, t_s;
+``delta_u``, ``creep_length`` in d), optional ``confidence`` (default 0.95) and ``beds_max`` (default 12); each run then
+takes the beds its drives need (``seeds`` the first of them, the next integers after), at least ``seeds``' count::
+
+    target = {u_w_inf = 0.03, mu_w_inf = 0.03, creep_length = 0.3, beds_max = 8}
+
+Unknown keys are errors.
 """
 from __future__ import annotations
 
@@ -27,10 +34,14 @@ import dataclasses
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from granstokes.dem import config as dem_config
 from granstokes.lib.toml_text import parse_assignment, with_entries
 from granstokes.lib.validate import finite, require
+
+if TYPE_CHECKING:
+    from granstokes.compare.noise import Target
 
 PRESET_DIR = Path(__file__).parent / "presets"
 #: a preset's relative paths name the committed results of the granstokes repository: they are resolved against
@@ -40,7 +51,9 @@ PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
 DRIVE_KEYS = ("kind", *dem_config.LOADS)
 SHORT = {"mu_w_tilde": "mutilde", "mu_w": "mu", "tau_w": "tau", "u_w": "u"}  # drive names: stress-mutilde0.5
 TOP = {"name", "dem", "seeds", "pressures", "calibration", "drive", "duration_ts", "min_duration", "width",
-       "width_check", "omega_ts", "cycles", "ngf_from"}
+       "width_check", "omega_ts", "cycles", "ngf_from", "target"}
+#: the [target] entries that are not an observable's difference
+TARGET_OPTIONS = ("confidence", "beds_max")
 
 
 def wave_label(omega_ts: float | None) -> str:
@@ -61,6 +74,7 @@ class Study:
     width: float | None = None
     width_check: bool = True
     ngf_from: str | None = None  # an oscillating study's NGF amplitude: a Stokes report's metrics.json
+    target: Target | None = None  # the error each run's beds are chosen for (compare.noise)
 
     @property
     def oscillating(self) -> bool:
@@ -155,11 +169,37 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     width_check = doc.get("width_check", omegas is None)
     require(isinstance(width_check, bool) and not (width_check and omegas is not None), "width_check",
             "true or false (false with omega_ts: the width check is a Stokes drive's)", width_check)
+    target = _target(doc.get("target"), len(seeds), omegas is not None)
     name = doc.get("name", "study")
     require(isinstance(name, str) and name.replace("-", "").replace("_", "").isalnum(), "name",
             "letters, digits, '-' and '_'", name)
     return Study(name, doc["dem"], tuple(seeds), tuple(float(p) for p in pressures), built, file,
-                 table if file is None else (), None if width is None else float(width), width_check, ngf_from)
+                 table if file is None else (), None if width is None else float(width), width_check, ngf_from,
+                 target)
+
+
+def _target(table, seeds: int, oscillating: bool) -> Target | None:
+    """The [target] table as a compare.noise.Target (None when absent)."""
+    if table is None:
+        return None
+    from granstokes.compare import noise  # the error law's table is read only by a study that states a target
+
+    observables = sorted(set(noise.SCORED["stress"]) | set(noise.SCORED["speed"]))
+    require(not oscillating, "target", "only in a Stokes study (the error law is the held drives')", table)
+    require(isinstance(table, dict) and set(table) <= {*observables, *TARGET_OPTIONS}
+            and set(table) - set(TARGET_OPTIONS), "target keys",
+            f"at least one of {observables}, and optionally {list(TARGET_OPTIONS)}", table)
+    for obs in set(table) & set(observables):
+        require(finite(table[obs]) and table[obs] > 0, f"target.{obs}", "a difference > 0 (u_w_inf, mu_w_inf, t90: a "
+                "fraction of the expected u_w, mu_w, t_s)", table[obs])
+    confidence = table.get("confidence", noise.CONFIDENCE)
+    require(finite(confidence) and 0.5 <= confidence < 1, "target.confidence", "a number in [0.5, 1)", confidence)
+    beds_max = table.get("beds_max", max(noise.BEDS_MAX, seeds))
+    require(isinstance(beds_max, int) and not isinstance(beds_max, bool) and max(seeds, noise.MIN_BEDS) <= beds_max,
+            "target.beds_max", f"an integer >= {max(seeds, noise.MIN_BEDS)} (the seeds given, at least "
+            f"{noise.MIN_BEDS})", beds_max)
+    return noise.Target(tuple((obs, float(table[obs])) for obs in observables if obs in table), float(confidence),
+                        beds_max)
 
 
 def _existing(file: str, base: Path | None, name: str, what: str) -> str:

@@ -80,14 +80,15 @@ def _outputs(cfg: dem_config.Config) -> dict:
 
 
 def run_config(study: Study, base: dem_config.Config, p_w: float, drives: tuple[dem_config.Drive, ...],
-               material: dict, source: str, wide_of: Plan | None = None) -> tuple[dem_config.Config, str]:
+               material: dict, source: str, wide_of: Plan | None = None,
+               seeds: tuple[int, ...] | None = None) -> tuple[dem_config.Config, str]:
     """The DEM config of a run at p_w and its TOML: the DEM preset ``base`` with its grains as one material, the
-    study's seeds, ``drives``, the depth and durations sized from ``material`` (the calibration at ``source``) and
-    the outputs that resolve the drives.  ``wide_of``: the width check of that run, in a box twice as wide and as
-    deep."""
+    study's seeds (or ``seeds``), ``drives``, the depth and durations sized from ``material`` (the calibration at
+    ``source``) and the outputs that resolve the drives.  ``wide_of``: the width check of that run, in a box twice
+    as wide and as deep."""
     width = (study.width or base.box.width) * (2 if wide_of else 1)
     cfg = dataclasses.replace(base, name=f"{study.name}-{pressure_label(p_w)}{WIDE if wide_of else ''}",
-                              seeds=study.seeds, p_w=p_w, grains=_grains(study, base.grains, p_w),
+                              seeds=seeds or study.seeds, p_w=p_w, grains=_grains(study, base.grains, p_w),
                               material=Material(**material), drives=drives,
                               box=dataclasses.replace(base.box, margin=None, depth=wide_of.depth if wide_of else None,
                                                       width=width))
@@ -209,17 +210,41 @@ class StudyPlan:
         return lines
 
 
-def plan_study(study: Study, material: dict, source: str) -> StudyPlan:
+def target_beds(r: StudyRun, target, table: dict | None = None) -> int:
+    """The beds the run takes for the study's error target: the most its drives need to decide what the target's
+    budget can (compare.noise.Target; what it cannot is said, not paid for), at least the seeds it was planned with."""
+    from granstokes.compare import noise
+
+    needs = [n for d in r.plan.drives for n in target.beds(noise.drive_size(r.plan, d, r.p_w), table).values()
+             if n is not None]
+    return max([len(r.plan.config.seeds), *needs])
+
+
+def extended_seeds(seeds: tuple[int, ...], beds: int) -> tuple[int, ...]:
+    """``seeds`` followed by the next integers after the largest, ``beds`` in all."""
+    return seeds + tuple(range(max(seeds) + 1, max(seeds) + 1 + beds - len(seeds)))
+
+
+def plan_study(study: Study, material: dict, source: str, noise_table: dict | None = None) -> StudyPlan:
     """Every run's config and its sizing (ValueError naming the drive if a load is outside the calibrated law): at
-    every pressure one run per frequency of the drives (held drives: one run), its outputs resolving them; with
-    ``study.width_check`` the first drive at the reference pressure in a box twice as wide."""
+    every pressure one run per frequency of the drives (held drives: one run), its outputs resolving them, its beds
+    the study's seeds or, with an error target, those its drives need (``target_beds``, from compare.noise's laws or
+    ``noise_table``); with ``study.width_check`` the first drive at the reference pressure in a box twice as wide
+    (the study's seeds)."""
     base = dem_config.preset(study.dem)[0]
 
-    def run(p_w: float, drives: tuple[dem_config.Drive, ...], wide_of: Plan | None = None) -> StudyRun:
-        cfg, text = run_config(study, base, p_w, drives, material, source, wide_of)
+    def run(p_w: float, drives: tuple[dem_config.Drive, ...], wide_of: Plan | None = None,
+            seeds: tuple[int, ...] | None = None) -> StudyRun:
+        cfg, text = run_config(study, base, p_w, drives, material, source, wide_of, seeds)
         return StudyRun(text, plan(cfg))
 
-    runs = {pressure_label(p_w) + wave_label(w): run(p_w, tuple(d for d in study.drives if d.omega_ts == w))
+    def targeted(p_w: float, drives: tuple[dem_config.Drive, ...]) -> StudyRun:
+        first = run(p_w, drives)
+        if study.target is None:
+            return first
+        return run(p_w, drives, seeds=extended_seeds(study.seeds, target_beds(first, study.target, noise_table)))
+
+    runs = {pressure_label(p_w) + wave_label(w): targeted(p_w, tuple(d for d in study.drives if d.omega_ts == w))
             for p_w in study.pressures for w in study.frequencies}
     if study.width_check:
         label = pressure_label(study.reference_pressure)

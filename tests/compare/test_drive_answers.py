@@ -4,10 +4,13 @@ the bed's depth over d sqrt(k_t/m), worked out here for the committed disks (Hoo
 kappa stated at 20 the stiffness k_n is the same (dem.contact.rigidity), so is the time; a Hertz contact's k_n
 scales as kappa^1.5; a known transit time is kept; a measured shear-wave speed replaces both."""
 import math
+from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from granstokes.compare.comparison import DemSide, timed
 from granstokes.compare.drive import DriveSpec, with_transit_time
 from granstokes.continuum.load import Load
 
@@ -42,3 +45,21 @@ def test_a_measured_shear_wave_speed_times_the_transit_whatever_the_record_says(
     for transit in (np.nan, 0.1038):
         assert with_transit_time(_drive(20.0, transit), GRAINS, 20.0, measured).transit_time == pytest.approx(
             28.0 / 118.0, rel=1e-12)
+
+
+@dataclass(frozen=True)
+class _Analysis:
+    spec: DriveSpec
+
+
+def test_the_stokes_comparison_starts_its_transients_after_transits_at_the_measured_speed():
+    """The Stokes drives' elastic start (compare.comparison.timed, the StokesDrives experiment's first step): a
+    calibration with c_s = 118 moves every drive's transit from the run's contact-speed 0.1038 to 28/118 = 0.2373
+    and the comparison's start to three of them; a calibration without a modulus (or none) leaves the run's."""
+    dem = DemSide((), {}, (_Analysis(_drive(20.0, 0.1038)), _Analysis(_drive(5.0, 0.1038))), None, 0.0)
+    cal = SimpleNamespace(elasticity={"G": 11277.0, "c_s": 118.0}, grains=GRAINS, info={"protocol": {"p": 20.0}})
+    out = timed(dem, cal)
+    assert [a.spec.transit_time for a in out.drives] == pytest.approx([28.0 / 118.0] * 2, rel=1e-12)
+    assert [a.spec.compared_from for a in out.drives] == pytest.approx([3 * 28.0 / 118.0] * 2, rel=1e-12)
+    assert timed(dem, SimpleNamespace(elasticity=None, grains=GRAINS, info={})) is dem
+    assert timed(dem, None) is dem

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -91,3 +92,72 @@ def test_dry_run_prints_errors_that_halve_with_four_times_the_beds(tmp_path, cap
 def _material(study) -> dict:
     material = dem_config.preset(study.dem)[0].material
     return {k: getattr(material, k) for k in dem_config.MATERIAL_KEYS}
+
+
+# --- the error target: beds from the law turned around ---------------------------------------------------------
+
+def _unit_law(observable: str, kind: str, one_bed: float, area: float) -> noise.NoiseLaw:
+    """A synthetic law whose one-bed error (a fraction of the scale for a relative observable) is ``one_bed`` on a
+    plate of ``area``, at any duration and pressure."""
+    return noise.NoiseLaw(observable, kind, one_bed * area**0.5, one_bed * area**0.5,
+                          1.0 if noise.relative(observable) else 0.0, 0.0, 0.0)
+
+
+def test_beds_to_decide_pay_for_the_t_quantile_as_well_as_the_error():
+    size = noise.DriveSize("stress", 2, 3, 16.0, 5.0, 10.0, {"u_w": 2.0, "mu_w": 0.5, "delta_s": 5.0, "t_s": 1.0})
+    creep = _unit_law("creep_length", "stress", 1.0, 16.0)
+    # t(0.975, n - 1)/sqrt(n): n = 6 gives 2.571/2.449 = 1.050, n = 7 gives 2.447/2.646 = 0.925 (a Gaussian's
+    # 1.96/sqrt(n) would stop at n = 4)
+    assert noise.beds_to_decide(creep, size, 1.0) == 7
+    # half the difference: n = 17 gives 2.120/4.123 = 0.514, n = 18 gives 2.110/4.243 = 0.497
+    assert noise.beds_to_decide(creep, size, 0.5, beds_max=20) == 18
+    assert noise.beds_to_decide(creep, size, 0.5, beds_max=17) is None
+    # at 90 %: t(0.95, 3)/2 = 2.353/2 = 1.18, t(0.95, 4)/sqrt(5) = 2.132/2.236 = 0.953
+    assert noise.beds_to_decide(creep, size, 1.0, confidence=0.90) == 5
+    # a relative observable: the one-bed error over the expected speed (r = 1: the law's error is 0.5 u_w)
+    speed = _unit_law("u_w_inf", "stress", 0.5, 16.0)
+    assert speed.error(replace(size, seeds=1)) == pytest.approx(0.5 * size.scales["u_w"])
+    # t/sqrt(n) <= 2: n = 3 gives 2.48, n = 4 gives 1.59
+    assert noise.beds_to_decide(speed, size, 1.0) == 4
+    target = noise.Target((("creep_length", 1.0), ("u_w_inf", 1.0), ("mu_w_inf", 1.0)))
+    assert target.beds(size, {("creep_length", "stress"): creep, ("u_w_inf", "stress"): speed}) == {
+        "creep_length": 7, "u_w_inf": 4}  # mu_w_inf: a speed drive's, not scored here
+
+
+def test_a_study_target_sets_each_runs_beds_and_the_dry_run_says_what_it_cannot_decide(tmp_path, capsys,
+                                                                                          monkeypatch):
+    study, _ = config.load(None, "smoke", ["seeds=[1, 2]"])
+    area = next(iter(plan_study(study, _material(study), "").runs.values())).plan.area
+    one_bed = {"creep_length": 1.0, "delta_u": 1.0, "u_w_inf": 0.5, "mu_w_inf": 0.5, "t90": 10.0}
+    table = {(obs, kind): _unit_law(obs, kind, one_bed[obs], area)
+             for kind, observables in noise.SCORED.items() for obs in observables}
+    monkeypatch.setattr(noise, "laws", lambda path=noise.NOISE_CSV: table)
+    target = "target={creep_length = 1.0, u_w_inf = 1.0, mu_w_inf = 1.0, t90 = 1.0, beds_max = 9}"
+    targeted, _ = config.load(None, "smoke", ["seeds=[1, 2]", target])
+    sp = plan_study(targeted, _material(targeted), "", table)
+    for label, r in sp.runs.items():  # creep 7 beds, the responses 4; t90 (10 t_s per bed) not within 9
+        assert r.plan.config.seeds == ((1, 2, 3, 4, 5, 6, 7) if not label.endswith("-wide") else (1, 2))
+    out = tmp_path / "targeted"
+    assert granstokes_main(["study", "--preset", "smoke", "--out", str(out), "--dry-run", "--set", "seeds=[1, 2]",
+                            "--set", target]) == 0
+    assert not out.exists()
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if "its run takes" in line]
+    assert len(lines) == sum(len(r.plan.drives) for label, r in sp.runs.items() if not label.endswith("-wide"))
+    for line in lines:
+        assert "cannot decide t90 within 9 beds" in line and "creep_length 1 d: 7" in line
+        assert ("u_w_inf 100 % of u_w: 4" in line) != ("mu_w_inf 100 % of mu_w: 4" in line)
+        assert line.endswith("its run takes 7")
+    assert "at 7 bed(s)" in err and "at 2 bed(s)" in err  # the errors printed at the runs' beds (the width check's 2)
+
+
+@pytest.mark.parametrize("entry, name", [
+    ("target={creep_length = -1.0}", "target.creep_length"),
+    ("target={beds_max = 6}", "target keys"),
+    ("target={creep_length = 0.3, beds_max = 1}", "target.beds_max"),
+    ("target={creep_length = 0.3, confidence = 1.0}", "target.confidence"),
+    ("target={layer = 0.3}", "target keys"),
+])
+def test_a_bad_target_is_named(entry, name):
+    with pytest.raises(ValueError, match=name.replace(".", r"\.")):
+        config.load(None, "smoke", [entry])
