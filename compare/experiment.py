@@ -110,6 +110,17 @@ class Experiment:
         """Whether a drive with this continuum.load.Load belongs to this experiment."""
         raise NotImplementedError
 
+    @classmethod
+    def planned(cls, plan, drive, c_s: float | None = None) -> str:
+        """What a planned drive (dem.sizing's Plan and DriveSizing) offers this experiment's laws, as a study's plan
+        prints it ("" when nothing beyond its size); ``c_s`` the bed's measured shear-wave speed, if known."""
+        return ""
+
+    @classmethod
+    def plan_header(cls, c_s: float | None = None) -> str:
+        """The line that explains ``planned``'s, or ""."""
+        return ""
+
     def analyse(self, runs: Sequence[Path], root: Path | None = None):
         """The DEM side of the run folders (``root``: name the runs by their paths relative to it)."""
         raise NotImplementedError

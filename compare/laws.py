@@ -249,12 +249,18 @@ def _spanning(w: Window) -> Window:
                           f"{MIN_DECADES:g})")
 
 
+def growth_bounds(transit_time: float, t_s: float, t_end: float,
+                  from_transits: float = TRANSITS_BEFORE_COMPARISON) -> tuple[float, float]:
+    """A growth window's [start, end]: ``from_transits`` shear-wave transits to min(GROWTH_END t_s, half the record
+    of length ``t_end``): what a study plans (granstokes.study.plan) and a drive's window is (``growth_window``)."""
+    return from_transits * transit_time, min(GROWTH_END * t_s, 0.5 * t_end)
+
+
 def growth_window(dc, from_transits: float = TRANSITS_BEFORE_COMPARISON) -> Window:
     """Drive ``dc``'s growth window from ``from_transits`` transits to min(GROWTH_END t_s, half the record)."""
     if dc.scales is None:
         return Window(np.nan, np.nan, "no calibrated scales for this drive")
-    start = _start(dc, from_transits)
-    end = min(GROWTH_END * dc.scales.t_s, 0.5 * dc.dem.t_end)
+    start, end = growth_bounds(float(dc.dem.spec.transit_time), dc.scales.t_s, dc.dem.t_end, from_transits)
     if not start > 0:
         return Window(start, end, "the drive's shear-wave transit time is unknown, and so is its elastic start")
     if start >= end:

@@ -163,7 +163,7 @@ def depth_needed(a: DriveAnalysis, delta_s: float) -> tuple[float, float, bool]:
     depth, the creep length, whether it is the assumed one)."""
     ell = dem_creep(a, delta_s).value
     assumed = not np.isfinite(ell)
-    ell = CREEP_LENGTH if assumed else ell
+    ell = CREEP_LENGTH[a.spec.dimension] if assumed else ell
     return delta_s + CREEP_LENGTHS_TO_BASE * ell, ell, assumed
 
 

@@ -6,11 +6,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 from granstokes.dem.sizing import count, makespan
 
 from . import calibrate, metrics, report, tables
 from .comparison import DemSide, analyse, check_grains, conclude, model_drive, prepare, run_grains, timed
+from .drive import TRANSITS_BEFORE_COMPARISON
 from .experiment import Experiment
+from .laws import GROWTH_END, MIN_DECADES, growth_bounds
 from .profiles import CGSettings
 
 #: the comparison's cost per 2D drive grain-step/s of this machine (dem.throughput: it scales with the probe),
@@ -31,6 +34,13 @@ FRAMES_PER_TS = 20
 EARLY_FRAMES_PER_TS = 100
 #: the models every drive is compared with: local mu(I), the paper's, NGF (compare.comparison)
 MODELS = 3
+
+
+def planned_window(plan, drive, c_s: float | None = None) -> tuple[float, float, float]:
+    """A planned drive's growth window (compare.laws.growth_bounds; its transit at the measured shear-wave speed
+    ``c_s``, else the contacts'): start, end and the decades it spans (-inf when the elastic start covers it)."""
+    start, end = growth_bounds(plan.depth / c_s if c_s else plan.transit_time, drive.scales.t_s, drive.duration)
+    return start, end, float(np.log10(end / start)) if end > start else -np.inf
 
 
 class StokesDrives(Experiment):
@@ -76,6 +86,21 @@ class StokesDrives(Experiment):
         rate = speed.rate(2, "drive")
         model = makespan([MODELS * MODEL_DRIVE_STEPS / rate] * drives, jobs, contention=speed.contention)
         return (grain_frames / CG_PER_DRIVE_STEP + drives * REPORT_DRIVE_STEPS) / rate + model
+
+    @classmethod
+    def plan_header(cls, c_s: float | None = None) -> str:
+        return (f"growth windows from {TRANSITS_BEFORE_COMPARISON:g} shear-wave transits to min({GROWTH_END:g} t_s, "
+                f"half the record), the growth laws' (a power law needs {MIN_DECADES:g} decade); transits at "
+                + (f"the calibration's measured c_s = {c_s:.4g}" if c_s else
+                   "the contacts' speed (no measured c_s: an upper bound, the windows longer than they will be)"))
+
+    @classmethod
+    def planned(cls, plan, drive, c_s: float | None = None) -> str:
+        """'growth window 0.41 decade(s) [0.81, 2.1]' (compare.laws.growth_bounds at the planned depth, t_s and
+        duration)."""
+        start, end, decades = planned_window(plan, drive, c_s)
+        return (f"growth window {decades:.2g} decade(s) [{start:.3g}, {end:.3g}]" if np.isfinite(decades)
+                else f"no growth window (the elastic start, {start:.3g}, reaches past {end:.3g})")
 
     @classmethod
     def comparison_work(cls, drives: int, grain_frames: float) -> str:

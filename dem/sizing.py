@@ -57,9 +57,10 @@ def drive_scales(cfg: Config, drive: Drive) -> Scales:
     return Scales(m, cfg.p_w, mu_w)
 
 
-#: e-folding length of the creep below the flowing layer in d (2.2-3 d measured in the 2D and 3D drives,
-#: metrics.json creep_length) and the number of them the default margin below the largest delta_s holds
-CREEP_LENGTH, CREEP_LENGTHS = 2.5, 5
+#: e-folding length of the creep below the flowing layer in d, by dimension: the largest the committed studies
+#: measured, rounded up (metrics.json creep_length: disks 2.6-4.9 d, spheres 2.5-3.1 d), and the number of them the
+#: default margin below the largest delta_s holds (the comparison's depth rule, compare.scorecard.short_bed)
+CREEP_LENGTH, CREEP_LENGTHS = {2: 5.0, 3: 3.5}, 5
 
 #: grain placement: insertion column filled to this fraction of the largest grain's volume
 INSERT_FRACTION = {2: 0.30, 3: 0.20}
@@ -302,7 +303,8 @@ def plan(cfg: Config) -> Plan:
         reasons.append(f"depth {depth:g} d (given; largest delta_s = {delta_max:.3g} d)")
     else:
         margin, why = ((cfg.box.margin, "given") if cfg.box.margin is not None else
-                       (CREEP_LENGTHS * CREEP_LENGTH, f"{CREEP_LENGTHS} creep lengths of {CREEP_LENGTH:g} d"))
+                       (CREEP_LENGTHS * CREEP_LENGTH[cfg.grains.dimension],
+                        f"{CREEP_LENGTHS} creep lengths of {CREEP_LENGTH[cfg.grains.dimension]:g} d"))
         depth = math.ceil(delta_max + margin)
         reasons.append(f"depth {depth:g} d = ceil(largest delta_s {delta_max:.3g} d + margin {margin:g} d, {why})")
     dim = cfg.grains.dimension

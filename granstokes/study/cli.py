@@ -42,6 +42,14 @@ def final_line(record: dict, args) -> str:
     return f"study: {record['status']}{said} (see {out / 'study.json'})"
 
 
+def measured_c_s(path) -> float | None:
+    """The shear-wave speed a calibration.json measured in its packing (its ``elasticity``), or None."""
+    if path is None:
+        return None
+    elasticity = json.loads(Path(path).read_text()).get("elasticity") or {}
+    return float(elasticity["c_s"]) if "c_s" in elasticity else None
+
+
 def target_lines(sp) -> list[str]:
     """The beds each scored drive needs for the study's error target (none without one), as the study plans them."""
     target = sp.study.target
@@ -106,10 +114,13 @@ def _cmd_study(args) -> int:
             seconds, disk = seconds + part.seconds, disk + part.disk
         calibration = calibration.plus("calibration", seconds, disk)
     reference = calibration_folder(out, study.reference_pressure)
+    elasticity_source = None  # the calibration whose measured shear-wave speed times the elastic start
     if study.calibration_file is not None:
         material, source = material_table(study.calibration_file)[0], study.calibration_file
+        elasticity_source = study.calibration_file
     elif args.resume and _complete(reference):  # a resume past the calibration sizes from it, as the runs were
         material, source = material_table(reference / CALIBRATION_JSON)[0], str(reference.relative_to(out))
+        elasticity_source = reference / CALIBRATION_JSON
     else:  # the calibration runs first: the dry run sizes from the DEM preset's nominal material
         material = dem_config.preset(study.dem)[0].material
         material = {k: getattr(material, k) for k in dem_config.MATERIAL_KEYS}
@@ -125,7 +136,7 @@ def _cmd_study(args) -> int:
                     + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
     print(f"study '{study.name}': {len(study.pressures)} pressure(s) x {len(study.drives)} drive(s) x "
           f"{len(study.seeds)} seed(s), sized from {source} -> {args.out}", file=sys.stderr)
-    for line in sp.lines(args.jobs, out if args.resume else None):
+    for line in sp.lines(args.jobs, out if args.resume else None, measured_c_s(elasticity_source)):
         print(line, file=sys.stderr)
     print(f"  {sp.estimate(args.jobs, out if args.resume else None, calibration).line()}", file=sys.stderr)
     for line in target_lines(sp):

@@ -188,19 +188,24 @@ class StudyPlan:
         return self.experiment().comparison_seconds(self.scored_drives(), self.grain_frames(), jobs,
                                                     speed or measured())
 
-    def lines(self, jobs: int, out: Path | None = None) -> list[str]:
-        """Per scene: delta_s, t_s, depth, duration, grains, steps and cost; then the whole (what is left of it in
-        the study folder ``out``)."""
+    def lines(self, jobs: int, out: Path | None = None, c_s: float | None = None) -> list[str]:
+        """Per scene: delta_s, t_s, depth, duration, grains, steps and cost, and what each drive offers the
+        experiment's laws (its ``planned``: a Stokes drive's growth window, at the measured shear-wave speed ``c_s``);
+        then the whole (what is left of it in the study folder ``out``)."""
         first = next(iter(self.runs.values())).plan.config.describe()
         lines = [f"  {first[1]}"]  # one material: the grains of every run
+        experiment = self.experiment()
+        if experiment.plan_header(c_s):
+            lines.append(f"  {experiment.plan_header(c_s)}")
         for label, r in self.runs.items():
             p = r.plan
             lines.append(f"  {label}: {p.config.describe()[0]}")
             for d in p.drives:
+                offers = experiment.planned(p, d, c_s)
                 lines.append(f"  {label}, {d.drive.name}: delta_s = {d.scales.delta_s:.3g} d, t_s = "
                              f"{d.scales.t_s:.3g}, depth {p.depth:g} d, width {p.config.box.width:g} d, duration "
                              f"{d.duration:.4g} ({d.steps:.3g} steps), {p.n_grains} grains x "
-                             f"{len(p.config.seeds)} bed(s)")
+                             f"{len(p.config.seeds)} bed(s)" + (f", {offers}" if offers else ""))
             lines.append(f"  {label}: {p.cost_estimate(1)}")
         left = " (what is left)" if self.done(out) else ""
         beds, comparison = self.cost_seconds(jobs, out), self.comparison_seconds(jobs)

@@ -588,17 +588,17 @@ def test_a_bed_shorter_than_delta_s_and_five_measured_creep_lengths_leaves_every
 
 
 def test_without_a_measured_creep_length_the_depth_rule_falls_back_on_the_sizing_s_and_says_so():
-    """Seeds whose speed is flat below delta_s (no e-folding: creep_length NaN): the bed must hold DELTA_S + 5 x 2.5
-    (dem.sizing's assumed creep length) = 19.5 d; 19.4 d falls short, 19.6 d holds it."""
+    """Seeds whose speed is flat below delta_s (no e-folding: creep_length NaN): a 2D bed must hold DELTA_S + 5 x 5
+    (dem.sizing's assumed creep length of disks, the largest measured) = 32 d; 31.9 d falls short, 32.1 d holds it."""
     from granstokes.compare.scorecard import short_bed
     from granstokes.dem.sizing import CREEP_LENGTH
     flat = pd.DataFrame({"depth": DEPTH, "u_x": np.where(DEPTH <= 5.0, 1 - DEPTH / 5.0, 0.01)})
-    need = DELTA_S + 5 * CREEP_LENGTH
-    assert need == pytest.approx(19.5)
+    need = DELTA_S + 5 * CREEP_LENGTH[2]
+    assert need == pytest.approx(32.0)
     a = _drive(samples=(flat, flat, flat))
-    a.spec = NS(depth=need - 0.1)
+    a.spec = NS(depth=need - 0.1, dimension=2)
     assert short_bed(a, DELTA_S) == (
-        "the bed (19.4 d) is shorter than delta_s + 5 creep lengths (7 + 5 x 2.5 = 19.5 d, the sizing's assumed creep "
+        "the bed (31.9 d) is shorter than delta_s + 5 creep lengths (7 + 5 x 5 = 32 d, the sizing's assumed creep "
         "length: the DEM's is not measured): the base constrains the creep")
-    a.spec = NS(depth=need + 0.1)
+    a.spec = NS(depth=need + 0.1, dimension=2)
     assert short_bed(a, DELTA_S) == ""

@@ -1,6 +1,7 @@
 """granstokes study: the config and its checks, --set, sizing from the calibration (one material), and (slow)
 the smoke study through a Dask scheduler, killed mid-way and resumed."""
 import json
+import math
 import os
 import re
 import signal
@@ -69,7 +70,7 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
         assert cfg.material.phi == pytest.approx(material["phi"]) and cfg.material.I0 == pytest.approx(material["I0"])
         k_n.add(round(cfg.contact.k_n, 6))
         deepest = max(d.scales.delta_s for d in p.drives)
-        assert p.depth >= deepest + CREEP_LENGTHS * CREEP_LENGTH
+        assert p.depth >= deepest + CREEP_LENGTHS * CREEP_LENGTH[cfg.grains.dimension]
         for d in p.drives:
             assert d.duration == pytest.approx(10 * d.scales.t_s, rel=1e-9)
         frame = min(d.scales.t_s for d in p.drives) / FRAMES_PER_TS  # the snapshots as LAMMPS writes them
@@ -440,3 +441,29 @@ def test_a_preset_runs_from_any_working_directory_and_a_missing_file_is_named(tm
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "calibration.file must be" in err[0] and "(this file is missing)" in err[0]
     assert str(tmp_path / "results" / "calibration-disks" / "p20" / "calibration.json") in err[0]
+
+
+def test_the_plan_prints_each_stokes_drives_growth_window_at_the_measured_shear_wave_speed(capsys):
+    """The disks preset sized from the committed p = 20 calibration (c_s = 118 measured): each drive's window runs
+    from 3 transits of its bed at that speed (not at the contacts' 270) to min(t_s/2, half the record); the shortest
+    layers have none (their elastic start reaches past t_s/2)."""
+    cal = ROOT / "results" / "calibration-disks" / "p20" / "calibration.json"
+    c_s = json.loads(cal.read_text())["elasticity"]["c_s"]
+    assert granstokes_main(["study", "--preset", "disks", "--out", "unused", "--dry-run", "--set",
+                            f"calibration={{file = '{cal}'}}"]) == 0
+    err = capsys.readouterr().err
+    assert f"transits at the calibration's measured c_s = {c_s:.4g}" in err
+    found = 0
+    for m in re.finditer(r"t_s = ([\d.e+-]+), depth ([\d.]+) d, .*?, growth window ([\d.e+-]+) decade\(s\) "
+                         r"\[([\d.e+-]+), ([\d.e+-]+)\]", err):
+        t_s, depth, decades, start, end = map(float, m.groups())
+        assert start == pytest.approx(3 * depth / c_s, rel=6e-3)  # printed to 3 digits: 0.5 % at worst
+        assert end == pytest.approx(0.5 * t_s, rel=6e-3)
+        assert decades == pytest.approx(math.log10(end / start), abs=0.01)
+        found += 1
+    nothing = re.findall(r"t_s = ([\d.e+-]+), depth ([\d.]+) d, .*?, no growth window \(the elastic start, "
+                         r"([\d.e+-]+), reaches past ([\d.e+-]+)\)", err)
+    assert found >= 8 and nothing  # every disks drive has one or the other
+    for t_s, depth, start, end in nothing:
+        assert float(start) == pytest.approx(3 * float(depth) / c_s, rel=6e-3) and float(start) > float(end)
+        assert float(end) == pytest.approx(0.5 * float(t_s), rel=6e-3)
