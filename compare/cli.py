@@ -1,7 +1,7 @@
-"""``granstokes compare (RUN_DIR... | --tables REPORT_DIR/tables) --out REPORT_DIR [--calibration
+"""``granstokes compare (RUN_DIR... | --tables REPORT_DIR/tables [--tables ...]) --out REPORT_DIR [--calibration
 DIR/calibration.json] [--fit-on-drives] [--ngf-from METRICS.json] [--jobs N] [--json]``: the experiment of the runs'
-drives (compare.experiment's registry: Stokes' first problem or the oscillating plate) from the runs or from an
-earlier report's tables, written as a report."""
+drives (compare.experiment's registry: Stokes' first problem or the oscillating plate) from the runs or from
+earlier reports' tables (several: a study run in parts, their drives together), written as a report."""
 from __future__ import annotations
 
 import json
@@ -20,18 +20,20 @@ def run_compare(args) -> int:
     from .experiment import experiment_for_runs, experiment_for_tables
 
     require(args.jobs >= 1, "--jobs", "an integer >= 1 (processes predicting the drives)", args.jobs)
-    require(bool(args.runs) != (args.tables is not None), "--tables or RUN_DIR",
-            "either run folders or one tables folder of an earlier report", "both" if args.runs else "neither")
+    require(bool(args.runs) != bool(args.tables), "--tables or RUN_DIR",
+            "either run folders or tables folders of earlier reports", "both" if args.runs else "neither")
     for run in args.runs:
         require((run / RUN_JSON).is_file(), "RUN_DIR", "a folder written by granstokes dem run (with run.json)",
                 str(run))
-    kind = experiment_for_tables(args.tables) if args.tables is not None else experiment_for_runs(args.runs)
-    sources = args.runs or [args.tables]
+    kinds = {experiment_for_tables(t) for t in args.tables} if args.tables else {experiment_for_runs(args.runs)}
+    require(len(kinds) == 1, "--tables", "tables folders of one experiment", sorted(k.name for k in kinds))
+    kind = kinds.pop()
+    sources = args.runs or args.tables
     inputs = [*sources, *([args.calibration] if args.calibration is not None else [])]
     claim(args.out, "--out", COMMAND, inputs)
     options = {k: v for k, v in (("fit_on_drives", args.fit_on_drives), ("ngf_from", args.ngf_from)) if v}
     experiment = kind.create(args.calibration, jobs=args.jobs, **options)  # every option checked before any work
-    dem = experiment.read_tables(args.tables) if args.tables is not None else experiment.analyse(args.runs)
+    dem = experiment.read_parts(args.tables) if args.tables else experiment.analyse(args.runs)
     result = experiment.run(dem)
     with staged(args.out, COMMAND, inputs) as work:
         m = experiment.write(result, work)
@@ -51,8 +53,9 @@ def register(sub) -> None:
     p = sub.add_parser("compare", help="coarse-grain DEM runs, predict them from mu(I) (independent or fitted), "
                                        "write the report")
     p.add_argument("runs", type=Path, nargs="*", metavar="RUN_DIR", help="run folders of granstokes dem run")
-    p.add_argument("--tables", type=Path, help="instead of run folders: the tables folder of an earlier report "
-                                               "(REPORT_DIR/tables: its DEM side, no dumps needed)")
+    p.add_argument("--tables", type=Path, action="append", default=[],
+                   help="instead of run folders: the tables folder of an earlier report (REPORT_DIR/tables: its DEM "
+                        "side, no dumps needed); repeat it for a study run in parts (their drives together)")
     p.add_argument("--out", type=Path, required=True, help="report folder (index.html, CSV, metrics.json)")
     p.add_argument("--calibration", type=Path, help="calibration.json of granstokes dem calibrate (same grains): "
                                                     "mu(I) and phi from it, the drives a blind test (required "

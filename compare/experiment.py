@@ -130,6 +130,16 @@ class Experiment:
         raise NotImplementedError
 
     @classmethod
+    def merge(cls, sides: list):
+        """Several DEM sides as one (a study run in parts: their runs and drives together)."""
+        raise NotImplementedError
+
+    def read_parts(self, folders: Sequence[Path]):
+        """The DEM side of one or several reports' tables folders (a study run in parts, ``merge``d)."""
+        sides = [self.read_tables(f) for f in folders]
+        return sides[0] if len(sides) == 1 else self.merge(sides)
+
+    @classmethod
     def write_tables(cls, result, folder: Path) -> None:
         raise NotImplementedError
 

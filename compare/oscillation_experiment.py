@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 from granstokes.dem.sizing import makespan
 
+from granstokes.lib.validate import require
+
 from . import calibrate, oscillation_report, oscillation_tables
 from .comparison import check_grains, run_grains
 from .drive import with_transit_time
@@ -80,6 +82,14 @@ class OscillatingPlate(Experiment):
 
     def read_tables(self, folder: Path):
         return oscillation_tables.read(folder)
+
+    @classmethod
+    def merge(cls, sides: list) -> list:
+        """The parts' drives together (ValueError naming --tables when a drive appears in two parts)."""
+        drives = [pair for side in sides for pair in side]
+        labels = [str(d.run / d.name) for d, _ in drives]
+        require(len(set(labels)) == len(labels), "--tables", "tables of distinct drives (a study's parts)", labels)
+        return drives
 
     @classmethod
     def write_tables(cls, result, folder: Path) -> None:

@@ -115,6 +115,10 @@ class StokesDrives(Experiment):
         return tables.read(folder)
 
     @classmethod
+    def merge(cls, sides: list[DemSide]) -> DemSide:
+        return tables.merge(sides)
+
+    @classmethod
     def write_tables(cls, result, folder: Path) -> None:
         tables.write(result.dem, folder)
 

@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from granstokes.lib.validate import require
+
 from .analysis import DriveAnalysis, plate_estimates
 from .comparison import Checks, DemSide
 from .drive import DriveSpec
@@ -121,3 +123,14 @@ def read(folder: Path) -> DemSide:
                        pd.read_csv(folder / "checks_crosscheck.csv"), first.steady_profile.y)
     grains = {run: (g["grains"], _number(g["p_w"])) for run, g in meta["grains"].items()}
     return DemSide(tuple(Path(r) for r in meta["runs"]), grains, drives, checks, _number(meta["mass_error"]))
+
+
+def merge(sides: list[DemSide]) -> DemSide:
+    """Several DEM sides as one (a study run in parts, each part's tables read by ``read``): the runs, grains and
+    drives of all, the coarse-graining checks and mass error of the first (ValueError naming --tables when a run
+    appears in two parts)."""
+    runs = [r for side in sides for r in side.runs]
+    require(len({str(r) for r in runs}) == len(runs), "--tables", "tables of distinct runs (a study's parts)",
+            [str(r) for r in runs])
+    return DemSide(tuple(runs), {k: v for side in sides for k, v in side.grains.items()},
+                   tuple(a for side in sides for a in side.drives), sides[0].checks, sides[0].mass_error)
