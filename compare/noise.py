@@ -146,33 +146,60 @@ class Target:
     confidence: float = CONFIDENCE
     beds_max: int = BEDS_MAX
 
-    def beds(self, size: DriveSize, table: dict | None = None) -> dict[str, int | None]:
-        """The beds each targeted observable the drive scores needs (None: more than ``beds_max``)."""
-        table = laws() if table is None else table
-        return {obs: beds_to_decide(table[(obs, size.kind)], size, diff, self.confidence, self.beds_max)
-                for obs, diff in self.differences if obs in SCORED[size.kind]}
+    def beds(self, size: DriveSize, table: dict | None = None, measured: dict | None = None) -> dict[str, int | None]:
+        """The beds each targeted observable the drive scores needs (None: more than ``beds_max``), from its
+        one-bed error as ``measured`` (observable -> error, a first round's: ``measured_errors``) or else as the
+        law predicts."""
+        table, measured = laws() if table is None else table, measured or {}
+        needs = {}
+        for obs, diff in self.differences:
+            if obs in SCORED[size.kind]:
+                one = measured.get(obs, table[(obs, size.kind)].error(replace(size, seeds=1)))
+                needs[obs] = beds_for(one / (size.x(obs) if relative(obs) else 1.0), diff, self.confidence,
+                                      self.beds_max)
+        return needs
 
 
-def beds_to_decide(law: NoiseLaw, size: DriveSize, difference: float, confidence: float = CONFIDENCE,
-                   beds_max: int = BEDS_MAX) -> int | None:
-    """The fewest beds n (at least MIN_BEDS) whose mean decides ``difference`` at ``confidence``: t(n - 1) err(n)
-    <= difference, err(n) the law's error at n beds (a fraction of the expected scale for a ``relative``
-    observable); None when ``beds_max`` beds do not."""
-    one = law.error(replace(size, seeds=1)) / (size.x(law.observable) if relative(law.observable) else 1.0)
+def beds_for(one_bed: float, difference: float, confidence: float = CONFIDENCE, beds_max: int = BEDS_MAX) -> int | None:
+    """The fewest beds n (at least MIN_BEDS) whose mean decides ``difference`` at ``confidence`` when one bed's
+    error is ``one_bed``: t(n - 1) one_bed n^-1/2 <= difference; None when ``beds_max`` beds do not."""
     for n in range(MIN_BEDS, beds_max + 1):
-        if stats.t.isf((1 - confidence) / 2, n - 1) * one * n ** -AVERAGING <= difference:
+        if stats.t.isf((1 - confidence) / 2, n - 1) * one_bed * n ** -AVERAGING <= difference:
             return n
     return None
 
 
-def target_line(label: str, size: DriveSize, target: Target, run_beds: int, table: dict | None = None) -> str:
+def beds_to_decide(law: NoiseLaw, size: DriveSize, difference: float, confidence: float = CONFIDENCE,
+                   beds_max: int = BEDS_MAX) -> int | None:
+    """``beds_for`` the law's one-bed error (a fraction of the expected scale for a ``relative`` observable)."""
+    one = law.error(replace(size, seeds=1)) / (size.x(law.observable) if relative(law.observable) else 1.0)
+    return beds_for(one, difference, confidence, beds_max)
+
+
+def measured_errors(metrics: dict) -> dict[str, dict[str, float]]:
+    """A first round's one-bed errors (a report's metrics.json): per drive label, each scored observable's DEM
+    standard error over its beds times sqrt(beds) (the spread of one bed), where finite; what a resume that adds
+    beds plans from instead of the law."""
+    beds = {label: int(d["seeds"]) for label, d in metrics.get("drives", {}).items()}
+    out: dict[str, dict[str, float]] = {}
+    for row in metrics.get("scorecard", []):
+        err, label = row.get("dem_err"), row.get("drive")
+        if row.get("observable") in RESPONSES + ("delta_u", "creep_length", "t90") and label in beds \
+                and err is not None and np.isfinite(err):
+            out.setdefault(label, {})[row["observable"]] = float(err) * beds[label] ** AVERAGING
+    return out
+
+
+def target_line(label: str, size: DriveSize, target: Target, run_beds: int, table: dict | None = None,
+                measured: dict | None = None) -> str:
     """What the target asks of one drive, as ``granstokes study`` prints it before running: the beds each targeted
-    observable needs, the drive's (the most of them) and its run's; an observable ``beds_max`` beds cannot decide is
-    named as such."""
-    needs, diffs = target.beds(size, table), dict(target.differences)
+    observable needs (from a first round's ``measured`` one-bed error where given: marked "measured"), the drive's
+    (the most of them) and its run's; an observable ``beds_max`` beds cannot decide is named as such."""
+    needs, diffs, measured = target.beds(size, table, measured), dict(target.differences), measured or {}
     parts = [(f"{obs} {100 * diffs[obs]:g} % of {SCALES[obs]}" if relative(obs) else
               f"{obs} {diffs[obs]:g} {UNITS[obs]}")
-             + (f": {n}" if n is not None else f": undecided within {target.beds_max}") for obs, n in needs.items()]
+             + (f": {n}" if n is not None else f": undecided within {target.beds_max}")
+             + (" (measured)" if obs in measured else "") for obs, n in needs.items()]
     if not needs:
         return f"  {label}: no targeted observable; {run_beds} bed(s) with its run"
     undecided = [obs for obs, n in needs.items() if n is None]

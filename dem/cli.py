@@ -1,7 +1,8 @@
 """``granstokes dem``: run a DEM scene, or calibrate its grains' mu(I), from a TOML config or a preset.
 
     granstokes dem run (CONFIG.toml | --preset NAME) --out DIR [--jobs 2] [--np N] [--launcher 'srun -n {np}']
-    granstokes dem run --resume --out DIR                 (continues the run with the config stored in DIR)
+    granstokes dem run --resume --out DIR                 (continues the run with the config stored in DIR;
+                                                          --set seeds=[...] adds beds after its seeds)
     granstokes dem calibrate (CONFIG.toml | --preset NAME) --out DIR [--jobs 2] [--np 1]
     granstokes dem calibrate --resume --out DIR
 
@@ -42,13 +43,17 @@ def _config(args, command: str):
 
             text = calibrated_text(text, args.calibration)
         return config_mod.parse(text), text
-    require(not args.set and not getattr(args, "calibration", None), "--set / --calibration",
+    require(not getattr(args, "calibration", None), "--calibration",
             "given with CONFIG.toml or --preset (a resume continues the stored config)", "a resume without either")
     require(args.resume, "CONFIG.toml / --preset", "given (or --resume, to continue the folder in --out)", "neither")
     stored = Path(args.out) / CONFIG_TOML
     require(stored.is_file(), "--resume", f"given with a folder holding the {CONFIG_TOML} of an earlier "
             f"granstokes dem {command}", str(args.out))
-    return config_mod.load(stored)
+    if not args.set:
+        return config_mod.load(stored)
+    text = with_entries(stored.read_text(), [parse_assignment(a) for a in args.set],  # a resume that adds beds
+                        header=f"{stored} with --set " + " ".join(args.set))
+    return config_mod.parse(text), text
 
 
 def _resume_line(done: list[str], left: list[str], what: str) -> str:

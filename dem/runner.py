@@ -517,13 +517,22 @@ def check_request(sized: Plan, text: str, out: str | Path, np: int | None = None
         require(meta_path.exists() and (out / layout.CONFIG_TOML).is_file(), "--resume",
                 f"given with an existing run folder (with {layout.RUN_JSON} and {layout.CONFIG_TOML})", str(out))
         stored = parse((out / layout.CONFIG_TOML).read_text())
-        require(stored.as_dict() == sized.config.as_dict(), "--resume",
-                f"given with the config stored in {out / layout.CONFIG_TOML}", "a different config")
+        require(stored.as_dict() == sized.config.as_dict() or adds_beds(stored, sized.config), "--resume",
+                f"given with the config stored in {out / layout.CONFIG_TOML} (or it with seeds added after its own)",
+                "a different config")
         staging.require_unchanged(out, "--out")
     else:
         require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
                 str(out))
     return runner
+
+
+def adds_beds(stored, requested) -> bool:
+    """Whether config ``requested`` is ``stored`` with beds added: equal but for seeds that continue the stored ones
+    (a resume runs the new beds and never redoes one)."""
+    a, b = stored.as_dict(), requested.as_dict()
+    old, new = tuple(a.pop("seeds")), tuple(b.pop("seeds"))
+    return a == b and len(new) > len(old) and new[:len(old)] == old
 
 
 def completed_stages(out: str | Path, plan_: Plan) -> tuple[list[str], list[str]]:
@@ -550,6 +559,9 @@ def begin(sized: Plan, text: str, out: str | Path, np: int | None = None, resume
         meta["status"], meta["message"] = "running", ""
         meta.setdefault("resumes", []).append(_now())
         staging.resume(out, COMMAND)
+        if adds_beds(parse((out / layout.CONFIG_TOML).read_text()), sized.config):  # the new beds join the record
+            (out / layout.CONFIG_TOML).write_text(text)
+            meta.update(config=sized.config.as_dict(), seeds=list(sized.config.seeds))
     else:
         meta = runner.new_metadata()  # queries the LAMMPS library: fails before anything is written
         staging.start(out, COMMAND)

@@ -14,6 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from granstokes.dem.lammps_env import DEFAULT_JOBS
+from granstokes.lib.toml_text import parse_assignment, with_entries
 from granstokes.lib.validate import require
 
 from . import config
@@ -42,28 +43,21 @@ def final_line(record: dict, args) -> str:
     return f"study: {record['status']}{said} (see {out / 'study.json'})"
 
 
-def measured_c_s(path) -> float | None:
-    """The shear-wave speed a calibration.json measured in its packing (its ``elasticity``), or None."""
-    if path is None:
-        return None
-    elasticity = json.loads(Path(path).read_text()).get("elasticity") or {}
-    return float(elasticity["c_s"]) if "c_s" in elasticity else None
-
-
-def target_lines(sp) -> list[str]:
-    """The beds each scored drive needs for the study's error target (none without one), as the study plans them."""
+def target_lines(sp, measured: dict | None = None) -> list[str]:
+    """The beds each scored drive needs for the study's error target (none without one), as the study plans them
+    (from a first round's ``measured`` one-bed errors where given)."""
     target = sp.study.target
     if target is None:
         return []
     from granstokes.compare import noise
 
-    from .plan import WIDE
+    from .plan import WIDE, drive_label
 
-    table = noise.laws()
+    table, measured = noise.laws(), measured or {}
     return [f"the error target: beds for a {target.confidence:.0%} decision (compare/noise.csv), at most "
             f"{target.beds_max} a run:"] + [
         noise.target_line(f"{label}, {d.drive.name}", noise.drive_size(r.plan, d, r.p_w), target,
-                          len(r.plan.config.seeds), table)
+                          len(r.plan.config.seeds), table, measured.get(drive_label(label, d.drive.name)))
         for label, r in sp.runs.items() if not label.endswith(WIDE) for d in r.plan.drives]
 
 
@@ -73,7 +67,7 @@ def _cmd_study(args) -> int:
     from granstokes.dem.estimate import Estimate
     from granstokes.dem.layout import CALIBRATION_JSON, CALIBRATION_STATE
 
-    from .plan import calibration_config, calibration_folder, plan_study
+    from .plan import calibration_config, calibration_folder, first_round, measured_c_s, plan_study
     from .runner import STUDY_TOML, check_folder, run_study
 
     require(args.scheduler is None or args.jobs is None, "--jobs / --scheduler", "one of them (a scheduler's "
@@ -82,11 +76,13 @@ def _cmd_study(args) -> int:
     require(isinstance(args.jobs, int) and args.jobs >= 1, "--jobs", "an integer >= 1 (LAMMPS processes at once)",
             args.jobs)
     if args.resume and args.config is None and args.preset is None:
-        require(not args.set, "--set", "given with STUDY.toml or --preset (a resume continues the stored study)",
-                args.set)
         stored = Path(args.out) / STUDY_TOML
         require(stored.is_file(), "--resume", f"given with a study folder (holding {STUDY_TOML})", args.out)
-        study, text = config.parse(stored.read_text(), Path(args.out)), stored.read_text()
+        text = stored.read_text()
+        if args.set:  # a resume that adds beds (more seeds, a stricter target): check_folder allows only that
+            text = with_entries(text, [parse_assignment(a) for a in args.set],
+                                header=f"{stored} with --set " + " ".join(args.set))
+        study = config.parse(text, Path(args.out))
     else:
         study, text = config.load(args.config, args.preset, args.set or ())
     check_folder(study, Path(args.out), args.resume)
@@ -125,7 +121,8 @@ def _cmd_study(args) -> int:
         material = dem_config.preset(study.dem)[0].material
         material = {k: getattr(material, k) for k in dem_config.MATERIAL_KEYS}
         source = f"(not yet run: sized here from the {study.dem} preset's nominal material)"
-    sp = plan_study(study, material, source)
+    measured = first_round(out) if args.resume else None  # a resume that adds beds plans from the last report
+    sp = plan_study(study, material, source, measured=measured)
     if args.resume:
         sp = sp.as_begun(out)
     if study.calibration_file is not None:  # a calibration of other grains is refused before any work
@@ -139,7 +136,7 @@ def _cmd_study(args) -> int:
     for line in sp.lines(args.jobs, out if args.resume else None, measured_c_s(elasticity_source)):
         print(line, file=sys.stderr)
     print(f"  {sp.estimate(args.jobs, out if args.resume else None, calibration).line()}", file=sys.stderr)
-    for line in target_lines(sp):
+    for line in target_lines(sp, measured):
         print(line, file=sys.stderr)
     if args.dry_run:
         from granstokes.compare import noise

@@ -13,6 +13,7 @@ from granstokes.dem import config as dem_config
 from granstokes.dem.contact import rigidity
 from granstokes.dem.estimate import STARTUP, Estimate, duration_text
 from granstokes.dem.layout import CONFIG_TOML, RUN_JSON
+from granstokes.dem.runner import adds_beds
 from granstokes.dem.sizing import Plan, makespan, plan, ranks_per_bed, size_drive, speedup
 from granstokes.dem.throughput import Throughput, measured
 from granstokes.lib.toml_text import with_entries
@@ -123,12 +124,14 @@ class StudyPlan:
 
     def as_begun(self, out: Path) -> StudyPlan:
         """This plan with each run already begun in the study folder ``out`` as its stored config has it (a resume
-        goes on as the run was planned)."""
+        goes on as the run was planned), or as planned now where that only adds beds to it (dem.runner.adds_beds:
+        the resume runs the new beds)."""
         runs = {}
         for label, r in self.runs.items():
             stored = self.folder(out, label) / CONFIG_TOML
             text = stored.read_text() if (self.folder(out, label) / RUN_JSON).is_file() else r.text
-            runs[label] = r if text == r.text else StudyRun(text, plan(dem_config.parse(text)))
+            begun = r if text == r.text else StudyRun(text, plan(dem_config.parse(text)))
+            runs[label] = r if adds_beds(begun.plan.config, r.plan.config) else begun
         return StudyPlan(self.study, runs)
 
     def done(self, out: Path | None) -> set[str]:
@@ -215,13 +218,38 @@ class StudyPlan:
         return lines
 
 
-def target_beds(r: StudyRun, target, table: dict | None = None) -> int:
-    """The beds the run takes for the study's error target: the most its drives need to decide what the target's
-    budget can (compare.noise.Target; what it cannot is said, not paid for), at least the seeds it was planned with."""
+def measured_c_s(path) -> float | None:
+    """The shear-wave speed a calibration.json measured in its packing (its ``elasticity``), or None."""
+    if path is None:
+        return None
+    elasticity = json.loads(Path(path).read_text()).get("elasticity") or {}
+    return float(elasticity["c_s"]) if "c_s" in elasticity else None
+
+
+def drive_label(label: str, drive_name: str) -> str:
+    """A study drive's label in its report (metrics.json's drives): runs/p10/stress-mutilde0.6."""
+    return f"{RUNS}/{label}/{drive_name}"
+
+
+def first_round(out: Path | None) -> dict | None:
+    """The one-bed errors the study folder's last report measured (compare.noise.measured_errors: what a resume
+    that adds beds plans from), or None before any report."""
     from granstokes.compare import noise
 
-    needs = [n for d in r.plan.drives for n in target.beds(noise.drive_size(r.plan, d, r.p_w), table).values()
-             if n is not None]
+    path = None if out is None else Path(out) / "metrics.json"
+    return noise.measured_errors(json.loads(path.read_text())) if path is not None and path.is_file() else None
+
+
+def target_beds(label: str, r: StudyRun, target, table: dict | None = None, measured: dict | None = None) -> int:
+    """The beds run ``label`` takes for the study's error target: the most its drives need to decide what the
+    target's budget can (compare.noise.Target, from a first round's ``measured`` errors where given; what it cannot
+    is said, not paid for), at least the seeds it was planned with."""
+    from granstokes.compare import noise
+
+    measured = measured or {}
+    needs = [n for d in r.plan.drives
+             for n in target.beds(noise.drive_size(r.plan, d, r.p_w), table,
+                                  measured.get(drive_label(label, d.drive.name))).values() if n is not None]
     return max([len(r.plan.config.seeds), *needs])
 
 
@@ -230,12 +258,13 @@ def extended_seeds(seeds: tuple[int, ...], beds: int) -> tuple[int, ...]:
     return seeds + tuple(range(max(seeds) + 1, max(seeds) + 1 + beds - len(seeds)))
 
 
-def plan_study(study: Study, material: dict, source: str, noise_table: dict | None = None) -> StudyPlan:
+def plan_study(study: Study, material: dict, source: str, noise_table: dict | None = None,
+               measured: dict | None = None) -> StudyPlan:
     """Every run's config and its sizing (ValueError naming the drive if a load is outside the calibrated law): at
     every pressure one run per frequency of the drives (held drives: one run), its outputs resolving them, its beds
-    the study's seeds or, with an error target, those its drives need (``target_beds``, from compare.noise's laws or
-    ``noise_table``); with ``study.width_check`` the first drive at the reference pressure in a box twice as wide
-    (the study's seeds)."""
+    the study's seeds or, with an error target, those its drives need (``target_beds``, from a first round's
+    ``measured`` errors where given, else compare.noise's laws or ``noise_table``); with ``study.width_check`` the
+    first drive at the reference pressure in a box twice as wide (the study's seeds)."""
     base = dem_config.preset(study.dem)[0]
 
     def run(p_w: float, drives: tuple[dem_config.Drive, ...], wide_of: Plan | None = None,
@@ -243,13 +272,15 @@ def plan_study(study: Study, material: dict, source: str, noise_table: dict | No
         cfg, text = run_config(study, base, p_w, drives, material, source, wide_of, seeds)
         return StudyRun(text, plan(cfg))
 
-    def targeted(p_w: float, drives: tuple[dem_config.Drive, ...]) -> StudyRun:
+    def targeted(label: str, p_w: float, drives: tuple[dem_config.Drive, ...]) -> StudyRun:
         first = run(p_w, drives)
         if study.target is None:
             return first
-        return run(p_w, drives, seeds=extended_seeds(study.seeds, target_beds(first, study.target, noise_table)))
+        beds = target_beds(label, first, study.target, noise_table, measured)
+        return run(p_w, drives, seeds=extended_seeds(study.seeds, beds))
 
-    runs = {pressure_label(p_w) + wave_label(w): targeted(p_w, tuple(d for d in study.drives if d.omega_ts == w))
+    runs = {pressure_label(p_w) + wave_label(w): targeted(pressure_label(p_w) + wave_label(w), p_w,
+                                                           tuple(d for d in study.drives if d.omega_ts == w))
             for p_w in study.pressures for w in study.frequencies}
     if study.width_check:
         label = pressure_label(study.reference_pressure)

@@ -9,6 +9,7 @@ unfinished; a finished calibration, bed or drive is never redone.
 """
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import json
 import math
@@ -29,7 +30,7 @@ from granstokes.lib.toml_text import with_entries
 from granstokes.lib.validate import require
 
 from .config import Study, parse
-from .plan import WIDE, StudyPlan, calibration_config, calibration_folder, plan_study
+from .plan import WIDE, StudyPlan, calibration_config, calibration_folder, first_round, measured_c_s, plan_study
 
 COMMAND = "study"
 STUDY_TOML, STUDY_JSON = "study.toml", "study.json"
@@ -39,15 +40,25 @@ def _now() -> str:
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
+def adds_beds(stored: Study, study: Study) -> bool:
+    """Whether ``study`` is ``stored`` with beds added: the same grid but for seeds that continue the stored ones
+    and an error target (none stored, or another), so that every run takes at least the beds it had."""
+    same = dataclasses.replace(study, seeds=stored.seeds, target=stored.target) == stored
+    return same and study.seeds[:len(stored.seeds)] == stored.seeds and (study.seeds, study.target) != (
+        stored.seeds, stored.target)
+
+
 def check_folder(study: Study, out: Path, resume: bool) -> None:
-    """The folder: new or empty, or with ``resume`` a study of the same grid whose files, its runs' and its
-    calibrations' included, are unchanged since written (ValueError naming the option)."""
+    """The folder: new or empty, or with ``resume`` a study of the same grid (or it with beds added:
+    ``adds_beds``) whose files, its runs' and its calibrations' included, are unchanged since written (ValueError
+    naming the option)."""
     require(not out.exists() or out.is_dir(), "--out", "a folder (this path is an existing file)", str(out))
     if resume:
         stored = out / STUDY_TOML
         require(stored.is_file(), "--resume", f"given with a study folder (holding {STUDY_TOML})", str(out))
-        require(parse(stored.read_text(), out) == study, "--resume", f"the study stored in {stored}",
-                "a different study")
+        before = parse(stored.read_text(), out)
+        require(before == study or adds_beds(before, study), "--resume", f"the study stored in {stored} (or it "
+                "with seeds added after its own, or another error target)", "a different study")
         staging.require_unchanged(out, "--out", nested=True)
     else:
         require(not (out.exists() and any(out.iterdir())), "--out", "a new or empty folder (or pass --resume)",
@@ -164,14 +175,15 @@ class StudyRunner:
             with sigterm_interrupts():
                 calibration = self.calibration()
                 material, _, _ = material_table(calibration)
-                sp = plan_study(self.study, material, str(calibration)).as_begun(self.out)
+                sp = plan_study(self.study, material, str(calibration),
+                                measured=first_round(self.out)).as_begun(self.out)
                 self.record(lambda d: d["runs"].update({
                     label: {**d["runs"].get(label, {"beds": {}}), "p_w": r.p_w,
                             "path": str(sp.folder(self.out, label).relative_to(self.out)),
                             "drives": [dp.drive.name for dp in r.plan.drives],
                             "status": d["runs"].get(label, {}).get("status", "pending")}
                     for label, r in sp.runs.items()}))
-                for line in sp.lines(self.jobs, self.out):
+                for line in sp.lines(self.jobs, self.out, measured_c_s(calibration)):
                     self.announce(line)
                 results = self.runs(sp)
                 stopped = [(k, r) for k, r in results.items() if r.status != "complete"]
@@ -258,11 +270,11 @@ def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None
     out = Path(out)
     check_folder(study, out, resume)
     runner = StudyRunner(study, text, out, jobs, scheduler, progress, announce)
+    files = [("calibration.file", study.calibration_file), ("ngf_from", study.ngf_from)]
+    # relative to the study folder, where a resume reads them from
+    text = with_entries(text, [(key, relative(path, out)) for key, path in files if path is not None])
     if not resume:
         staging.start(out, COMMAND)
-        files = [("calibration.file", study.calibration_file), ("ngf_from", study.ngf_from)]
-        # relative to the study folder, where a resume reads them from
-        text = with_entries(text, [(key, relative(path, out)) for key, path in files if path is not None])
         (out / STUDY_TOML).write_text(text)
         runner.record(lambda d: d.update(
             name=study.name, status="running", message="", started=_now(), runs={},
@@ -271,7 +283,11 @@ def run_study(study: Study, text: str, out, jobs: int = 2, scheduler: str | None
             units="DEM units: d = rho_p = g = 1; p_w in rho_p g d, times in sqrt(d/g)",
             provenance={**provenance(), "jobs": jobs, "scheduler": scheduler or "local"}))
     else:
+        added = adds_beds(parse((out / STUDY_TOML).read_text(), out), study)
         staging.resume(out, COMMAND)
+        if added:  # the study with its new beds is the study from now on (dem.runner adds them to each run)
+            (out / STUDY_TOML).write_text(text)
+            runner.record(lambda d: d["grid"].update(seeds=list(study.seeds)))
         runner.record(lambda d: d.update(status="running", message="", resumes=[*d.get("resumes", []), _now()]))
     allow_lammps()
     return runner.run()

@@ -9,7 +9,7 @@ import stat
 
 import pytest
 from granstokes.dem import config, layout
-from granstokes.dem.runner import Runner
+from granstokes.dem.runner import Runner, adds_beds, begin, completed_stages
 from granstokes.dem.sizing import plan
 
 from granstokes.cli import main
@@ -199,3 +199,34 @@ def test_outputs_get_the_mode_the_umask_gives(tmp_path, capsys, umask_022):
     files = [*out.iterdir(), plot, tmp_path / "record.json", tmp_path / "run" / staging.MANIFEST]
     assert staging.MANIFEST in {p.name for p in files} and len(files) == 7
     assert {p.name: oct(stat.S_IMODE(p.stat().st_mode)) for p in files} == {p.name: "0o644" for p in files}
+
+
+def test_a_resume_that_adds_seeds_keeps_every_bed_run_and_runs_only_the_new_ones(tmp_path, capsys):
+    """Sequential design: ``dem run --resume --set seeds=[...]`` with seeds that continue the stored ones adds their
+    beds (config.toml and run.json then hold them; the stages done stay done); any other change, reordered seeds
+    included, is refused by name and the folder left as it was."""
+    run = _stopped_run(tmp_path / "run")
+    stored = config.parse((run / layout.CONFIG_TOML).read_text())
+    more = [*stored.seeds, max(stored.seeds) + 1, max(stored.seeds) + 2]
+    before = _snapshot(run)
+    for change in ([f"seeds={list(reversed(more))}"], ["load.p_w=7.0"], [f"seeds={more}", "load.p_w=7.0"]):
+        code, err = _run(["dem", "run", "--resume", "--out", run, "--dry-run", *sum((["--set", c] for c in change),
+                                                                                   [])], capsys)
+        assert code == 2 and "--resume must be given with the config stored in" in err and _snapshot(run) == before
+    code, err = _run(["dem", "run", "--resume", "--out", run, "--dry-run", "--set", f"seeds={more}"], capsys)
+    stages = len(plan(stored).stage_keys(1)) * len(more)  # a preparation and the drives, per bed
+    assert code == 0 and f"resume: 1 of {stages} stages complete (seed-1)" in err and _snapshot(run) == before
+    text = config_text_with(run, more)
+    begin(plan(config.parse(text)), text, run, resume=True, progress=False)
+    assert config.parse((run / layout.CONFIG_TOML).read_text()).seeds == tuple(more)
+    assert json.loads((run / layout.RUN_JSON).read_text())["seeds"] == more
+    done, left = completed_stages(run, plan(config.parse(text)))
+    assert done == ["seed-1"] and {f"seed-{s}" for s in more[len(stored.seeds):]} <= set(left)
+    assert adds_beds(stored, config.parse(text)) and not adds_beds(config.parse(text), stored)
+
+
+def config_text_with(run, seeds) -> str:
+    """The run's stored config with ``seeds``, as ``--set`` writes it."""
+    from granstokes.lib.toml_text import with_entries
+
+    return with_entries((run / layout.CONFIG_TOML).read_text(), [("seeds", seeds)], header="more beds")

@@ -467,3 +467,39 @@ def test_the_plan_prints_each_stokes_drives_growth_window_at_the_measured_shear_
     for t_s, depth, start, end in nothing:
         assert float(start) == pytest.approx(3 * float(depth) / c_s, rel=6e-3) and float(start) > float(end)
         assert float(end) == pytest.approx(0.5 * float(t_s), rel=6e-3)
+
+
+def test_a_resume_may_add_beds_to_a_study_and_nothing_else():
+    """granstokes.study.runner.adds_beds: seeds that continue the stored ones, or another error target, add beds;
+    reordered seeds, fewer seeds or another grid do not."""
+    from granstokes.study.runner import adds_beds
+
+    stored = config.parse(_study(seeds=[1, 2]))
+    assert adds_beds(stored, config.parse(_study(seeds=[1, 2, 3])))
+    assert adds_beds(stored, config.parse(_study(seeds=[1, 2], target={"creep_length": 0.5})))
+    for other in (_study(seeds=[2, 1, 3]), _study(seeds=[1]), _study(seeds=[1, 2]),
+                  _study(seeds=[1, 2, 3], pressures=[10.0, 40.0])):
+        assert not adds_beds(stored, config.parse(other))
+
+
+def test_a_second_round_plans_its_beds_from_the_first_rounds_measured_errors():
+    """compare.noise.measured_errors: a report's DEM error over n beds times sqrt(n) is one bed's; with it the target
+    asks each drive for t(n - 1)/sqrt(n) x that error <= the difference (creep one-bed error 1 d, target 1 d: 7 beds,
+    t(5)/sqrt(6) = 1.05, t(6)/sqrt(7) = 0.925), the law where nothing was measured, never fewer than the run had."""
+    from granstokes.compare import noise
+
+    study = config.parse(_study(seeds=[1, 2], target={"creep_length": 1.0, "beds_max": 9}))
+    material, _, _ = material_table(CALIBRATION)
+    metrics = {"drives": {"runs/p10/stress-mutilde0.5": {"seeds": 4}, "runs/p20/stress-mutilde0.5": {"seeds": 4}},
+               "scorecard": [{"drive": "runs/p10/stress-mutilde0.5", "observable": "creep_length", "dem_err": 0.5},
+                             {"drive": "runs/p20/stress-mutilde0.5", "observable": "creep_length", "dem_err": 0.1},
+                             {"drive": "runs/p20/stress-mutilde0.5", "observable": "t90", "dem_err": None}]}
+    measured = noise.measured_errors(metrics)
+    assert measured == {"runs/p10/stress-mutilde0.5": {"creep_length": pytest.approx(1.0)},
+                        "runs/p20/stress-mutilde0.5": {"creep_length": pytest.approx(0.2)}}
+    law = {key: noise.NoiseLaw(key[0], key[1], 1e-3, 1e-3, 0.0, 0.0, 0.0) for key in
+           [(o, k) for k, obs in noise.SCORED.items() for o in obs]}  # the law: everything decided by 2 beds
+    sp = plan_study(study, material, "test", law, measured)
+    assert sp.runs["p10"].plan.config.seeds == (1, 2, 3, 4, 5, 6, 7)  # the measured p10 error asks 7
+    assert sp.runs["p20"].plan.config.seeds == (1, 2, 3)  # 0.2 d: t(2)/sqrt(3) x 0.2 = 0.50 <= 1 at 3 beds
+    assert plan_study(study, material, "test", law).runs["p10"].plan.config.seeds == (1, 2)
