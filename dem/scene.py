@@ -5,7 +5,9 @@ minimum extent (``boundary p m p``) so that no kicked grain is lost.  Atom types
 2 base grains (frozen, ``fix freeze``), 3 plate grains (one rigid body, ``fix rigid single``, no
 rotation, so the sphere inertia that fix rigid assigns its grains never enters).  The plate grains are
 spaced (``plate_pitch``) so that the bed grains nest between them: the plate grips the bed.  2D grains
-are integrated as disks (``fix nve/sphere disc``: I = m r^2/2; spheres I = 2 m r^2/5).  The plate is
+are integrated as disks (``fix nve/sphere disc``: I = m r^2/2; spheres I = 2 m r^2/5); a drive needs no
+``fix enforce2d``: its grains start in the plane at rest along z and every force on them lies in the plane, so
+their z components stay exactly zero.  The plate is
 loaded by ``fix addforce`` (p_w A downwards; no gravity on the plate, so p_w is exactly the applied
 normal stress) and driven either by a constant x force tau_w A (imposed stress) or at a held x
 velocity u_w (imposed speed: rigid-body x force switched off).
@@ -114,7 +116,8 @@ def _density(group: str, dim: int) -> str:
 
 
 def _enforce(dim: int, after_rigid: bool = False) -> str:
-    """2D: keep everything in the plane (re-declared after fix rigid, which must precede it)."""
+    """2D preparation: keep everything in the plane (re-declared after fix rigid, which must precede it; a drive
+    needs none, see the module docstring)."""
     if dim != 2:
         return ""
     return "unfix two_d\nfix two_d all enforce2d" if after_rigid else "fix two_d all enforce2d"
@@ -367,7 +370,6 @@ fix gravity bed gravity 1.0 vector 0 -1 0
 fix plate plate rigid single {flags} torque * off off off
 {tracking}
 fix load plate addforce {fx} {fy} 0.0
-{_enforce(plan.dimension)}
 """
     return what, block
 
@@ -376,9 +378,13 @@ def _plate_output(plan: Plan) -> str:
     area, every, sample = plan.area, plan.intervals["plate"], plan.intervals["sample"]
     fmt = ",".join(f"$({v})" for v in ("step", "v_t:%.8g", "v_px:%.10g", "v_py:%.10g", *(
         f"v_out_{k}:%.8g" for k in ("ux", "uy", "fx", "fy", "uc", "nc"))))
-    averaged = "\n".join(f"variable out_{k} equal (step>0)*f_plate_mean[{i + 1}]+(step==0)*v_{v}"
-                          for i, (k, v) in enumerate((("ux", "pux"), ("uy", "puy"), ("fx", "pfx"), ("fy", "pfy"),
-                                                      ("sc", "ucsum"), ("nc", "ncon"))))
+    # the sampled values: fix ave/time reads computes and fixes directly (only the rigid body's array needs a
+    # variable); the force's interval means are divided by the plate's area at output
+    sampled = (("ux", "v_pux"), ("uy", "v_puy"), ("fx", "f_load[1]"), ("fy", "f_load[2]"), ("sc", "c_touch_sums[1]"),
+               ("nc", "c_touch_sums[2]"))
+    mean = {k: f"(step>0)*f_plate_mean[{i + 1}]+(step==0)*{ref}" for i, (k, ref) in enumerate(sampled)}
+    averaged = "\n".join(f"variable out_{k} equal " + (f"({m})/{area:.10g}" if k in ("fx", "fy") else m)
+                          for k, m in mean.items())
     return f"""
 # --- plate time series: unwrapped x and y at the output step; velocity and force of the bed on the
 #     plate per area (the plate grains' forces summed before the load is added: fix addforce's vector)
@@ -389,15 +395,11 @@ variable px equal f_plate[1][1]+f_plate[1][13]*lx
 variable py equal f_plate[1][2]
 variable pux equal f_plate[1][4]
 variable puy equal f_plate[1][5]
-variable pfx equal f_load[1]/{area:.10g}
-variable pfy equal f_load[2]/{area:.10g}
 compute touching bed contact/atom plate
 variable touch atom c_touching>0
 variable touch_vx atom v_touch*vx
 compute touch_sums bed reduce sum v_touch_vx v_touch
-variable ucsum equal c_touch_sums[1]
-variable ncon equal c_touch_sums[2]
-fix plate_mean all ave/time {sample} {every // sample} {every} v_pux v_puy v_pfx v_pfy v_ucsum v_ncon
+fix plate_mean all ave/time {sample} {every // sample} {every} {" ".join(ref for _, ref in sampled)}
 {averaged}
 variable out_uc equal v_out_sc/(v_out_nc+(v_out_nc==0))
 fix plate_out all print {every} "{fmt}" file {PLATE_CSV} screen no title "{",".join(PLATE_COLUMNS)}"

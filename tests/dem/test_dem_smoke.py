@@ -49,6 +49,19 @@ def test_no_grain_lost(smoke):
     assert counts == {len(grains)}
 
 
+def test_disks_stay_in_the_plane_without_enforce2d(smoke):
+    """A 2D drive has no fix enforce2d: every grain's z and v_z stay exactly zero in every snapshot, and every
+    contact's dz and tangential force along z too (forces in the plane only)."""
+    out, _ = smoke
+    drive = out / "seed-1" / "speed"
+    assert "enforce2d" not in (drive / "in.lammps").read_text()
+    atoms = [layout.snapshot_table(text) for _, text in layout.dump_snapshots(drive / "atoms.dump")]
+    contacts = [layout.snapshot_table(text) for _, text in layout.dump_snapshots(drive / "contacts.dump")]
+    assert len(atoms) == len(contacts) > 100
+    assert all((a[["z", "vz"]].to_numpy() == 0).all() for a in atoms)
+    assert all((c[["dz", "ft_z"]].to_numpy() == 0).all() and (c["fn"] != 0).all() for c in contacts)
+
+
 def test_preparation_ends_with_the_plate_landed_and_still(smoke):
     """Settling ends below its own threshold once the pile has landed; relax counts the plate's kinetic energy,
     so the prepared plate (row 0 of the drive) rests on the bed grains nested in its gaps, its speed within the
@@ -222,8 +235,12 @@ def test_sampled_plate_averages_are_unbiased_against_every_step(smoke, tmp_path)
     assert sample > 1 and every % sample == 0
     drive = dataclasses.replace(p.drives[0], steps=60 * every, duration=60 * every * p.dt)
     script = scene.drive_script(p, drive, str(out / "seed-1" / "prepare" / "prepared.restart"), fresh=True)
-    both = (f"fix every_step all ave/time 1 {every} {every} v_pfx v_pfy v_ncon file every_step.txt\n"
-            f"fix sampled all ave/time {sample} {every // sample} {every} v_pfx v_pfy v_ncon file sampled.txt\n")
+    # the drive samples the plate's velocity, its x and y force and the bed grains touching it (u_c's sum, n_c)
+    assert (f"ave/time {sample} {every // sample} {every} v_pux v_puy f_load[1] f_load[2] c_touch_sums[1] "
+            "c_touch_sums[2]\n") in script
+    values = "f_load[1] f_load[2] c_touch_sums[2]"
+    both = (f"fix every_step all ave/time 1 {every} {every} {values} file every_step.txt\n"
+            f"fix sampled all ave/time {sample} {every // sample} {every} {values} file sampled.txt\n")
     head, run_line = script.rsplit("\nrun ", 1)
     work = tmp_path / "drive" / "segment"  # the script writes its restarts to ../../restart, as in a run folder
     work.mkdir(parents=True)
