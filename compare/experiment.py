@@ -44,6 +44,8 @@ from .words import VERDICT_COLOUR
 MODULES = ("granstokes.compare.stokes_experiment", "granstokes.compare.oscillation_experiment")
 #: the report folder's subfolder holding the DEM side as small tables (``--tables``: a comparison again without dumps)
 TABLES = "tables"
+#: a report's numbers (its scorecard, laws, drives)
+METRICS_JSON = "metrics.json"
 #: the CSV files' number format
 CSV_FLOAT = "%.6g"
 #: the reasons a finding without a scored row gives (the rest are in its rows' notes)
@@ -249,7 +251,7 @@ class Experiment:
             "units": UNITS["dem_units"], "I_convention": UNITS["inertial_number"], "runs": runs,
             "provenance": provenance(runs=runs, calibration=result.calibration_source),
         })
-        (out / "metrics.json").write_text(json.dumps(m, indent=2))
+        (out / METRICS_JSON).write_text(json.dumps(m, indent=2))
         rows.to_csv(out / "scorecard.csv", index=False, float_format=CSV_FLOAT)
         laws.to_csv(out / "laws.csv", index=False, float_format=CSV_FLOAT)
         figures = cls.files(result, out)

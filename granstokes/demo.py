@@ -74,7 +74,9 @@ def laws_html(rows: list[dict]) -> str:
 def write_index(out: Path, study: Path, clock: dict) -> Path:
     """The demo's front page in ``out``: the verdict and main figure of the study report in ``study`` (the demo's
     STUDY_DIR), links to both reports."""
-    metrics = json.loads((study / "metrics.json").read_text())
+    from granstokes.compare.experiment import METRICS_JSON
+
+    metrics = json.loads((study / METRICS_JSON).read_text())
     timing = ", ".join(f"{k} {v:.0f} s" for k, v in clock.items()) or "resumed: nothing left to run"
     figure = next(iter(sorted(study.glob("drive_*.png"))), None)
     body = (f"<h1>granstokes demo</h1>{laws_html(metrics.get('laws', []))}<p>{html.escape(metrics['verdict'])}</p>"

@@ -235,8 +235,9 @@ def first_round(out: Path | None) -> dict | None:
     """The one-bed errors the study folder's last report measured (compare.noise.measured_errors: what a resume
     that adds beds plans from), or None before any report."""
     from granstokes.compare import noise
+    from granstokes.compare.experiment import METRICS_JSON
 
-    path = None if out is None else Path(out) / "metrics.json"
+    path = None if out is None else Path(out) / METRICS_JSON
     return noise.measured_errors(json.loads(path.read_text())) if path is not None and path.is_file() else None
 
 
