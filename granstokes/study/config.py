@@ -26,7 +26,8 @@ takes the beds its drives need (``seeds`` the first of them, the next integers a
 
     target = {u_w_inf = 0.03, mu_w_inf = 0.03, creep_length = 0.3, beds_max = 8}
 
-Unknown keys are errors.
+``stiffness_at``: the pressure at which the DEM preset's kappa holds (default the highest pressure): a study run in
+parts gives each part the whole study's, so that every part has the same grains.  Unknown keys are errors.
 """
 from __future__ import annotations
 
@@ -51,7 +52,7 @@ PRESETS = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
 DRIVE_KEYS = ("kind", *dem_config.LOADS)
 SHORT = {"mu_w_tilde": "mutilde", "mu_w": "mu", "tau_w": "tau", "u_w": "u"}  # drive names: stress-mutilde0.5
 TOP = {"name", "dem", "seeds", "pressures", "calibration", "drive", "duration_ts", "min_duration", "width",
-       "width_check", "omega_ts", "cycles", "ngf_from", "target"}
+       "width_check", "omega_ts", "cycles", "ngf_from", "target", "stiffness_at"}
 #: the [target] entries that are not an observable's difference
 TARGET_OPTIONS = ("confidence", "beds_max")
 
@@ -75,6 +76,7 @@ class Study:
     width_check: bool = True
     ngf_from: str | None = None  # an oscillating study's NGF amplitude: a Stokes report's metrics.json
     target: Target | None = None  # the error each run's beds are chosen for (compare.noise)
+    stiffness_at: float | None = None  # the p_w whose kappa (the DEM preset's) sets k_n; None: the highest pressure
 
     @property
     def oscillating(self) -> bool:
@@ -90,6 +92,11 @@ class Study:
     def calibration_pressures(self) -> tuple[float, ...]:
         """Where the study's own calibration runs: the lowest and the highest pressure."""
         return tuple(sorted({min(self.pressures), max(self.pressures)}))
+
+    @property
+    def stiffness_pressure(self) -> float:
+        """The pressure at which the DEM preset's kappa holds: k_n, one for every run, follows from it."""
+        return self.stiffness_at if self.stiffness_at is not None else max(self.pressures)
 
     @property
     def reference_pressure(self) -> float:
@@ -170,12 +177,15 @@ def from_dict(doc: dict, base: Path | None = None) -> Study:
     require(isinstance(width_check, bool) and not (width_check and omegas is not None), "width_check",
             "true or false (false with omega_ts: the width check is a Stokes drive's)", width_check)
     target = _target(doc.get("target"), len(seeds), omegas is not None)
+    stiffness_at = doc.get("stiffness_at")
+    require(stiffness_at is None or (finite(stiffness_at) and stiffness_at > 0), "stiffness_at",
+            "a pressure > 0 [rho_p g d] (a study's part: the whole study's highest)", stiffness_at)
     name = doc.get("name", "study")
     require(isinstance(name, str) and name.replace("-", "").replace("_", "").isalnum(), "name",
             "letters, digits, '-' and '_'", name)
     return Study(name, doc["dem"], tuple(seeds), tuple(float(p) for p in pressures), built, file,
                  table if file is None else (), None if width is None else float(width), width_check, ngf_from,
-                 target)
+                 target, None if stiffness_at is None else float(stiffness_at))
 
 
 def _target(table, seeds: int, oscillating: bool) -> Target | None:

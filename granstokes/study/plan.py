@@ -39,8 +39,9 @@ def calibration_folder(out: Path, p_w: float) -> Path:
 
 
 def _grains(study: Study, grains: dem_config.Grains, p_w: float) -> dem_config.Grains:
-    """The DEM preset's ``grains`` as one material at p_w: k_n of the highest pressure's kappa."""
-    return dataclasses.replace(grains, kappa=rigidity(grains.kappa, grains.contact, max(study.pressures), p_w))
+    """The DEM preset's ``grains`` as one material at p_w: k_n of the preset's kappa at the study's stiffness pressure
+    (its highest, or ``stiffness_at``)."""
+    return dataclasses.replace(grains, kappa=rigidity(grains.kappa, grains.contact, study.stiffness_pressure, p_w))
 
 
 def _recorded(study: Study, cfg: dem_config.Config, entries: list, header: str) -> tuple[dem_config.Config, str]:

@@ -503,3 +503,16 @@ def test_a_second_round_plans_its_beds_from_the_first_rounds_measured_errors():
     assert sp.runs["p10"].plan.config.seeds == (1, 2, 3, 4, 5, 6, 7)  # the measured p10 error asks 7
     assert sp.runs["p20"].plan.config.seeds == (1, 2, 3)  # 0.2 d: t(2)/sqrt(3) x 0.2 = 0.50 <= 1 at 3 beds
     assert plan_study(study, material, "test", law).runs["p10"].plan.config.seeds == (1, 2)
+
+
+def test_a_part_of_a_study_keeps_the_whole_studys_grains():
+    """``stiffness_at``: a study's part at p_w = 10 alone, with the preset's kappa held at the whole study's 20,
+    has the whole's k_n (one material); without it, kappa would hold at 10 and k_n halve (Hooke: k_n = kappa p d)."""
+    material, _, _ = material_table(CALIBRATION)
+    whole = plan_study(config.parse(_study()), material, "test").runs["p10"].plan.config.contact.k_n
+    part = plan_study(config.parse(_study(pressures=[10.0], stiffness_at=20.0)), material, "test")
+    alone = plan_study(config.parse(_study(pressures=[10.0])), material, "test")
+    assert part.runs["p10"].plan.config.contact.k_n == pytest.approx(whole, rel=1e-12)
+    assert alone.runs["p10"].plan.config.contact.k_n == pytest.approx(whole / 2, rel=1e-12)
+    with pytest.raises(ValueError, match="stiffness_at must be a pressure > 0"):
+        config.parse(_study(stiffness_at=-1.0))
