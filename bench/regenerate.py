@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-STUDIES = ("study-spheres", "study-disks", "study-oscillating-disks")
+STUDIES = ("study-spheres", "study-disks", "study-oscillating-disks", "study-oscillating-spheres")
 
 
 def readme_command(study: str) -> list[str]:
