@@ -169,13 +169,6 @@ def beds_for(one_bed: float, difference: float, confidence: float = CONFIDENCE, 
     return None
 
 
-def beds_to_decide(law: NoiseLaw, size: DriveSize, difference: float, confidence: float = CONFIDENCE,
-                   beds_max: int = BEDS_MAX) -> int | None:
-    """``beds_for`` the law's one-bed error (a fraction of the expected scale for a ``relative`` observable)."""
-    one = law.error(replace(size, seeds=1)) / (size.x(law.observable) if relative(law.observable) else 1.0)
-    return beds_for(one, difference, confidence, beds_max)
-
-
 def measured_errors(metrics: dict) -> dict[str, dict[str, float]]:
     """A first round's one-bed errors (a report's metrics.json): per drive label, each scored observable's DEM
     standard error over its beds times sqrt(beds) (the spread of one bed), where finite; what a resume that adds

@@ -104,21 +104,25 @@ def _unit_law(observable: str, kind: str, one_bed: float, area: float) -> noise.
 
 
 def test_beds_to_decide_pay_for_the_t_quantile_as_well_as_the_error():
+    def beds(law, difference, **kw):  # the target of one observable on this drive
+        return noise.Target(((law.observable, difference),), **kw).beds(size, {(law.observable, "stress"): law})[
+            law.observable]
+
     size = noise.DriveSize("stress", 2, 3, 16.0, 5.0, 10.0, {"u_w": 2.0, "mu_w": 0.5, "delta_s": 5.0, "t_s": 1.0})
     creep = _unit_law("creep_length", "stress", 1.0, 16.0)
     # t(0.975, n - 1)/sqrt(n): n = 6 gives 2.571/2.449 = 1.050, n = 7 gives 2.447/2.646 = 0.925 (a Gaussian's
     # 1.96/sqrt(n) would stop at n = 4)
-    assert noise.beds_to_decide(creep, size, 1.0) == 7
+    assert beds(creep, 1.0) == 7
     # half the difference: n = 17 gives 2.120/4.123 = 0.514, n = 18 gives 2.110/4.243 = 0.497
-    assert noise.beds_to_decide(creep, size, 0.5, beds_max=20) == 18
-    assert noise.beds_to_decide(creep, size, 0.5, beds_max=17) is None
+    assert beds(creep, 0.5, beds_max=20) == 18
+    assert beds(creep, 0.5, beds_max=17) is None
     # at 90 %: t(0.95, 3)/2 = 2.353/2 = 1.18, t(0.95, 4)/sqrt(5) = 2.132/2.236 = 0.953
-    assert noise.beds_to_decide(creep, size, 1.0, confidence=0.90) == 5
+    assert beds(creep, 1.0, confidence=0.90) == 5
     # a relative observable: the one-bed error over the expected speed (r = 1: the law's error is 0.5 u_w)
     speed = _unit_law("u_w_inf", "stress", 0.5, 16.0)
     assert speed.error(replace(size, seeds=1)) == pytest.approx(0.5 * size.scales["u_w"])
     # t/sqrt(n) <= 2: n = 3 gives 2.48, n = 4 gives 1.59
-    assert noise.beds_to_decide(speed, size, 1.0) == 4
+    assert beds(speed, 1.0) == 4
     target = noise.Target((("creep_length", 1.0), ("u_w_inf", 1.0), ("mu_w_inf", 1.0)))
     assert target.beds(size, {("creep_length", "stress"): creep, ("u_w_inf", "stress"): speed}) == {
         "creep_length": 7, "u_w_inf": 4}  # mu_w_inf: a speed drive's, not scored here
