@@ -4,11 +4,12 @@
 
 For the committed grains (the disks' calibration at p = 20, the spheres' at p = 10: their mu(I), phi and measured
 shear-wave speed c_s), one imposed-stress drive per (p_w, mu~_w) planned as a study plans it (dem.sizing: depth
-delta_s + 5 creep lengths, the box's preset width), its growth window as the comparison will take it
-(compare.laws.growth_bounds from 3 transits at the measured c_s to min(t_s/2, half the record)) and the DEM cost of
-one bed at this machine's probed speed (dem.throughput, one rank): with the record the study runs (10 t_s, every
-law) and with a record of GROWTH_RECORD t_s, enough for the window (the growth laws alone; the steady laws need the
-long one).  A power law is fitted over at least compare.laws.MIN_DECADES.  Prints the markdown table and writes a CSV.
+delta_s + the larger of BASE_CLEARANCE delta_s and 5 creep lengths, the box's preset width), its growth window as the
+comparison will take it (compare.laws.growth_bounds from 3 transits at the measured c_s to min(t_s/2, half the
+record)) and the DEM cost of one bed at this machine's probed speed (dem.throughput, one rank): with the record the
+study runs (10 t_s, every law) and with a record of GROWTH_RECORD t_s, enough for the window (the growth laws alone;
+the steady laws need the long one). A power law is fitted over at least compare.laws.MIN_DECADES. Prints the markdown
+table and writes a CSV.
 """
 from __future__ import annotations
 

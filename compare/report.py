@@ -715,7 +715,7 @@ def scene(c: Comparison) -> list[dict]:
         spec = dc.dem.spec
         out.append({"check": "base", "drive": dc.label, "holds": not dc.base, "detail": dc.base})
         if dc.scales is not None:
-            need = depth_needed(dc.dem, dc.scales.delta_s)[0]
+            need = depth_needed(dc.scales.delta_s)
             out.append({"check": "depth", "drive": dc.label, "holds": bool(spec.depth >= need),
                         "detail": f"bed {spec.depth:.3g} d, needs {need:.3g} d"})
         if dc.scales is not None and np.isfinite(spec.compared_from):

@@ -25,18 +25,18 @@ band's mean over the window); the numerical error of t90 is its change when ever
 the Welch-Satterthwaite degrees of freedom of that combined error (the band's and the numerical error's infinite);
 verdict "consistent" when |sigma| <= t_0.975(dof) (compare.rows.verdict).
 
-Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where
-the plate slips by more than SLIP_MAX against the grains touching it (``slipping``), every row of the drive (the
-plate's speed and friction are not the bed's, and every model's plate grips); where the bed is shorter than delta_s +
-CREEP_LENGTHS_TO_BASE of the DEM's own creep lengths (``short_bed``; the sizing's assumed creep length where the DEM
-measures none), every row of the drive (the base constrains the creep, which carries part of the plate's speed and
-sets the layer's depth); where a model's steady wall inertial number lies beyond the calibration's largest I
-(``extrapolated``), its steady rows; where the drive's flow reaches the base (``base_reach``), its layer observables,
-and every row of a model whose bed is a half-space; where a model is not yet steady over the DEM's final quarter
-(the record is shorter than the model's time scale), that model's steady profile rows (delta_u, creep_length).  A
-row is ``blind`` only when mu(I) comes from an independent calibration and the model's own parameter was not fitted
-on that drive; only scored blind rows count for a model (``tally``), and models are ranked over the rows they
-share.
+Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where the plate
+slips by more than SLIP_MAX against the grains touching it (``slipping``), every row of the drive (the plate's speed
+and friction are not the bed's, and every model's plate grips); where the bed leaves less than BASE_CLEARANCE delta_s
+between delta_s and the base (``short_bed``: the clearance at which the layer's observables were measured independent
+of the depth), every row of the drive; the creep length in every bed (``BASE_SET``: the DEM's grows with the depth to
+the base, bench/creep_depth.py, so it is the base's, not the material's); where a model's steady wall inertial number
+lies beyond the calibration's largest I (``extrapolated``), its steady rows; where the drive's flow reaches the base
+(``base_reach``), its layer observables, and every row of a model whose bed is a half-space; where a model is not yet
+steady over the DEM's final quarter (the record is shorter than the model's time scale), that model's steady profile
+rows (delta_u, creep_length). A row is ``blind`` only when mu(I) comes from an independent calibration and the model's
+own parameter was not fitted on that drive; only scored blind rows count for a model (``tally``), and models are
+ranked over the rows they share.
 """
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import crossing_depth, depth_at_fraction
 from granstokes.continuum.scene_models import Prediction, SceneModel, Steady
-from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS
+from granstokes.dem.sizing import BASE_CLEARANCE
 from scipy import stats
 
 from .analysis import DriveAnalysis
@@ -70,10 +70,11 @@ MODEL_UNSTEADY = 0.05
 #: the observables of the steady state, and those of the layer (meaningless where the flow reaches the base)
 STEADY_OBSERVABLES = ("u_w_inf", "mu_w_inf", "delta_u", "creep_length")
 LAYER_OBSERVABLES = ("delta_u", "creep_length")
-#: the bed holds delta_s and this many creep lengths below it: there the creep's speed has e-folded to e^-5 < 1 % of
-#: its value at delta_s, so the base's no-slip does not cut the tail short and the layer's depth and creep length are
-#: the material's (the margin a sized bed gets, dem.sizing.CREEP_LENGTHS)
-CREEP_LENGTHS_TO_BASE = CREEP_LENGTHS
+#: observables the bed's depth sets in every bed measured: the DEM's creep length grows with the depth to the base
+#: (bench/creep_depth.py: 3.0 to 13.1 d from 26 to 78 d at one drive), so no bed measures the material's
+BASE_SET = ("creep_length",)
+BASE_SET_NOTE = ("not scored: the DEM's creep length grows with the bed's depth (bench/creep_depth.py: 3 to 13 d from "
+                 "26 to 78 d), so it is the base's, not the material's")
 TRANSIENT_OBSERVABLES = ("t90",)
 
 
@@ -157,26 +158,20 @@ def dem_creep(a: DriveAnalysis, delta_s: float) -> Measured:
     return _mean_err([creep_length(s.depth, s.u_x, delta_s, a.spec.depth) for s in a.samples], a.samples_how)
 
 
-def depth_needed(a: DriveAnalysis, delta_s: float) -> tuple[float, float, bool]:
-    """The depth drive ``a``'s bed needs for its creep: delta_s + CREEP_LENGTHS_TO_BASE creep lengths, the DEM's own
-    (``dem_creep``) or, where the DEM measures none, the sizing's assumed one (dem.sizing.CREEP_LENGTH): (that
-    depth, the creep length, whether it is the assumed one)."""
-    ell = dem_creep(a, delta_s).value
-    assumed = not np.isfinite(ell)
-    ell = CREEP_LENGTH[a.spec.dimension] if assumed else ell
-    return delta_s + CREEP_LENGTHS_TO_BASE * ell, ell, assumed
+def depth_needed(delta_s: float) -> float:
+    """The depth a bed needs for the layer of the calibrated ``delta_s``: BASE_CLEARANCE delta_s below it, the
+    clearance at which the layer's observables were measured independent of the depth (dem.sizing.BASE_CLEARANCE)."""
+    return (1 + BASE_CLEARANCE) * delta_s
 
 
 def short_bed(a: DriveAnalysis, delta_s: float) -> str:
-    """Why drive ``a``'s bed is too shallow for its rows, or "": its depth is short of ``depth_needed`` (the base
-    constrains the creep); the note says when the creep length is the sizing's assumed one."""
-    need, ell, assumed = depth_needed(a, delta_s)
+    """Why drive ``a``'s bed is too shallow for its rows, or "": it is shorter than ``depth_needed``."""
+    need = depth_needed(delta_s)
     if a.spec.depth >= need:
         return ""
-    which = ", the sizing's assumed creep length: the DEM's is not measured" if assumed else ""
-    return (f"the bed ({a.spec.depth:.3g} d) is shorter than delta_s + {CREEP_LENGTHS_TO_BASE:g} creep lengths "
-            f"({delta_s:.3g} + {CREEP_LENGTHS_TO_BASE:g} x {ell:.3g} = {need:.3g} d{which}): the base constrains the "
-            "creep")
+    return (f"the bed ({a.spec.depth:.3g} d) leaves {a.spec.depth - delta_s:.3g} d below delta_s ({delta_s:.3g} d), "
+            f"less than the {BASE_CLEARANCE:g} delta_s = {BASE_CLEARANCE * delta_s:.3g} d at which the layer was "
+            f"measured independent of the depth: a bed of {need:.3g} d")
 
 
 def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
@@ -420,7 +415,8 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
                     or (beyond.get(model.key, "") if obs in STEADY_OBSERVABLES else "")
                     or (_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"])
                         if not windowed else _not_scored("", model, base, end_value, asymptote))
-                    or _unmeasurable(measured, lo, hi, combined))
+                    or _unmeasurable(measured, lo, hi, combined)
+                    or (BASE_SET_NOTE if obs in BASE_SET else ""))
             rows.append(score_row(
                 drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,
                 dem_how=measured.how, model=model.key, model_label=model.label, predicted=value,

@@ -1,9 +1,9 @@
 """Scene sizing from the continuum prediction (continuum.scales): depth, grain count, durations, steps.
 
-* bed depth (base top to plate) >= max over drives of delta_s + margin (default CREEP_LENGTHS creep decay
-  lengths CREEP_LENGTH below the flowing layer: the creep has fallen to e^-5 of its value at delta_s), unless
-  the config gives it; the sizing is as good as the config's material (``dem run --calibration`` puts a
-  calibration's there);
+* bed depth (base top to plate) >= max over drives of delta_s + margin (default the larger of BASE_CLEARANCE delta_s,
+  the clearance below the layer at which the layer's observables are measured independent of the depth, and
+  CREEP_LENGTHS creep lengths CREEP_LENGTH), unless the config gives it; the sizing is as good as the config's
+  material (``dem run --calibration`` puts a calibration's there);
 * duration of a drive = duration_ts * t_s (default 10 t_s, t_s = delta_s^2/nu_g), unless given;
 * a speed drive with mu_w_tilde runs at the matching steady speed u_w = U u~_w^inf(mu_w) (the paper's
   u~_w); a stress drive with tau_w has mu_w = tau_w/p_w;
@@ -57,9 +57,14 @@ def drive_scales(cfg: Config, drive: Drive) -> Scales:
     return Scales(m, cfg.p_w, mu_w)
 
 
+#: the clearance between the calibrated delta_s and the base, in units of delta_s, from which on the steady layer
+#: delta_u, the steady plate speed and t90 were measured independent of the bed's depth (bench/creep_depth.py: one
+#: drive, delta_s = 10.6 d, beds 26-78 d deep, clearances 1.46-6.4 delta_s; the comparison's depth rule,
+#: compare.scorecard.short_bed)
+BASE_CLEARANCE = 1.45
 #: e-folding length of the creep below the flowing layer in d, by dimension: the largest the committed studies
 #: measured, rounded up (metrics.json creep_length: disks 2.6-4.9 d, spheres 2.5-3.1 d), and the number of them the
-#: default margin below the largest delta_s holds (the comparison's depth rule, compare.scorecard.short_bed)
+#: default margin holds at least (a floor for thin layers: the creep's length itself grows with the depth)
 CREEP_LENGTH, CREEP_LENGTHS = {2: 5.0, 3: 3.5}, 5
 
 #: grain placement: insertion column filled to this fraction of the largest grain's volume
@@ -303,8 +308,9 @@ def plan(cfg: Config) -> Plan:
         reasons.append(f"depth {depth:g} d (given; largest delta_s = {delta_max:.3g} d)")
     else:
         margin, why = ((cfg.box.margin, "given") if cfg.box.margin is not None else
-                       (CREEP_LENGTHS * CREEP_LENGTH[cfg.grains.dimension],
-                        f"{CREEP_LENGTHS} creep lengths of {CREEP_LENGTH[cfg.grains.dimension]:g} d"))
+                       max((BASE_CLEARANCE * delta_max, f"{BASE_CLEARANCE:g} delta_s, the layer clear of the base"),
+                           (CREEP_LENGTHS * CREEP_LENGTH[cfg.grains.dimension],
+                            f"{CREEP_LENGTHS} creep lengths of {CREEP_LENGTH[cfg.grains.dimension]:g} d")))
         depth = math.ceil(delta_max + margin)
         reasons.append(f"depth {depth:g} d = ceil(largest delta_s {delta_max:.3g} d + margin {margin:g} d, {why})")
     dim = cfg.grains.dimension

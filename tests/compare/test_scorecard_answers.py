@@ -22,6 +22,7 @@ WALL_EXCLUSION) are imported from their modules.  The notes and the headline are
 whole sentences: they are what the report prints.
 """
 import warnings
+from pathlib import Path
 from types import SimpleNamespace as NS
 
 import numpy as np
@@ -32,6 +33,7 @@ from granstokes.compare.calibrate import WALL_EXCLUSION
 from granstokes.compare.plate import STEADY_LAST
 from granstokes.compare.rows import Z95
 from granstokes.compare.scorecard import (
+    BASE_SET_NOTE,
     MODEL_UNSTEADY,
     T90_WINDOW,
     Measured,
@@ -248,9 +250,11 @@ def test_sigma_is_dem_minus_model_over_every_error_in_quadrature_and_gives_the_v
     normal = stats.norm.ppf(0.975)
     assert expected["u_w_inf"] < -normal and expected["delta_u"] < -normal  # beyond 1.96 ...
     assert all(abs(expected[k]) <= threshold[k] for k in expected)  # ... within their own t quantile
-    assert rows.verdict.to_dict() == {"u_w_inf": "consistent", "delta_u": "consistent", "creep_length": "consistent",
+    # the creep length's sigma is formed, but no bed measures the material's creep length: never scored
+    assert rows.verdict.to_dict() == {"u_w_inf": "consistent", "delta_u": "consistent", "creep_length": "not scored",
                                       "t90": "consistent"}
-    assert rows.scored.all() and (rows.note == "").all()
+    assert rows.scored.to_dict() == {"u_w_inf": True, "delta_u": True, "creep_length": False, "t90": True}
+    assert rows.note.to_dict() == {"u_w_inf": "", "delta_u": "", "creep_length": BASE_SET_NOTE, "t90": ""}
 
 
 def test_the_dem_errors_dof_is_seeds_minus_one_or_blocks_of_one_seed_minus_one():
@@ -348,10 +352,10 @@ def test_a_model_whose_time_scale_is_assumed_predicts_no_t90():
     rows, _, _ = _score(_drive(), {"ngf": _model_side()}, models=[_model("ngf", transient_calibrated=False)])
     ngf = _by(rows, "ngf")
     assert ngf.note.to_dict() == {
-        "u_w_inf": "", "delta_u": "", "creep_length": "",
+        "u_w_inf": "", "delta_u": "", "creep_length": BASE_SET_NOTE,
         "t90": "not predicted: ngf's time scale is assumed (t0 one local inertial time), not calibrated, so its "
                "transient is no prediction"}
-    assert ngf.verdict["t90"] == "not predicted" and ngf.scored.sum() == 3
+    assert ngf.verdict["t90"] == "not predicted" and ngf.scored.sum() == 2  # u_w_inf, delta_u (creep: BASE_SET)
 
 
 def test_a_model_not_yet_steady_over_the_final_quarter_has_its_steady_profile_rows_unscored():
@@ -365,7 +369,7 @@ def test_a_model_not_yet_steady_over_the_final_quarter_has_its_steady_profile_ro
     assert local.loc["u_w_inf", "predicted"] == pytest.approx(1.8) and local.loc["u_w_inf", "asymptote"] == 2.0
     # 2 % short: steady enough
     rows, _, _ = _score(_drive(), {"local": _model_side(asymptote=2.0, plateau=1.96)})
-    assert rows.scored.all()
+    assert _by(rows).note.to_dict() == {"u_w_inf": "", "delta_u": "", "creep_length": BASE_SET_NOTE, "t90": ""}
 
 
 def test_a_model_at_rest_is_unscored_only_while_its_response_still_moves():
@@ -384,7 +388,8 @@ def test_a_model_at_rest_is_unscored_only_while_its_response_still_moves():
     rows, _, _ = _score(_drive(), {"local": _model_side(asymptote=0.0, delta_u=np.nan, ell=None, replicates=at_rest,
                                                         series=still)})
     local = _by(rows)  # no t90 (the model never moves): rest is steady
-    assert list(local.index) == ["u_w_inf", "creep_length"] and local.scored.all()
+    assert list(local.index) == ["u_w_inf", "creep_length"] and local.note.to_dict() == {
+        "u_w_inf": "", "creep_length": BASE_SET_NOTE}
     assert local.predicted.tolist() == [0.0, 0.0]
 
 
@@ -536,7 +541,8 @@ def test_a_slipping_plate_leaves_every_row_of_its_drive_unscored():
     predictions, spreads = _model_side()
     for slip, slipped in ((0.12, True), (SLIP_MAX, False)):
         rows, _, _ = score(_drive(slip=slip), models, {"local": predictions}, {"local": spreads}, 5)
-        assert len(rows) == 4 and rows.scored.all() != slipped
+        gripped = rows[rows.observable != "creep_length"]  # the creep length: never scored (BASE_SET)
+        assert len(rows) == 4 and gripped.scored.all() != slipped and not rows.scored.all()
         assert set(rows.observable) == {"u_w_inf", "t90", "delta_u", "creep_length"}
         if slipped:
             assert (rows.note == "not scored: the plate slips 12% against the grains touching it (more than "
@@ -560,14 +566,14 @@ def test_a_model_beyond_the_calibrated_inertial_number_extrapolates_its_steady_r
     assert rows[~steady].scored.all() and set(rows[~steady].observable) == {"t90"}
 
 
-def test_a_bed_shorter_than_delta_s_and_five_measured_creep_lengths_leaves_every_row_unscored():
-    """The seeds' creep lengths 2.4, 3.0, 2.7 (mean 2.7) below DELTA_S = 7: the bed must hold 7 + 5 x 2.7 = 20.5 d. A
-    bed 0.1 d short of that has every row (the layer's and the plate's) kept, not scored, the note giving the sum;
-    a bed 0.1 d deeper has every row scored."""
-    from granstokes.compare.scorecard import CREEP_LENGTHS_TO_BASE, LAYER_OBSERVABLES, short_bed
-    ell = (2.4 + 3.0 + 2.7) / 3
-    need = DELTA_S + CREEP_LENGTHS_TO_BASE * ell
-    assert CREEP_LENGTHS_TO_BASE == 5 and need == pytest.approx(20.5)
+def test_a_bed_short_of_the_base_clearance_leaves_every_row_unscored():
+    """DELTA_S = 7: the bed must hold 7 (1 + BASE_CLEARANCE) = 17.15 d. A bed 0.1 d short of that has every row (the
+    layer's and the plate's) kept, not scored, the note giving the clearance; a bed 0.1 d deeper has every row but the
+    creep length's scored."""
+    from granstokes.compare.scorecard import LAYER_OBSERVABLES, depth_needed, short_bed
+    from granstokes.dem.sizing import BASE_CLEARANCE
+    need = DELTA_S * (1 + BASE_CLEARANCE)
+    assert BASE_CLEARANCE == 1.45 and depth_needed(DELTA_S) == pytest.approx(17.15)
     predictions, spreads = _model_side()
     for depth, short in ((need - 0.1, True), (need + 0.1, False)):
         a = _drive()
@@ -575,30 +581,33 @@ def test_a_bed_shorter_than_delta_s_and_five_measured_creep_lengths_leaves_every
         rows, _, _ = score(a, [_model("local")], {"local": predictions}, {"local": spreads}, 5)
         layer = rows.observable.isin(LAYER_OBSERVABLES)
         assert set(rows[layer].observable) == {"delta_u", "creep_length"} and len(rows[~layer]) == 2
-        assert rows.scored.all() != short
         if short:
-            why = (f"the bed ({depth:.3g} d) is shorter than delta_s + 5 creep lengths (7 + 5 x 2.7 = 20.5 d): the "
-                   "base constrains the creep")
+            why = ("the bed (17.1 d) leaves 10.1 d below delta_s (7 d), less than the 1.45 delta_s = 10.2 d at which "
+                   "the layer was measured independent of the depth: a bed of 17.2 d")
             assert short_bed(a, DELTA_S) == why
             assert (rows.note == "not scored: " + why).all() and set(rows.verdict) == {"not scored"}
             # the unscored rows keep the DEM's numbers: the creep length is the seeds' mean
-            assert rows[rows.observable == "creep_length"].dem.iloc[0] == pytest.approx(ell)
+            assert rows[rows.observable == "creep_length"].dem.iloc[0] == pytest.approx((2.4 + 3.0 + 2.7) / 3)
         else:
             assert short_bed(a, DELTA_S) == ""
+            assert rows.set_index("observable").scored.to_dict() == {
+                "u_w_inf": True, "t90": True, "delta_u": True, "creep_length": False}
 
 
-def test_without_a_measured_creep_length_the_depth_rule_falls_back_on_the_sizing_s_and_says_so():
-    """Seeds whose speed is flat below delta_s (no e-folding: creep_length NaN): a 2D bed must hold DELTA_S + 5 x 5
-    (dem.sizing's assumed creep length of disks, the largest measured) = 32 d; 31.9 d falls short, 32.1 d holds it."""
-    from granstokes.compare.scorecard import short_bed
-    from granstokes.dem.sizing import CREEP_LENGTH
-    flat = pd.DataFrame({"depth": DEPTH, "u_x": np.where(DEPTH <= 5.0, 1 - DEPTH / 5.0, 0.01)})
-    need = DELTA_S + 5 * CREEP_LENGTH[2]
-    assert need == pytest.approx(32.0)
-    a = _drive(samples=(flat, flat, flat))
-    a.spec = NS(depth=need - 0.1, dimension=2)
-    assert short_bed(a, DELTA_S) == (
-        "the bed (31.9 d) is shorter than delta_s + 5 creep lengths (7 + 5 x 5 = 32 d, the sizing's assumed creep "
-        "length: the DEM's is not measured): the base constrains the creep")
-    a.spec = NS(depth=need + 0.1, dimension=2)
-    assert short_bed(a, DELTA_S) == ""
+def test_the_base_clearance_is_the_shallowest_at_which_the_depth_study_found_the_layer_independent_of_the_depth():
+    """bench/creep_depth.csv (one drive in beds 26-78 d deep): the creep length grows with the depth (a weighted line's
+    slope beyond Student-t's 95 % at the depths' dof, its error scaled by sqrt(chi2/dof) where the depths scatter
+    beyond their errors), the steady layer, the plate's speed and t90 do not (their slopes within it), and
+    BASE_CLEARANCE is at most the shallowest bed's clearance below delta_s."""
+    from granstokes.dem.sizing import BASE_CLEARANCE
+    table = pd.read_csv(Path(__file__).resolve().parents[2] / "bench" / "creep_depth.csv")
+    assert BASE_CLEARANCE <= ((table.depth - table.delta_s) / table.delta_s).min() < BASE_CLEARANCE + 0.05
+
+    def slope_t(key):
+        coef, cov = np.polyfit(table.depth, table[key], 1, w=1 / table[f"{key}_err"], cov="unscaled")
+        chi2 = np.sum(((table[key] - np.polyval(coef, table.depth)) / table[f"{key}_err"]) ** 2)
+        return coef[0] / np.sqrt(cov[0, 0] * max(1.0, chi2 / (len(table) - 2)))
+
+    critical = stats.t.ppf(0.975, len(table) - 2)
+    assert slope_t("creep_length") > critical
+    assert all(abs(slope_t(k)) < critical for k in ("delta_u", "u_w_inf", "t90"))
