@@ -5,10 +5,11 @@
 The disks study's grains (the quick preset, k_n = 2e5) at p_w = 10 under the imposed stress mu~_w = 0.45, sized from
 the committed calibration at p = 20, 10 t_s, in beds of each depth (``box.depth``); each run compared with that
 calibration (``granstokes compare``), and from its report the DEM's creep length (the e-folding length of u below
-delta_s, compare.scorecard), the steady layer delta_u (u = 5 % of u_w), the steady plate speed, t90 and the slip, each
-with its error over the beds.  A creep length the flow sets does not change with the depth; one the base sets grows
-with it.  ``--resume`` keeps each depth's run and report already in DIR.  Writes bench/creep_depth.csv and prints the
-table for bench/RESULTS.md (the scene rule it supports: dem.sizing.BASE_CLEARANCE).
+delta_s, over compare.scorecard's fixed zone, and fitted from delta_s down to the base), the steady layer delta_u (u =
+5 % of u_w), the steady plate speed, t90 and the slip, each with its error over the beds. A creep length the flow sets
+does not change with the depth; one the base sets grows with it. ``--resume`` keeps each depth's run and report
+already in DIR. Writes bench/creep_depth.csv and prints the table for bench/RESULTS.md (the scene rule it supports:
+dem.sizing.BASE_CLEARANCE).
 """
 from __future__ import annotations
 
@@ -20,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from granstokes.compare.calibrate import WALL_EXCLUSION
+from granstokes.compare.tables import read_drive
 from scipy import stats
 
 HERE = Path(__file__).resolve().parent
@@ -33,6 +36,18 @@ def granstokes(*args: str) -> None:
     subprocess.run([sys.executable, "-m", "granstokes.cli", *args], check=True, capture_output=True, text=True)
 
 
+def to_base_lengths(tables: Path, delta_s: float) -> np.ndarray:
+    """Each bed's e-folding length of u fitted from delta_s down to WALL_EXCLUSION above the base (least squares of
+    ln u): the estimator before the fixed zones of compare.scorecard.CREEP_ZONES, whose growth with the depth they
+    remove."""
+    a = read_drive(tables)
+    lengths = []
+    for s in a.samples:
+        zone = (s.depth >= delta_s) & (s.depth <= a.spec.depth - WALL_EXCLUSION) & (s.u_x > 0)
+        lengths.append(-1 / stats.linregress(s.depth[zone], np.log(s.u_x[zone])).slope)
+    return np.array(lengths)
+
+
 def measure(out: Path, depth: float, seeds: list[int], resume: bool) -> dict:
     run, report = out / f"d{depth:g}", out / f"report-d{depth:g}"
     sets = [*SETTINGS, f"seeds={seeds}", f"box.depth={depth}"]
@@ -43,8 +58,10 @@ def measure(out: Path, depth: float, seeds: list[int], resume: bool) -> dict:
     m = json.loads((report / "metrics.json").read_text())
     rows = pd.DataFrame(m["scorecard"]).query("model == 'local'").set_index("observable")
     drive = next(iter(m["drives"].values()))
+    to_base = to_base_lengths(next((report / "tables").glob("drive*")), drive["delta_s"])
     return {"depth": depth, "beds": len(seeds), "delta_s": drive["delta_s"],
             "creep_length": rows.loc["creep_length", "dem"], "creep_length_err": rows.loc["creep_length", "dem_err"],
+            "creep_to_base": to_base.mean(), "creep_to_base_err": to_base.std(ddof=1) / np.sqrt(len(to_base)),
             "delta_u": rows.loc["delta_u", "dem"], "delta_u_err": rows.loc["delta_u", "dem_err"],
             "t90": rows.loc["t90", "dem"], "t90_err": rows.loc["t90", "dem_err"],
             "u_w_inf": drive["u_w_inf"]["dem"], "u_w_inf_err": drive["u_w_inf"]["dem_err"], "slip": drive["slip"]}
@@ -59,15 +76,16 @@ def main() -> None:
     args = ap.parse_args()
     table = pd.DataFrame([measure(args.out, d, args.seeds, args.resume) for d in args.depths])
     table.to_csv(HERE / "creep_depth.csv", index=False, float_format="%.4g")
-    print("| bed depth [d] | beds | clearance below δ_s [δ_s] | creep length [d] | δ_u (5 %) [d] | u_w∞ [√(g d)] | "
-          "t90 [√(d/g)] | slip |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| bed depth [d] | beds | clearance below δ_s [δ_s] | creep length, δ_s to the base [d] | creep length, "
+          "first 3 d [d] | δ_u (5 %) [d] | u_w∞ [√(g d)] | t90 [√(d/g)] | slip |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in table.itertuples():
-        print(f"| {r.depth:g} | {r.beds} | {(r.depth - r.delta_s) / r.delta_s:.2f} | {r.creep_length:.2f} ± "
+        print(f"| {r.depth:g} | {r.beds} | {(r.depth - r.delta_s) / r.delta_s:.2f} | {r.creep_to_base:.2f} ± "
+              f"{r.creep_to_base_err:.2f} | {r.creep_length:.2f} ± "
               f"{r.creep_length_err:.2f} | {r.delta_u:.2f} ± {r.delta_u_err:.2f} | {r.u_w_inf:.2f} ± "
               f"{r.u_w_inf_err:.2f} | {r.t90:.1f} ± {r.t90_err:.1f} | {100 * r.slip:.1f} % |")
     dof = len(table) - 2
-    for key in ("creep_length", "delta_u", "u_w_inf", "t90"):
+    for key in ("creep_to_base", "creep_length", "delta_u", "u_w_inf", "t90"):
         slope, err, chi2_dof = depth_slope(table, key)
         p = stats.chi2.sf(chi2_dof * dof, dof)
         print(f"{key}: slope against the depth {slope:.3g} ± {err:.2g} per d (t = {slope / err:.2f}; 95 % at {dof} "

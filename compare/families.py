@@ -40,7 +40,7 @@ from granstokes.continuum.crossing import LAYER_FRACTIONS, U_FRACTION
 from .drive import TRANSITS_BEFORE_COMPARISON
 from .plate import STEADY_LAST
 from .rows import ESTIMATOR_DEPENDENT, sigma, verdict
-from .scorecard import CREEP_ZONE_OFFSET, CREEP_ZONES, T90_LEVEL
+from .scorecard import CREEP_WINDOW, CREEP_ZONE_OFFSET, CREEP_ZONES, T90_LEVEL
 
 #: the layer estimators: the depths at LAYER_FRACTIONS, smallest fraction (the deepest depth) first, and the moment
 LAYER_ESTIMATORS = (*sorted(LAYER_FRACTIONS, key=LAYER_FRACTIONS.get), "moment")
@@ -58,7 +58,7 @@ _WORDS = {"speed": "{whose} speed", "mu_w": "{whose} friction", "t90": "the time
           "t75": "the time to 75 % of {whose} speed", "final quarter": "{whose} speed over the record's final quarter",
           "final half": "{whose} speed over the record's final half", "creep": "the creep length below delta_s",
           "creep_deep": f"the creep length from {CREEP_ZONE_OFFSET:g} d below delta_s",
-          "creep_upper": "the creep length over the tail's upper half"}
+          "creep_wide": f"the creep length over {2 * CREEP_WINDOW:g} d below delta_s"}
 
 
 @dataclass(frozen=True)

@@ -53,9 +53,9 @@ calibration's replicates linearly (compare.band.Sensitivity: the same estimate o
 each parameter shifted), band = predicted -+ 1.96 s_cal, sigma = (dem - predicted)/sqrt(dem_err^2 + s_cal^2) and
 each choice's verdict is at Student-t's quantile of its Welch-Satterthwaite dof (compare.rows).
 
-Scenes: a drive whose plate slips (compare.scorecard.slipping) or whose bed leaves less than BASE_CLEARANCE delta_s
-below delta_s (compare.scorecard.short_bed) is left out of every law, as its scorecard rows are not scored; the creep
-length's law is not measurable in any bed (the DEM's creep length is the base's: compare.scorecard.BASE_SET). A law
+Scenes: a drive whose plate slips (compare.scorecard.slipping) or whose bed leaves less than the depth study's
+clearance below delta_s (compare.scorecard.short_bed) is left out of every law, as its scorecard rows are not scored.
+A law
 the data cannot decide (a window the elastic start covers, too short or outside the model's regime, too few points or
 drives, a model without the quantity) is ``not measurable`` with the reason, never a number fitted on noise.
 """
@@ -72,7 +72,6 @@ from granstokes.continuum.crossing import layer_measures
 from granstokes.continuum.paper.equations import eq
 from granstokes.continuum.rheology import convert_I
 from granstokes.continuum.steady import steady_wall_speed
-from granstokes.dem.sizing import BASE_CLEARANCE
 
 from .band import STEP
 from .drive import TRANSITS_BEFORE_COMPARISON
@@ -91,7 +90,6 @@ from .families import (
 from .plate import STEADY_LAST
 from .rows import LAW_KEYS, effective_dof, law_row, not_a_line
 from .scorecard import (
-    BASE_SET_NOTE,
     CREEP_ZONES,
     creep_length,
     extrapolated,
@@ -446,7 +444,6 @@ class Law:
     family: tuple[Choice, ...]          # compare.families: the primary choice first
     window: object = None               # (dc, choice, DEM track, model track) -> Window; None: no window to choose
     transient: bool = True              # it reads the response over time (a model needs a calibrated time scale)
-    unmeasurable: str = ""              # why no bed measures it (its DEM value is the base's), or ""
 
     @property
     def across(self) -> bool:
@@ -455,8 +452,8 @@ class Law:
 
 
 #: why a law has no drive to read
-NO_DRIVE = ("no drive of this kind holds the scene rules (a plate that grips, a bed clear of delta_s by "
-            f"{BASE_CLEARANCE:g} delta_s, the flow clear of the base)")
+NO_DRIVE = ("no drive of this kind holds the scene rules (a plate that grips, a bed deep enough below delta_s, the "
+            "flow clear of the base)")
 
 
 def _mean_of(per_drive, key):
@@ -619,14 +616,14 @@ LAWS = (
     Law("creep_length_scaling", "slope of log creep length against log p_w", "1", None,
         Across(lambda tr, dc, choice: dc.dem.spec.p_w, lambda tr, dc, choice: tr.creep[choice.estimator],
                "a creep length"),
-        FAMILIES["creep"], transient=False, unmeasurable=BASE_SET_NOTE.replace("not scored", "not measurable")),
+        FAMILIES["creep"], transient=False),
 )
 
 
 def _drives(compared, kind):
     """The drives a law reads: predicted, their flow clear of the base, of the law's kind, their plate gripping
-    (compare.scorecard.slipping) and their bed deep enough for the creep (compare.scorecard.short_bed): the scene
-    rules of the scorecard's rows."""
+    (compare.scorecard.slipping) and their bed deep enough (compare.scorecard.short_bed): the scene rules of the
+    scorecard's rows."""
     return [dc for dc in compared if dc.predictions and not dc.base and (kind is None or dc.dem.spec.kind == kind)
             and not slipping(dc.dem) and not short_bed(dc.dem, dc.scales.delta_s)]
 
@@ -800,9 +797,7 @@ def _law_row(law: Law, model: str, drives, src: _Sources, calibrated: bool, star
                  f"{law.family[h].describe()}: {window}"
     split = family_note(entries)
     note = e["note"] or split
-    if law.unmeasurable:
-        note = law.unmeasurable
-    elif law.transient and not calibrated:
+    if law.transient and not calibrated:
         note = (f"not predicted: {model}'s time scale is assumed (t0 one local inertial time), not calibrated, "
                 "so its transient is no prediction")
     return law_row(law=law.name, quantity=law.quantity, unit=law.unit, model=model, dem=e["dem"],

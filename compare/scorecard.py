@@ -9,7 +9,7 @@ Observables (DEM units; estimators applied alike to the DEM and to every model):
 * ``t90``: time for the running mean of the free response to cover 90 % of its change (the model's
   series is interpolated onto the DEM's output times first, so that both are smoothed alike);
 * ``creep_length``: e-folding length of u below the calibrated delta_s (least squares of ln u over
-  depth, from delta_s to WALL_EXCLUSION above the base); local mu(I) is rigid there: 0.
+  depth, over CREEP_WINDOW below delta_s); local mu(I) is rigid there: 0.
 
 Errors.  DEM: spread over seeds (standard error of the mean; n_seeds - 1 degrees of freedom) when a drive has
 >= 2 seeds; with one seed, for the profile observables the spread over BLOCKS consecutive blocks of the steady
@@ -27,16 +27,14 @@ verdict "consistent" when |sigma| <= t_0.975(dof) (compare.rows.verdict).
 
 Rows that the scene cannot support are kept but not scored (``scored`` False, ``note`` says why): where the plate
 slips by more than SLIP_MAX against the grains touching it (``slipping``), every row of the drive (the plate's speed
-and friction are not the bed's, and every model's plate grips); where the bed leaves less than BASE_CLEARANCE delta_s
-between delta_s and the base (``short_bed``: the clearance at which the layer's observables were measured independent
-of the depth), every row of the drive; the creep length in every bed (``BASE_SET``: the DEM's grows with the depth to
-the base, bench/creep_depth.py, so it is the base's, not the material's); where a model's steady wall inertial number
-lies beyond the calibration's largest I (``extrapolated``), its steady rows; where the drive's flow reaches the base
-(``base_reach``), its layer observables, and every row of a model whose bed is a half-space; where a model is not yet
-steady over the DEM's final quarter (the record is shorter than the model's time scale), that model's steady profile
-rows (delta_u, creep_length). A row is ``blind`` only when mu(I) comes from an independent calibration and the model's
-own parameter was not fitted on that drive; only scored blind rows count for a model (``tally``), and models are
-ranked over the rows they share.
+and friction are not the bed's, and every model's plate grips); where the bed leaves less than the depth study's
+clearance between delta_s and the base (``short_bed``, dem.sizing.clearance), every row of the drive; where a model's
+steady wall inertial number lies beyond the calibration's largest I (``extrapolated``), its steady rows; where the
+drive's flow reaches the base (``base_reach``), its layer observables, and every row of a model whose bed is a
+half-space; where a model is not yet steady over the DEM's final quarter (the record is shorter than the model's time
+scale), that model's steady profile rows (delta_u, creep_length).  A row is ``blind`` only when mu(I) comes from an
+independent calibration and the model's own parameter was not fitted on that drive; only scored blind rows count for
+a model (``tally``), and models are ranked over the rows they share.
 """
 from __future__ import annotations
 
@@ -46,7 +44,7 @@ import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import crossing_depth, depth_at_fraction
 from granstokes.continuum.scene_models import Prediction, SceneModel, Steady
-from granstokes.dem.sizing import BASE_CLEARANCE
+from granstokes.dem.sizing import BASE_CLEARANCE, DEPTH_STUDY_DELTA_S, clearance
 from scipy import stats
 
 from .analysis import DriveAnalysis
@@ -70,11 +68,6 @@ MODEL_UNSTEADY = 0.05
 #: the observables of the steady state, and those of the layer (meaningless where the flow reaches the base)
 STEADY_OBSERVABLES = ("u_w_inf", "mu_w_inf", "delta_u", "creep_length")
 LAYER_OBSERVABLES = ("delta_u", "creep_length")
-#: observables the bed's depth sets in every bed measured: the DEM's creep length grows with the depth to the base
-#: (bench/creep_depth.py: 3.0 to 13.1 d from 26 to 78 d at one drive), so no bed measures the material's
-BASE_SET = ("creep_length",)
-BASE_SET_NOTE = ("not scored: the DEM's creep length grows with the bed's depth (bench/creep_depth.py: 3 to 13 d from "
-                 "26 to 78 d), so it is the base's, not the material's")
 TRANSIENT_OBSERVABLES = ("t90",)
 
 
@@ -92,20 +85,24 @@ def t90(t, y, level: float = T90_LEVEL) -> float:
     return crossing_depth(t, remaining, 1 - level)
 
 
-#: the creep's fit zones (the creep law's estimator family, compare.families): the tail below delta_s to the base's
-#: WALL_EXCLUSION ("creep", the scorecard's), that tail from CREEP_ZONE_OFFSET below delta_s (clear of the yield
-#: surface's rounding) and its upper half (clear of the base's no-slip)
-CREEP_ZONE_OFFSET = 2.0
+#: the creep's fit zones (the creep law's estimator family, compare.families), each of fixed width and never below the
+#: base's WALL_EXCLUSION: the tail's first CREEP_WINDOW below delta_s ("creep", the scorecard's), as wide from
+#: CREEP_ZONE_OFFSET below delta_s (clear of the yield surface's rounding) and twice as wide.  Fixed, because the DEM's
+#: tail is not exponential: the length fitted from delta_s to the base grows with the bed (3.0 to 13.1 d from 26 to 78
+#: d, bench/creep_depth.py), over the first 3 d it does not (2.5-2.8 d), over 6 d it grows less (2.5-3.5 d)
+CREEP_WINDOW, CREEP_ZONE_OFFSET = 3.0, 2.0
 CREEP_ZONES = {
-    "creep": lambda delta_s, bottom: (delta_s, bottom),
-    "creep_deep": lambda delta_s, bottom: (delta_s + CREEP_ZONE_OFFSET, bottom),
-    "creep_upper": lambda delta_s, bottom: (delta_s, (delta_s + bottom) / 2),
+    "creep": lambda delta_s, bottom: (delta_s, min(delta_s + CREEP_WINDOW, bottom)),
+    "creep_deep": lambda delta_s, bottom: (delta_s + CREEP_ZONE_OFFSET,
+                                           min(delta_s + CREEP_ZONE_OFFSET + CREEP_WINDOW, bottom)),
+    "creep_wide": lambda delta_s, bottom: (delta_s, min(delta_s + 2 * CREEP_WINDOW, bottom)),
 }
 
 
 def creep_length(depth, u, delta_s: float, bed_depth: float, zone: str = "creep") -> float:
     """e-folding length of u below delta_s (least squares of ln u over the CREEP_ZONES ``zone``, by default
-    [delta_s, bed_depth - WALL_EXCLUSION]); 0 when u vanishes there (rigid), nan when fewer than 3 points lie in it."""
+    [delta_s, delta_s + CREEP_WINDOW] above bed_depth - WALL_EXCLUSION); 0 when u vanishes there (rigid), nan when
+    fewer than 3 points lie in it."""
     depth, u = np.asarray(depth, dtype=float), np.asarray(u, dtype=float)
     top, bottom = CREEP_ZONES[zone](delta_s, bed_depth - WALL_EXCLUSION)
     zone = (depth >= top) & (depth <= bottom)
@@ -159,9 +156,9 @@ def dem_creep(a: DriveAnalysis, delta_s: float) -> Measured:
 
 
 def depth_needed(delta_s: float) -> float:
-    """The depth a bed needs for the layer of the calibrated ``delta_s``: BASE_CLEARANCE delta_s below it, the
-    clearance at which the layer's observables were measured independent of the depth (dem.sizing.BASE_CLEARANCE)."""
-    return (1 + BASE_CLEARANCE) * delta_s
+    """The depth a bed needs below the calibrated ``delta_s``: delta_s and the depth study's clearance
+    (dem.sizing.clearance)."""
+    return delta_s + clearance(delta_s)
 
 
 def short_bed(a: DriveAnalysis, delta_s: float) -> str:
@@ -170,8 +167,8 @@ def short_bed(a: DriveAnalysis, delta_s: float) -> str:
     if a.spec.depth >= need:
         return ""
     return (f"the bed ({a.spec.depth:.3g} d) leaves {a.spec.depth - delta_s:.3g} d below delta_s ({delta_s:.3g} d), "
-            f"less than the {BASE_CLEARANCE:g} delta_s = {BASE_CLEARANCE * delta_s:.3g} d at which the layer was "
-            f"measured independent of the depth: a bed of {need:.3g} d")
+            f"less than the {need - delta_s:.3g} d ({BASE_CLEARANCE:g} x max(delta_s, {DEPTH_STUDY_DELTA_S:g} d)) at "
+            "which the depth study found the observables independent of the depth")
 
 
 def bulk(table: pd.DataFrame, bed_depth: float) -> pd.Series:
@@ -415,8 +412,7 @@ def score(a: DriveAnalysis, models, predictions: dict, spreads: dict, n_replicat
                     or (beyond.get(model.key, "") if obs in STEADY_OBSERVABLES else "")
                     or (_not_scored(obs, model, base, end_value, central[f"{a.response}_inf"])
                         if not windowed else _not_scored("", model, base, end_value, asymptote))
-                    or _unmeasurable(measured, lo, hi, combined)
-                    or (BASE_SET_NOTE if obs in BASE_SET else ""))
+                    or _unmeasurable(measured, lo, hi, combined))
             rows.append(score_row(
                 drive=a.label, observable=obs, unit=OBSERVABLES[obs][0], dem=measured.value, dem_err=measured.err,
                 dem_how=measured.how, model=model.key, model_label=model.label, predicted=value,

@@ -1,8 +1,7 @@
 """Scene sizing from the continuum prediction (continuum.scales): depth, grain count, durations, steps.
 
-* bed depth (base top to plate) >= max over drives of delta_s + margin (default the larger of BASE_CLEARANCE delta_s,
-  the clearance below the layer at which the layer's observables are measured independent of the depth, and
-  CREEP_LENGTHS creep lengths CREEP_LENGTH), unless the config gives it; the sizing is as good as the config's
+* bed depth (base top to plate) >= max over drives of delta_s + margin (default ``clearance``, at which the
+  observables were measured independent of the depth), unless the config gives it; the sizing is as good as the config's
   material (``dem run --calibration`` puts a calibration's there);
 * duration of a drive = duration_ts * t_s (default 10 t_s, t_s = delta_s^2/nu_g), unless given;
 * a speed drive with mu_w_tilde runs at the matching steady speed u_w = U u~_w^inf(mu_w) (the paper's
@@ -57,15 +56,19 @@ def drive_scales(cfg: Config, drive: Drive) -> Scales:
     return Scales(m, cfg.p_w, mu_w)
 
 
-#: the clearance between the calibrated delta_s and the base, in units of delta_s, from which on the steady layer
-#: delta_u, the steady plate speed and t90 were measured independent of the bed's depth (bench/creep_depth.py: one
-#: drive, delta_s = 10.6 d, beds 26-78 d deep, clearances 1.46-6.4 delta_s; the comparison's depth rule,
-#: compare.scorecard.short_bed)
-BASE_CLEARANCE = 1.45
-#: e-folding length of the creep below the flowing layer in d, by dimension: the largest the committed studies
-#: measured, rounded up (metrics.json creep_length: disks 2.6-4.9 d, spheres 2.5-3.1 d), and the number of them the
-#: default margin holds at least (a floor for thin layers: the creep's length itself grows with the depth)
-CREEP_LENGTH, CREEP_LENGTHS = {2: 5.0, 3: 3.5}, 5
+#: the clearance a bed leaves between the calibrated delta_s and the base, in units of delta_s (of DEPTH_STUDY_DELTA_S
+#: where delta_s is smaller: ``clearance``): the shallowest clearance of the depth study (bench/creep_depth.py: one 2D
+#: drive, delta_s = 10.58 d, beds 26-78 d deep, clearances 1.46-6.4 delta_s, two beds each), at which the plate's
+#: steady speed, t90, the steady layer and the creep length agree with the deepest bed's within their errors; the
+#: comparison's depth rule (compare.scorecard.short_bed) and the sizing's margin
+BASE_CLEARANCE, DEPTH_STUDY_DELTA_S = 1.45, 10.58
+
+
+def clearance(delta_s: float) -> float:
+    """The clearance in d below the layer ``delta_s``: BASE_CLEARANCE delta_s, and no less than at the delta_s it was
+    measured at (whether it scales with delta_s or is a number of grains is not measured: the stricter)."""
+    return BASE_CLEARANCE * max(delta_s, DEPTH_STUDY_DELTA_S)
+
 
 #: grain placement: insertion column filled to this fraction of the largest grain's volume
 INSERT_FRACTION = {2: 0.30, 3: 0.20}
@@ -308,9 +311,8 @@ def plan(cfg: Config) -> Plan:
         reasons.append(f"depth {depth:g} d (given; largest delta_s = {delta_max:.3g} d)")
     else:
         margin, why = ((cfg.box.margin, "given") if cfg.box.margin is not None else
-                       max((BASE_CLEARANCE * delta_max, f"{BASE_CLEARANCE:g} delta_s, the layer clear of the base"),
-                           (CREEP_LENGTHS * CREEP_LENGTH[cfg.grains.dimension],
-                            f"{CREEP_LENGTHS} creep lengths of {CREEP_LENGTH[cfg.grains.dimension]:g} d")))
+                       (clearance(delta_max),
+                        f"{BASE_CLEARANCE:g} x max(delta_s, {DEPTH_STUDY_DELTA_S:g} d), the layer clear of the base"))
         depth = math.ceil(delta_max + margin)
         reasons.append(f"depth {depth:g} d = ceil(largest delta_s {delta_max:.3g} d + margin {margin:g} d, {why})")
     dim = cfg.grains.dimension

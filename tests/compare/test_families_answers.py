@@ -31,6 +31,7 @@ def test_a_choice_is_named_by_its_quantity_its_reference_and_its_start():
     assert Choice("mu_w", "contact", None).describe() == "the contact layer's friction"
     assert Choice("creep", "contact", None).describe() == "the creep length below delta_s"
     assert Choice("creep_deep", "contact", None).describe() == "the creep length from 2 d below delta_s"
+    assert Choice("creep_wide", "contact", None).describe() == "the creep length over 6 d below delta_s"
     assert Choice("t75", "plate", None).describe() == "the time to 75 % of the plate's speed"
     assert Choice("final half", "contact", None).describe() == "the contact layer's speed over the record's final half"
     assert Choice("delta_20", "contact", 0.5).describe() == "delta_20 of the contact layer's speed from 0.5 transits"
@@ -41,7 +42,7 @@ def test_a_family_lists_its_primary_first_and_once():
     assert FAMILIES["friction"] == (Choice("mu_w"), Choice("mu_w", "plate", 1.0), Choice("mu_w", "plate", 10.0))
     assert FAMILIES["response time"] == (Choice("t90", "plate", None), Choice("t90", "contact", None),
                                          Choice("t75", "plate", None))
-    assert [c.estimator for c in FAMILIES["creep"]] == ["creep", "creep_deep", "creep_upper"]
+    assert [c.estimator for c in FAMILIES["creep"]] == ["creep", "creep_deep", "creep_wide"]
     assert FAMILIES["steady speed"][0] == Choice("final quarter", "plate", None)
     assert all(len(family) >= 3 for family in FAMILIES.values())
     assert FAMILIES["layer"][0] == Choice(PRIMARY_ESTIMATOR) and FAMILIES["layer"].count(Choice(PRIMARY_ESTIMATOR)) == 1

@@ -225,4 +225,4 @@ def test_with_no_drive_holding_the_scene_rules_every_law_is_still_a_row_and_not_
                                                                                     table.kind))
     assert not table.verdict.isin(["consistent", "disagrees"]).any() and set(table.model) == {"local"}
     assert (row(table, "u_w_sqrt_t").note == "not measurable: no drive of this kind holds the scene rules (a plate "
-            "that grips, a bed clear of delta_s by 1.45 delta_s, the flow clear of the base)")
+            "that grips, a bed deep enough below delta_s, the flow clear of the base)")

@@ -20,10 +20,8 @@ What is checked, and how the answers are found without the module:
   h sqrt(2), so h = sd/sqrt(2) gives it the error sd (BOOTSTRAP_FEW_SEEDS seeds: no few-seed correction); the answers
   are numpy.polyfit's weighted by 1/sd with its unscaled covariance, the chi-square written out, the lack-of-fit
   probability scipy's chi-square survival function;
-* every law leaves out a drive whose bed leaves less than BASE_CLEARANCE delta_s below delta_s, and the creep length's
-  law is not measurable in any bed (its DEM value is the base's).
+* every law leaves out a drive whose bed is short of the depth rule (compare.scorecard.depth_needed).
 """
-from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -45,8 +43,7 @@ from granstokes.compare.laws import (
 )
 from granstokes.compare.plate import SLIP_MAX
 from granstokes.compare.rows import LACK_OF_FIT_P, critical
-from granstokes.compare.scorecard import CREEP_ZONES
-from granstokes.dem.sizing import BASE_CLEARANCE
+from granstokes.compare.scorecard import CREEP_ZONES, depth_needed
 from scipy import stats
 
 NU_G = 0.3
@@ -186,11 +183,6 @@ def _hand_line(x, y, sd):
     return coef, np.sqrt(np.diag(cov)), float(np.sum(((y - np.polyval(coef, x)) / sd) ** 2))
 
 
-def _creep_law():
-    """The creep length's law as if a bed measured the material's creep length (its line's machinery)."""
-    return replace(_law("creep_length_scaling"), unmeasurable="")
-
-
 def _creep_drives(creep):
     drives = [SimpleNamespace(label=f"p{p:g}", dem=SimpleNamespace(spec=SimpleNamespace(p_w=p))) for p in P_W]
     h = LOG_SD / np.sqrt(2)
@@ -203,7 +195,7 @@ def test_creep_lengths_on_a_power_law_give_the_weighted_slope_its_scaled_error_a
     scaled by sqrt(chi2/dof) (here 1.7 > 1), dof 6 - 2 = 4; the model's exact power law gives 0.3 on the same
     weights; sigma and the verdict at Student-t's quantile with 4 dof."""
     drives, full, lo, hi = _creep_drives(2 * P_W**0.3 * np.exp(Z * LOG_SD))
-    row = _row_of(_creep_law(), drives, full, lo, hi, _creep_drives(2 * P_W**0.3)[1])
+    row = _row_of(_law("creep_length_scaling"), drives, full, lo, hi, _creep_drives(2 * P_W**0.3)[1])
     (slope, _), (slope_err, _), chi2 = _hand_line(np.log(P_W), np.log(2 * P_W**0.3) + Z * LOG_SD, LOG_SD)
     assert chi2 / 4 == pytest.approx(1.713, abs=1e-3)
     err = slope_err * np.sqrt(chi2 / 4)
@@ -215,25 +207,12 @@ def test_creep_lengths_on_a_power_law_give_the_weighted_slope_its_scaled_error_a
     assert row["choices"][0]["chi2_dof"] == row["chi2_dof"] and row["n_drives"] == 6
 
 
-def test_the_creep_length_s_law_is_not_measurable_in_any_bed_as_its_dem_value_is_the_base_s():
-    """The shipped law on the same six drives as the power law: not measurable, no sigma, the note naming the
-    depth's measurement (the DEM's creep length grows with the bed's depth); the DEM's slope still shown."""
-    from granstokes.compare.scorecard import BASE_SET_NOTE
-    drives, full, lo, hi = _creep_drives(2 * P_W**0.3 * np.exp(Z * LOG_SD))
-    row = _row_of(_law("creep_length_scaling"), drives, full, lo, hi, _creep_drives(2 * P_W**0.3)[1])
-    measured = _row_of(_creep_law(), drives, full, lo, hi, _creep_drives(2 * P_W**0.3)[1])
-    assert row["verdict"] == "not measurable" and np.isnan(row["sigma"]) and measured["verdict"] == "consistent"
-    assert row["note"] == BASE_SET_NOTE.replace("not scored", "not measurable") and "grows with the bed's depth" in row[
-        "note"]
-    assert row["dem"] == pytest.approx(measured["dem"], rel=1e-12)
-
-
 def test_creep_lengths_on_a_step_are_not_a_line():
     """Creep lengths 2 below p_w = 12 and 4 above, each to 4-10 %: the weighted line leaves chi2/dof = 12.6 (p = 3e-10),
     improbable below LACK_OF_FIT_P: 'not measurable: not a line' with chi2/dof and p, no DEM slope quoted."""
     step = np.where(P_W < 12, 2.0, 4.0)
     drives, full, lo, hi = _creep_drives(step)
-    row = _row_of(_creep_law(), drives, full, lo, hi, _creep_drives(2 * P_W**0.3)[1])
+    row = _row_of(_law("creep_length_scaling"), drives, full, lo, hi, _creep_drives(2 * P_W**0.3)[1])
     *_, chi2 = _hand_line(np.log(P_W), np.log(step), LOG_SD)
     p = stats.chi2.sf(chi2, 4)
     assert p < LACK_OF_FIT_P and chi2 / 4 == pytest.approx(12.57, abs=0.01)
@@ -274,13 +253,14 @@ def test_the_steady_layer_s_slope_and_offset_carry_each_choice_s_chi2_per_dof():
         assert hand["delta_50"][2] / 4 < 1 and delta_50["dem_err"] == pytest.approx(hand["delta_50"][1][k], rel=1e-9)
 
 
-def test_a_drive_whose_bed_is_short_of_the_clearance_or_whose_plate_slips_is_left_out_of_every_law():
-    """Two drives with delta_s = 7: the bed must hold 7 + BASE_CLEARANCE x 7 = 17.15 d; the bed 0.5 d shorter is
-    left out of every law (of every kind), as is a deep bed whose plate slips 2 SLIP_MAX."""
+def test_a_drive_whose_bed_is_short_or_whose_plate_slips_is_left_out_of_every_law():
+    """delta_s = 7, below the depth study's 10.58 d, so the clearance is 1.45 x 10.58 d: a bed of 7 + 15.341 d.  One
+    0.5 d shorter is left out of every law (of every kind), as is a deep bed whose plate slips 2 SLIP_MAX."""
     depth = np.arange(0.0, 40.0, 0.5)
     sample = pd.DataFrame({"depth": depth, "u_x": np.exp(-depth / 3.0)})
-    need = 7.0 * (1 + BASE_CLEARANCE)
-    assert need == pytest.approx(17.15)
+    need = depth_needed(7.0)
+    assert need == pytest.approx(7.0 + 1.45 * 10.58)
+    assert depth_needed(20.0) == pytest.approx(20.0 * 2.45)  # above 10.58 d the clearance is 1.45 delta_s
 
     def dc(bed):
         dem = SimpleNamespace(spec=SimpleNamespace(depth=bed, kind="stress"), samples=(sample, sample),

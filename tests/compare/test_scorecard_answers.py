@@ -33,7 +33,6 @@ from granstokes.compare.calibrate import WALL_EXCLUSION
 from granstokes.compare.plate import STEADY_LAST
 from granstokes.compare.rows import Z95
 from granstokes.compare.scorecard import (
-    BASE_SET_NOTE,
     MODEL_UNSTEADY,
     T90_WINDOW,
     Measured,
@@ -45,9 +44,9 @@ from granstokes.compare.scorecard import (
 from scipy import stats
 
 T = np.arange(21.0)               # the DEM's output times
-BED = 22.0                        # the bed's depth [d]: deeper than DELTA_S + 5 of the seeds' creep lengths
+BED = 36.0                        # the bed's depth [d]: deep enough for every row (compare.scorecard.short_bed)
 DEPTH = np.arange(0.0, BED + 0.25, 0.5)
-DELTA_S = 7.0                     # the calibrated delta_s: the creep zone is [7, BED - WALL_EXCLUSION]
+DELTA_S = 7.0                     # the calibrated delta_s: the creep zone is [7, 7 + CREEP_WINDOW]
 LABEL = "stress-1"
 # the calibration's spread: two parameters, their steps and covariance
 NAMES, STEPS = ("mu_s", "I0"), (0.005, 0.003)
@@ -250,11 +249,9 @@ def test_sigma_is_dem_minus_model_over_every_error_in_quadrature_and_gives_the_v
     normal = stats.norm.ppf(0.975)
     assert expected["u_w_inf"] < -normal and expected["delta_u"] < -normal  # beyond 1.96 ...
     assert all(abs(expected[k]) <= threshold[k] for k in expected)  # ... within their own t quantile
-    # the creep length's sigma is formed, but no bed measures the material's creep length: never scored
-    assert rows.verdict.to_dict() == {"u_w_inf": "consistent", "delta_u": "consistent", "creep_length": "not scored",
+    assert rows.verdict.to_dict() == {"u_w_inf": "consistent", "delta_u": "consistent", "creep_length": "consistent",
                                       "t90": "consistent"}
-    assert rows.scored.to_dict() == {"u_w_inf": True, "delta_u": True, "creep_length": False, "t90": True}
-    assert rows.note.to_dict() == {"u_w_inf": "", "delta_u": "", "creep_length": BASE_SET_NOTE, "t90": ""}
+    assert rows.scored.all() and (rows.note == "").all()
 
 
 def test_the_dem_errors_dof_is_seeds_minus_one_or_blocks_of_one_seed_minus_one():
@@ -352,10 +349,10 @@ def test_a_model_whose_time_scale_is_assumed_predicts_no_t90():
     rows, _, _ = _score(_drive(), {"ngf": _model_side()}, models=[_model("ngf", transient_calibrated=False)])
     ngf = _by(rows, "ngf")
     assert ngf.note.to_dict() == {
-        "u_w_inf": "", "delta_u": "", "creep_length": BASE_SET_NOTE,
+        "u_w_inf": "", "delta_u": "", "creep_length": "",
         "t90": "not predicted: ngf's time scale is assumed (t0 one local inertial time), not calibrated, so its "
                "transient is no prediction"}
-    assert ngf.verdict["t90"] == "not predicted" and ngf.scored.sum() == 2  # u_w_inf, delta_u (creep: BASE_SET)
+    assert ngf.verdict["t90"] == "not predicted" and ngf.scored.sum() == 3
 
 
 def test_a_model_not_yet_steady_over_the_final_quarter_has_its_steady_profile_rows_unscored():
@@ -369,7 +366,7 @@ def test_a_model_not_yet_steady_over_the_final_quarter_has_its_steady_profile_ro
     assert local.loc["u_w_inf", "predicted"] == pytest.approx(1.8) and local.loc["u_w_inf", "asymptote"] == 2.0
     # 2 % short: steady enough
     rows, _, _ = _score(_drive(), {"local": _model_side(asymptote=2.0, plateau=1.96)})
-    assert _by(rows).note.to_dict() == {"u_w_inf": "", "delta_u": "", "creep_length": BASE_SET_NOTE, "t90": ""}
+    assert rows.scored.all()
 
 
 def test_a_model_at_rest_is_unscored_only_while_its_response_still_moves():
@@ -388,15 +385,15 @@ def test_a_model_at_rest_is_unscored_only_while_its_response_still_moves():
     rows, _, _ = _score(_drive(), {"local": _model_side(asymptote=0.0, delta_u=np.nan, ell=None, replicates=at_rest,
                                                         series=still)})
     local = _by(rows)  # no t90 (the model never moves): rest is steady
-    assert list(local.index) == ["u_w_inf", "creep_length"] and local.note.to_dict() == {
-        "u_w_inf": "", "creep_length": BASE_SET_NOTE}
+    assert list(local.index) == ["u_w_inf", "creep_length"] and local.scored.all()
     assert local.predicted.tolist() == [0.0, 0.0]
 
 
 def test_rows_a_side_cannot_measure_are_left_out():
-    # the DEM's u never falls to 5 % (no delta_u: u >= 0.9 exp(-1.35) = 0.23 at the base; creep length 10 d); the
+    # the DEM's u never falls to 5 % (no delta_u: u >= 0.9 exp(-1.475) = 0.21 at the base; creep length 20 d); the
     # model's creep zone holds fewer than 3 points (no creep length)
-    slow = pd.DataFrame({"depth": DEPTH, "u_x": np.where(DEPTH <= 6.5, 1.0, 0.9 * np.exp(-(DEPTH - 6.5) / 10))})
+    assert 0.9 * np.exp(-(BED - 6.5) / 20) > 0.05
+    slow = pd.DataFrame({"depth": DEPTH, "u_x": np.where(DEPTH <= 6.5, 1.0, 0.9 * np.exp(-(DEPTH - 6.5) / 20))})
     flat = (slow, slow.copy(), slow.copy())
     rows, _, _ = _score(_drive(samples=flat, steady_profile=_profile(5.0, 2.4)), {"local": _model_side()})
     assert list(rows.observable) == ["u_w_inf", "creep_length", "t90"]
@@ -541,8 +538,7 @@ def test_a_slipping_plate_leaves_every_row_of_its_drive_unscored():
     predictions, spreads = _model_side()
     for slip, slipped in ((0.12, True), (SLIP_MAX, False)):
         rows, _, _ = score(_drive(slip=slip), models, {"local": predictions}, {"local": spreads}, 5)
-        gripped = rows[rows.observable != "creep_length"]  # the creep length: never scored (BASE_SET)
-        assert len(rows) == 4 and gripped.scored.all() != slipped and not rows.scored.all()
+        assert len(rows) == 4 and rows.scored.all() != slipped
         assert set(rows.observable) == {"u_w_inf", "t90", "delta_u", "creep_length"}
         if slipped:
             assert (rows.note == "not scored: the plate slips 12% against the grains touching it (more than "
@@ -566,48 +562,63 @@ def test_a_model_beyond_the_calibrated_inertial_number_extrapolates_its_steady_r
     assert rows[~steady].scored.all() and set(rows[~steady].observable) == {"t90"}
 
 
-def test_a_bed_short_of_the_base_clearance_leaves_every_row_unscored():
-    """DELTA_S = 7: the bed must hold 7 (1 + BASE_CLEARANCE) = 17.15 d. A bed 0.1 d short of that has every row (the
-    layer's and the plate's) kept, not scored, the note giving the clearance; a bed 0.1 d deeper has every row but the
-    creep length's scored."""
-    from granstokes.compare.scorecard import LAYER_OBSERVABLES, depth_needed, short_bed
-    from granstokes.dem.sizing import BASE_CLEARANCE
-    need = DELTA_S * (1 + BASE_CLEARANCE)
-    assert BASE_CLEARANCE == 1.45 and depth_needed(DELTA_S) == pytest.approx(17.15)
+def test_a_bed_short_of_the_depth_study_s_clearance_leaves_every_row_unscored():
+    """DELTA_S = 7, below the depth study's 10.58 d: a bed must hold 7 + 1.45 x 10.58 = 22.34 d. 0.1 d short of that:
+    every row (the layer's and the plate's) kept, not scored, the note giving the clearance; 0.1 d deeper: every row
+    scored."""
+    from granstokes.compare.scorecard import short_bed
     predictions, spreads = _model_side()
-    for depth, short in ((need - 0.1, True), (need + 0.1, False)):
+    need = DELTA_S + 1.45 * 10.58
+    for depth in (need - 0.1, need + 0.1):
         a = _drive()
-        a.spec = NS(depth=depth)  # the creep zone [DELTA_S, depth - WALL_EXCLUSION] still lies in the exponential tail
+        a.spec = NS(depth=depth)
         rows, _, _ = score(a, [_model("local")], {"local": predictions}, {"local": spreads}, 5)
-        layer = rows.observable.isin(LAYER_OBSERVABLES)
-        assert set(rows[layer].observable) == {"delta_u", "creep_length"} and len(rows[~layer]) == 2
-        if short:
-            why = ("the bed (17.1 d) leaves 10.1 d below delta_s (7 d), less than the 1.45 delta_s = 10.2 d at which "
-                   "the layer was measured independent of the depth: a bed of 17.2 d")
+        assert set(rows.observable) == {"u_w_inf", "t90", "delta_u", "creep_length"}
+        if depth < need:
+            why = ("the bed (22.2 d) leaves 15.2 d below delta_s (7 d), less than the 15.3 d (1.45 x max(delta_s, "
+                   "10.58 d)) at which the depth study found the observables independent of the depth")
             assert short_bed(a, DELTA_S) == why
             assert (rows.note == "not scored: " + why).all() and set(rows.verdict) == {"not scored"}
             # the unscored rows keep the DEM's numbers: the creep length is the seeds' mean
             assert rows[rows.observable == "creep_length"].dem.iloc[0] == pytest.approx((2.4 + 3.0 + 2.7) / 3)
         else:
-            assert short_bed(a, DELTA_S) == ""
-            assert rows.set_index("observable").scored.to_dict() == {
-                "u_w_inf": True, "t90": True, "delta_u": True, "creep_length": False}
+            assert short_bed(a, DELTA_S) == "" and rows.scored.all()
 
 
-def test_the_base_clearance_is_the_shallowest_at_which_the_depth_study_found_the_layer_independent_of_the_depth():
-    """bench/creep_depth.csv (one drive in beds 26-78 d deep): the creep length grows with the depth (a weighted line's
-    slope beyond Student-t's 95 % at the depths' dof, its error scaled by sqrt(chi2/dof) where the depths scatter
-    beyond their errors), the steady layer, the plate's speed and t90 do not (their slopes within it), and
-    BASE_CLEARANCE is at most the shallowest bed's clearance below delta_s."""
-    from granstokes.dem.sizing import BASE_CLEARANCE
-    table = pd.read_csv(Path(__file__).resolve().parents[2] / "bench" / "creep_depth.csv")
-    assert BASE_CLEARANCE <= ((table.depth - table.delta_s) / table.delta_s).min() < BASE_CLEARANCE + 0.05
+def test_the_creep_length_is_fitted_over_a_fixed_window_below_delta_s_whatever_the_bed():
+    """A tail whose local e-folding length grows with depth (ln u = -(z - 7)/3 - (z - 7)^2/60 below delta_s = 7): over
+    the first CREEP_WINDOW = 3 d the least-squares length is the same in a 36 d and an 80 d bed, and equals numpy's fit
+    over [7, 10]."""
+    from granstokes.compare.scorecard import CREEP_WINDOW, creep_length
+    assert CREEP_WINDOW == 3.0
+    z = np.arange(0.0, 80.25, 0.25)
+    u = np.exp(-(z - 7) / 3 - (z - 7) ** 2 / 60)
+    zone = (z >= 7) & (z <= 10)
+    expected = -1 / np.polyfit(z[zone], np.log(u[zone]), 1)[0]
+    assert creep_length(z, u, 7.0, 36.0) == pytest.approx(expected, rel=1e-12) == creep_length(z, u, 7.0, 80.0)
 
-    def slope_t(key):
-        coef, cov = np.polyfit(table.depth, table[key], 1, w=1 / table[f"{key}_err"], cov="unscaled")
-        chi2 = np.sum(((table[key] - np.polyval(coef, table.depth)) / table[f"{key}_err"]) ** 2)
-        return coef[0] / np.sqrt(cov[0, 0] * max(1.0, chi2 / (len(table) - 2)))
 
-    critical = stats.t.ppf(0.975, len(table) - 2)
-    assert slope_t("creep_length") > critical
-    assert all(abs(slope_t(k)) < critical for k in ("delta_u", "u_w_inf", "t90"))
+def test_the_depth_study_finds_every_scored_observable_flat_from_the_clearance_and_the_creep_to_the_base_growing():
+    """bench/creep_depth.csv (one drive, delta_s = 10.58 d, beds 26-78 d deep, each value with its error over two
+    beds): every bed's plate speed, t90, delta_u and creep length (the scorecard's fixed zone) agree with the deepest
+    bed's (|difference| within Student-t's 95 % at the Welch dof of the two beds' errors), and BASE_CLEARANCE is the
+    shallowest bed's clearance (at most it, within 0.05); the creep length fitted from delta_s to the base grows with
+    the depth (a weighted line's slope beyond Student-t's 95 % at n - 2 dof, its error scaled by sqrt(chi2/dof))."""
+    from granstokes.compare.rows import effective_dof
+    from granstokes.dem.sizing import BASE_CLEARANCE, DEPTH_STUDY_DELTA_S
+    table = pd.read_csv(Path(__file__).resolve().parents[2] / "bench" / "creep_depth.csv").sort_values("depth")
+    assert (table.delta_s == DEPTH_STUDY_DELTA_S).all()
+    deepest = table.iloc[-1]
+
+    def agrees(row, key):
+        errors = (row[f"{key}_err"], deepest[f"{key}_err"])
+        dof = effective_dof(errors, (row.beds - 1, deepest.beds - 1))
+        return abs(row[key] - deepest[key]) <= stats.t.ppf(0.975, dof) * np.hypot(*errors)
+
+    assert all(agrees(r, k) for _, r in table.iterrows() for k in ("u_w_inf", "t90", "delta_u", "creep_length"))
+    clear = (table.depth - table.delta_s) / table.delta_s
+    assert 0 <= clear.iloc[0] - BASE_CLEARANCE < 0.05
+    coef, cov = np.polyfit(table.depth, table.creep_to_base, 1, w=1 / table.creep_to_base_err, cov="unscaled")
+    chi2 = np.sum(((table.creep_to_base - np.polyval(coef, table.depth)) / table.creep_to_base_err) ** 2)
+    dof = len(table) - 2
+    assert coef[0] / np.sqrt(cov[0, 0] * max(1.0, chi2 / dof)) > stats.t.ppf(0.975, dof)

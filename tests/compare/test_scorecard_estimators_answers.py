@@ -152,28 +152,31 @@ def test_t90_of_one_seed_carries_the_running_mean_s_half_width_with_infinite_dof
     assert m.dof == np.inf
 
 
-def test_the_creep_zones_read_each_part_of_a_two_slope_tail():
-    """A tail that e-folds over 2 d from delta_s = 4 to 8 and over 4 d below, to a bed of 30 (the zone's bottom
-    30 - WALL_EXCLUSION): "creep_upper" fits [4, (4 + bottom)/2], "creep_deep" [6, bottom], "creep" [4, bottom];
-    each is the least-squares slope of ln u over its own points, by numpy; on one exponential every zone gives its
-    length."""
-    from granstokes.compare.scorecard import CREEP_ZONE_OFFSET, CREEP_ZONES
-    bed, delta_s = 30.0, 4.0
-    depth = np.arange(0.0, bed + 0.25, 0.25)
+def test_the_creep_zones_read_each_part_of_a_two_slope_tail_over_fixed_widths():
+    """A tail that e-folds over 2 d from delta_s = 4 to 8 and over 4 d below, in a bed of 30: "creep" fits [4, 7]
+    (CREEP_WINDOW = 3 d, all in the 2 d part: exactly 2), "creep_deep" [6, 9], "creep_wide" [4, 10], whatever the bed
+    below; each is the least-squares slope of ln u over its own points, by numpy; a bed of 10 cuts every zone at
+    10 - WALL_EXCLUSION; on one exponential every zone gives its length."""
+    from granstokes.compare.scorecard import CREEP_WINDOW, CREEP_ZONE_OFFSET, CREEP_ZONES
+    delta_s = 4.0
+    depth = np.arange(0.0, 30.25, 0.25)
     ln_u = np.where(depth <= 8.0, -(depth - delta_s) / 2.0, -2.0 - (depth - 8.0) / 4.0)
-    bottom = bed - WALL_EXCLUSION
-    zones = {"creep": (delta_s, bottom), "creep_deep": (delta_s + CREEP_ZONE_OFFSET, bottom),
-             "creep_upper": (delta_s, (delta_s + bottom) / 2)}
-    assert set(CREEP_ZONES) == set(zones) and CREEP_ZONE_OFFSET == 2.0
-    for zone, (top, low) in zones.items():
-        inside = (depth >= top) & (depth <= low)
-        hand = -1 / np.polyfit(depth[inside], ln_u[inside], 1)[0]
-        assert creep_length(depth, np.exp(ln_u), delta_s, bed, zone) == pytest.approx(hand, rel=1e-9)
-    lengths = [creep_length(depth, np.exp(ln_u), delta_s, bed, z) for z in ("creep_upper", "creep", "creep_deep")]
-    assert 2.0 < lengths[0] < lengths[1] < lengths[2] < 4.0  # the deeper the zone, the more of the 4 d tail
+    assert (CREEP_WINDOW, CREEP_ZONE_OFFSET) == (3.0, 2.0)
+    for bed in (30.0, 10.0):
+        bottom = bed - WALL_EXCLUSION
+        zones = {"creep": (4.0, min(7.0, bottom)), "creep_deep": (6.0, min(9.0, bottom)),
+                 "creep_wide": (4.0, min(10.0, bottom))}
+        assert set(CREEP_ZONES) == set(zones)
+        for zone, (top, low) in zones.items():
+            inside = (depth >= top) & (depth <= low)
+            hand = -1 / np.polyfit(depth[inside], ln_u[inside], 1)[0]
+            assert creep_length(depth, np.exp(ln_u), delta_s, bed, zone) == pytest.approx(hand, rel=1e-9)
+    lengths = {z: creep_length(depth, np.exp(ln_u), delta_s, 30.0, z) for z in CREEP_ZONES}
+    assert lengths["creep"] == pytest.approx(2.0, rel=1e-9)
+    assert 2.0 < lengths["creep_wide"] < 4.0 and 2.0 < lengths["creep_deep"] < 4.0  # they reach the 4 d tail
     single = np.exp(-(depth - delta_s) / 3.0)
     for zone in CREEP_ZONES:
-        assert creep_length(depth, single, delta_s, bed, zone) == pytest.approx(3.0, rel=1e-9)
+        assert creep_length(depth, single, delta_s, 30.0, zone) == pytest.approx(3.0, rel=1e-9)
 
 
 def test_a_response_time_at_any_level_on_a_ramp_is_that_fraction_of_the_ramp():

@@ -15,7 +15,7 @@ import pytest
 from granstokes.compare.stokes_experiment import EARLY_FRAMES_PER_TS, FRAMES_PER_TS
 from granstokes.dem import config as dem_config
 from granstokes.dem.calibrate import material_table
-from granstokes.dem.sizing import CREEP_LENGTH, CREEP_LENGTHS
+from granstokes.dem.sizing import clearance
 
 from granstokes.cli import main as granstokes_main
 from granstokes.study import config
@@ -70,7 +70,7 @@ def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
         assert cfg.material.phi == pytest.approx(material["phi"]) and cfg.material.I0 == pytest.approx(material["I0"])
         k_n.add(round(cfg.contact.k_n, 6))
         deepest = max(d.scales.delta_s for d in p.drives)
-        assert p.depth >= deepest + CREEP_LENGTHS * CREEP_LENGTH[cfg.grains.dimension]
+        assert p.depth >= deepest + clearance(deepest)
         for d in p.drives:
             assert d.duration == pytest.approx(10 * d.scales.t_s, rel=1e-9)
         frame = min(d.scales.t_s for d in p.drives) / FRAMES_PER_TS  # the snapshots as LAMMPS writes them
