@@ -103,7 +103,7 @@ SCENE_CHECKS = {c.key: c for c in (
     SceneCheck("slip", "the plate's grip", f"the plate slips by more than {SLIP_MAX * 100:g} %"),
     SceneCheck("stresses", "the stresses' balance", "the coarse-grained stresses miss the plate's or the bed's weight"),
     SceneCheck("base", "the base", "the flow reaches the base"),
-    SceneCheck("depth", "the bed's depth", "the bed is shorter than delta_s + 5 of its measured creep lengths"),
+    SceneCheck("depth", "the bed's depth", "the bed leaves less than the depth study's clearance below delta_s"),
     SceneCheck("transit", "the elastic transit", "the elastic transit is not short against the drive's time"),
     SceneCheck("record", "the record's length", "the record is short (the DEM or a model is not steady in it)"),
     SceneCheck("periodic", "the periodic state", "a bed is not periodic"),

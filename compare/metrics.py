@@ -13,7 +13,7 @@ from .drive import TRANSITS_BEFORE_COMPARISON
 from .laws import BOOTSTRAP_FEW_SEEDS, SEED_RESAMPLES
 from .plate import BLOCK_TAUS, MIN_SEEDS_SPREAD, SLIP_FROM, STEADY_WINDOW, TREND_SIGMA
 from .rows import Z95, critical
-from .scorecard import OBSERVABLES, T90_WINDOW, bulk, creep_length
+from .scorecard import CREEP_WINDOW, OBSERVABLES, T90_WINDOW, bulk, creep_length
 
 #: name -> (unit, definition)
 DEFINITIONS = {
@@ -32,7 +32,8 @@ DEFINITIONS = {
                          "an imposed stress, mu_w under an imposed speed) to cover 90 % of its change; the continuum "
                          "series are interpolated onto the DEM's output times and treated alike"),
     "creep_length": ("d", "e-folding length of u below the calibrated delta_s, from a least-squares fit of ln u "
-                          f"down to {WALL_EXCLUSION:g} d above the base; local mu(I) is rigid there (0)"),
+                          f"over the first {CREEP_WINDOW:g} d below it (never within {WALL_EXCLUSION:g} d of the "
+                          "base); local mu(I) is rigid there (0)"),
     "sigma": ("1", "(DEM - predicted) / sqrt(dem_err^2 + calibration_sd^2 + numerical_err^2), calibration_sd = "
                    "band width / 3.92; 'consistent' when |sigma| <= t_0.975(dof), Student-t's 97.5 % quantile at the "
                    f"row's dof ({Z95:.3g} at infinite dof, {critical(3):.3g} at 3, {critical(2):.3g} at 2)"),

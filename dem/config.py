@@ -10,7 +10,7 @@ A config is a TOML document (DEM units: d = rho_p = g = 1); this example is vali
     # dimension 2 (disks) or 3 (spheres); diameters uniform by number in [1-w, 1+w] d; pair_style "classic" (the
     # Hooke default, LAMMPS's gran/hooke/history) or "granular" (Hertz's only style; dem.contact)
     grains = {dimension = 2, polydispersity = 0.2, mu_p = 0.5, restitution = 0.5, contact = "hooke", kappa = 1e4}
-    box = {width = 32.0}   # widths and depth in d; no depth -> max delta_s + margin (default 5 creep lengths)
+    box = {width = 32.0}   # widths and depth in d; no depth -> max delta_s + margin (default dem.sizing.clearance)
     load = {p_w = 20.0}
     # kind "stress" (mu_w, mu_w_tilde or tau_w) or "speed" (u_w, or mu_w_tilde: the matching steady speed), held
     # from t = 0; with omega (1/time) or omega_ts (omega t_s) the load is the amplitude of a sine, run `cycles` periods

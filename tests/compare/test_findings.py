@@ -98,7 +98,7 @@ def test_the_scene_names_the_drives_that_fail_and_whether_the_evidence_s_drive_i
     assert {s.check.key: s.text() for s in f.scene if s.check.key not in ("slip", "depth")} == {
         "transit": "the elastic transit: not known", "record": "the record's length: not known",
         "base": "the base: holds"}
-    assert fd.scene_text(f) == ("the bed is shorter than delta_s + 5 of its measured creep lengths in 1 of 2 drives "
+    assert fd.scene_text(f) == ("the bed leaves less than the depth study's clearance below delta_s in 1 of 2 drives "
                                 "(runs/p10/b: the bed (26 d) is shorter); "
                                 f"the plate slips by more than {SLIP_MAX * 100:g} % in 1 of 2 drives (p5: a: slip "
                                 "9 %), the evidence's drive among them; the base: holds in every drive; the elastic "

@@ -53,7 +53,7 @@ def test_bad_studies_are_refused_naming_the_parameter(change, message):
 
 
 def test_sizing_comes_from_the_calibration_with_one_material(tmp_path):
-    """Every run is sized from the calibrated material: depth >= delta_s + 5 creep lengths, duration >= 10
+    """Every run is sized from the calibrated material: depth >= delta_s + the depth study's clearance, duration >= 10
     calibrated t_s, frames every t_s/FRAMES_PER_TS of the fastest drive; the grains' k_n is one at every pressure
     (kappa scales as 1/p), the calibration stage's too; tau_w gives mu_w = tau_w/p_w.  Each run's and calibration's
     TOML is the config it runs."""
