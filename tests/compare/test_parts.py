@@ -31,17 +31,19 @@ def _part(whole: Path, folder: Path, run: str) -> Path:
 
 
 def test_the_parts_of_a_study_merge_into_the_whole(tmp_path):
-    a, b = _part(WHOLE, tmp_path / "a", "runs/p5"), _part(WHOLE, tmp_path / "b", "runs/p10")
     whole = tables.read(WHOLE)
-    merged = StokesDrives.create(None, fit_on_drives=True).read_parts([a, b])
+    assert len(whole.runs) >= 2
+    parts = [_part(WHOLE, tmp_path / f"part{k}", str(run)) for k, run in enumerate(whole.runs)]
+    merged = StokesDrives.create(None, fit_on_drives=True).read_parts(parts)
     assert merged.runs == whole.runs and merged.grains == whole.grains
-    assert [d.label for d in merged.drives] == [d.label for d in whole.drives] and len(merged.drives) == 4
+    assert [d.label for d in merged.drives] == [d.label for d in whole.drives] and len(merged.drives) == 2 * len(
+        whole.runs)  # a stress and a speed drive per pressure
     for m, w in zip(merged.drives, whole.drives):
         assert repr(m.spec) == repr(w.spec) and np.array_equal(m.plates[0].u_w, w.plates[0].u_w)  # NaN t_s in both
         assert m.steady_profile.equals(w.steady_profile)
     assert merged.checks.drive == whole.checks.drive and merged.mass_error == whole.mass_error
     with pytest.raises(ValueError, match="--tables must be tables of distinct runs"):
-        tables.merge([tables.read(a), tables.read(a)])
+        tables.merge([tables.read(parts[0]), tables.read(parts[0])])
 
 
 def test_compare_refuses_parts_of_two_experiments_before_any_work(tmp_path, capsys):
