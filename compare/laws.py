@@ -54,7 +54,9 @@ each parameter shifted), band = predicted -+ 1.96 s_cal, sigma = (dem - predicte
 each choice's verdict is at Student-t's quantile of its Welch-Satterthwaite dof (compare.rows).
 
 Scenes: a drive whose plate slips (compare.scorecard.slipping) or whose bed leaves less than the depth study's
-clearance below delta_s (compare.scorecard.short_bed) is left out of every law, as its scorecard rows are not scored.
+clearance below delta_s (compare.scorecard.short_bed) is left out of every law, as its scorecard rows are not scored,
+and so is a drive whose steady wall inertial number by the calibrated mu(I) lies beyond the calibration's measured I
+(``within_calibration``: outside the range calibrated, its steady rows unscored).
 A law
 the data cannot decide (a window the elastic start covers, too short or outside the model's regime, too few points or
 drives, a model without the quantity) is ``not measurable`` with the reason, never a number fitted on noise.
@@ -620,12 +622,25 @@ LAWS = (
 )
 
 
-def _drives(compared, kind):
+def _drives(compared, kind, calibrated_I=(np.nan, np.nan)):
     """The drives a law reads: predicted, their flow clear of the base, of the law's kind, their plate gripping
-    (compare.scorecard.slipping) and their bed deep enough (compare.scorecard.short_bed): the scene rules of the
-    scorecard's rows."""
+    (compare.scorecard.slipping), their bed deep enough (compare.scorecard.short_bed): the scene rules of the
+    scorecard's rows; and their load within the calibration (``within_calibration``)."""
     return [dc for dc in compared if dc.predictions and not dc.base and (kind is None or dc.dem.spec.kind == kind)
-            and not slipping(dc.dem) and not short_bed(dc.dem, dc.scales.delta_s)]
+            and not slipping(dc.dem) and not short_bed(dc.dem, dc.scales.delta_s)
+            and within_calibration(dc, calibrated_I)]
+
+
+def within_calibration(dc, calibrated_I) -> bool:
+    """Whether drive ``dc``'s steady wall inertial number by the calibrated mu(I) (DEM convention, at its steady
+    wall friction) lies within the calibration's measured I: a drive beyond it is outside the range calibrated, and
+    every law leaves it out (its steady scorecard rows are unscored, compare.scorecard.extrapolated); an unknown
+    range is not checked."""
+    if dc.scales is None or not np.isfinite(calibrated_I[1]):
+        return True
+    m = dc.scales.material
+    return not extrapolated(wall_I(m.friction, [dc.scales.mu_w], convert_I(m.I0, m.I_convention, "dem")),
+                            calibrated_I)
 
 
 def _few_seeds(n: int) -> float:
@@ -812,11 +827,12 @@ def _law_row(law: Law, model: str, drives, src: _Sources, calibrated: bool, star
 def laws(compared, calibrated_I=(np.nan, np.nan), resamples: int = SEED_RESAMPLES, seed: int = 1) -> pd.DataFrame:
     """Every law x model row (compare.rows.LAW_KEYS) over the drives ``compared`` (comparison.DriveComparison);
     ``calibrated_I`` the calibration's range of I (DEM convention; unknown: not checked)."""
-    usable = _drives(compared, None)
+    usable = _drives(compared, None, calibrated_I)
     src = _Sources.of(usable, resamples, seed, calibrated_I)
     predicted = [p for dc in compared for p in dc.predictions]  # every model, though no drive hold the rules
     calibrated = {p.model: p.transient_calibrated for p in predicted}
     starts = {p.model: p.initial for p in predicted}
-    rows = [_law_row(law, model, _drives(compared, law.kind), src, calibrated[model], starts[model])
+    rows = [_law_row(law, model, _drives(compared, law.kind, calibrated_I), src, calibrated[model],
+                     starts[model])
             for law in LAWS for model in calibrated]
     return pd.DataFrame(rows, columns=list(dict.fromkeys([*LAW_KEYS, *(k for r in rows for k in r)])))

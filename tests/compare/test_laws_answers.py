@@ -294,3 +294,18 @@ def test_a_steady_speed_is_the_mean_over_the_dem_s_final_quarter_or_half_of_the_
     fine = np.arange(0.0, 100.5, 0.5)
     model = SimpleNamespace(t=fine, speed=lambda ref: fine)
     assert steady_speed(model, dc, contact) == steady_speed(model, dc, quarter) == pytest.approx(87.5)
+
+
+def test_a_drive_whose_load_lies_beyond_the_calibrated_I_is_left_out_of_every_law():
+    """mu_s = 0.3, mu_d = 0.7, I0 = 0.3 (DEM convention): a wall friction of 0.5 is the steady wall I = 0.3 x 0.2/0.2 =
+    0.3 (eq. (2.1) inverted). A calibration that measured I up to 0.31 keeps the drive, one up to 0.29 leaves it out of
+    every law; an unknown range (NaN) keeps it."""
+    from granstokes.compare.laws import within_calibration
+    from granstokes.continuum.rheology import Friction
+    material = SimpleNamespace(friction=Friction(mu_s=0.3, mu_d=0.7), I0=0.3, I_convention="dem")
+    dem = SimpleNamespace(spec=SimpleNamespace(depth=60.0, kind="stress"), slip={"value": 0.0})
+    dc = SimpleNamespace(predictions=(None,), base="", dem=dem,
+                         scales=SimpleNamespace(delta_s=7.0, mu_w=0.5, material=material))
+    assert within_calibration(dc, (1e-3, 0.31)) and within_calibration(dc, (np.nan, np.nan))
+    assert not within_calibration(dc, (1e-3, 0.29))
+    assert _drives([dc], None, (1e-3, 0.31)) == [dc] and _drives([dc], "stress", (1e-3, 0.29)) == []
