@@ -25,7 +25,9 @@ STUDIES = ("study-spheres", "study-disks", "study-oscillating-disks", "study-osc
 def readme_command(study: str) -> list[str]:
     """The ``granstokes compare --tables ...`` command of results/STUDY/README.md, its REPORT_DIR left out."""
     text = (ROOT / "results" / study / "README.md").read_text()
-    command = re.search(r"^\s+(granstokes compare --tables .*?--out REPORT_DIR)", text, flags=re.S | re.M).group(1)
+    # one command, its lines joined by backslashes (a README may show other compare commands before it)
+    command = re.search(r"^\s+(granstokes compare --tables (?:\\\n|[^\n])*?--out REPORT_DIR)", text,
+                        flags=re.M).group(1)
     words = shlex.split(command.replace("\\\n", " "))
     return words[1:words.index("--out")]
 
