@@ -4,7 +4,9 @@
 
 * the shared 2D yardstick (``../shared/bench/yardstick2d/``, ``--shared``), built exactly as its README says:
   800 disks settled by ``in.settle2d``, base and chute profile by ``base_and_flow.py``, flowed by ``in.chute2d`` for
-  CHUTE2D_STEPS steps, best of R;
+  CHUTE2D_STEPS steps, best of R; and the same disks at rest: the same base at zero speed, ``in.chute2d`` with its
+  gravity untilted (REST_GRAVITY), a dense packing under its own weight in the yardstick's own contact law, skin and
+  time step: what its pair style costs where every grain touches its neighbours;
 * the 3D chute (LAMMPS's granular chute benchmark of 32,000 spheres, ``bench/dem_yardstick.py``), best of R;
 * the smoke and spheres presets run as a user runs them, ``granstokes dem run --preset P --np 1 --jobs 1 --out DIR``
   (every output; one LAMMPS process at a time), R times each: the rate of each drive from its ``log.lammps``
@@ -39,6 +41,9 @@ SHARED = ROOT.parent / "shared" / "bench" / "yardstick2d"
 #: the shared yardstick's README: 800 disks, 20 d wide, chute speed 14.6, 40,000 timed steps
 CHUTE2D_GRAINS, CHUTE2D_WIDTH, CHUTE2D_SPEED, CHUTE2D_STEPS = 800, 20, 14.6, 40000
 CHUTE3D_STEPS = 1000
+#: the yardstick's tilted gravity, and the untilted one of its disks at rest
+CHUTE2D_GRAVITY, REST_GRAVITY = "vector 0.438371 -0.898794 0", "vector 0 -1 0"
+REST2D = "2D chute's disks at rest (its script, gravity untilted)"
 #: the presets run as a user runs them, and the yardstick each is compared with
 PRESETS = {"smoke": "2D chute (shared yardstick)", "spheres": "3D chute, 32k spheres"}
 
@@ -48,19 +53,26 @@ def lammps(args: list[str], cwd: Path) -> None:
                    env=lammps_env.child_env(), check=True)
 
 
-def shared_yardstick(shared: Path, work: Path, repeats: int) -> dict:
-    """The 2D chute built and run by the commands of its README; the fastest of ``repeats`` timed runs."""
+def shared_yardstick(shared: Path, work: Path, repeats: int) -> tuple[dict, dict]:
+    """The 2D chute built and run by the commands of its README, and its disks at rest (module docstring): the
+    fastest of ``repeats`` timed runs of each, the two interleaved."""
     work.mkdir(parents=True)
     lammps(["-in", str(shared / "in.settle2d"), "-var", "n", str(CHUTE2D_GRAINS), "-var", "lx", str(CHUTE2D_WIDTH),
             "-var", "out", "settle.data", "-log", "log.settle"], work)
-    subprocess.run([sys.executable, str(shared / "base_and_flow.py"), "settle.data", "chute.data", "2",
-                    str(CHUTE2D_SPEED)], cwd=work, check=True, stdout=subprocess.DEVNULL)
-    runs = []
+    for data, speed in (("chute.data", CHUTE2D_SPEED), ("rest.data", 0.0)):
+        subprocess.run([sys.executable, str(shared / "base_and_flow.py"), "settle.data", data, "2", str(speed)],
+                       cwd=work, check=True, stdout=subprocess.DEVNULL)
+    script = (shared / "in.chute2d").read_text()
+    if CHUTE2D_GRAVITY not in script:
+        raise SystemExit(f"dem_as_run: {shared / 'in.chute2d'} no longer tilts gravity by '{CHUTE2D_GRAVITY}'")
+    (work / "in.rest2d").write_text(script.replace(CHUTE2D_GRAVITY, REST_GRAVITY))
+    runs = {"chute": [], "rest": []}
     for k in range(repeats):
-        lammps(["-in", str(shared / "in.chute2d"), "-var", "data", "chute.data", "-var", "nsteps",
-                str(CHUTE2D_STEPS), "-log", f"log.y{k}"], work)
-        runs.append(timed((work / f"log.y{k}").read_text()))
-    return {"dimension": 2, **max(runs, key=lambda r: r["rate"])}
+        for name, script_path in (("chute", shared / "in.chute2d"), ("rest", work / "in.rest2d")):
+            lammps(["-in", str(script_path), "-var", "data", f"{name}.data", "-var", "nsteps", str(CHUTE2D_STEPS),
+                    "-log", f"log.{name}{k}"], work)
+            runs[name].append(timed((work / f"log.{name}{k}").read_text()))
+    return tuple({"dimension": 2, **max(r, key=lambda x: x["rate"])} for r in runs.values())
 
 
 def as_run(preset: str, out: Path) -> dict:
@@ -97,12 +109,14 @@ def main() -> dict:
     args = ap.parse_args()
     root = args.out or Path(tempfile.mkdtemp(prefix="dem-as-run-"))
     load_before, t0 = load(), time.monotonic()
-    sticks = {PRESETS["smoke"]: shared_yardstick(args.shared, root / "yardstick2d", args.repeats),
+    flow, rest = shared_yardstick(args.shared, root / "yardstick2d", args.repeats)
+    sticks = {PRESETS["smoke"]: flow,
               PRESETS["spheres"]: {"dimension": 3, **best_of(chute(3, LARGE, CHUTE3D_STEPS), root / "chute3d",
                                                              args.repeats)}}
     presets = {name: [as_run(name, root / f"{name}-{k}") for k in range(args.repeats)] for name in PRESETS}
     res = {"machine": machine(), "load_before": load_before, "load_after": load(), "lammps": lammps_env.lammps_info(),
-           "repeats": args.repeats, "yardsticks": sticks, "presets": presets, "seconds": time.monotonic() - t0}
+           "repeats": args.repeats, "yardsticks": sticks, "rest": rest, "presets": presets,
+           "seconds": time.monotonic() - t0}
     (HERE / "dem_as_run.json").write_text(json.dumps(res, indent=2))
     print(markdown(res))
     return res
@@ -128,6 +142,10 @@ def markdown(res: dict) -> str:
     for label, r in res["yardsticks"].items():
         lines.append(f"| {label}, best of {res['repeats']} | {r['atoms']} | {r['rate'] / 1e6:.2f} M | 1.00 | "
                      f"{r['cpu']:.0f} | | {_per_cpu(r) / 1e6:.2f} M, 1.00 | {_shares(r)} |")
+    flow, rest = res["yardsticks"][PRESETS["smoke"]], res["rest"]
+    lines.append(f"| {REST2D}, best of {res['repeats']} | {rest['atoms']} | {rest['rate'] / 1e6:.2f} M | "
+                 f"{rest['rate'] / flow['rate']:.2f} | {rest['cpu']:.0f} | | {_per_cpu(rest) / 1e6:.2f} M, "
+                 f"{_per_cpu(rest) / _per_cpu(flow):.2f} | {_shares(rest)} |")
     for name, runs in res["presets"].items():
         stick = res["yardsticks"][PRESETS[name]]
         ref = stick["rate"]

@@ -21,7 +21,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from granstokes.continuum.calibration import Calibration, mu_law
-from granstokes.continuum.rheology import convert_I
 from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.scene_models import LOCAL, PAPER, Prediction, SceneModel, elastic_model, ngf_model
 from granstokes.dem.calibrate import grains_difference
@@ -40,7 +39,7 @@ from .laws import laws as paper_laws
 from .nonlocal_fit import A_RANGE, FluidityFit, fit_amplitude
 from .plate import STEADY_WINDOW_LATEST, power_law
 from .profiles import CGSettings, standard_error
-from .scorecard import Scorecard, base_reach, extrapolated, headline, scene_checks, score, wall_I
+from .scorecard import Scorecard, base_reach, beyond_calibration, headline, scene_checks, score
 
 #: continuum output times per drive (log-spaced from t_end/PREDICTION_SPAN to t_end, plus the snapshots)
 PREDICTION_TIMES, PREDICTION_SPAN = 60, 300
@@ -455,9 +454,7 @@ def model_drive(a: DriveAnalysis, side: ModelSide) -> tuple:
         return (scales, preds, note, base, {}), pd.DataFrame(), np.nan, {}
     spreads = {p.model: spread(a, m, side.material, side.replicates, p.series.t.to_numpy())
                for m, p in zip(side.models, preds)}
-    I0 = convert_I(side.material.I0, side.material.I_convention, "dem")
-    beyond = {p.model: extrapolated(wall_I(side.material.friction, [p.steady.mu_w], I0), side.calibrated_I)
-              for p in preds}
+    beyond = {p.model: beyond_calibration(side.material, [p.steady.mu_w], side.calibrated_I) for p in preds}
     rows, edges, bands = score(a, side.models, {p.model: p for p in preds}, spreads, len(side.replicates),
                                side.fitted_on, side.independent, beyond)
     return (scales, preds, note, base, {key: sens for key, (_, sens) in spreads.items()}), rows, edges, bands

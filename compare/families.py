@@ -13,9 +13,9 @@ A ``Choice`` names what reads the response and how:
   u_c in the plate record, or its coarse-grained speed at the plate's contact plane for a steady profile; a
   continuum model does not slip, so its contact speed is its u_w).  The layer's depths over time are stored against
   the plate's speed only (compare.analysis.layer_series), so the transient depths have that reference alone;
-* ``from_transits``: the window's start in shear-wave transits over the bed (FROM_TRANSITS: at 1 the elastic wave has
-  crossed the bed once, at 3 it is compare.drive's elastic start, at 10 it has crossed it ten times);
-  None for a law of the steady state.
+* ``from_transits``: the window's start in shear-wave transits over the bed (FROM_TRANSITS: at 3 it is compare.drive's
+  elastic start, at 5 and 10 the wave has crossed the bed that many times; no start is earlier, where the load is
+  still carried down by the elastic wave no rigid-plastic model has); None for a law of the steady state.
 
 ``FAMILIES`` holds each kind of law's family, its primary choice first: the depth delta_05 (U_FRACTION of the
 plate's speed) from TRANSITS_BEFORE_COMPARISON transits, the plate's own speed and friction.  delta_05 is the depth
@@ -46,8 +46,8 @@ from .scorecard import CREEP_WINDOW, CREEP_ZONE_OFFSET, CREEP_ZONES, T90_LEVEL
 LAYER_ESTIMATORS = (*sorted(LAYER_FRACTIONS, key=LAYER_FRACTIONS.get), "moment")
 #: the primary layer depth: delta_u, the depth at U_FRACTION of the reference speed
 PRIMARY_ESTIMATOR = next(k for k, f in LAYER_FRACTIONS.items() if f == U_FRACTION)
-#: the windows' starts, in shear-wave transits over the bed
-FROM_TRANSITS = (1.0, TRANSITS_BEFORE_COMPARISON, 10.0)
+#: the windows' starts, in shear-wave transits over the bed: the elastic start and later, never before it
+FROM_TRANSITS = (TRANSITS_BEFORE_COMPARISON, 5.0, 10.0)
 #: a response time: the fraction of the speed's change covered (compare.scorecard.t90's level)
 RESPONSE_LEVELS = {"t90": T90_LEVEL, "t75": 0.75}
 #: a steady speed: the mean over the record's final part from this fraction of it on (the final quarter:

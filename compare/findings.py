@@ -111,17 +111,16 @@ SCENE_CHECKS = {c.key: c for c in (
 
 #: the layer's rows: its steady depth, creep, early depth and growth, its offset beyond delta_s; ``sign``: a layer
 #: deeper in the DEM (and so, deep from the start, growing more slowly)
+#: the models with no flow below yield (the elasto-plastic one only loads elastically there): one effect of the layer
+RIGID_BELOW_YIELD = ("local", "paper", "elastic")
 _LAYER = (Member(observable="delta_u", sign=1), Member(observable="creep_length", sign=1),
           Member(law="delta_growth_prefactor", sign=1), Member(law="delta_growth_exponent", sign=-1),
           Member(law="delta_s_scaling", quantity="offset", sign=1), Member(law="creep_length_scaling"))
 EFFECTS = (
-    Effect("The DEM's layer is deeper than the rigid-plastic models': creep and elastic loading below the flowing "
-           "layer", _LAYER, ("depth", "base", "transit", "record", "slip"), ("local", "paper")),
+    Effect("The DEM's layer is deeper than the models' that are rigid below yield: creep and elastic loading below "
+           "the flowing layer", _LAYER, ("depth", "base", "transit", "record", "slip"), RIGID_BELOW_YIELD),
     Effect("NGF's layer differs from the DEM's", tuple(Member(m.law, m.quantity, m.observable) for m in _LAYER),
            ("depth", "base", "record", "slip"), ("ngf",)),
-    Effect("The elasto-plastic model's layer differs from the DEM's",
-           tuple(Member(m.law, m.quantity, m.observable) for m in _LAYER), ("depth", "base", "record", "slip"),
-           ("elastic",)),
     Effect("The steady layer grows with the yield depth delta_s otherwise than the model's",
            (Member(law="delta_s_scaling", quantity="slope"),), ("depth", "base", "record")),
     Effect("Under an imposed stress the DEM responds more slowly than the model",

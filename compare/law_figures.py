@@ -3,6 +3,7 @@ t~ = t/t_s, y~ = y/delta_s, u~ = u/U, mu~ = (mu_d - mu)/Dmu), so that a collapse
 glance.  Renders a compare.comparison.Comparison; nothing is computed here but the drawing."""
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +49,8 @@ GUIDE = dict(color="k", lw=0.8, ls=":")
 FAMILY_MODEL = "local"
 #: a family panel's marker and horizontal offset per kind of drive
 KIND_MARKER = {"stress": ("o", -0.15), "speed": ("s", 0.15), "all": ("D", 0.0)}
+#: a family with no measured choice shows its primary's note, shortened to this many characters
+NOTE_CHARS = 240
 
 
 def _drives(c):
@@ -108,6 +111,12 @@ def family_panel(ax, rows, what: str) -> None:
     rows = rows[rows.choices.map(len) > 0] if len(rows) else rows
     if rows.empty:
         ax.text(0.5, 0.5, "no law row with an estimator family", transform=ax.transAxes, ha="center")
+        ax.set_axis_off()
+        return
+    if not any(np.isfinite(e["dem"]) for choices in rows.choices for e in choices):
+        note = textwrap.shorten(str(rows.iloc[0].choices[0]["note"]), NOTE_CHARS, placeholder=" ...")
+        ax.text(0.5, 0.5, "\n".join(textwrap.wrap(f"{what}: no choice measured on these drives. {note}", 48)),
+                transform=ax.transAxes, ha="center", va="center", fontsize=9)
         ax.set_axis_off()
         return
     labels = [_choice_label(e) for e in rows.iloc[0].choices]

@@ -72,7 +72,6 @@ import pandas as pd
 from granstokes.continuum.closed_forms import uwall_asymp
 from granstokes.continuum.crossing import layer_measures
 from granstokes.continuum.paper.equations import eq
-from granstokes.continuum.rheology import convert_I
 from granstokes.continuum.steady import steady_wall_speed
 
 from .band import STEP
@@ -93,13 +92,12 @@ from .plate import STEADY_LAST
 from .rows import LAW_KEYS, effective_dof, law_row, not_a_line
 from .scorecard import (
     CREEP_ZONES,
+    beyond_calibration,
     creep_length,
-    extrapolated,
     initial_state,
     short_bed,
     slipping,
     t90,
-    wall_I,
 )
 
 #: the growth window ends at this many t_s (the paper's self-similar regime holds to t~ of order 1)
@@ -638,9 +636,7 @@ def within_calibration(dc, calibrated_I) -> bool:
     range is not checked."""
     if dc.scales is None or not np.isfinite(calibrated_I[1]):
         return True
-    m = dc.scales.material
-    return not extrapolated(wall_I(m.friction, [dc.scales.mu_w], convert_I(m.I0, m.I_convention, "dem")),
-                            calibrated_I)
+    return not beyond_calibration(dc.scales.material, [dc.scales.mu_w], calibrated_I)
 
 
 def _few_seeds(n: int) -> float:
@@ -786,16 +782,13 @@ def _extrapolating(law: Law, drives, model: str, windows: dict, src: _Sources, c
     if not np.isfinite(calibrated_I[1]):
         return ""
     for dc in drives:
-        friction = dc.scales.material.friction
-        I0 = convert_I(dc.scales.material.I0, dc.scales.material.I_convention, "dem")
         if law.transient:
             tr, w = src.predicted[(dc.label, model)], windows.get(dc.label)
             usable = w is not None and not w.why and np.isfinite(w.t0)
-            inside = (tr.t >= w.t0) & (tr.t <= w.t1) if usable else tr.t > 0
-            I = wall_I(friction, tr.mu_w[inside], I0)
+            mu_w = tr.mu_w[(tr.t >= w.t0) & (tr.t <= w.t1) if usable else tr.t > 0]
         else:
-            I = wall_I(friction, [p.steady.mu_w for p in dc.predictions if p.model == model], I0)
-        if why := extrapolated(I, calibrated_I):
+            mu_w = [p.steady.mu_w for p in dc.predictions if p.model == model]
+        if why := beyond_calibration(dc.scales.material, mu_w, calibrated_I):
             return f"{why} ({dc.label})"
     return ""
 

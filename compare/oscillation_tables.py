@@ -9,6 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from .oscillation import DriveSpec, Record
+from .tables import write_csv
 
 DRIVES_JSON = "oscillating_drives.json"
 #: the tables keep nine digits: a report regenerated from them equals the report from the run folders to its digits
@@ -27,11 +28,8 @@ def write(dem, folder: Path) -> None:
         record = {**drive.as_record(), "beds": len(records), "intervals": [r.interval for r in records]}
         drives.append(record)
         for k, r in enumerate(records):
-            r.plate.to_csv(folder / f"{_stem(drive)}__bed{k}_plate.csv.gz", index=False, float_format=TABLE_FLOAT)
-            r.profiles.to_csv(folder / f"{_stem(drive)}__bed{k}_profiles.csv.gz", index=False,
-                              float_format=TABLE_FLOAT)
-            r.velocity.to_csv(folder / f"{_stem(drive)}__bed{k}_velocity.csv.gz", index=False,
-                              float_format=TABLE_FLOAT)
+            for name, table in (("plate", r.plate), ("profiles", r.profiles), ("velocity", r.velocity)):
+                write_csv(table, folder / f"{_stem(drive)}__bed{k}_{name}.csv.gz", TABLE_FLOAT)
     (folder / DRIVES_JSON).write_text(json.dumps(drives, indent=1))
 
 

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 from granstokes.continuum.crossing import crossing_depth, depth_at_fraction
+from granstokes.continuum.rheology import convert_I
 from granstokes.continuum.scene_models import Prediction, SceneModel, Steady
 from granstokes.dem.sizing import BASE_CLEARANCE, DEPTH_STUDY_DELTA_S, clearance
 from scipy import stats
@@ -217,6 +218,13 @@ def extrapolated(I_wall: float, calibrated: tuple[float, float]) -> str:
         return ""
     return (f"not scored: extrapolated: the model's wall inertial number I = {I_wall:.3g} (DEM convention) lies "
             f"beyond the calibration's largest, {calibrated[1]:.3g}")
+
+
+def beyond_calibration(material, mu_w, calibrated: tuple[float, float]) -> str:
+    """``extrapolated``'s note for the wall frictions ``mu_w`` under ``material``'s calibrated mu(I) (its I0 in the
+    DEM convention), or ""."""
+    return extrapolated(wall_I(material.friction, mu_w, convert_I(material.I0, material.I_convention, "dem")),
+                        calibrated)
 
 
 def scene_checks(a: DriveAnalysis) -> list[dict]:

@@ -28,6 +28,8 @@ from .plate import PlateRecord
 
 #: floats in every table: six significant digits (far below the DEM's errors)
 CSV_FLOAT = "%.6g"
+#: gzip without a timestamp: a table written again from the same data is the same bytes
+GZIP = {"method": "gzip", "mtime": 0}
 DEM_JSON = "dem.json"
 PLATE_COLUMNS = ("t", "u_w", "tau_w", "p", "y", "u_c", "n_c")
 #: what the steady-window samples keep: the estimators of compare.scorecard and compare.nonlocal_fit read u_x(depth)
@@ -35,8 +37,9 @@ SAMPLE_COLUMNS = ("depth", "y", "u_x")
 UNITS = "DEM units: d = rho_p = g = 1; p, tau in rho_p g d, u in sqrt(g d), t in sqrt(d/g)"
 
 
-def _csv(table: pd.DataFrame, path: Path) -> None:
-    table.to_csv(path, index=False, float_format=CSV_FLOAT)
+def write_csv(table: pd.DataFrame, path: Path, float_format: str = CSV_FLOAT) -> None:
+    """``table`` at ``path`` (gzip-compressed, without a timestamp, when it ends in .gz)."""
+    table.to_csv(path, index=False, float_format=float_format, compression=GZIP if path.suffix == ".gz" else None)
 
 
 def _number(v) -> float:
@@ -64,14 +67,14 @@ def write_drive(a: DriveAnalysis, folder: Path) -> None:
               "snapshots": a.snapshots, "samples_how": a.samples_how, "frames": a.frames,
               "dropped_frames": a.dropped_frames, "bulk_tau": a.bulk_tau}
     (folder / "drive.json").write_text(json.dumps(_json(record), indent=1))
-    _csv(pd.concat([pd.DataFrame({k: getattr(p, k) for k in PLATE_COLUMNS}).assign(seed=i)
+    write_csv(pd.concat([pd.DataFrame({k: getattr(p, k) for k in PLATE_COLUMNS}).assign(seed=i)
                     for i, p in enumerate(a.plates)], ignore_index=True), folder / "plates.csv.gz")
-    _csv(pd.concat([s[list(SAMPLE_COLUMNS)].assign(sample=i) for i, s in enumerate(a.samples)], ignore_index=True),
+    write_csv(pd.concat([s[list(SAMPLE_COLUMNS)].assign(sample=i) for i, s in enumerate(a.samples)], ignore_index=True),
          folder / "samples.csv.gz")
     for name in ("steady_profile", "mean_profile", "instant"):
-        _csv(getattr(a, name), folder / f"{name}.csv.gz")
-    _csv(a.delta, folder / "delta.csv")
-    _csv(a.layers, folder / "layers.csv.gz")
+        write_csv(getattr(a, name), folder / f"{name}.csv.gz")
+    write_csv(a.delta, folder / "delta.csv")
+    write_csv(a.layers, folder / "layers.csv.gz")
 
 
 def read_drive(folder: Path) -> DriveAnalysis:
@@ -103,8 +106,8 @@ def write(dem: DemSide, folder: Path) -> None:
     drives = [_folder(i, a) for i, a in enumerate(dem.drives)]
     for name, a in zip(drives, dem.drives):
         write_drive(a, folder / name)
-    _csv(dem.checks.width, folder / "checks_width.csv")
-    _csv(dem.checks.crosscheck, folder / "checks_crosscheck.csv")
+    write_csv(dem.checks.width, folder / "checks_width.csv")
+    write_csv(dem.checks.crosscheck, folder / "checks_crosscheck.csv")
     meta = {"units": UNITS, "runs": [str(r) for r in dem.runs],
             "grains": {run: {"grains": g, "p_w": p} for run, (g, p) in dem.grains.items()},
             "mass_error": dem.mass_error, "checks_drive": dem.checks.drive, "drives": drives}

@@ -110,21 +110,22 @@ def test_a_creep_tail_makes_the_growth_exponent_depend_on_the_threshold():
 
 
 def test_a_window_under_a_decade_is_not_measurable_with_its_numbers():
-    """Transit 0.1: from 1 transit the growth window is [0.1, GROWTH_END t_s = 0.593] (log10(0.593/0.1) = 0.77 of a
-    decade), from 3 and 10 transits the elastic start covers less than that or all of it: no choice is measurable."""
-    dc = synthetic(erfc_layer(1.0), erfc_layer(1.0), transit=0.1)
+    """Transit 0.05: from 3 transits the growth window is [0.15, GROWTH_END t_s = 0.593] (log10(0.593/0.15) = 0.6 of a
+    decade), from 5 and 10 transits less than that or nothing: no choice is measurable."""
+    dc = synthetic(erfc_layer(1.0), erfc_layer(1.0), transit=0.05)
     row = law_row(laws([dc], resamples=10), "delta_growth_exponent")
     end = GROWTH_END * Scales(MATERIAL, P_W, MU_W).t_s
     assert row.verdict == "not measurable" and np.isnan(row.sigma) and np.isnan(row.systematic)
-    span = f"the window [0.1, {end:.3g}] spans {np.log10(end / 0.1):.2g} decade(s) of time (fewer than {MIN_DECADES:g})"
-    assert span in by_choice(row)[("delta_05", 1.0)]["note"]
+    span = (f"the window [0.15, {end:.3g}] spans {np.log10(end / 0.15):.2g} decade(s) of time "
+            f"(fewer than {MIN_DECADES:g})")
+    assert span in by_choice(row)[("delta_05", 3.0)]["note"]
     assert all(c["note"].startswith("not measurable") for c in row.choices)
 
 
 def test_a_model_outside_its_power_law_regime_over_the_window_is_not_measurable():
     """The model's layer L = sqrt(t / (1 + t/t_c)) bends from t^(1/2) to a constant around t_c = 0.1: over a piece
     [a, b] of the window its mean exponent is 1/2 - ln((1 + b/t_c)/(1 + a/t_c)) / (2 ln(b/a)), and these spread by more
-    than REGIME_TOLERANCE over the windows from 1 and 3 transits; the DEM's layer, a clean t^(1/2), is not fitted."""
+    than REGIME_TOLERANCE over the windows from 3 and 5 transits; the DEM's layer, a clean t^(1/2), is not fitted."""
     t_c = 0.1
     model = lambda t: erfc(Y / np.sqrt(t / (1 + t / t_c)))  # noqa: E731
     table = laws([synthetic(erfc_layer(1.0), model)], resamples=10)
@@ -205,3 +206,20 @@ def test_the_family_panel_draws_each_measured_choice_and_the_systematic_beside_t
     assert lo_hi == pytest.approx([0.2 - 0.15, 0.2 + 0.15])
     bars = dem_points.lines[2][0].get_segments()
     assert [s[1, 1] - s[0, 1] for s in bars] == pytest.approx([2 * Z95 * 0.01, 2 * Z95 * 0.02])
+
+
+def test_a_family_with_no_measured_choice_says_why_instead_of_an_empty_axis():
+    """Every choice not measurable: the panel draws no axis and says so with the primary's note."""
+    from granstokes.compare.law_figures import family_panel
+    from matplotlib.figure import Figure
+
+    why = "not measurable: the window [0.67, 3.19] spans 0.68 decade(s) of time (fewer than 1)"
+    choices = [entry(Choice(e), np.nan, np.nan, np.nan, 0.0, why, np.inf) for e in ("delta_05", "delta_50")]
+    rows = pd.DataFrame([{"law": "delta_growth_exponent", "kind": "stress", "model": "local", "dem": np.nan,
+                          "dem_err": np.nan, "choices": choices, "systematic": np.nan}])
+    ax = Figure().subplots()
+    family_panel(ax, rows, "growth exponent n")
+    assert not ax.axison and not ax.containers
+    (text,) = ax.texts
+    assert text.get_text().replace("\n", " ").startswith("growth exponent n: no choice measured on these drives.")
+    assert "spans 0.68 decade(s)" in text.get_text().replace("\n", " ")

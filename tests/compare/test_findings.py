@@ -123,6 +123,13 @@ def test_every_law_and_observable_of_the_studies_belongs_to_exactly_one_effect(m
             assert len(claims) == 1, (row, claims)
 
 
+def test_the_layer_rows_of_every_model_rigid_below_yield_are_one_effect():
+    """local mu(I), the paper's and the elasto-plastic model have no flow below yield: the DEM's creep beside each is
+    one effect (one finding), NGF's layer another."""
+    effect = lambda model: next(e.name for e in fd.EFFECTS if e.member({"observable": "creep_length", "model": model}))  # noqa: E731
+    assert effect("local") == effect("paper") == effect("elastic") != effect("ngf")
+
+
 def test_every_law_and_observable_has_its_words():
     assert set(OBSERVABLES) | set(OSC_OBSERVABLES) <= set(OBSERVABLE_WORDS)
     assert {x.name for x in LAWS} | set(OSC_LAWS) <= set(LAW_WORDS)

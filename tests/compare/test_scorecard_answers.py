@@ -622,3 +622,15 @@ def test_the_depth_study_finds_every_scored_observable_flat_from_the_clearance_a
     chi2 = np.sum(((table.creep_to_base - np.polyval(coef, table.depth)) / table.creep_to_base_err) ** 2)
     dof = len(table) - 2
     assert coef[0] / np.sqrt(cov[0, 0] * max(1.0, chi2 / dof)) > stats.t.ppf(0.975, dof)
+
+
+def test_a_wall_friction_beyond_the_calibration_is_judged_in_the_dem_convention():
+    """mu_s = 0.3, mu_d = 0.7, I0 = 0.15 in the paper's convention (|gamma_dot| = |du/dy|/2) is I0 = 0.3 in the DEM's:
+    a wall friction of 0.5 is then the wall I = 0.3 (DEM), beyond a calibration measured up to 0.29 and within one up
+    to 0.31; read without the conversion it would be 0.15, within both."""
+    from granstokes.compare.scorecard import beyond_calibration
+    from granstokes.continuum.rheology import Friction
+    material = NS(friction=Friction(mu_s=0.3, mu_d=0.7), I0=0.15, I_convention="paper")
+    assert "I = 0.3 (DEM convention)" in beyond_calibration(material, [0.5], (1e-3, 0.29))
+    assert beyond_calibration(material, [0.5, 0.4], (1e-3, 0.31)) == ""
+    assert "I = inf" in beyond_calibration(material, [0.7], (1e-3, 0.31))  # at mu_d no finite I reaches it

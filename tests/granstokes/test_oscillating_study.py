@@ -15,7 +15,7 @@ pytestmark = pytest.mark.slow
 
 #: the smoke grains' plane-shear calibration (the quick preset's grains)
 CALIBRATION = Path(__file__).resolve().parents[2] / "results" / "quick-calibration" / "calibration.json"
-OMEGA_TS = 4.0
+OMEGA_TS = 8.0
 #: a bed half the preset's width: the plate's tracking and the rows' keys do not depend on it, the run takes half
 SMALL = ["seeds=[1]", f"omega_ts=[{OMEGA_TS}]", "cycles=3", "width=10", f'calibration={{file = "{CALIBRATION}"}}']
 #: the plate's x speed within this fraction of the imposed amplitude
