@@ -4,7 +4,8 @@ any number, the rows only one side has, the fields whose words differ.
 
     .venv/bin/python bench/regenerate.py [--studies NAME ...] [--scratch DIR]
 
-Prints the table for bench/RESULTS.md ("Regeneration") and writes bench/regenerate.json.
+Prints the table for bench/RESULTS.md ("Regeneration") and writes bench/regenerate.json (the studies not rerun keep
+their last entries).
 """
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-STUDIES = ("study-spheres", "study-disks", "study-oscillating-disks", "study-oscillating-spheres")
+STUDIES = ("study-spheres", "study-disks", "study-oscillating-disks", "study-oscillating-spheres", "pair-style-spheres")
 
 
 def readme_command(study: str) -> list[str]:
@@ -41,7 +42,8 @@ def regenerate(study: str, scratch: Path) -> dict:
     subprocess.run([sys.executable, "-m", "granstokes.cli", *args, "--out", str(out)], cwd=ROOT, check=True,
                    capture_output=True, text=True)
     seconds = time.perf_counter() - t0
-    committed = json.loads((ROOT / "results" / study / "metrics.json").read_text())
+    report = ROOT / Path(args[args.index("--tables") + 1]).parent  # the committed report beside its tables
+    committed = json.loads((report / "metrics.json").read_text())
     return {"command": "granstokes " + " ".join(args) + " --out REPORT_DIR", "seconds": seconds,
             "differences": row_differences(committed, json.loads((out / "metrics.json").read_text()))}
 
@@ -67,8 +69,10 @@ def main() -> None:
         for study in args.studies:
             rows[study] = regenerate(study, scratch)
             print(f"{study}: {rows[study]['differences']}", flush=True)
-    (ROOT / "bench" / "regenerate.json").write_text(json.dumps(rows, indent=2))
-    print(table(rows))
+    record = ROOT / "bench" / "regenerate.json"
+    rows = {**(json.loads(record.read_text()) if record.exists() else {}), **rows}  # the studies not rerun kept
+    record.write_text(json.dumps({k: rows[k] for k in STUDIES if k in rows}, indent=2))
+    print(table({k: rows[k] for k in STUDIES if k in rows}))
 
 
 if __name__ == "__main__":

@@ -4,10 +4,14 @@ only (its damping scales with the pair's mass: lighter pairs bounce more)."""
 import math
 import re
 import subprocess
+from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 from granstokes.dem import config, lammps_env
 from granstokes.dem.contact import Contact, grain_volume, mean_grain_volume
+from scipy import stats
 
 SPEED = 0.5  # each disk's approach speed, sqrt(g d): overlaps stay ~1e-3 d at k_n = 2e5
 GAP = 0.1  # d between the surfaces at the start
@@ -68,3 +72,20 @@ def test_the_restitution_is_the_set_one_where_the_style_promises_it(tmp_path):
     light, heavy = restitution(classic, *pairs[0], tmp_path), restitution(classic, *pairs[1], tmp_path)
     assert 0.54 < light < 0.59 and 0.41 < heavy < 0.45, (light, heavy)
     assert light - heavy > 5 * (max(measured) - min(measured))  # the classic spread is the masses', not the step's
+
+
+def test_the_classic_style_gives_the_granular_style_s_mu_i_and_drives_in_3d():
+    """bench/pair_style_check.csv: the spheres grains in both styles from the same seeds, their plane-shear mu and phi
+    at every inertial number measured in both with a spread, and the p_w = 10 drives' observables of both kinds.
+    Each row's p is Welch's (recomputed here by scipy from the seed means, errors and counts), and no row differs at
+    95 % for the family: the smallest p exceeds 0.05 over the number of rows (Holm's first step, which rejects none
+    then)."""
+    table = pd.read_csv(Path(__file__).resolve().parents[2] / "bench" / "pair_style_check.csv")
+    calibration, drives = table[table.part == "calibration"], table[table.part == "drives"]
+    assert len(calibration) >= 14 and {"mu", "phi"} == set(calibration.quantity)
+    assert {"u_w_inf", "mu_w_inf", "delta_u", "t90"} <= set(drives.quantity)
+    side = lambda name: (table[name].to_numpy(), (table[f"{name}_err"] * np.sqrt(table[f"{name}_n"])).to_numpy(),  # noqa: E731
+                         table[f"{name}_n"].to_numpy())
+    recomputed = stats.ttest_ind_from_stats(*side("granular"), *side("classic"), equal_var=False).pvalue
+    assert np.allclose(recomputed, table.p, rtol=0, atol=2e-3)  # the CSV keeps six digits of the means
+    assert table.p.min() > 0.05 / len(table) and not table.holm_rejects.any()
