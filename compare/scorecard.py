@@ -454,9 +454,11 @@ def headline(rows: pd.DataFrame, blind: bool, failure: str, n_drives: int) -> st
     if len(t) == 1:
         return (f"Blind test over {n_drives} drive(s), one model scored: {parts}; no ranking, since no other model "
                 f"has a scored row{aside}.")
-    tied = t[(t.share == best.share) & (t.median_abs_sigma == best.median_abs_sigma)]
+    # the ranking is the count of consistent rows; the median |sigma| describes, it does not separate
+    tied = t[t.share == best.share]
     ranking = ("no model is consistent on most of them" if best.share < 0.5 else
-               f"the DEM does not separate {' and '.join(tied.label)} (a tie)" if len(tied) > 1 else
+               f"the DEM does not separate {', '.join(tied.label)} (each consistent on {best.consistent} of "
+               f"{int(best.n)})" if len(tied) > 1 else
                f"the DEM supports {best.label} best")
     return (f"Blind test on the {int(best.n)} row(s) the models share over {n_drives} drive(s): {parts}; "
             f"{ranking}{aside}.")

@@ -521,12 +521,14 @@ def test_the_headline_says_when_no_model_is_consistent_on_most_rows():
         "|sigma| 2.5), ngf model consistent on 0 of 3 (median |sigma| 3.0); no model is consistent on most of them.")
 
 
-def test_the_headline_calls_an_exact_tie_a_tie():
-    rows = pd.DataFrame([_row("a", "local", 0.5), _row("a", "ngf", -0.5), _row("a", "paper", 0.5)])
+def test_the_headline_separates_no_models_consistent_on_as_many_rows():
+    """Three models each consistent on the one shared row, their median |sigma| 0.5, 0.9, 1.2: no ranking."""
+    rows = pd.DataFrame([_row("a", "local", 0.5), _row("a", "ngf", -0.9), _row("a", "paper", 1.2)])
     assert headline(rows, True, "", 1) == (
         "Blind test on the 1 row(s) the models share over 1 drive(s): local model consistent on 1 of 1 (median "
-        "|sigma| 0.5), ngf model consistent on 1 of 1 (median |sigma| 0.5), paper model consistent on 1 of 1 "
-        "(median |sigma| 0.5); the DEM does not separate local model and ngf model and paper model (a tie).")
+        "|sigma| 0.5), ngf model consistent on 1 of 1 (median |sigma| 0.9), paper model consistent on 1 of 1 "
+        "(median |sigma| 1.2); the DEM does not separate local model, ngf model, paper model (each consistent on 1 "
+        "of 1).")
 
 
 def test_a_slipping_plate_leaves_every_row_of_its_drive_unscored():

@@ -82,13 +82,16 @@ def test_a_drive_whose_layer_reaches_the_base_is_flagged_and_its_layer_rows_unsc
     assert _not_scored("t90", LOCAL, "", 0.9, 1.0) == ""
 
 
-def test_an_exact_tie_is_called_a_tie_and_a_model_without_shared_rows_is_named():
-    rows = pd.DataFrame([_row("a", "u_w_inf", "local", 0.5), _row("a", "u_w_inf", "ngf", -0.5),
+def test_models_consistent_on_as_many_rows_are_not_separated_and_a_model_without_shared_rows_is_named():
+    """local and NGF each consistent on their one shared row: a tie, whatever their median |sigma| (0.5 against 0.6
+    separates nothing); NGF disagreeing there makes local the best."""
+    rows = pd.DataFrame([_row("a", "u_w_inf", "local", 0.5), _row("a", "u_w_inf", "ngf", -0.6),
                          _row("a", "u_w_inf", "paper", 0.4, scored=False)])
     text = headline(rows, blind=True, failure="", n_drives=1)
-    assert "does not separate" in text and "a tie" in text and "supports" not in text
+    assert "the DEM does not separate local model, ngf model (each consistent on 1 of 1)" in text
+    assert "supports" not in text
     assert "not ranked (no scored blind row shared with the others): paper model" in text
-    rows.loc[1, "sigma"] = -0.6  # no longer a tie: the smaller median |sigma| wins
+    rows.loc[1, ["sigma", "verdict"]] = [-4.0, "disagrees"]
     assert "the DEM supports local model best;" in headline(rows, blind=True, failure="", n_drives=1)
 
 
