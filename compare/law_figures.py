@@ -49,6 +49,8 @@ GUIDE = dict(color="k", lw=0.8, ls=":")
 FAMILY_MODEL = "local"
 #: a family panel's marker and horizontal offset per kind of drive
 KIND_MARKER = {"stress": ("o", -0.15), "speed": ("s", 0.15), "all": ("D", 0.0)}
+#: the creep panel's pressure axis reaches this factor beyond the lowest and highest pressure
+PRESSURE_PAD = 1.5
 #: a family with no measured choice shows its primary's note, shortened to this many characters
 NOTE_CHARS = 240
 
@@ -228,8 +230,11 @@ def steady_figure(c, out: Path) -> Path:
                 right.plot(dc.dem.spec.p_w, value, "x", color=MODEL_STYLE["ngf"]["color"], label="NGF")
     left.set(xlabel="mu~_w = (mu_d - mu_w) / (mu_d - mu_s)", ylabel="u~_w^inf = u_w / U", yscale="log",
              title="steady plate speed (the paper's figure 4)")
+    pressures = [dc.dem.spec.p_w for dc in drives]
     right.set(xlabel="p_w [rho_p g d]", ylabel="creep length below delta_s [d]", xscale="log",
               title="creep length (local mu(I): none)")
+    if pressures:  # at least a factor PRESSURE_PAD each side, one pressure included
+        right.set_xlim(min(pressures) / PRESSURE_PAD, max(pressures) * PRESSURE_PAD)
     plain_log(right.xaxis)
     right.plot([], [], "o", color=DEM_COLOUR, label="DEM (circles: stress, squares: speed)")
     return _finish(fig, [left, right], "Steady states against the paper's steady law (calibrated material; DEM units)",
