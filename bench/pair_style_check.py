@@ -56,7 +56,7 @@ def holm(p: np.ndarray, alpha: float = ALPHA) -> np.ndarray:
     return reject
 
 
-def _seed_means(points: pd.DataFrame, targets: list[float]) -> dict[float, pd.DataFrame]:
+def _cells(points: pd.DataFrame, targets: list[float]) -> dict[float, pd.DataFrame]:
     """Each target inertial number's cells (the nearest in log I, within 10 %)."""
     out = {}
     for target in targets:
@@ -69,8 +69,8 @@ def _seed_means(points: pd.DataFrame, targets: list[float]) -> dict[float, pd.Da
 def calibration_rows() -> list[dict]:
     targets = json.loads((GRANULAR / "calibration" / "calibration.json").read_text())["protocol"]["points"]
     targets = [p["I"] for p in targets]
-    classic = _seed_means(pd.read_csv(CLASSIC_CALIBRATION / "points.csv"), targets)
-    granular = _seed_means(pd.read_csv(GRANULAR / "calibration" / "points.csv"), targets)
+    classic = _cells(pd.read_csv(CLASSIC_CALIBRATION / "points.csv"), targets)
+    granular = _cells(pd.read_csv(GRANULAR / "calibration" / "points.csv"), targets)
     rows = []
     for target in targets:
         if target not in classic or target not in granular:

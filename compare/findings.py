@@ -109,10 +109,10 @@ SCENE_CHECKS = {c.key: c for c in (
     SceneCheck("periodic", "the periodic state", "a bed is not periodic"),
 )}
 
-#: the layer's rows: its steady depth, creep, early depth and growth, its offset beyond delta_s; ``sign``: a layer
-#: deeper in the DEM (and so, deep from the start, growing more slowly)
 #: the models with no flow below yield (the elasto-plastic one only loads elastically there): one effect of the layer
 RIGID_BELOW_YIELD = ("local", "paper", "elastic")
+#: the layer's rows: its steady depth, creep, early depth and growth, its offset beyond delta_s; ``sign``: a layer
+#: deeper in the DEM (and so, deep from the start, growing more slowly)
 _LAYER = (Member(observable="delta_u", sign=1), Member(observable="creep_length", sign=1),
           Member(law="delta_growth_prefactor", sign=1), Member(law="delta_growth_exponent", sign=-1),
           Member(law="delta_s_scaling", quantity="offset", sign=1), Member(law="creep_length_scaling"))

@@ -68,9 +68,9 @@ def write_drive(a: DriveAnalysis, folder: Path) -> None:
               "dropped_frames": a.dropped_frames, "bulk_tau": a.bulk_tau}
     (folder / "drive.json").write_text(json.dumps(_json(record), indent=1))
     write_csv(pd.concat([pd.DataFrame({k: getattr(p, k) for k in PLATE_COLUMNS}).assign(seed=i)
-                    for i, p in enumerate(a.plates)], ignore_index=True), folder / "plates.csv.gz")
-    write_csv(pd.concat([s[list(SAMPLE_COLUMNS)].assign(sample=i) for i, s in enumerate(a.samples)], ignore_index=True),
-         folder / "samples.csv.gz")
+                         for i, p in enumerate(a.plates)], ignore_index=True), folder / "plates.csv.gz")
+    write_csv(pd.concat([s[list(SAMPLE_COLUMNS)].assign(sample=i) for i, s in enumerate(a.samples)],
+                        ignore_index=True), folder / "samples.csv.gz")
     for name in ("steady_profile", "mean_profile", "instant"):
         write_csv(getattr(a, name), folder / f"{name}.csv.gz")
     write_csv(a.delta, folder / "delta.csv")
