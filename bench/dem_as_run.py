@@ -11,7 +11,10 @@
 * the smoke and spheres presets run as a user runs them, ``granstokes dem run --preset P --np 1 --jobs 1 --out DIR``
   (every output; one LAMMPS process at a time), R times each: the rate of each drive from its ``log.lammps``
   (atoms x steps / loop time / ranks), the best drive log, and the whole run's drives together (their atom-steps
-  over their summed loop time).
+  over their summed loop time);
+* the smoke preset with its recording cut to the least the comparison reads (recording_off: the atoms, contacts
+  and profiles written and a restart taken once, at the drive's end; the plate still sampled as always), R times:
+  the rate a smoke drive could reach as run whatever its dumps, which is the rate of its contacts.
 
 Ratios are to the yardstick of the scene's dimension measured in the same invocation. CPU use is LAMMPS's own
 figure for a run (below 100 % when it waited for a core); the ``granstokes`` command's CPU use is its process
@@ -33,6 +36,7 @@ import time
 from pathlib import Path
 
 from dem_yardstick import BREAKDOWN, LARGE, best_of, chute, timed
+from granstokes.dem import config as dem_config
 from granstokes.dem import lammps_env
 
 HERE = Path(__file__).resolve().parent
@@ -46,6 +50,15 @@ CHUTE2D_GRAVITY, REST_GRAVITY = "vector 0.438371 -0.898794 0", "vector 0 -1 0"
 REST2D = "2D chute's disks at rest (its script, gravity untilted)"
 #: the presets run as a user runs them, and the yardstick each is compared with
 PRESETS = {"smoke": "2D chute (shared yardstick)", "spheres": "3D chute, 32k spheres"}
+#: the outputs the smoke preset writes at the end of its drive only (RECORDING_OFF); the plate's series is kept
+RECORDED = ("atoms", "contacts", "profiles", "restart")
+SMOKE_BARE = "smoke, recording at the drive's end only"
+
+
+def recording_off(preset: str) -> tuple[str, ...]:
+    """``--set`` values writing each of RECORDED once, at the end of the preset's longest drive."""
+    end = max(d.duration for d in dem_config.preset(preset)[0].drives)
+    return tuple(f"output.{name}={end!r}" for name in RECORDED)
 
 
 def lammps(args: list[str], cwd: Path) -> None:
@@ -75,12 +88,13 @@ def shared_yardstick(shared: Path, work: Path, repeats: int) -> tuple[dict, dict
     return tuple({"dimension": 2, **max(r, key=lambda x: x["rate"])} for r in runs.values())
 
 
-def as_run(preset: str, out: Path) -> dict:
-    """``granstokes dem run --preset P --np 1 --jobs 1`` into ``out``: each drive's timing, the whole run's drives
-    together, the command's wall time and its process tree's CPU use."""
+def as_run(preset: str, out: Path, overrides: tuple[str, ...] = ()) -> dict:
+    """``granstokes dem run --preset P --np 1 --jobs 1`` into ``out`` (``overrides``: its ``--set`` values): each
+    drive's timing, the whole run's drives together, the command's wall time and its process tree's CPU use."""
     before, t0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.monotonic()
+    sets = [arg for value in overrides for arg in ("--set", value)]
     subprocess.run([str(ROOT / ".venv" / "bin" / "granstokes"), "dem", "run", "--preset", preset, "--np", "1",
-                    "--jobs", "1", "--out", str(out), "--quiet"], check=True, stdout=subprocess.DEVNULL)
+                    "--jobs", "1", "--out", str(out), "--quiet", *sets], check=True, stdout=subprocess.DEVNULL)
     wall, after = time.monotonic() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     drives = {str(log.parent.relative_to(out)): timed(log.read_text())
@@ -114,8 +128,9 @@ def main() -> dict:
               PRESETS["spheres"]: {"dimension": 3, **best_of(chute(3, LARGE, CHUTE3D_STEPS), root / "chute3d",
                                                              args.repeats)}}
     presets = {name: [as_run(name, root / f"{name}-{k}") for k in range(args.repeats)] for name in PRESETS}
+    bare = [as_run("smoke", root / f"smoke-bare-{k}", recording_off("smoke")) for k in range(args.repeats)]
     res = {"machine": machine(), "load_before": load_before, "load_after": load(), "lammps": lammps_env.lammps_info(),
-           "repeats": args.repeats, "yardsticks": sticks, "rest": rest, "presets": presets,
+           "repeats": args.repeats, "yardsticks": sticks, "rest": rest, "presets": presets, "smoke_bare": bare,
            "seconds": time.monotonic() - t0}
     (HERE / "dem_as_run.json").write_text(json.dumps(res, indent=2))
     print(markdown(res))
@@ -147,19 +162,24 @@ def markdown(res: dict) -> str:
                  f"{rest['rate'] / flow['rate']:.2f} | {rest['cpu']:.0f} | | {_per_cpu(rest) / 1e6:.2f} M, "
                  f"{_per_cpu(rest) / _per_cpu(flow):.2f} | {_shares(rest)} |")
     for name, runs in res["presets"].items():
-        stick = res["yardsticks"][PRESETS[name]]
-        ref = stick["rate"]
-        logs = [(d, run) for run in runs for d in run["drives"].values()]
-        best, run = max(logs, key=lambda x: x[0]["rate"])
-        whole = max(runs, key=lambda r: r["all_drives"]["rate"])
-        lines += [f"| {name} as run, best drive log of {len(logs)} | {best['atoms']} | {best['rate'] / 1e6:.2f} M | "
-                  f"{best['rate'] / ref:.2f} | {best['cpu']:.0f} | {run['command_cpu']:.0f} | "
-                  f"{_per_cpu(best) / 1e6:.2f} M, "
-                  f"{_per_cpu(best) / _per_cpu(stick):.2f} | {_shares(best)} |",
-                  f"| {name} as run, every drive of the best run together | {best['atoms']} | "
-                  f"{whole['all_drives']['rate'] / 1e6:.2f} M | {whole['all_drives']['rate'] / ref:.2f} | | "
-                  f"{whole['command_cpu']:.0f} | | |"]
+        lines += _preset_rows(f"{name} as run", runs, res["yardsticks"][PRESETS[name]])
+    if "smoke_bare" in res:
+        lines += _preset_rows(SMOKE_BARE, res["smoke_bare"], flow)
     return "\n".join(lines)
+
+
+def _preset_rows(label: str, runs: list[dict], stick: dict) -> list[str]:
+    """The best drive log of ``runs`` and the best run's drives together, each against the yardstick ``stick``."""
+    ref = stick["rate"]
+    logs = [(d, run) for run in runs for d in run["drives"].values()]
+    best, run = max(logs, key=lambda x: x[0]["rate"])
+    whole = max(runs, key=lambda r: r["all_drives"]["rate"])
+    return [f"| {label}, best drive log of {len(logs)} | {best['atoms']} | {best['rate'] / 1e6:.2f} M | "
+            f"{best['rate'] / ref:.2f} | {best['cpu']:.0f} | {run['command_cpu']:.0f} | {_per_cpu(best) / 1e6:.2f} M, "
+            f"{_per_cpu(best) / _per_cpu(stick):.2f} | {_shares(best)} |",
+            f"| {label}, every drive of the best run together | {best['atoms']} | "
+            f"{whole['all_drives']['rate'] / 1e6:.2f} M | {whole['all_drives']['rate'] / ref:.2f} | | "
+            f"{whole['command_cpu']:.0f} | | |"]
 
 
 if __name__ == "__main__":
