@@ -1,6 +1,6 @@
 """The cost of an error bar: each scored observable's DEM error against grain-steps, from the committed
-studies' files (results/study-disks: 2D, 3 pressures x 6 drives x 4 beds; results/3d: 3D, 2 drives x 2 beds),
-fitted to compare.noise's law and checked by predicting each pressure's errors from the other two.
+studies' files (results/study-disks: 2D, 2 pressures x 6 drives x 6-7 beds; results/study-spheres: 3D, 3 pressures
+x 2 drives x 4 beds), fitted to compare.noise's law and checked by predicting each drive's errors from the others.
 
     .venv/bin/python bench/dem_cost_noise.py              # writes compare/noise.csv, bench/dem_cost_noise.{csv,png}
     .venv/bin/python bench/dem_cost_noise.py --plot-only  # redraws the PNG from the committed CSVs
@@ -8,14 +8,13 @@ fitted to compare.noise's law and checked by predicting each pressure's errors f
 
 Measured errors:
 * full window: each drive's dem_err in the scorecard (the spread over its beds, std/sqrt(n));
-* shorter windows (error against duration): no per-bed record is committed, so a drive's error over the
-  final fraction f of its steady window is split into a part every bed keeps for the whole run (its offset:
+* shorter windows (error against duration): a drive's error over the final fraction f of its steady window is
+  split into a part every bed keeps for the whole run (its offset:
   dem_err^2 less the block error^2 of the seed-mean record over the full window) and the seed-mean record's
   block error over windows f as long (compare.plate.block_estimate), scaled to give dem_err over the full
   window: err_f^2 = offset^2 + (dem_err^2 - offset^2) (block_f / block_1)^2.
   u_w_inf and mu_w_inf from series_*.csv, delta_u from delta_*.csv; creep_length has no time record (its
   duration exponent comes from the drives' durations), t90 is a transient's time (no duration exponent);
-* width: the study's width check (one drive in a bed twice as wide).
 
 The forward check (``--forward``): the committed study's scene at p_w = 10 (its calibration, new beds: seeds 5-12)
 with one stress and one speed drive, and its width check, run now; each bed's plate record gives the errors of
@@ -37,15 +36,16 @@ from granstokes.dem.calibrate import material_table
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter
+from scipy.stats import chi2
 
 from granstokes.study import config as study_config
 from granstokes.study.plan import plan_study
 
 ROOT = Path(__file__).resolve().parents[1]
 HERE = ROOT / "bench"
-STUDY_2D, STUDY_3D = ROOT / "results" / "study-disks", ROOT / "results" / "3d"
-#: the committed 3D drives ran the spheres preset's bed
-PRESET_3D = "spheres"
+STUDY_2D, STUDY_3D = ROOT / "results" / "study-disks", ROOT / "results" / "study-spheres"
+#: the DEM presets whose boxes the committed studies' beds have (each study's ``dem`` entry)
+PRESET_2D, PRESET_3D = "quick", "spheres"
 #: fractions of the steady window whose errors measure the duration exponent
 FRACTIONS = (1.0, 0.5, 0.25, 0.125)
 #: the record each observable's shorter windows come from: (file prefix, column)
@@ -58,7 +58,7 @@ LENGTHS = ("delta_u", "creep_length")
 #: the forward check: the disks study cut to one pressure, two drives and eight new beds, with its calibration
 FORWARD = ["seeds=[5, 6, 7, 8, 9, 10, 11, 12]", "pressures=[10.0]",
            'drive=[{kind = "stress", mu_w_tilde = 0.45}, {kind = "speed", mu_w_tilde = 0.45}]']
-CALIBRATION_2D = STUDY_2D / "calibration-p20" / "calibration.json"
+CALIBRATION_2D = ROOT / "results" / "calibration-disks" / "p20" / "calibration.json"
 PRESSURE_COLOURS = {5.0: "C0", 10.0: "C1", 20.0: "C2"}
 
 
@@ -126,16 +126,29 @@ def scale(rows: pd.DataFrame, observable: str) -> np.ndarray:
     return np.ones(len(rows)) if name == "one" else rows[name].to_numpy(float)
 
 
-def fit_laws(full: pd.DataFrame, short: pd.DataFrame) -> dict[tuple[str, str], dict]:
-    """One law per (observable, kind) from 2D rows: a from the shorter windows (creep_length: from the drives'
-    durations; t90: none), at least 0 (a longer window cannot add noise: a negative slope is the estimate's
-    noise); then c, r, b over the drives.  LENGTHS: over both kinds at once, b held at 0."""
+#: the law's forms tried (the exponents each holds): for a scaled observable, and for the LENGTHS (their error in
+#: d: r and b held at 0), one law over both drive kinds or one for each. The form whose held-out predictions (each
+#: drive from the other drives) err least, by the RMS of ln(predicted / measured), is kept per (observable, kind)
+FORMS = {"free": {}, "no pressure": {"b": 0.0}, "relative": {"r": 1.0, "b": 0.0}}
+LENGTH_FORMS = {"both kinds": {"r": 0.0, "b": 0.0}, "each kind": {"r": 0.0, "b": 0.0}}
+
+
+def forms_of(obs: str) -> dict:
+    return LENGTH_FORMS if obs in LENGTHS else FORMS
+
+
+def fit_laws(full: pd.DataFrame, short: pd.DataFrame, forms: dict | None = None) -> dict[tuple[str, str], dict]:
+    """One law per (observable, kind) from 2D rows, in the form ``forms[(observable, kind)]`` (a FORMS key;
+    default "free"): a from the shorter windows (creep_length: from the drives' durations; t90: none), at least 0
+    (a longer window cannot add noise: a negative slope is the estimate's noise); then c and the exponents the form
+    leaves free over the drives (LENGTHS: default one law over both kinds)."""
     out = {}
     for (obs, kind), _ in full.groupby(["observable", "kind"]):
-        kinds = list(noise.SCORED) if obs in LENGTHS else [kind]
+        form = (forms or {}).get((obs, kind), next(iter(forms_of(obs))))
+        kinds = list(noise.SCORED) if form == "both kinds" else [kind]
         g = full[(full.observable == obs) & full.kind.isin(kinds)]
         s = short[(short.observable == obs) & short.kind.isin(kinds)]
-        held = {"r": 0.0 if noise.SCALES[obs] == "one" else None, "b": 0.0 if obs in LENGTHS else None}
+        held = {"r": None, "b": None, **forms_of(obs)[form]}
         if obs == "t90":
             a, a_from = 0.0, "none (a transient's time)"
         elif len(s):
@@ -143,8 +156,40 @@ def fit_laws(full: pd.DataFrame, short: pd.DataFrame) -> dict[tuple[str, str], d
         else:
             a, a_from = noise.fit(g.err, scale(g, obs), g.seeds, g.area, g.duration, g.p_w, **held)["a"], "durations"
         law = noise.fit(g.err, scale(g, obs), g.seeds, g.area, g.duration, g.p_w, a=max(a, 0.0), **held)
-        out[(obs, kind)] = {**law, "a_measured": a, "a_from": a_from}
+        out[(obs, kind)] = {**law, "a_measured": a, "a_from": a_from, "form": form}
     return out
+
+
+def held_out(full: pd.DataFrame, short: pd.DataFrame, forms: dict | None = None) -> pd.DataFrame:
+    """Each drive's errors predicted by the laws (``forms``) fitted to the other drives: one row per (drive,
+    observable) with the prediction and predicted / measured."""
+    rows = []
+    for drive in full.drive.unique():
+        laws_d = fit_laws(full[full.drive != drive], short[short.drive != drive], forms)
+        for (obs, kind), g in full[full.drive == drive].groupby(["observable", "kind"]):
+            predicted = predict(laws_d[(obs, kind)], g, obs)
+            rows += [{"index": i, "observable": obs, "kind": kind, "drive": drive, "p_w": p_w, "seeds": n,
+                      "predicted": x, "ratio": x / err} for i, p_w, n, x, err in zip(g.index, g.p_w, g.seeds, predicted,
+                                                                                      g.err)]
+    return pd.DataFrame(rows)
+
+
+def choose_forms(full: pd.DataFrame, short: pd.DataFrame) -> tuple[dict, pd.DataFrame]:
+    """Per (observable, kind): the form (FORMS, LENGTH_FORMS) whose held-out predictions err least; and every form's
+    score."""
+    scores, keys = [], list(full.groupby(["observable", "kind"]).groups)
+    for k in range(max(len(FORMS), len(LENGTH_FORMS))):
+        # the k-th form of every (observable, kind) that has one, all held out in one pass
+        forms = {(obs, kind): list(forms_of(obs))[k] for obs, kind in keys if k < len(forms_of(obs))}
+        for (obs, kind), g in held_out(full, short, forms).groupby(["observable", "kind"]):
+            if (obs, kind) not in forms:
+                continue
+            scores.append({"observable": obs, "kind": kind, "form": forms[(obs, kind)],
+                           "rms_log": float(np.sqrt(np.mean(np.log(g.ratio) ** 2))),
+                           "within": int((np.abs(np.log(g.ratio)) <= np.log(WITHIN)).sum()), "cells": len(g)})
+    scores = pd.DataFrame(scores)
+    best = scores.loc[scores.groupby(["observable", "kind"]).rms_log.idxmin()]
+    return {(r.observable, r.kind): r.form for r in best.itertuples()}, scores
 
 
 def predict(law: dict, rows: pd.DataFrame, obs: str, c: float | None = None) -> np.ndarray:
@@ -153,47 +198,57 @@ def predict(law: dict, rows: pd.DataFrame, obs: str, c: float | None = None) -> 
             * rows.duration ** -law["a"] * rows.p_w ** -law["b"]).to_numpy(float)
 
 
+def measured_windows() -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """Each committed drive's full-window errors (2D, 3D) and the 2D drives' shorter windows."""
+    width_2d = dem_config.preset(PRESET_2D)[0].box.width
+    box_3d = dem_config.preset(PRESET_3D)[0].box
+    full2 = full_windows(STUDY_2D, 2, width_2d)
+    full3 = full_windows(STUDY_3D, 3, box_3d.width * box_3d.width_z)
+    return full2, full3, shorter_windows(STUDY_2D, full2)
+
+
 def measure() -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, dict]:
     """The measured table (full and shorter windows, 2D and 3D, with predictions), compare/noise.csv's table,
     the held-out check and the checks' figures."""
-    width_2d = dem_config.preset("quick")[0].box.width
-    box_3d = dem_config.preset(PRESET_3D)[0]
-    full2 = full_windows(STUDY_2D, 2, width_2d)
-    full3 = full_windows(STUDY_3D, 3, box_3d.box.width * box_3d.width_z)
-    short = shorter_windows(STUDY_2D, full2)
-    fitted = fit_laws(full2, short)
+    full2, full3, short = measured_windows()
+    forms, scores = choose_forms(full2, short)
+    fitted = fit_laws(full2, short, forms)
     table = []
     for (obs, kind), law in fitted.items():
         g3 = full3[(full3.observable == obs) & (full3.kind == kind)]
         c3 = law["c"] * float(np.exp(np.mean(np.log(g3.err / predict(law, g3, obs))))) if len(g3) else np.nan
         table.append({"observable": obs, "kind": kind, "scale": noise.SCALES[obs], "c2": law["c"], "c3": c3,
                       "r": law["r"], "a": law["a"], "b": law["b"], "a_measured": law["a_measured"],
-                      "a_from": law["a_from"],
+                      "a_from": law["a_from"], "form": law["form"],
                       "c3_from": "; ".join(sorted(set(g3.how))) if len(g3) else ""})
     table = pd.DataFrame(table)
-    # held out: each pressure's errors predicted by the laws fitted to the other two
-    held = []
-    for p in sorted(full2.p_w.unique()):
-        laws_p = fit_laws(full2[full2.p_w != p], short[short.p_w != p])
-        for (obs, kind), g in full2[full2.p_w == p].groupby(["observable", "kind"]):
-            ratio = predict(laws_p[(obs, kind)], g, obs) / g.err.to_numpy()
-            held.append({"observable": obs, "kind": kind, "p_w": p, "ratio": float(np.exp(np.mean(np.log(ratio)))),
-                         "worst": float(ratio[np.argmax(np.abs(np.log(ratio)))]), "drives": len(g)})
-            full2.loc[g.index, "heldout"] = predict(laws_p[(obs, kind)], g, obs)
+    held = held_out(full2, short, forms)
+    full2.loc[held["index"], "heldout"] = held.predicted.to_numpy()
     measured = pd.concat([full2, short, full3], ignore_index=True)
     measured["predicted"] = np.nan
     for row in table.itertuples():
         for dim, c in ((2, row.c2), (3, row.c3)):
             m = (measured.observable == row.observable) & (measured.kind == row.kind) & (measured.dimension == dim)
             measured.loc[m, "predicted"] = predict(row._asdict(), measured[m], row.observable, c)
-    study = json.loads((STUDY_2D / "study.json").read_text())
-    (wc,) = study["width_check"]
     u = short[(short.observable == "u_w_inf") & (short.fraction == 1.0)]
     m = short[(short.observable == "mu_w_inf") & (short.fraction == 1.0)]
-    checks = {"width_ratio": wc["wide_err"] / wc["normal_err"], "width_ratio_law": 2 ** -noise.AVERAGING,
-              "seed_over_block_u_w": float(np.median(u.err / u.block_full)),
+    checks = {"seed_over_block_u_w": float(np.median(u.err / u.block_full)),
               "seed_over_block_mu_w": float(np.median(m.err / m.block_full))}
-    return measured, table, pd.DataFrame(held), checks
+    checks["forms"] = scores
+    return measured, table, held, checks
+
+
+def check_law(path: Path) -> pd.DataFrame:
+    """A law table's predictions (``path``: a compare/noise.csv) against every committed drive's measured
+    full-window error: one row per (drive, observable)."""
+    law_table = noise.laws(path)
+    full2, full3, _ = measured_windows()
+    rows = pd.concat([full2, full3], ignore_index=True)
+    rows["predicted"] = [law_table[(r.observable, r.kind)].error(noise.DriveSize(
+        r.kind, r.dimension, r.seeds, r.area, r.duration, r.p_w,
+        {"u_w": r.u_w, "mu_w": r.mu_w, "delta_s": r.delta_s, "t_s": r.t_s})) for r in rows.itertuples()]
+    rows["ratio"] = rows.predicted / rows.err
+    return rows
 
 
 OBS_LABELS = {"u_w_inf": "u_w_inf (stress drives)", "mu_w_inf": "mu_w_inf (speed drives)", "delta_u": "delta_u",
@@ -238,12 +293,13 @@ def plot(measured: pd.DataFrame, forward: pd.DataFrame | None, path: Path) -> Pa
     for k in (WITHIN, 1 / WITHIN):
         ax.plot(lim, k * lim, "k:", lw=0.8)
     ax.set(xscale="log", yscale="log", xlabel="measured error (spread over the beds)",
-           ylabel="predicted (pressure held out / before the run)",
+           ylabel="predicted (drive held out / before the run)",
            title=f"predicted against measured (dotted: x{WITHIN:g})")
     ax.legend(fontsize=7, loc="upper left", frameon=False)
+    pressures_2d = set(measured.p_w[measured.dimension == 2])
     handles = [Line2D([], [], color=c, marker="o", ls="none", label=f"2D, p_w = {p:g}")
-               for p, c in PRESSURE_COLOURS.items()]
-    handles += [Line2D([], [], color="0.4", marker="o", ls="none", label="3D, p_w = 10 (2 beds)"),
+               for p, c in PRESSURE_COLOURS.items() if p in pressures_2d]
+    handles += [Line2D([], [], color="0.4", marker="o", ls="none", label=f"3D ({STUDY_3D.name})"),
                 Line2D([], [], color="k", marker="o", ls="none", label="imposed stress"),
                 Line2D([], [], color="k", marker="s", ls="none", label="imposed speed"),
                 Line2D([], [], color="k", marker="o", fillstyle="none", ls="-", lw=0.6,
@@ -339,7 +395,13 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--plot-only", action="store_true", help="redraw the PNG from bench/dem_cost_noise.csv")
     parser.add_argument("--forward", type=Path, metavar="DIR", help="run (or resume) the forward check in DIR")
+    parser.add_argument("--check-law", type=Path, metavar="CSV",
+                        help="only print how the law table CSV (a compare/noise.csv) predicts the committed drives")
     args = parser.parse_args()
+    if args.check_law:
+        print(f"{args.check_law} against the committed studies' measured errors (predicted / measured):")
+        print_ratios(check_law(args.check_law))
+        return
     forward_csv = HERE / "dem_cost_noise_forward.csv"
     if args.plot_only:
         forward = pd.read_csv(forward_csv) if forward_csv.exists() else None
@@ -354,25 +416,46 @@ def main():
     else:
         forward = pd.read_csv(forward_csv) if forward_csv.exists() else None
     plot(measured, forward, HERE / "dem_cost_noise.png")
-    print("| observable | drives | C_2 | C_3 | r (scale) | a (measured, from) | b |")
-    print("|---|---|---|---|---|---|---|")
+    print("| observable | drives | form | C_2 | C_3 | r (scale) | a (measured, from) | b |")
+    print("|---|---|---|---|---|---|---|---|")
     for r in table.itertuples():
-        print(f"| {r.observable} | {r.kind} | {r.c2:.3g} | {r.c3:.3g} | {r.r:.2f} ({r.scale}) | {r.a:.2f} "
+        print(f"| {r.observable} | {r.kind} | {r.form} | {r.c2:.3g} | {r.c3:.3g} | {r.r:.2f} ({r.scale}) | {r.a:.2f} "
               f"({r.a_measured:.2f}, {r.a_from}) | {r.b:.2f} |")
-    pivot = held.pivot_table(index=["observable", "kind"], columns="p_w", values=["ratio", "worst"])
-    print("\nheld out (predicted / measured, geometric mean over the pressure's 3 drives; worst drive):")
-    print("| observable | drives | " + " | ".join(f"p_w = {p:g}" for p in sorted(held.p_w.unique())) + " |")
-    print("|---|---|" + "---|" * held.p_w.nunique())
-    for (obs, kind), row in pivot.iterrows():
-        cells = [f"x{row[('ratio', p)]:.2f} (x{row[('worst', p)]:.2f})" for p in sorted(held.p_w.unique())]
-        print(f"| {obs} | {kind} | " + " | ".join(cells) + " |")
-    inside = (np.abs(np.log(held.ratio)) <= np.log(WITHIN)).sum()
-    print(f"\nwithin x{WITHIN:g}: {inside} of {len(held)} (observable, kind, pressure) cells")
-    print(f"width: error ratio twice as wide {checks['width_ratio']:.3f} (law {checks['width_ratio_law']:.3f})")
+    print(f"\nforms (held out: RMS of ln(predicted / measured), cells within x{WITHIN:g}):")
+    names = [*FORMS, *LENGTH_FORMS]
+    print("| observable | drives | " + " | ".join(names) + " |")
+    print("|---|---|" + "---|" * len(names))
+    for (obs, kind), g in checks["forms"].groupby(["observable", "kind"]):
+        cells = {r.form: f"{r.rms_log:.2f} ({r.within} of {r.cells})" for r in g.itertuples()}
+        print(f"| {obs} | {kind} | " + " | ".join(cells.get(f, "") for f in names) + " |")
+    print("\nheld out (each drive predicted by the laws fitted to the other drives; predicted / measured):")
+    print_ratios(held)
     print(f"seed spread / block error of the seed-mean record, median: u_w {checks['seed_over_block_u_w']:.2f}, "
           f"mu_w {checks['seed_over_block_mu_w']:.2f}")
     if forward is not None:
         print_forward(forward)
+
+
+def within_if_exact(seeds) -> np.ndarray:
+    """The chance that a measured error (the spread of ``seeds`` beds: s / sigma ~ sqrt(chi2_{n-1} / (n-1))) lies
+    within WITHIN of an exact prediction: the most a law can score."""
+    dof = np.asarray(seeds, float) - 1
+    return chi2.cdf(dof * WITHIN**2, dof) - chi2.cdf(dof / WITHIN**2, dof)
+
+
+def print_ratios(rows: pd.DataFrame):
+    """Per (observable, kind, dimension): the geometric mean and range of predicted / measured over the drives,
+    how many lie within WITHIN, and how many an exact law would place there on average (within_if_exact)."""
+    rows = rows.assign(dimension=rows.get("dimension", 2), log=np.log(rows.ratio), exact=within_if_exact(rows.seeds))
+    print(f"| observable | drives | D | cells | geometric mean | range | within x{WITHIN:g} | an exact law |")
+    print("|---|---|---|---|---|---|---|---|")
+    for (obs, kind, dim), g in rows.groupby(["observable", "kind", "dimension"]):
+        inside = int((g.log.abs() <= np.log(WITHIN)).sum())
+        print(f"| {obs} | {kind} | {dim} | {len(g)} | x{np.exp(g.log.mean()):.2f} | x{g.ratio.min():.2f}-"
+              f"x{g.ratio.max():.2f} | {inside} | {g.exact.sum():.1f} |")
+    inside = int((rows.log.abs() <= np.log(WITHIN)).sum())
+    print(f"within x{WITHIN:g}: {inside} of {len(rows)} (drive, observable) cells; an exact law: "
+          f"{rows.exact.sum():.1f} on average")
 
 
 def print_forward(fwd: pd.DataFrame):
