@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parents[1]
 LOCK = Path("/work/runs/cpu.lock")
 SCRATCH = Path("/work/runs/cost")
 GS = [sys.executable, "-m", "granstokes.cli"]
-DISKS_CALIBRATION = ROOT / "results" / "study-disks" / "calibration-p20" / "calibration.json"
+DISKS_CALIBRATION = ROOT / "results" / "calibration-disks" / "p20" / "calibration.json"
 SPHERES_CALIBRATION = SCRATCH / "study-spheres-calibration" / "calibration.json"
 #: the paper scene's subset: one bed, each of its six drives this long (time units; the preset's 20-57)
 PAPER_DRIVE = 0.5
