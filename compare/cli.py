@@ -31,7 +31,8 @@ def run_compare(args) -> int:
     sources = args.runs or args.tables
     inputs = [*sources, *([args.calibration] if args.calibration is not None else [])]
     claim(args.out, "--out", COMMAND, inputs)
-    options = {k: v for k, v in (("fit_on_drives", args.fit_on_drives), ("ngf_from", args.ngf_from)) if v}
+    options = {k: v for k, v in (("fit_on_drives", args.fit_on_drives), ("ngf_from", args.ngf_from),
+                                 ("any_pair_style", args.any_pair_style)) if v}
     experiment = kind.create(args.calibration, jobs=args.jobs, **options)  # every option checked before any work
     dem = experiment.read_parts(args.tables) if args.tables else experiment.analyse(args.runs)
     result = experiment.run(dem)
@@ -63,6 +64,10 @@ def register(sub) -> None:
     p.add_argument("--fit-on-drives", action="store_true",
                    help="fit mu(I) on the drives' own steady windows instead: a restatement, every row labelled not "
                         "blind and never counted as support for a model")
+    p.add_argument("--any-pair-style", action="store_true",
+                   help="accept a --calibration run in the other LAMMPS pair style of the same contact law "
+                        "(gran/hooke/history or pair granular; the grains otherwise the runs'): the two styles' "
+                        "drives compared like for like; the report says so")
     p.add_argument("--ngf-from", type=Path, help="oscillating drives: a Stokes report's metrics.json whose NGF "
                                                  "amplitude A (fitted on a Stokes drive of the same grains) predicts "
                                                  "them (else no NGF rows)")

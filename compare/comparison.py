@@ -337,14 +337,29 @@ def run_grains(runs) -> dict:
     return out
 
 
-def check_grains(cal: Calibration, grains: dict) -> None:
+#: what ``ignore`` may leave out of the grains check: the LAMMPS implementation of the same contact law
+IGNORABLE = ("pair_style",)
+
+
+def check_grains(cal: Calibration, grains: dict, ignore: tuple[str, ...] = ()) -> None:
     """Refuse a calibration of other grains than the runs' (``grains``: run_grains; one-line ValueError naming the
-    difference; dem.calibrate.grains_difference: one material, one stiffness k_n at any pressure)."""
+    difference; dem.calibrate.grains_difference: one material, one stiffness k_n at any pressure), leaving out the
+    entries in ``ignore`` (of IGNORABLE)."""
     p_cal = float(cal.info.get("protocol", {}).get("p", np.nan))
     for run, (table, p_w) in grains.items():
         diff = grains_difference(cal.grains, p_cal if np.isfinite(p_cal) else p_w, table, p_w)
+        diff = {k: v for k, v in diff.items() if k not in ignore}
         require(not diff, f"--calibration {cal.source}", f"a calibration of the grains of {run}",
                 "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
+
+
+def other_pair_style(cal: Calibration, grains: dict) -> str:
+    """'' or, where the calibration ran in another pair style than the runs (compare --any-pair-style), a clause
+    saying so for the calibration's source."""
+    styles = sorted({table.get("pair_style", "granular") for table, _ in grains.values()})
+    calibrated = cal.grains.get("pair_style", "granular")
+    return "" if styles == [calibrated] else (f", calibrated in pair style {calibrated}, the drives run in "
+                                             f"{', '.join(styles)}")
 
 
 def analyse(run_dirs, settings: CGSettings = CGSettings(), progress: bool = True, root: Path | None = None) -> DemSide:
@@ -379,7 +394,7 @@ def timed(dem: DemSide, independent: Calibration | None) -> DemSide:
                                      for a in dem.drives))
 
 
-def prepare(dem: DemSide, independent: Calibration | None) -> tuple[ModelSide, dict]:
+def prepare(dem: DemSide, independent: Calibration | None, ignore: tuple[str, ...] = ()) -> tuple[ModelSide, dict]:
     """What every drive's prediction shares: mu(I) and phi from the ``independent`` calibration (calibration.json,
     refused if its grains differ from the runs') or, without one, fitted on the drives' steady windows; the models
     (NGF when its amplitude fits within its search range).  Returns the ModelSide and what the Comparison keeps."""
@@ -393,9 +408,9 @@ def prepare(dem: DemSide, independent: Calibration | None) -> tuple[ModelSide, d
         replicates = replicates_of(cal, cal.replicates["phi_bulk"])
     else:
         # the continuum's constant phi is the calibration's phi(I -> 0) = phi_max: the bed below the layer is at rest
-        check_grains(independent, dem.grains)
+        check_grains(independent, dem.grains, ignore)
         cal = independent
-        source = f"blind: independent plane-shear calibration {cal.source}"
+        source = f"blind: independent plane-shear calibration {cal.source}" + other_pair_style(cal, dem.grains)
         material = cal.material()
         replicates = replicates_of(cal, cal.replicates["phi_max"])
     tested = law_test(pairs, cal)

@@ -9,8 +9,10 @@ from pathlib import Path
 import numpy as np
 from granstokes.dem.sizing import count, makespan
 
+from granstokes.lib.validate import require
+
 from . import calibrate, metrics, report, tables
-from .comparison import DemSide, analyse, check_grains, conclude, model_drive, prepare, run_grains, timed
+from .comparison import IGNORABLE, DemSide, analyse, check_grains, conclude, model_drive, prepare, run_grains, timed
 from .drive import TRANSITS_BEFORE_COMPARISON
 from .experiment import Experiment
 from .laws import GROWTH_END, MIN_DECADES, growth_bounds
@@ -45,7 +47,9 @@ def planned_window(plan, drive, c_s: float | None = None) -> tuple[float, float,
 
 class StokesDrives(Experiment):
     """Held loads: ``fit_on_drives`` fits mu(I) on the drives' steady windows instead of a calibration (a
-    restatement, never scored as support); ``settings`` the coarse-graining's."""
+    restatement, never scored as support); ``any_pair_style`` accepts a calibration run in the other LAMMPS
+    implementation of the same contact law (the two styles' drives compared like for like); ``settings`` the
+    coarse-graining's."""
 
     name = "stokes"
     title = "continuum vs DEM: Stokes' first problem"
@@ -57,13 +61,17 @@ class StokesDrives(Experiment):
     definitions = metrics.DEFINITIONS
 
     def __init__(self, calibration: str | Path | None = None, *, fit_on_drives: bool = False,
-                 settings: CGSettings = CGSettings(), jobs: int = 1, progress: bool = True):
+                 any_pair_style: bool = False, settings: CGSettings = CGSettings(), jobs: int = 1,
+                 progress: bool = True):
         super().__init__(calibration, jobs=jobs, progress=progress)
         if (calibration is None) != fit_on_drives:
             raise ValueError("--calibration is required: a calibration.json of granstokes dem calibrate (an "
                              "independent plane-shear calibration of the same grains); or pass --fit-on-drives for a "
                              "fit on the drives that is never scored as support (not both)")
+        require(not (any_pair_style and fit_on_drives), "--any-pair-style", "with --calibration (a fit on the drives "
+                "has the drives' own pair style)", "--fit-on-drives")
         self.settings = settings
+        self.ignore = IGNORABLE if any_pair_style else ()
         self.independent = calibrate.load(calibration) if calibration is not None else None
 
     @classmethod
@@ -108,7 +116,7 @@ class StokesDrives(Experiment):
 
     def analyse(self, runs, root: Path | None = None) -> DemSide:
         if self.independent is not None:  # a calibration of other grains is refused before any coarse-graining
-            check_grains(self.independent, run_grains(runs))
+            check_grains(self.independent, run_grains(runs), self.ignore)
         return analyse(runs, self.settings, self.progress, root)
 
     def read_tables(self, folder: Path) -> DemSide:
@@ -124,7 +132,7 @@ class StokesDrives(Experiment):
 
     def _prepare(self, dem: DemSide):
         dem = timed(dem, self.independent)
-        return dem, *prepare(dem, self.independent)
+        return dem, *prepare(dem, self.independent, self.ignore)
 
     def _units(self, dem, setup) -> list:
         return list(setup[0].drives)

@@ -37,6 +37,10 @@ def test_an_option_the_experiment_does_not_take_is_refused_before_any_work(tmp_p
         OscillatingPlate.create(None, fit_on_drives=True)
     with pytest.raises(ValueError, match="--calibration is required"):
         OscillatingPlate.create(None)
+    with pytest.raises(ValueError, match="--any-pair-style.*oscillating"):
+        OscillatingPlate.create(tmp_path / "none.json", any_pair_style=True)
+    with pytest.raises(ValueError, match="^--any-pair-style must be with --calibration"):
+        StokesDrives.create(None, fit_on_drives=True, any_pair_style=True)
 
 
 def test_no_pipeline_branch_on_the_oscillating_plate_outside_the_experiments():
