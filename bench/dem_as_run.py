@@ -13,8 +13,8 @@
   (atoms x steps / loop time / ranks), the best drive log, and the whole run's drives together (their atom-steps
   over their summed loop time);
 * the smoke preset with its recording cut to the least the comparison reads (recording_off: the atoms, contacts
-  and profiles written and a restart taken once, at the drive's end; the plate still sampled as always), R times:
-  the rate a smoke drive could reach as run whatever its dumps, which is the rate of its contacts.
+  and profiles written at the drive's first and last step only, one restart at its end; the plate still sampled as
+  always), R times: what a smoke drive costs without the dumps' frames.
 
 Ratios are to the yardstick of the scene's dimension measured in the same invocation. CPU use is LAMMPS's own
 figure for a run (below 100 % when it waited for a core); the ``granstokes`` command's CPU use is its process
@@ -50,13 +50,15 @@ CHUTE2D_GRAVITY, REST_GRAVITY = "vector 0.438371 -0.898794 0", "vector 0 -1 0"
 REST2D = "2D chute's disks at rest (its script, gravity untilted)"
 #: the presets run as a user runs them, and the yardstick each is compared with
 PRESETS = {"smoke": "2D chute (shared yardstick)", "spheres": "3D chute, 32k spheres"}
-#: the outputs the smoke preset writes at the end of its drive only (RECORDING_OFF); the plate's series is kept
+#: the outputs the smoke preset writes at its drive's first and last step only (recording_off); the plate's series
+#: is kept
 RECORDED = ("atoms", "contacts", "profiles", "restart")
-SMOKE_BARE = "smoke, recording at the drive's end only"
+SMOKE_BARE = "smoke, recording at the drive's first and last step only"
 
 
 def recording_off(preset: str) -> tuple[str, ...]:
-    """``--set`` values writing each of RECORDED once, at the end of the preset's longest drive."""
+    """``--set`` values setting each of RECORDED's interval to the preset's longest drive (a dump is also written at
+    a drive's first step)."""
     end = max(d.duration for d in dem_config.preset(preset)[0].drives)
     return tuple(f"output.{name}={end!r}" for name in RECORDED)
 

@@ -16,9 +16,10 @@ Measured errors:
   u_w_inf and mu_w_inf from series_*.csv, delta_u from delta_*.csv; creep_length has no time record (its
   duration exponent comes from the drives' durations), t90 is a transient's time (no duration exponent);
 
-The forward check (``--forward``): the committed study's scene at p_w = 10 (its calibration, new beds: seeds 5-12)
+The forward check (``--forward``): the committed study's scene at p_w = 10 (its calibration, new beds: seeds 8-15)
 with one stress and one speed drive, and its width check, run now; each bed's plate record gives the errors of
-subsets of beds and of shorter windows directly, and the laws' predictions for 8 beds are compared with them.
+subsets of beds and of shorter windows directly, and the laws' predictions for 8 beds are compared with them. A
+rerun predicts with compare/noise.csv as it is then and replaces bench/dem_cost_noise_forward.csv.
 """
 from __future__ import annotations
 
@@ -56,7 +57,7 @@ WITHIN = 1.5
 #: (the layer's edge is placed to within the grains' structure at any pressure)
 LENGTHS = ("delta_u", "creep_length")
 #: the forward check: the disks study cut to one pressure, two drives and eight new beds, with its calibration
-FORWARD = ["seeds=[5, 6, 7, 8, 9, 10, 11, 12]", "pressures=[10.0]",
+FORWARD = ["seeds=[8, 9, 10, 11, 12, 13, 14, 15]", "pressures=[10.0]",
            'drive=[{kind = "stress", mu_w_tilde = 0.45}, {kind = "speed", mu_w_tilde = 0.45}]']
 CALIBRATION_2D = ROOT / "results" / "calibration-disks" / "p20" / "calibration.json"
 PRESSURE_COLOURS = {5.0: "C0", 10.0: "C1", 20.0: "C2"}
@@ -75,14 +76,11 @@ def full_windows(folder: Path, dimension: int, area: float) -> pd.DataFrame:
     rows = []
     for r in card.itertuples():
         d = drives[r.drive]
-        series = pd.read_csv(folder / f"series_{stem(r.drive)}.csv")
-        duration = float(d.get("duration", series.t.iloc[-1]))
-        t_s = float(d.get("t_s", duration / 10.0))  # 3D: the drives ran 10 t_s
         local = d["steady_local"]
         rows.append({"dimension": dimension, "drive": stem(r.drive), "kind": d["kind"], "observable": r.observable,
-                     "p_w": d["p_w"], "seeds": d["seeds"], "area": area, "duration": duration, "fraction": 1.0,
+                     "p_w": d["p_w"], "seeds": d["seeds"], "area": area, "duration": d["duration"], "fraction": 1.0,
                      "grain_steps": d["grains_x_steps"], "value": r.dem, "err": r.dem_err, "how": r.dem_how,
-                     "u_w": local["u_w"], "mu_w": local["mu_w"], "delta_s": local["delta_s"], "t_s": t_s})
+                     "u_w": local["u_w"], "mu_w": local["mu_w"], "delta_s": local["delta_s"], "t_s": d["t_s"]})
     return pd.DataFrame(rows)
 
 
@@ -126,46 +124,61 @@ def scale(rows: pd.DataFrame, observable: str) -> np.ndarray:
     return np.ones(len(rows)) if name == "one" else rows[name].to_numpy(float)
 
 
-#: the law's forms tried (the exponents each holds): for a scaled observable, and for the LENGTHS (their error in
-#: d: r and b held at 0), one law over both drive kinds or one for each. The form whose held-out predictions (each
-#: drive from the other drives) err least, by the RMS of ln(predicted / measured), is kept per (observable, kind)
+#: the law's forms tried, by the exponents each holds, for a scaled observable; the LENGTHS (their error in d: r and
+#: b held at 0) are fitted over both drive kinds at once or for each (LENGTH_FORMS). The form whose held-out
+#: predictions (each drive from the other drives) err least, by the RMS of ln(predicted / measured), is kept per
+#: (observable, kind)
 FORMS = {"free": {}, "no pressure": {"b": 0.0}, "relative": {"r": 1.0, "b": 0.0}}
-LENGTH_FORMS = {"both kinds": {"r": 0.0, "b": 0.0}, "each kind": {"r": 0.0, "b": 0.0}}
+LENGTH_HELD = {"r": 0.0, "b": 0.0}
+LENGTH_FORMS = ("both kinds", "each kind")
 
 
-def forms_of(obs: str) -> dict:
-    return LENGTH_FORMS if obs in LENGTHS else FORMS
+def forms_of(obs: str) -> tuple[str, ...]:
+    """The form names tried for ``obs``; the first is fit_laws' default."""
+    return LENGTH_FORMS if obs in LENGTHS else tuple(FORMS)
+
+
+def sigma_rows(g: pd.DataFrame) -> np.ndarray:
+    """The rows' errors as estimates of sigma in log space: each a spread of its drive's beds, low by
+    compare.noise.log_spread_bias on average."""
+    return (g.err * np.exp(-noise.log_spread_bias(g.seeds))).to_numpy(float)
 
 
 def fit_laws(full: pd.DataFrame, short: pd.DataFrame, forms: dict | None = None) -> dict[tuple[str, str], dict]:
-    """One law per (observable, kind) from 2D rows, in the form ``forms[(observable, kind)]`` (a FORMS key;
-    default "free"): a from the shorter windows (creep_length: from the drives' durations; t90: none), at least 0
-    (a longer window cannot add noise: a negative slope is the estimate's noise); then c and the exponents the form
-    leaves free over the drives (LENGTHS: default one law over both kinds)."""
+    """One law per (observable, kind) from 2D rows, in the form ``forms[(observable, kind)]`` (default: the first
+    of forms_of): a from the shorter windows (creep_length: from the drives' durations; t90: none), at least 0 (a
+    longer window cannot add noise: a negative slope is the estimate's noise); then c and the exponents the form
+    leaves free, over the drives' sigma_rows; with the pressures and scales fitted over."""
     out = {}
     for (obs, kind), _ in full.groupby(["observable", "kind"]):
-        form = (forms or {}).get((obs, kind), next(iter(forms_of(obs))))
+        form = (forms or {}).get((obs, kind), forms_of(obs)[0])
         kinds = list(noise.SCORED) if form == "both kinds" else [kind]
         g = full[(full.observable == obs) & full.kind.isin(kinds)]
         s = short[(short.observable == obs) & short.kind.isin(kinds)]
-        held = {"r": None, "b": None, **forms_of(obs)[form]}
+        held = LENGTH_HELD if obs in LENGTHS else {"r": None, "b": None, **FORMS[form]}
+        err, x = sigma_rows(g), scale(g, obs)
         if obs == "t90":
             a, a_from = 0.0, "none (a transient's time)"
         elif len(s):
             a, a_from = duration_exponent(s), "shorter windows"
         else:
-            a, a_from = noise.fit(g.err, scale(g, obs), g.seeds, g.area, g.duration, g.p_w, **held)["a"], "durations"
-        law = noise.fit(g.err, scale(g, obs), g.seeds, g.area, g.duration, g.p_w, a=max(a, 0.0), **held)
-        out[(obs, kind)] = {**law, "a_measured": a, "a_from": a_from, "form": form}
+            a, a_from = noise.fit(err, x, g.seeds, g.area, g.duration, g.p_w, **held)["a"], "durations"
+        law = noise.fit(err, x, g.seeds, g.area, g.duration, g.p_w, a=max(a, 0.0), **held)
+        scaled = noise.relative(obs)
+        ranges = {"p_min": g.p_w.min(), "p_max": g.p_w.max(), "x_min": x.min() if scaled else np.nan,
+                  "x_max": x.max() if scaled else np.nan}
+        out[(obs, kind)] = {**law, "a_measured": a, "a_from": a_from, "form": form, **ranges}
     return out
 
 
 def held_out(full: pd.DataFrame, short: pd.DataFrame, forms: dict | None = None) -> pd.DataFrame:
-    """Each drive's errors predicted by the laws (``forms``) fitted to the other drives: one row per (drive,
+    """Each drive's errors predicted by the laws fitted to the other drives, in the given ``forms`` or, without,
+    in the forms chosen on those other drives alone (choose_forms: the choice held out too): one row per (drive,
     observable) with the prediction and predicted / measured."""
     rows = []
     for drive in full.drive.unique():
-        laws_d = fit_laws(full[full.drive != drive], short[short.drive != drive], forms)
+        others, others_short = full[full.drive != drive], short[short.drive != drive]
+        laws_d = fit_laws(others, others_short, forms if forms is not None else choose_forms(others, others_short)[0])
         for (obs, kind), g in full[full.drive == drive].groupby(["observable", "kind"]):
             predicted = predict(laws_d[(obs, kind)], g, obs)
             rows += [{"index": i, "observable": obs, "kind": kind, "drive": drive, "p_w": p_w, "seeds": n,
@@ -180,7 +193,7 @@ def choose_forms(full: pd.DataFrame, short: pd.DataFrame) -> tuple[dict, pd.Data
     scores, keys = [], list(full.groupby(["observable", "kind"]).groups)
     for k in range(max(len(FORMS), len(LENGTH_FORMS))):
         # the k-th form of every (observable, kind) that has one, all held out in one pass
-        forms = {(obs, kind): list(forms_of(obs))[k] for obs, kind in keys if k < len(forms_of(obs))}
+        forms = {(obs, kind): forms_of(obs)[k] for obs, kind in keys if k < len(forms_of(obs))}
         for (obs, kind), g in held_out(full, short, forms).groupby(["observable", "kind"]):
             if (obs, kind) not in forms:
                 continue
@@ -216,13 +229,14 @@ def measure() -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, dict]:
     table = []
     for (obs, kind), law in fitted.items():
         g3 = full3[(full3.observable == obs) & (full3.kind == kind)]
-        c3 = law["c"] * float(np.exp(np.mean(np.log(g3.err / predict(law, g3, obs))))) if len(g3) else np.nan
+        c3 = law["c"] * float(np.exp(np.mean(np.log(sigma_rows(g3) / predict(law, g3, obs))))) if len(g3) else np.nan
         table.append({"observable": obs, "kind": kind, "scale": noise.SCALES[obs], "c2": law["c"], "c3": c3,
                       "r": law["r"], "a": law["a"], "b": law["b"], "a_measured": law["a_measured"],
                       "a_from": law["a_from"], "form": law["form"],
-                      "c3_from": "; ".join(sorted(set(g3.how))) if len(g3) else ""})
+                      "c3_from": "; ".join(sorted(set(g3.how))) if len(g3) else "",
+                      **{k: law[k] for k in noise.RANGE_COLUMNS}})
     table = pd.DataFrame(table)
-    held = held_out(full2, short, forms)
+    held = held_out(full2, short)
     full2.loc[held["index"], "heldout"] = held.predicted.to_numpy()
     measured = pd.concat([full2, short, full3], ignore_index=True)
     measured["predicted"] = np.nan
@@ -428,8 +442,12 @@ def main():
     for (obs, kind), g in checks["forms"].groupby(["observable", "kind"]):
         cells = {r.form: f"{r.rms_log:.2f} ({r.within} of {r.cells})" for r in g.itertuples()}
         print(f"| {obs} | {kind} | " + " | ".join(cells.get(f, "") for f in names) + " |")
-    print("\nheld out (each drive predicted by the laws fitted to the other drives; predicted / measured):")
+    print("\nheld out (each drive predicted by the laws fitted to the other drives, their forms chosen on those "
+          "drives; predicted / measured):")
     print_ratios(held)
+    print("\n3D, in sample (C_3 fitted to these drives; predicted / measured):")
+    in_sample = check_law(noise.NOISE_CSV)
+    print_ratios(in_sample[in_sample.dimension == 3])
     print(f"seed spread / block error of the seed-mean record, median: u_w {checks['seed_over_block_u_w']:.2f}, "
           f"mu_w {checks['seed_over_block_mu_w']:.2f}")
     if forward is not None:

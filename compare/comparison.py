@@ -23,7 +23,7 @@ import pandas as pd
 from granstokes.continuum.calibration import Calibration, mu_law
 from granstokes.continuum.scales import Material, Scales
 from granstokes.continuum.scene_models import LOCAL, PAPER, Prediction, SceneModel, elastic_model, ngf_model
-from granstokes.dem.calibrate import grains_difference
+from granstokes.dem.calibrate import grains_difference, pair_style_of
 from granstokes.dem.layout import RUN_JSON
 from scipy import stats
 from tqdm import tqdm
@@ -353,11 +353,11 @@ def check_grains(cal: Calibration, grains: dict, ignore: tuple[str, ...] = ()) -
                 "different grains: " + ", ".join(f"{k} calibrated {a!r} vs run {b!r}" for k, (a, b) in diff.items()))
 
 
-def other_pair_style(cal: Calibration, grains: dict) -> str:
+def pair_style_clause(cal: Calibration, grains: dict) -> str:
     """'' or, where the calibration ran in another pair style than the runs (compare --any-pair-style), a clause
     saying so for the calibration's source."""
-    styles = sorted({table.get("pair_style", "granular") for table, _ in grains.values()})
-    calibrated = cal.grains.get("pair_style", "granular")
+    styles = sorted({pair_style_of(table) for table, _ in grains.values()})
+    calibrated = pair_style_of(cal.grains)
     return "" if styles == [calibrated] else (f", calibrated in pair style {calibrated}, the drives run in "
                                              f"{', '.join(styles)}")
 
@@ -410,7 +410,7 @@ def prepare(dem: DemSide, independent: Calibration | None, ignore: tuple[str, ..
         # the continuum's constant phi is the calibration's phi(I -> 0) = phi_max: the bed below the layer is at rest
         check_grains(independent, dem.grains, ignore)
         cal = independent
-        source = f"blind: independent plane-shear calibration {cal.source}" + other_pair_style(cal, dem.grains)
+        source = f"blind: independent plane-shear calibration {cal.source}" + pair_style_clause(cal, dem.grains)
         material = cal.material()
         replicates = replicates_of(cal, cal.replicates["phi_max"])
     tested = law_test(pairs, cal)

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from granstokes.continuum.steady import steady_wall_speed
-from scipy import stats
+from scipy import special, stats
 
 NOISE_CSV = Path(__file__).with_name("noise.csv")
 #: the observable each drive kind scores (compare.scorecard), in the order printed
@@ -40,6 +40,10 @@ AVERAGING = 0.5
 CONFIDENCE = 0.95
 #: the fewest beds a decision rests on (one degree of freedom), and the most a target may take unless it says
 MIN_BEDS, BEDS_MAX = 2, 12
+#: a value this fraction beyond a fitted range still counts as inside it (planned and measured scales differ)
+RANGE_SLACK = 0.05
+#: noise.csv's fitted ranges (NoiseLaw.p_range, x_range)
+RANGE_COLUMNS = ("p_min", "p_max", "x_min", "x_max")
 
 
 @dataclass(frozen=True)
@@ -60,8 +64,18 @@ class DriveSize:
         return 1.0 if name == "one" else float(self.scales[name])
 
 
+def log_spread_bias(beds) -> np.ndarray:
+    """E ln(s / sigma) of the spread s of ``beds`` Gaussian beds (s^2 (n-1) / sigma^2 ~ chi2(n-1)):
+    (psi((n-1)/2) + ln(2/(n-1))) / 2, -0.18 at 4 beds, -0.09 at 7.  A law fitted to ln s is low by it."""
+    k = np.asarray(beds, float) - 1
+    return 0.5 * (special.digamma(k / 2) + np.log(2 / k))
+
+
 @dataclass(frozen=True)
 class NoiseLaw:
+    """One observable's law for one drive kind; ``p_range`` and ``x_range`` the pressures and scales of the 2D
+    drives its exponents were fitted to (NaN: not recorded, or no scale)."""
+
     observable: str
     kind: str
     c2: float
@@ -69,11 +83,24 @@ class NoiseLaw:
     r: float
     a: float
     b: float
+    p_range: tuple[float, float] = (np.nan, np.nan)
+    x_range: tuple[float, float] = (np.nan, np.nan)
 
     def error(self, size: DriveSize) -> float:
         c = self.c2 if size.dimension == 2 else self.c3
         return float(c * size.x(self.observable) ** self.r * (size.seeds * size.area) ** -AVERAGING
                      * size.duration ** -self.a * size.p_w ** -self.b)
+
+    def extrapolated(self, size: DriveSize) -> list[str]:
+        """What of the drive lies beyond the fitted ranges, where an exponent other than 0 is applied:
+        e.g. ["p_w 40 beyond 10-20"]."""
+        out = []
+        for name, value, (lo, hi), exponent in (("p_w", size.p_w, self.p_range, self.b),
+                                                 (SCALES[self.observable], size.x(self.observable), self.x_range,
+                                                  self.r)):
+            if exponent != 0 and np.isfinite(lo) and not lo * (1 - RANGE_SLACK) <= value <= hi * (1 + RANGE_SLACK):
+                out.append(f"{name} {value:.3g} beyond {lo:.3g}-{hi:.3g}")
+        return out
 
 
 def fit(err, x, seeds, area, duration, p_w, r: float | None = None, a: float | None = None,
@@ -97,7 +124,11 @@ def fit(err, x, seeds, area, duration, p_w, r: float | None = None, a: float | N
 def laws(path: Path = NOISE_CSV) -> dict[tuple[str, str], NoiseLaw]:
     """The fitted laws by (observable, kind)."""
     table = pd.read_csv(path)
-    return {(row.observable, row.kind): NoiseLaw(row.observable, row.kind, row.c2, row.c3, row.r, row.a, row.b)
+    for column in RANGE_COLUMNS:  # a table fitted without its ranges: none recorded
+        if column not in table:
+            table[column] = np.nan
+    return {(row.observable, row.kind): NoiseLaw(row.observable, row.kind, row.c2, row.c3, row.r, row.a, row.b,
+                                                 (row.p_min, row.p_max), (row.x_min, row.x_max))
             for row in table.itertuples()}
 
 
@@ -120,12 +151,14 @@ def drive_errors(size: DriveSize, table: dict | None = None) -> dict[str, float]
 def error_line(label: str, size: DriveSize, table: dict | None = None) -> str:
     """One drive's predicted errors, as ``granstokes study --dry-run`` prints them (relative to the expected value
     for the plate's response)."""
+    table = laws() if table is None else table
     parts = []
     for obs, err in drive_errors(size, table).items():
         unit = f" {UNITS[obs]}" if UNITS[obs] else ""
         x = size.x(obs)
         rel = f" ({err / x:.1%} of {x:.3g})" if obs in RESPONSES else ""
-        parts.append(f"{obs} +- {err:.3g}{unit}{rel}")
+        beyond = table[(obs, size.kind)].extrapolated(size)
+        parts.append(f"{obs} +- {err:.3g}{unit}{rel}" + (f" (extrapolated: {', '.join(beyond)})" if beyond else ""))
     area = f"{size.area:g} d" + ("" if size.dimension == 2 else f"^{size.dimension - 1}")
     return (f"  {label}: expected errors at {size.seeds} bed(s) x {area}, duration {size.duration:.4g}: "
             + ", ".join(parts))

@@ -567,12 +567,21 @@ def _fit_and_write(plan: CalibrationPlan, out: Path, state: dict) -> fitting.Cal
     return cal
 
 
+#: the pair style of a grains record that names none: ``pair_style granular``, the only style it could have run
+RECORD_PAIR_STYLE = "granular"
+
+
+def pair_style_of(grains: dict) -> str:
+    """The LAMMPS pair style a grains record (a run's or a calibration's) ran in."""
+    return grains.get("pair_style", RECORD_PAIR_STYLE)
+
+
 def grains_difference(calibrated: dict, p_calibrated: float, run: dict, p_run: float) -> dict:
     """{key: (calibrated, run)} where two grains records differ; an entry a record lacks is the config's default
-    (Grains), except the pair style (a record that names none ran ``pair_style granular``, the only style it
-    could have run).  The rigidity kappa = k_n/(p d) may differ with the pressure: one material has one
-    stiffness k_n in rho_p g d units, so k_n is compared instead (kappa itself when a pressure is unknown)."""
-    default = {**dataclasses.asdict(Grains()), "pair_style": "granular"}
+    (Grains), except the pair style (pair_style_of).  The rigidity kappa = k_n/(p d) may differ with the
+    pressure: one material has one stiffness k_n in rho_p g d units, so k_n is compared instead (kappa itself when
+    a pressure is unknown)."""
+    default = {**dataclasses.asdict(Grains()), "pair_style": RECORD_PAIR_STYLE}
     a, b = {**default, **calibrated}, {**default, **run}
     pressures = all(math.isfinite(p) for p in (p_calibrated, p_run))
     diff = {k: (a.get(k), v) for k, v in b.items() if (k != "kappa" or not pressures) and a.get(k) != v}

@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from granstokes.compare.calibrate import fit, load
-from granstokes.compare.comparison import check_grains, run_grains
+from granstokes.compare.comparison import IGNORABLE, check_grains, pair_style_clause, run_grains
 from granstokes.compare.plate import block_estimate, friction, pooled, power_law, steady_state, trend
 from granstokes.continuum.calibration import IN_DRIVE, PLANE_SHEAR, fit_blocks, mu_law
 from granstokes.continuum.crossing import depth_at_fraction
@@ -85,6 +85,15 @@ def test_a_calibration_of_other_grains_is_refused(tmp_path):
     (run / "run.json").write_text(json.dumps({"config": {"grains": {**doc["grains"], "pair_style": "classic"}}}))
     with pytest.raises(ValueError, match=r"pair_style calibrated 'granular' vs run 'classic'"):
         check_grains(loaded, run_grains([run]))
+    # compare --any-pair-style: the other implementation of the same law is accepted, and said in the source
+    check_grains(loaded, run_grains([run]), ignore=IGNORABLE)
+    assert pair_style_clause(loaded, run_grains([run])) == \
+        ", calibrated in pair style granular, the drives run in classic"
+    assert pair_style_clause(loaded, {"r": ({"pair_style": "granular"}, 20.0)}) == ""
+    (run / "run.json").write_text(json.dumps({"config": {"grains": {**doc["grains"], "pair_style": "classic",
+                                                                    "mu_p": 0.4}}}))
+    with pytest.raises(ValueError, match=r"grains: mu_p calibrated 0.5 vs run 0.4'$"):  # nothing else is ignored
+        check_grains(loaded, run_grains([run]), ignore=IGNORABLE)
     # one material at two pressures: the same k_n = kappa p (Hooke) is the same grains, another k_n is not
     from granstokes.dem.calibrate import grains_difference
     grains = {**doc["grains"], "pair_style": "classic"}
