@@ -146,8 +146,8 @@ def plate_estimates(plates: tuple[PlateRecord, ...], kind: str) -> tuple[pd.Data
 def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> DriveAnalysis:
     plates = tuple(PlateRecord.read(f.path) for f in spec.beds)
     series, steady, slips = plate_estimates(plates, spec.kind)
-    first = spec.beds[0]
-    grid = settings.grid_for(next(first.frames([0])))
+    rise = max(float(np.max(p.y) - p.y[0]) for p in plates)
+    grid = settings.grid_for([next(bed.frames([0])) for bed in spec.beds], rise=rise)
     profiles = tuple(DepthProfiles(f, settings, grid).run() for f in spec.beds)
     surface = lambda t: layout.plate_surface(np.interp(t, plates[0].t, plates[0].y), spec.surface_offset)  # noqa: E731
     # the record ends with the plate's, or earlier where a truncated dump lost its last frames
@@ -159,7 +159,7 @@ def analyse_drive(spec: DriveSpec, settings: CGSettings = CGSettings()) -> Drive
     mean_profile = _with_depth(whole, float(np.mean(surface(profiles[0].results.t))) - whole.y)
     inst = ensemble(list(profiles))
     inst.insert(3, "depth", surface(inst.t.to_numpy()) - inst.y.to_numpy())
-    snapshots = snapshot_times(first.times())
+    snapshots = snapshot_times(spec.beds[0].times())
     rows = []
     u_scale = steady["u_w"]["value"]
     for t, g in inst.groupby("t"):

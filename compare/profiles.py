@@ -127,11 +127,14 @@ class CGSettings:
     def h(self) -> float:
         return self.spacing or self.width / 4
 
-    def grid_for(self, frame: Frame, margin: float = 2.0) -> Grid:
-        """Grid covering every grain of ``frame`` plus the kernel cutoff and ``margin`` d, on multiples of h."""
+    def grid_for(self, frame: Frame | list[Frame], margin: float = 2.0, rise: float = 0.0) -> Grid:
+        """Grid covering every grain of ``frame`` (or of each of several frames: every bed's first) plus the kernel
+        cutoff and ``margin`` d, its top ``rise`` d higher still (the most a plate rises later: a sheared bed
+        dilates), on multiples of h."""
+        frames = frame if isinstance(frame, list) else [frame]
         c, h = self.K.cutoff, self.h
-        lo = math.floor((frame.x[:, 1].min() - c - margin) / h) * h
-        hi = math.ceil((frame.x[:, 1].max() + c + margin) / h) * h
+        lo = math.floor((min(f.x[:, 1].min() for f in frames) - c - margin) / h) * h
+        hi = math.ceil((max(f.x[:, 1].max() for f in frames) + rise + c + margin) / h) * h
         return Grid(lo, hi, h)
 
 

@@ -364,6 +364,22 @@ def test_a_2d_frame_ignores_its_z_extent_and_a_box_need_not_start_at_zero():
     assert moved["j_z"][inner] == pytest.approx(-0.6 * moved["rho"][inner], rel=1e-12)
 
 
+def test_the_grid_covers_every_bed_and_the_plate_s_rise():
+    """A drive's grid covers the tallest bed's first frame and the plate's largest rise after it (a deep sheared
+    bed dilates by more than the margin: a 66 d bed rose 2 d), nothing more."""
+    s = CGSettings("lucy", 0.5)
+    low, tall = frame(np.array([[1.0, 30.0, 0.0], [2.0, 1.0, 0.0]])), frame(np.array([[1.0, 31.0, 0.0]]))
+    c = s.K.cutoff
+    assert s.grid_for(low).hi == pytest.approx(np.ceil((30.0 + c + 2.0) / s.h) * s.h)
+    grid = s.grid_for([low, tall], rise=2.5)
+    assert grid.hi == pytest.approx(np.ceil((31.0 + 2.5 + c + 2.0) / s.h) * s.h)
+    assert grid.lo == pytest.approx(np.floor((1.0 - c - 2.0) / s.h) * s.h)
+    risen = frame(np.array([[1.0, 33.4, 0.0]]))
+    coarse_grain(risen, None, s, grid, dimension=2)  # covered
+    with pytest.raises(ValueError, match="does not cover"):
+        coarse_grain(risen, None, s, s.grid_for([low, tall]), dimension=2)
+
+
 def test_a_grid_that_does_not_cover_the_grains_height_is_refused_and_the_dimension_named():
     x = np.array([[1.0, 9.8, 0.0], [2.0, 1.0, 0.0]])  # the highest grain at y = 9.8, both at z = 0
     s = CGSettings("lucy", 0.5)
