@@ -87,7 +87,8 @@ def _ensemble_series(plates: tuple[PlateRecord, ...]) -> pd.DataFrame:
             if name == "mu_w":  # ratio of the seed-mean stresses
                 tau, p_ = ([np.interp(t, p.t, getattr(p, k)) for p in plates] for k in ("tau_w", "p"))
                 mean = np.where(np.mean(p_, axis=0) > 0, np.mean(tau, axis=0) / np.mean(p_, axis=0), np.nan)
-        half = 1.96 * np.nanstd(values, axis=0, ddof=1) / np.sqrt(len(plates)) if len(plates) > 1 else np.nan * mean
+            half = (1.96 * np.nanstd(values, axis=0, ddof=1) / np.sqrt(len(plates)) if len(plates) > 1
+                    else np.nan * mean)
         cols.update({name: mean, f"{name}_lo": mean - half, f"{name}_hi": mean + half})
     return pd.DataFrame({"t": t, **cols})
 
