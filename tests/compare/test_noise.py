@@ -89,9 +89,8 @@ def test_the_shipped_laws_are_the_fit_to_the_committed_studies(cost_noise):
 
 def test_the_shipped_laws_show_no_lack_of_fit(cost_noise):
     """Each committed drive's spread of n beds against the law's sigma: (n - 1) s^2 / sigma^2 ~ chi2(n - 1). The
-    cells outside the two-sided LACK_OF_FIT_LEVEL interval are no more than chance allows at 99.9 % (binomial);
-    the law fitted before these studies (3D prefactors from 2 beds, the creep length of an earlier estimator) had
-    9 of 72 there."""
+    cells outside the two-sided LACK_OF_FIT_LEVEL interval are no more than chance allows at 99.9 % (binomial, 4
+    of 72): a law with 3D prefactors from 2 beds' block errors has 9 there (bench/RESULTS.md)."""
     rows = cost_noise.check_law(noise.NOISE_CSV)
     assert len(rows) == sum(len(noise.SCORED[k]) for k in rows.kind[rows.observable.isin(noise.RESPONSES)])
     dof = rows.seeds - 1
