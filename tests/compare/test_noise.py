@@ -117,8 +117,12 @@ def test_a_drive_beyond_the_fitted_ranges_is_flagged():
     assert law.extrapolated(replace(size, p_w=20.9)) == []  # within RANGE_SLACK
     assert law.extrapolated(replace(size, scales={**size.scales, "t_s": 0.5})) == ["t_s 0.5 beyond 1.5-13"]
     assert replace(law, b=0.0, r=0.0).extrapolated(replace(size, p_w=40.0, scales={"t_s": 0.5})) == []
-    assert "(extrapolated: p_w 40 beyond 10-20)" in noise.error_line(
-        "x", replace(size, p_w=40.0), {(obs, "stress"): replace(law, observable=obs) for obs in noise.SCORED["stress"]})
+    # printed beside the one observable whose law is applied beyond its range (the others record no range)
+    table = {(obs, "stress"): replace(law, observable=obs, p_range=(np.nan, np.nan), x_range=(np.nan, np.nan))
+             for obs in noise.SCORED["stress"]}
+    table[("t90", "stress")] = law
+    line = noise.error_line("x", replace(size, p_w=40.0), table)
+    assert line.count("(extrapolated") == 1 and line.endswith("sqrt(d/g) (extrapolated: p_w 40 beyond 10-20)")
 
 
 def _dry_run_errors(tmp_path, capsys, seeds: str) -> dict[tuple[str, str], float]:
